@@ -1,0 +1,3 @@
+//! The geometry stage: everything about the disk light and the casters that needs no GPU.
+
+pub mod ray;

@@ -1,0 +1,10 @@
+//! dbuffer: a lab for boundary-correct real-time soft shadows from a disk light.
+//!
+//! Layers, each depending only on those below:
+//! - [`scene`]: scene files, built-in shapes and scenes, meshes;
+//! - [`geometry`]: face classes, silhouettes, umbra/penumbra volumes, the CPU twin of the
+//!   D-buffer lookup and the ray-cast visibility oracle (plain Rust, no GPU types).
+#![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
+
+pub mod geometry;
+pub mod scene;
