@@ -1,0 +1,193 @@
+//! The CPU twin of the D-buffer: what the light pass stores along a ray from the light centre,
+//! and what the camera pass computes from it, evaluated exactly by ray casting (no texels, no
+//! interpolation). The GPU passes are tested against it.
+//!
+//! Channel rules along the ray from `c` with unit direction `w` (the light pass must do the same):
+//! - `|cx_o|`: the nearest hit of any scene triangle.
+//! - `|cx_uv|`: for each caster, the **nearest umbra exit** — a hit on an umbra-volume triangle
+//!   whose normal faces away from `c` (umbra quads, category-A silhouette faces; category-B
+//!   silhouette faces face `c` and are culled). Untrimmed umbra quads cross each other at convex
+//!   corners and beyond the apex of a closing umbra; the true boundary is always the first exit.
+//!   Over casters the **farthest** of these wins (seed 000 §4, overlapping casters).
+//! - `|cx_pv|`: the **farthest penumbra entry** — a hit on a penumbra quad or fan whose normal
+//!   faces `c`. For a convex caster the penumbra surface is closed and crossed once.
+//! - `|cx_s|`: eq. (2) from the fragment that won each volume channel, so it is kept per volume
+//!   (`s_u`, `s_p`), as `dbuffer.exr` + `dbuffer_s.exr` store it.
+//!
+//! The shaded point `x` at `D = |cx|` is hidden from `c` when `D > |cx_o| + bias`; then `t` comes
+//! from the umbra channels, otherwise from the penumbra ones ([`super::visibility`]).
+
+use glam::Vec3;
+
+use super::bvh::Bvh;
+use super::visibility::{t_hidden, t_visible, Branch, VtVariant};
+use super::volumes::{CasterGeometry, VolumeVertex};
+use crate::scene::{DiskLight, Scene};
+
+/// One D-buffer texel: the four channels along one ray from the light centre.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Texel {
+    /// `|cx_o|`: nearest scene surface.
+    pub o: Option<f32>,
+    /// `|cx_uv|`: the umbra boundary (see the module rules).
+    pub u: Option<f32>,
+    /// `|cx_s|` from the fragment that won `u`.
+    pub s_u: f32,
+    /// `|cx_pv|`: the penumbra boundary.
+    pub p: Option<f32>,
+    /// `|cx_s|` from the fragment that won `p`.
+    pub s_p: f32,
+}
+
+/// What the camera pass computes for one shaded point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TwinSample {
+    /// `|cx|`.
+    pub d: f32,
+    pub texel: Texel,
+    pub hidden: bool,
+    pub t: f64,
+    pub branch: Branch,
+}
+
+/// Relative bias of the hidden-from-centre test `D > |cx_o| (1 + HIDDEN_BIAS) + HIDDEN_BIAS`.
+pub const HIDDEN_BIAS: f32 = 1e-4;
+
+struct CasterVolumes {
+    umbra: Bvh,
+    umbra_attrs: Vec<VolumeVertex>,
+    penumbra: Bvh,
+    penumbra_attrs: Vec<VolumeVertex>,
+}
+
+/// The D-buffer lookup and camera-pass arithmetic on the CPU.
+pub struct DBufferTwin {
+    light: DiskLight,
+    surfaces: Bvh,
+    casters: Vec<CasterVolumes>,
+}
+
+impl DBufferTwin {
+    /// Build from every scene triangle (for `|cx_o|`) and each caster's volumes.
+    pub fn new(scene: &Scene, casters: &[CasterGeometry]) -> Self {
+        Self::from_parts(scene.light, scene.all_triangles(), casters)
+    }
+
+    pub fn from_parts(
+        light: DiskLight,
+        surfaces: Vec<[Vec3; 3]>,
+        casters: &[CasterGeometry],
+    ) -> Self {
+        let casters = casters
+            .iter()
+            .map(|g| {
+                let (mut ut, mut ua, mut pt, mut pa) = (vec![], vec![], vec![], vec![]);
+                for i in 0..g.volumes.triangle_count() {
+                    let (tri, attrs) = g.volumes.triangle(i);
+                    if attrs.kind.is_umbra() {
+                        ut.push(tri);
+                        ua.push(*attrs);
+                    } else {
+                        pt.push(tri);
+                        pa.push(*attrs);
+                    }
+                }
+                CasterVolumes {
+                    umbra: Bvh::build(ut),
+                    umbra_attrs: ua,
+                    penumbra: Bvh::build(pt),
+                    penumbra_attrs: pa,
+                }
+            })
+            .collect();
+        Self {
+            light,
+            surfaces: Bvh::build(surfaces),
+            casters,
+        }
+    }
+
+    pub fn light(&self) -> &DiskLight {
+        &self.light
+    }
+
+    /// The D-buffer channels along the ray from the light centre with unit direction `w`.
+    pub fn texel(&self, w: Vec3) -> Texel {
+        let c = self.light.center;
+        let mut texel = Texel {
+            o: self
+                .surfaces
+                .closest_hit(c, w, 0.0, f32::INFINITY)
+                .map(|h| h.t),
+            ..Texel::default()
+        };
+        let facing = |tri: &[Vec3; 3]| (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(w);
+        for caster in &self.casters {
+            // Nearest umbra exit of this caster.
+            let mut exit: Option<(f32, u32)> = None;
+            caster.umbra.for_each_hit(c, w, 0.0, f32::INFINITY, |h| {
+                if facing(caster.umbra.triangle(h.triangle as usize)) > 0.0
+                    && exit.is_none_or(|(t, _)| h.t < t)
+                {
+                    exit = Some((h.t, h.triangle));
+                }
+            });
+            if let Some((t, k)) = exit {
+                if texel.u.is_none_or(|u| t > u) {
+                    texel.u = Some(t);
+                    let attrs = &caster.umbra_attrs[k as usize];
+                    texel.s_u = attrs.edge_plane_distance(c + t * w, w, &self.light);
+                }
+            }
+            // Farthest penumbra entry over all casters.
+            caster.penumbra.for_each_hit(c, w, 0.0, f32::INFINITY, |h| {
+                if facing(caster.penumbra.triangle(h.triangle as usize)) < 0.0
+                    && texel.p.is_none_or(|p| h.t > p)
+                {
+                    texel.p = Some(h.t);
+                    let attrs = &caster.penumbra_attrs[h.triangle as usize];
+                    texel.s_p = attrs.edge_plane_distance(c + h.t * w, w, &self.light);
+                }
+            });
+        }
+        texel
+    }
+
+    /// The camera pass at world point `x`: `|cx|`, the texel, the branch and `t`.
+    pub fn sample(&self, x: Vec3) -> TwinSample {
+        let v = x - self.light.center;
+        let d = v.length();
+        if !(self.light.height_of(x) > 0.0) || !d.is_finite() {
+            // Behind the one-sided light (or not a point): it receives nothing.
+            return TwinSample {
+                d,
+                texel: Texel::default(),
+                hidden: true,
+                t: 0.0,
+                branch: Branch::Umbra,
+            };
+        }
+        let w = v / d;
+        let texel = self.texel(w);
+        let hidden = texel
+            .o
+            .is_some_and(|o| d > o * (1.0 + HIDDEN_BIAS) + HIDDEN_BIAS);
+        let (t, branch) = if hidden {
+            t_hidden(f64::from(d), f64::from(texel.s_u), texel.u.map(f64::from))
+        } else {
+            t_visible(f64::from(d), f64::from(texel.s_p), texel.p.map(f64::from))
+        };
+        TwinSample {
+            d,
+            texel,
+            hidden,
+            t,
+            branch,
+        }
+    }
+
+    /// `V(t)` at `x` with the chosen variant.
+    pub fn visibility(&self, x: Vec3, vt: VtVariant) -> f64 {
+        vt.apply(self.sample(x).t)
+    }
+}

@@ -1,0 +1,610 @@
+//! Umbra and penumbra volumes of a caster, as one indexed triangle mesh tagged by kind.
+//!
+//! - **Umbra volume**: a quad per umbra-silhouette edge, extruded away from its `p_u`, plus the
+//!   silhouette faces (seed 000 §3.3; without them the D-buffer has holes). Umbra quads are
+//!   oriented with their normal *away* from the light centre `c`: every umbra quad lies on a plane
+//!   tangent to the disk with the disk (and `c`) on its inner side, so a ray from `c` can only
+//!   *leave* the umbra through it. Adjacent quads cross at convex corners and beyond the apex of a
+//!   closing umbra; they are not trimmed here. The D-buffer rule resolves that: per caster, the
+//!   *nearest* umbra exit along the ray is the boundary (see [`super::twin`]).
+//! - **Penumbra volume**: a quad per penumbra-silhouette edge, extruded away from its `p_p`,
+//!   oriented with its normal *toward* `c` (a ray from `c` enters the penumbra through it); at a
+//!   vertex where two penumbra quads leave a gap (a convex corner), a fan of triangles from the
+//!   vertex extruded away from rim points interpolated along the shorter disk arc between the two
+//!   edges' `p_p` closes it. At reflex corners the quads cross and no fan is needed.
+//!
+//! Each vertex carries the silhouette edge and the extrusion point it came from, so the light pass
+//! (and [`VolumeVertex::edge_plane_distance`], its CPU twin) can evaluate eq. (2) per fragment.
+
+use glam::Vec3;
+
+use super::adjacency::CasterMesh;
+use super::classify::{classify, FaceClass};
+use super::silhouette::{extrusion_points, find_silhouettes, SilhouetteEdge};
+use crate::scene::{DiskLight, Scene};
+
+/// What a volume triangle is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum VolumeKind {
+    UmbraQuad,
+    /// A silhouette face of category A, rendered as part of the umbra volume.
+    SilhouetteFaceA,
+    /// A silhouette face of category B, rendered as part of the umbra volume.
+    SilhouetteFaceB,
+    PenumbraQuad,
+    PenumbraFan,
+}
+
+impl VolumeKind {
+    pub fn is_umbra(self) -> bool {
+        matches!(
+            self,
+            VolumeKind::UmbraQuad | VolumeKind::SilhouetteFaceA | VolumeKind::SilhouetteFaceB
+        )
+    }
+
+    pub fn is_silhouette_face(self) -> bool {
+        matches!(
+            self,
+            VolumeKind::SilhouetteFaceA | VolumeKind::SilhouetteFaceB
+        )
+    }
+
+    /// Small integer code, the same one the GPU uses.
+    pub fn code(self) -> u32 {
+        match self {
+            VolumeKind::UmbraQuad => 0,
+            VolumeKind::SilhouetteFaceA => 1,
+            VolumeKind::SilhouetteFaceB => 2,
+            VolumeKind::PenumbraQuad => 3,
+            VolumeKind::PenumbraFan => 4,
+        }
+    }
+}
+
+/// A volume vertex: its position and, constant over its triangle, where it came from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeVertex {
+    pub position: Vec3,
+    pub kind: VolumeKind,
+    /// The silhouette edge the triangle was extruded from (both ends equal for a fan: its apex;
+    /// for a silhouette face, its first vertex).
+    pub edge: [Vec3; 2],
+    /// The rim point it was extruded away from (`p_u`, `p_p` or a fan rim point).
+    pub extrusion: Vec3,
+}
+
+impl VolumeVertex {
+    /// `|cx_s|`: the distance along the ray from `c` (unit direction `dir`) to the plane through
+    /// the silhouette edge parallel to the disk — eq. (2) as the brief defines it in words. The
+    /// edge point used is the one the fragment was extruded from (on the line from the extrusion
+    /// point through the fragment), so it is exact per fragment even for edges that are not
+    /// parallel to the disk. On a silhouette face the face is its own edge: `|cx_s| = |cx|`.
+    ///
+    /// Note: the formula printed in seed 000 and copied into the brief,
+    /// `(dir(c,x)·n)/(dir(c,e)·n)·dist(c,e)`, is this distance with the ratio inverted; the two
+    /// agree only where `dir(c,x)·n = dir(c,e)·n`.
+    pub fn edge_plane_distance(&self, hit: Vec3, dir: Vec3, light: &DiskLight) -> f32 {
+        let along = dir.dot(light.normal);
+        if self.kind.is_silhouette_face() {
+            return (hit - light.center).length();
+        }
+        if !(along > 0.0) {
+            return f32::INFINITY;
+        }
+        let e = closest_point_on_line(self.edge[0], self.edge[1], self.extrusion, hit);
+        (e - light.center).dot(light.normal) / along
+    }
+}
+
+/// The point of the line `a b` closest to the line `p q` (`a` when the two are parallel or `a = b`).
+pub fn closest_point_on_line(a: Vec3, b: Vec3, p: Vec3, q: Vec3) -> Vec3 {
+    let (d1, d2, w0) = (b - a, q - p, a - p);
+    let (aa, bb, cc) = (d1.dot(d1), d1.dot(d2), d2.dot(d2));
+    let (dd, ee) = (d1.dot(w0), d2.dot(w0));
+    let den = aa * cc - bb * bb;
+    if !(den > 1e-12 * aa * cc) {
+        return a;
+    }
+    a + d1 * ((bb * ee - cc * dd) / den)
+}
+
+/// An indexed triangle mesh of volume geometry.
+#[derive(Clone, Debug, Default)]
+pub struct VolumeMesh {
+    pub vertices: Vec<VolumeVertex>,
+    pub indices: Vec<u32>,
+}
+
+impl VolumeMesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Triangle `i`: its corners and its first vertex (which carries the triangle's attributes).
+    pub fn triangle(&self, i: usize) -> ([Vec3; 3], &VolumeVertex) {
+        let k = &self.indices[3 * i..3 * i + 3];
+        let v = |j: usize| self.vertices[k[j] as usize].position;
+        ([v(0), v(1), v(2)], &self.vertices[k[0] as usize])
+    }
+
+    pub fn count(&self, pred: impl Fn(VolumeKind) -> bool) -> usize {
+        (0..self.triangle_count())
+            .filter(|&i| pred(self.triangle(i).1.kind))
+            .count()
+    }
+
+    /// Append a polygon given as a fan around its first corner, wound so that its normal points
+    /// toward `c` (`toward_c`) or away from it.
+    fn push_polygon(&mut self, corners: &[Vec3], template: VolumeVertex, c: Vec3, toward_c: bool) {
+        if corners.len() < 3 {
+            return;
+        }
+        let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+        let flip = (normal.dot(c - corners[0]) > 0.0) != toward_c;
+        let base = self.vertices.len() as u32;
+        self.vertices
+            .extend(corners.iter().map(|&position| VolumeVertex {
+                position,
+                ..template
+            }));
+        for k in 1..corners.len() as u32 - 1 {
+            if flip {
+                self.indices.extend([base, base + k + 1, base + k]);
+            } else {
+                self.indices.extend([base, base + k, base + k + 1]);
+            }
+        }
+    }
+}
+
+/// How far volumes are extruded, and how finely fans follow the disk rim.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeParams {
+    /// Distance the far end of every extruded vertex lies beyond it.
+    pub far: f32,
+    /// Largest angle of the disk arc one fan triangle covers, in degrees.
+    pub fan_step_deg: f32,
+}
+
+impl Default for VolumeParams {
+    fn default() -> Self {
+        Self {
+            far: 1000.0,
+            fan_step_deg: 11.25,
+        }
+    }
+}
+
+impl VolumeParams {
+    /// Extrude well beyond everything in the scene.
+    pub fn for_scene(scene: &Scene) -> Self {
+        let mut lo = scene.light.center;
+        let mut hi = scene.light.center;
+        for o in &scene.objects {
+            if let Some((a, b)) = o.mesh.bounds() {
+                lo = lo.min(a);
+                hi = hi.max(b);
+            }
+        }
+        let size = (hi - lo).length();
+        Self {
+            far: if size.is_finite() {
+                (size * 20.0).max(10.0)
+            } else {
+                1000.0
+            },
+            ..Self::default()
+        }
+    }
+}
+
+/// Counts for the stats panel and `meta.json`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GeometryStats {
+    pub triangles: usize,
+    pub all_front: usize,
+    pub none_front: usize,
+    pub silhouette_a: usize,
+    pub silhouette_b: usize,
+    pub umbra_edges: usize,
+    pub penumbra_edges: usize,
+    pub fans: usize,
+    pub umbra_triangles: usize,
+    pub penumbra_triangles: usize,
+    /// Silhouette edges whose line meets the disk: no tangent plane, no volume.
+    pub unextruded_edges: usize,
+}
+
+impl std::ops::AddAssign for GeometryStats {
+    fn add_assign(&mut self, o: Self) {
+        self.triangles += o.triangles;
+        self.all_front += o.all_front;
+        self.none_front += o.none_front;
+        self.silhouette_a += o.silhouette_a;
+        self.silhouette_b += o.silhouette_b;
+        self.umbra_edges += o.umbra_edges;
+        self.penumbra_edges += o.penumbra_edges;
+        self.fans += o.fans;
+        self.umbra_triangles += o.umbra_triangles;
+        self.penumbra_triangles += o.penumbra_triangles;
+        self.unextruded_edges += o.unextruded_edges;
+    }
+}
+
+/// Everything the geometry stage computes for one caster and one light.
+#[derive(Clone, Debug, Default)]
+pub struct CasterGeometry {
+    pub name: String,
+    /// One class per face of the [`CasterMesh`].
+    pub classes: Vec<FaceClass>,
+    pub silhouettes: Vec<SilhouetteEdge>,
+    pub volumes: VolumeMesh,
+    pub stats: GeometryStats,
+    pub warnings: Vec<String>,
+}
+
+/// Classify, find silhouettes and build both volumes of one caster.
+pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams) -> CasterGeometry {
+    let classes = classify(mesh, light);
+    let silhouettes = find_silhouettes(mesh, &classes);
+    let c = light.center;
+    let mut volumes = VolumeMesh::default();
+    let mut stats = GeometryStats {
+        triangles: mesh.faces.len(),
+        ..GeometryStats::default()
+    };
+    for class in &classes {
+        match class {
+            FaceClass::AllFront => stats.all_front += 1,
+            FaceClass::NoneFront => stats.none_front += 1,
+            FaceClass::SilhouetteA => stats.silhouette_a += 1,
+            FaceClass::SilhouetteB => stats.silhouette_b += 1,
+        }
+    }
+
+    let extrude = |v: Vec3, p: Vec3| v + (v - p).normalize_or_zero() * params.far;
+    // (welded vertex, p_p, edge index) at both ends of every extruded penumbra edge.
+    let mut penumbra_ends: Vec<(u32, u32, Vec3)> = Vec::new();
+    for s in &silhouettes {
+        stats.umbra_edges += usize::from(s.umbra);
+        stats.penumbra_edges += usize::from(s.penumbra);
+        let Some(points) = extrusion_points(s.v[0], s.v[1], s.caster_side, light) else {
+            stats.unextruded_edges += 1;
+            continue;
+        };
+        let [a, b] = s.v;
+        if s.umbra {
+            let p = points.umbra;
+            let template = VolumeVertex {
+                position: a,
+                kind: VolumeKind::UmbraQuad,
+                edge: s.v,
+                extrusion: p,
+            };
+            volumes.push_polygon(&[a, b, extrude(b, p), extrude(a, p)], template, c, false);
+        }
+        if s.penumbra {
+            let p = points.penumbra;
+            let template = VolumeVertex {
+                position: a,
+                kind: VolumeKind::PenumbraQuad,
+                edge: s.v,
+                extrusion: p,
+            };
+            volumes.push_polygon(&[a, b, extrude(b, p), extrude(a, p)], template, c, true);
+            let ids = mesh.edges[s.edge as usize].v;
+            penumbra_ends.push((ids[0], s.edge, p));
+            penumbra_ends.push((ids[1], s.edge, p));
+        }
+    }
+
+    // Close the penumbra at vertices shared by exactly two penumbra edges.
+    penumbra_ends.sort_unstable_by_key(|&(v, e, _)| (v, e));
+    for pair in penumbra_ends.chunk_by(|x, y| x.0 == y.0) {
+        let [(v, e1, p1), (_, e2, p2)] = pair else {
+            continue;
+        };
+        let apex = mesh.position(*v);
+        let other_end = |e: u32| {
+            let ids = mesh.edges[e as usize].v;
+            mesh.position(if ids[0] == *v { ids[1] } else { ids[0] })
+        };
+        if !penumbra_gap(apex, other_end(*e1), *p1, other_end(*e2), *p2, c) {
+            continue;
+        }
+        let before = volumes.triangle_count();
+        push_fan(&mut volumes, apex, *p1, *p2, light, params, &extrude);
+        if volumes.triangle_count() > before {
+            stats.fans += 1;
+        }
+    }
+
+    for (face, class) in mesh.faces.iter().zip(&classes) {
+        let kind = match class {
+            FaceClass::SilhouetteA => VolumeKind::SilhouetteFaceA,
+            FaceClass::SilhouetteB => VolumeKind::SilhouetteFaceB,
+            _ => continue,
+        };
+        let corners = face.v.map(|k| mesh.position(k));
+        let base = volumes.vertices.len() as u32;
+        volumes
+            .vertices
+            .extend(corners.iter().map(|&position| VolumeVertex {
+                position,
+                kind,
+                edge: [corners[0], corners[0]],
+                extrusion: c,
+            }));
+        volumes.indices.extend([base, base + 1, base + 2]);
+    }
+
+    stats.umbra_triangles = volumes.count(VolumeKind::is_umbra);
+    stats.penumbra_triangles = volumes.triangle_count() - stats.umbra_triangles;
+
+    let mut warnings = Vec::new();
+    if let Some(w) = mesh.report.warning(&mesh.name) {
+        warnings.push(w);
+    }
+    let behind = mesh
+        .positions
+        .iter()
+        .filter(|&&p| !(light.height_of(p) > 0.0))
+        .count();
+    if behind > 0 {
+        warnings.push(format!(
+            "caster '{}' reaches the light plane ({behind} vertices on or behind it): its shadow \
+             volumes are incomplete",
+            mesh.name
+        ));
+    }
+    if stats.unextruded_edges > 0 {
+        warnings.push(format!(
+            "caster '{}': {} silhouette edges point into the light disk and get no volume",
+            mesh.name, stats.unextruded_edges
+        ));
+    }
+
+    CasterGeometry {
+        name: mesh.name.clone(),
+        classes,
+        silhouettes,
+        volumes,
+        stats,
+        warnings,
+    }
+}
+
+/// Do the penumbra quads of the edges `apex→b1` (from `p1`) and `apex→b2` (from `p2`) leave a gap
+/// at `apex`? They do when the far edge of each quad at the apex lies on the caster side of the
+/// other quad's plane (a convex corner); at a reflex corner the quads cross instead.
+fn penumbra_gap(apex: Vec3, b1: Vec3, p1: Vec3, b2: Vec3, p2: Vec3, c: Vec3) -> bool {
+    let inside = |b: Vec3, p: Vec3, g: Vec3| {
+        let n = (b - apex).cross(p - apex);
+        // The caster side of a penumbra plane is the side away from c.
+        n.dot(g - apex) * n.dot(c - apex) < 0.0
+    };
+    let g1 = apex + (apex - p1);
+    let g2 = apex + (apex - p2);
+    inside(b2, p2, g1) && inside(b1, p1, g2)
+}
+
+fn push_fan(
+    volumes: &mut VolumeMesh,
+    apex: Vec3,
+    p1: Vec3,
+    p2: Vec3,
+    light: &DiskLight,
+    params: &VolumeParams,
+    extrude: &impl Fn(Vec3, Vec3) -> Vec3,
+) {
+    let (u, w) = light.basis();
+    let c = light.center;
+    let angle = |p: Vec3| (p - c).dot(w).atan2((p - c).dot(u));
+    let a1 = angle(p1);
+    let mut delta = angle(p2) - a1;
+    if delta > std::f32::consts::PI {
+        delta -= std::f32::consts::TAU;
+    } else if delta < -std::f32::consts::PI {
+        delta += std::f32::consts::TAU;
+    }
+    let step = params.fan_step_deg.to_radians().max(1e-3);
+    let n = (delta.abs() / step).ceil() as usize;
+    if n == 0 {
+        return;
+    }
+    let rim = |k: usize| {
+        if k == 0 {
+            return p1;
+        }
+        if k == n {
+            return p2;
+        }
+        let a = a1 + delta * k as f32 / n as f32;
+        c + light.radius * (a.cos() * u + a.sin() * w)
+    };
+    for k in 0..n {
+        let (q0, q1) = (rim(k), rim(k + 1));
+        let template = VolumeVertex {
+            position: apex,
+            kind: VolumeKind::PenumbraFan,
+            edge: [apex, apex],
+            extrusion: q0,
+        };
+        volumes.push_polygon(
+            &[apex, extrude(apex, q0), extrude(apex, q1)],
+            template,
+            c,
+            true,
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::ray::intersect_triangle;
+    use crate::scene::Mesh;
+
+    fn cube(center: Vec3, half: f32) -> Mesh {
+        let positions = (0..8)
+            .map(|i| {
+                center
+                    + half
+                        * Vec3::new(
+                            if i & 1 == 0 { -1.0 } else { 1.0 },
+                            if i & 2 == 0 { -1.0 } else { 1.0 },
+                            if i & 4 == 0 { -1.0 } else { 1.0 },
+                        )
+            })
+            .collect();
+        let triangles = vec![
+            [0, 1, 5],
+            [0, 5, 4],
+            [2, 6, 7],
+            [2, 7, 3],
+            [0, 4, 6],
+            [0, 6, 2],
+            [1, 3, 7],
+            [1, 7, 5],
+            [0, 2, 3],
+            [0, 3, 1],
+            [4, 5, 7],
+            [4, 7, 6],
+        ];
+        Mesh::new(positions, triangles)
+    }
+
+    fn light(r: f32) -> DiskLight {
+        DiskLight {
+            center: Vec3::new(0.0, 4.0, 0.0),
+            normal: Vec3::NEG_Y,
+            radius: r,
+            intensity: 1.0,
+        }
+    }
+
+    #[test]
+    fn cube_volumes_are_oriented_and_closed_by_fans() {
+        let mesh = CasterMesh::new("cube", &cube(Vec3::new(0.0, 1.5, 0.0), 0.5));
+        let l = light(1.0);
+        let g = build_caster(&mesh, &l, &VolumeParams::default());
+        assert_eq!(g.stats.umbra_edges, 4);
+        assert_eq!(g.stats.penumbra_edges, 4);
+        assert_eq!(g.stats.fans, 4, "one fan per convex corner of the top rim");
+        assert_eq!(g.stats.silhouette_a, 8);
+        assert!(g.warnings.is_empty(), "{:?}", g.warnings);
+        for i in 0..g.volumes.triangle_count() {
+            let (t, attrs) = g.volumes.triangle(i);
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            let facing_c = n.dot(l.center - t[0]) > 0.0;
+            match attrs.kind {
+                VolumeKind::UmbraQuad | VolumeKind::SilhouetteFaceA => assert!(!facing_c),
+                VolumeKind::PenumbraQuad | VolumeKind::PenumbraFan => assert!(facing_c),
+                VolumeKind::SilhouetteFaceB => {}
+            }
+        }
+        // The penumbra surface is closed: every ray from c that misses the cube crosses it
+        // exactly once (quads and fans neither overlap nor leave gaps). Rays (a, −1, b) with
+        // |a|, |b| ≤ 0.5 all reach the penumbra; those with |a|, |b| < 0.3 hit the cube first.
+        let penumbra: Vec<[Vec3; 3]> = (0..g.volumes.triangle_count())
+            .map(|i| g.volumes.triangle(i))
+            .filter(|(_, a)| !a.kind.is_umbra())
+            .map(|(t, _)| t)
+            .collect();
+        let mut checked = 0;
+        for i in 0..48 {
+            for j in 0..48 {
+                let (a, b) = (-0.5 + i as f32 / 47.0 + 1e-3, -0.5 + j as f32 / 47.0 + 2e-3);
+                if a.abs() < 0.3 && b.abs() < 0.3 {
+                    continue;
+                }
+                let dir = Vec3::new(a, -1.0, b).normalize();
+                let hits = penumbra
+                    .iter()
+                    .filter(|t| intersect_triangle(l.center, dir, t).is_some_and(|s| s > 0.0))
+                    .count();
+                assert_eq!(
+                    hits, 1,
+                    "ray {dir} crosses the penumbra surface {hits} times"
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 1000);
+    }
+
+    #[test]
+    fn fan_rim_points_follow_the_shorter_arc() {
+        let mesh = CasterMesh::new("cube", &cube(Vec3::new(0.0, 1.5, 0.0), 0.5));
+        let l = light(1.0);
+        let g = build_caster(&mesh, &l, &VolumeParams::default());
+        for v in g
+            .volumes
+            .vertices
+            .iter()
+            .filter(|v| v.kind == VolumeKind::PenumbraFan)
+        {
+            assert!(
+                ((v.extrusion - l.center).length() - 1.0).abs() < 1e-4,
+                "on the rim"
+            );
+            // Rim points of the fan at a corner lie on the opposite side of c from the corner.
+            let corner = v.edge[0];
+            let radial = (v.extrusion - l.center).normalize();
+            assert!(
+                radial.x * corner.x <= 1e-4 && radial.z * corner.z <= 1e-4,
+                "{v:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn edge_plane_distance_matches_eq2_in_words() {
+        let l = light(1.0);
+        // A quad extruded from an edge at height 1.5 (2.5 below the light): any ray from c meets
+        // the plane through the edge parallel to the disk at 2.5 / cos(angle to the normal).
+        let v = VolumeVertex {
+            position: Vec3::ZERO,
+            kind: VolumeKind::PenumbraQuad,
+            edge: [Vec3::new(-0.5, 1.5, 0.5), Vec3::new(0.5, 1.5, 0.5)],
+            extrusion: Vec3::new(0.0, 4.0, -1.0),
+        };
+        let hit = Vec3::new(0.2, 1.5, 0.5) + 3.0 * (Vec3::new(0.2, 1.5, 0.5) - v.extrusion);
+        let dir = (hit - l.center).normalize();
+        let expected = 2.5 / dir.dot(l.normal);
+        assert!((v.edge_plane_distance(hit, dir, &l) - expected).abs() < 1e-4);
+        // A tilted edge: the edge point is the one on the line from the extrusion point.
+        let tilted = VolumeVertex {
+            edge: [Vec3::new(-0.5, 1.0, 0.5), Vec3::new(0.5, 2.0, 0.5)],
+            ..v
+        };
+        let e = Vec3::new(0.25, 1.75, 0.5);
+        let hit = e + 2.0 * (e - v.extrusion);
+        let dir = (hit - l.center).normalize();
+        let expected = (4.0 - 1.75) / dir.dot(l.normal);
+        assert!((tilted.edge_plane_distance(hit, dir, &l) - expected).abs() < 1e-4);
+        // A silhouette face is its own edge.
+        let face = VolumeVertex {
+            kind: VolumeKind::SilhouetteFaceA,
+            ..v
+        };
+        assert!((face.edge_plane_distance(hit, dir, &l) - (hit - l.center).length()).abs() < 1e-5);
+    }
+
+    #[test]
+    fn caster_through_the_light_plane_warns_without_panicking() {
+        let mesh = CasterMesh::new("tall", &cube(Vec3::new(0.3, 4.0, 0.0), 0.5));
+        let g = build_caster(&mesh, &light(0.5), &VolumeParams::default());
+        assert!(
+            g.warnings
+                .iter()
+                .any(|w| w.contains("reaches the light plane")),
+            "{:?}",
+            g.warnings
+        );
+        for v in &g.volumes.vertices {
+            assert!(v.position.is_finite());
+        }
+    }
+}
