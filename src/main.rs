@@ -1,3 +1,77 @@
-fn main() {
-    println!("dbuffer");
+//! `dbuffer`: the lab's command line. Thin: parsing and printing; the work is in the library.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod cli;
+
+/// A lab for boundary-correct real-time soft shadows from a disk light
+/// (the D-buffer of Jakobsen et al., CGI 2004).
+#[derive(Parser)]
+#[command(name = "dbuffer", version, about, long_about = None)]
+struct Args {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Open the lab on a scene file or built-in name.
+    Gui { scene: Option<String> },
+    /// Render a scene headless into DIR (image.png, visibility.exr, ...).
+    Render {
+        scene: String,
+        #[arg(long)]
+        out: std::path::PathBuf,
+        #[arg(long, default_value = "512x512")]
+        size: String,
+        #[arg(long, default_value = "dbuffer")]
+        method: String,
+        #[arg(long, default_value = "smoothstep")]
+        vt: String,
+    },
+    /// Render every method and the ray-traced reference, and report their errors.
+    Compare {
+        scene: String,
+        #[arg(long)]
+        out: std::path::PathBuf,
+        #[arg(long, default_value = "512x512")]
+        size: String,
+        #[arg(long, default_value_t = 1024)]
+        samples: usize,
+    },
+    /// Print the benchmark tables.
+    Bench {
+        #[arg(long)]
+        quick: bool,
+    },
+    /// List the built-in scenes, one a line.
+    Scenes,
+    /// Print what the geometry stage makes of a scene: classes, silhouettes, volumes, warnings.
+    Inspect {
+        scene: String,
+        /// Also measure ground-truth visibility under the casters with this many disk samples.
+        #[arg(long)]
+        samples: Option<usize>,
+    },
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    let result = match args.command {
+        Some(Command::Scenes) => cli::scenes(),
+        Some(Command::Inspect { scene, samples }) => cli::inspect(&scene, samples),
+        None | Some(Command::Gui { .. }) => cli::not_yet("the lab window", 5),
+        Some(Command::Render { .. }) => cli::not_yet("render", 3),
+        Some(Command::Compare { .. }) => cli::not_yet("compare", 4),
+        Some(Command::Bench { .. }) => cli::not_yet("bench", 6),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("dbuffer: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
 }

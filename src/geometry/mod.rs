@@ -10,6 +10,7 @@ pub mod adjacency;
 pub mod bvh;
 pub mod classify;
 pub mod hull;
+pub mod metrics;
 pub mod ray;
 pub mod silhouette;
 pub mod twin;

@@ -131,9 +131,15 @@ fn silhouette_edge(mesh: &CasterMesh, classes: &[FaceClass], i: usize) -> Option
         let d = mesh.opposite_vertex(f, edge) - mid;
         (d - d.dot(along) * along).normalize_or_zero()
     };
-    let mut inward = into_face(edge.faces[0]);
+    // Into the caster: along both faces and against their normals. For a nearly flat edge the
+    // in-face directions cancel and the normals decide; for a sharp one the faces do. A boundary
+    // edge of a sheet has only its face's direction (the back side is the same sheet).
+    let f0 = edge.faces[0];
+    let mut inward = into_face(f0);
     if edge.faces[1] != NO_FACE {
-        inward += into_face(edge.faces[1]);
+        let f1 = edge.faces[1];
+        let normals = mesh.faces[f0 as usize].normal + mesh.faces[f1 as usize].normal;
+        inward += into_face(f1) - normals;
     }
     let scale = (v[1] - v[0]).length();
     Some(SilhouetteEdge {
