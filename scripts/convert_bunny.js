@@ -1,6 +1,7 @@
 #!/usr/bin/env node
 // Converts the Stanford bunny from the npm package `bunny` (exports `positions` and `cells`)
-// into assets/bunny.obj. The scan has holes; they are kept on purpose.
+// into assets/bunny.obj, geometry unchanged (this decimated version turns out to be closed:
+// no open boundary edges).
 //
 // How to run (from the repository root):
 //   cd /tmp && npm pack bunny && mkdir -p bunnypkg && tar xzf bunny-*.tgz -C bunnypkg && cd -
@@ -20,7 +21,7 @@ if (!src || !dst) {
 const bunny = require(path.resolve(src));
 const lines = [
   "# Stanford bunny (Stanford 3D Scanning Repository), via the npm package `bunny` 1.0.1",
-  "# converted by scripts/convert_bunny.js; holes of the scan kept on purpose",
+  "# converted by scripts/convert_bunny.js; geometry unchanged",
   `# ${bunny.positions.length} vertices, ${bunny.cells.length} triangles`,
 ];
 for (const p of bunny.positions) lines.push(`v ${p[0]} ${p[1]} ${p[2]}`);

@@ -17,11 +17,11 @@
 //! | `wedge`       | none                          | right-triangle footprint in XZ with a 15° corner, 1 long, height 0.5 along Y, centred | 8 |
 //! | `rounded-box` | `SxK` like `sphere` (`32x16`) | convex superellipsoid (exponent 0.3) in the unit cube | 2·S·(K−1) |
 //! | `torus-knot`  | `TxR` tubular × radial segments (`240x12`) | (2,3) knot in XZ, about 0.95 across | 2·T·R |
-//! | `bunny`       | none                          | the Stanford bunny (`assets/bunny.obj`, embedded), ~10 units tall, feet at y ≈ 0; an open scanned mesh with holes | 3674 |
+//! | `bunny`       | none                          | the Stanford bunny (`assets/bunny.obj`, embedded), ~10 units tall, feet at y ≈ 0; a decimated scan, closed (see `assets/README.md`) | 3674 |
 //!
 //! Examples: `"sphere"`, `"sphere:16x8"`, `"torus:24x20"`, `"torus-knot:240x12"`, `"icosphere:3"`.
 //!
-//! Every shape except `plane` (and `bunny`, a scan with holes) is closed, 2-manifold, welded (seams
+//! Every shape except `plane` (and `bunny`, which is not generated) is closed, 2-manifold, welded (seams
 //! share vertex indices; no two vertices have the same position) and wound counter-clockwise seen
 //! from outside.
 
@@ -138,7 +138,7 @@ fn two(
     Ok((a, b))
 }
 
-/// The embedded Stanford bunny (an open scanned mesh, holes kept).
+/// The embedded Stanford bunny, as the npm package `bunny` has it (any holes kept as they are).
 pub fn bunny() -> Result<Mesh, super::SceneError> {
     super::obj::parse_obj_str(include_str!("../../assets/bunny.obj"), "built-in bunny.obj")
 }
