@@ -465,6 +465,14 @@ fn no_umbra_reaches_the_ground() {
 }
 
 #[test]
+fn fig1_caster_is_much_smaller_than_the_light() {
+    let s = scene("fig1-large-light");
+    let (lo, hi) = s.casters().next().unwrap().mesh.bounds().unwrap();
+    // Light diameter at least three times the caster's largest extent.
+    assert!(3.0 * (hi - lo).max_element() < 2.0 * s.light.radius);
+}
+
+#[test]
 fn acute_corner_has_a_15_degree_corner_and_tilted_light() {
     let s = scene("acute-corner");
     assert!(
@@ -473,4 +481,48 @@ fn acute_corner_has_a_15_degree_corner_and_tilted_light() {
     );
     assert_eq!(s.casters().count(), 1);
     assert!((shapes::WEDGE_ANGLE_DEG - 15.0).abs() < 1e-6);
+}
+
+/// The camera frames the shadow: the casters and the extent of their penumbrae on the ground
+/// project inside a square viewport (the narrowest the GUI or `render` uses by default).
+#[test]
+fn cameras_frame_casters_and_shadows() {
+    for &name in builtin::names() {
+        let s = scene(name);
+        let view = glam::Mat4::look_at_rh(s.camera.eye, s.camera.target, Vec3::Y);
+        let proj = glam::Mat4::perspective_rh(s.camera.fov_y_deg.to_radians(), 1.0, 0.05, 100.0);
+        let m = proj * view;
+        let inside = |p: Vec3, what: &str| {
+            let c = m * p.extend(1.0);
+            assert!(c.w > 0.0, "{name}: {what} {p} behind the camera");
+            let ndc = c.truncate() / c.w;
+            assert!(
+                ndc.x.abs() <= 1.0 && ndc.y.abs() <= 1.0,
+                "{name}: {what} {p} outside the view ({ndc})"
+            );
+        };
+        for o in s.casters() {
+            let (lo, hi) = o.mesh.bounds().unwrap();
+            for k in 0..8 {
+                let pick = |bit: usize, a: f32, b: f32| if k & bit != 0 { b } else { a };
+                let p = Vec3::new(
+                    pick(1, lo.x, hi.x),
+                    pick(2, lo.y, hi.y),
+                    pick(4, lo.z, hi.z),
+                );
+                inside(p, "caster corner");
+            }
+            // The extreme points of the (round or box-like) penumbra: its bounds' edge midpoints.
+            let (a, b) = penumbra_bounds(&s, &o.mesh);
+            let mid = (a + b) / 2.0;
+            for p in [
+                glam::Vec2::new(a.x, mid.y),
+                glam::Vec2::new(b.x, mid.y),
+                glam::Vec2::new(mid.x, a.y),
+                glam::Vec2::new(mid.x, b.y),
+            ] {
+                inside(Vec3::new(p.x, 0.0, p.y), "penumbra corner");
+            }
+        }
+    }
 }

@@ -48,6 +48,8 @@ pub const NAMES: &[&str] = &[
 
 /// Largest segment count accepted for one parameter (keeps a typo from allocating gigabytes).
 pub const MAX_SEGMENTS: u32 = 4096;
+/// Largest product of the two parameters of `AxB` shapes (about 4 million triangles).
+pub const MAX_QUADS: u64 = 2_000_000;
 /// Largest icosphere subdivision level accepted (7 gives 327 680 triangles).
 pub const MAX_ICOSPHERE_LEVEL: u32 = 7;
 
@@ -134,6 +136,12 @@ fn two(
     let b: u32 = b.trim().parse().map_err(|_| bad())?;
     if a < min.0 || b < min.1 || a > MAX_SEGMENTS || b > MAX_SEGMENTS {
         return Err(bad());
+    }
+    if a as u64 * b as u64 > MAX_QUADS {
+        return Err(ShapeError::BadParams(format!(
+            "`{base}:{a}x{b}` would have {} triangles: expected A·B at most {MAX_QUADS}",
+            2 * a as u64 * b as u64
+        )));
     }
     Ok((a, b))
 }
@@ -575,6 +583,47 @@ mod tests {
         let m = plane();
         for [a, b, c] in m.triangle_corners() {
             assert!((b - a).cross(c - a).y > 0.0);
+        }
+    }
+
+    #[test]
+    fn huge_meshes_are_refused() {
+        assert!(matches!(
+            build("torus-knot:4096x4096"),
+            Err(ShapeError::BadParams(_))
+        ));
+        assert!(build("sphere:2000x1000").is_ok());
+    }
+
+    /// The knot's tube never meets itself: points of the centre curve farther apart along the
+    /// curve than the tube's diameter are farther apart in space than the diameter.
+    #[test]
+    fn torus_knot_tube_does_not_self_intersect() {
+        let m = torus_knot(480, 3);
+        // Ring centres: the mean of each ring of `radial` vertices.
+        let centres: Vec<Vec3> = m
+            .positions
+            .chunks(3)
+            .map(|r| (r[0] + r[1] + r[2]) / 3.0)
+            .collect();
+        let tube = (m.positions[0] - centres[0]).length();
+        let n = centres.len();
+        let mut along = vec![0.0f32; n + 1];
+        for i in 0..n {
+            along[i + 1] = along[i] + (centres[(i + 1) % n] - centres[i]).length();
+        }
+        let total = along[n];
+        for i in 0..n {
+            for j in i + 1..n {
+                let arc = (along[j] - along[i]).min(total - (along[j] - along[i]));
+                if arc > 4.0 * tube {
+                    let d = (centres[i] - centres[j]).length();
+                    assert!(
+                        d > 2.2 * tube,
+                        "rings {i} and {j}: {d} apart, tube radius {tube}"
+                    );
+                }
+            }
         }
     }
 
