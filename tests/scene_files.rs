@@ -168,6 +168,11 @@ fn nan_and_inf() {
     // Finite in f64 but infinite as the f32 the meshes use.
     let msg = parse_err(&scene_with("mesh = \"cube\"\ntranslate = [1e300, 0, 0]"));
     assert_has(&msg, &["my.toml", "object[1].translate", "finite"]);
+    let msg = parse_err(&format!(
+        "{CAMERA}\n{}",
+        LIGHT.replace("[0.0, -1.0, 0.0]", "[0.0, -1.0, nan]")
+    ));
+    assert_has(&msg, &["my.toml", "light.normal", "finite"]);
     let msg = parse_err(&format!("{CAMERA}\n{}intensity = nan\n", LIGHT));
     assert_has(&msg, &["my.toml", "light.intensity"]);
 }

@@ -62,6 +62,21 @@ pub enum ShapeError {
     BadParams(String),
 }
 
+impl std::fmt::Display for ShapeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ShapeError::Unknown(name) => write!(
+                f,
+                "unknown shape {name:?}: expected one of {}",
+                NAMES.join(", ")
+            ),
+            ShapeError::BadParams(expected) => f.write_str(expected),
+        }
+    }
+}
+
+impl std::error::Error for ShapeError {}
+
 /// True if `name` (the part before any `:`) is a built-in shape name.
 pub fn is_shape_name(name: &str) -> bool {
     let base = name.split(':').next().unwrap_or(name);
@@ -562,6 +577,11 @@ mod tests {
     #[test]
     fn bad_names_and_params() {
         assert_eq!(build("blob"), Err(ShapeError::Unknown("blob".into())));
+        let msg = build("blob:3").unwrap_err().to_string();
+        assert!(
+            msg.contains("\"blob\"") && msg.contains("torus-knot, bunny"),
+            "{msg}"
+        );
         for bad in [
             "sphere:2x8",
             "sphere:16",
