@@ -1,10 +1,18 @@
 //! Scenes: the disk light, the camera and the objects, from TOML files or built-ins.
 
+pub mod builtin;
+mod error;
+pub mod file;
 mod mesh;
+pub mod obj;
+pub mod shapes;
 
+pub use error::SceneError;
+pub use file::SceneFile;
 pub use mesh::Mesh;
 
 use glam::Vec3;
+use std::path::{Path, PathBuf};
 
 /// A one-sided disk light: centre `c`, unit normal `n_c` (the side it emits to), radius `r`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,4 +79,131 @@ impl Scene {
     pub fn caster_triangle_count(&self) -> usize {
         self.casters().map(|o| o.mesh.triangles.len()).sum()
     }
+}
+
+/// Loads a scene: a built-in scene name (see [`builtin::names`]), else a path to a `.toml` scene
+/// file (`.obj` paths in it are relative to the file), else a path to an `.obj` mesh, which is
+/// shown on a default ground under a default light (see [`obj_scene`]).
+pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+    let source = load_source(name_or_path)?;
+    source
+        .file
+        .build_named(&source.base_dir, &source.label, &source.name)
+}
+
+/// Like [`load`] but stops before loading meshes: the parsed scene file and the file it came from
+/// (`None` for a built-in scene). For an `.obj` path the scene file is the generated one, its
+/// mesh an absolute path, and the path returned is the `.obj`. Useful to edit and save a scene.
+pub fn load_file(name_or_path: &str) -> Result<(SceneFile, Option<PathBuf>), SceneError> {
+    let source = load_source(name_or_path)?;
+    Ok((source.file, source.path))
+}
+
+struct Source {
+    file: SceneFile,
+    path: Option<PathBuf>,
+    base_dir: PathBuf,
+    label: String,
+    name: String,
+}
+
+fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
+    if let Some(text) = builtin::source(name_or_path) {
+        let label = format!("built-in scene {name_or_path}");
+        return Ok(Source {
+            file: SceneFile::parse(text, &label)?,
+            path: None,
+            base_dir: PathBuf::from("."),
+            label,
+            name: name_or_path.to_string(),
+        });
+    }
+    let path = Path::new(name_or_path);
+    let label = path.display().to_string();
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| label.clone());
+    let base_dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("toml") => {
+            let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+                file: label.clone(),
+                source,
+            })?;
+            Ok(Source {
+                file: SceneFile::parse(&text, &label)?,
+                path: Some(path.to_path_buf()),
+                base_dir,
+                label,
+                name,
+            })
+        }
+        Some("obj") => Ok(Source {
+            file: obj_scene(path)?,
+            path: Some(path.to_path_buf()),
+            base_dir,
+            label,
+            name,
+        }),
+        _ => Err(SceneError::UnknownScene {
+            name: name_or_path.to_string(),
+            known: builtin::names().join(", "),
+        }),
+    }
+}
+
+/// The scene shown for a bare `.obj`: the mesh scaled to 1.5 m across its largest extent,
+/// centred over the origin and standing on a 10 m ground plane, under a disk light of radius 0.5
+/// at 4 m pointing down. The mesh path is made absolute so the scene can be saved anywhere.
+pub fn obj_scene(obj_path: &Path) -> Result<SceneFile, SceneError> {
+    let mesh = obj::load_obj(obj_path)?;
+    let (lo, hi) = mesh.bounds().ok_or_else(|| SceneError::Obj {
+        file: obj_path.display().to_string(),
+        problem: "contains no vertices".into(),
+    })?;
+    let extent = (hi - lo).max_element();
+    let scale = if extent > 0.0 { 1.5 / extent } else { 1.0 };
+    let centre = (lo + hi) / 2.0;
+    let translate = [
+        (-centre.x * scale) as f64,
+        (-lo.y * scale) as f64,
+        (-centre.z * scale) as f64,
+    ];
+    let absolute = std::path::absolute(obj_path).unwrap_or_else(|_| obj_path.to_path_buf());
+    const TEXT: &str = r#"
+[camera]
+eye = [0.0, 3.0, 5.0]
+target = [0.0, 0.5, 0.0]
+fov_y_deg = 45.0
+
+[light]
+center = [0.0, 4.0, 0.0]
+normal = [0.0, -1.0, 0.0]
+radius = 0.5
+
+[[object]]
+name = "ground"
+mesh = "plane"
+scale = 10.0
+casts_shadow = false
+"#;
+    let mut file = SceneFile::parse(TEXT, "generated obj scene")?;
+    file.objects.push(file::ObjectSpec {
+        name: obj_path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned()),
+        mesh: absolute.display().to_string(),
+        translate,
+        rotate_deg: [0.0; 3],
+        scale: file::Scale::Uniform(scale as f64),
+        casts_shadow: true,
+    });
+    Ok(file)
 }

@@ -1,0 +1,456 @@
+//! The scene file (design.md §3): TOML, +Y up, right-handed, metres, angles in degrees.
+//!
+//! ```toml
+//! [camera]
+//! eye = [0.0, 3.0, 6.0]
+//! target = [0.0, 0.5, 0.0]
+//! fov_y_deg = 45.0
+//!
+//! [light]                  # one-sided disk, emits toward `normal`
+//! center = [0.0, 4.0, 0.0]
+//! normal = [0.0, -1.0, 0.0]
+//! radius = 0.5
+//! intensity = 1.0          # optional, default 1
+//!
+//! [[object]]
+//! name = "ground"          # optional, default: the mesh name
+//! mesh = "plane"           # a built-in shape name (see `shapes`), or a path to .obj relative to this file
+//! translate = [0.0, 0.0, 0.0]    # optional, default 0
+//! rotate_deg = [0.0, 0.0, 0.0]   # optional, XYZ Euler, default 0
+//! scale = 10.0             # optional, a number or [x, y, z], default 1
+//! casts_shadow = false     # optional, default true
+//! ```
+//!
+//! **Transform convention.** An object's mesh is placed in the world by
+//! `T(translate) · R · S(scale)`: scaled first, then rotated, then translated. `R` is
+//! `glam::Quat::from_euler(EulerRot::XYZ, x, y, z)` = `Rx · Ry · Rz` (intrinsic X, then Y, then
+//! Z; equivalently, applied to a point: about the world Z axis first, then world Y, then world
+//! X). Angles are in degrees, positive counter-clockwise looking down the axis toward the origin.
+//!
+//! The light's normal need not be unit length; it is normalised when the scene is built.
+
+use super::{shapes, Camera, DiskLight, Mesh, Object, Scene, SceneError};
+use glam::{Affine3A, EulerRot, Quat, Vec3};
+use serde::{de, Deserialize, Deserializer, Serialize, Serializer};
+use std::fmt;
+use std::path::Path;
+
+/// A parsed scene file, before meshes are loaded. Numbers are kept as `f64` so a file written
+/// back by [`SceneFile::to_toml`] reads `0.1`, not `0.10000000149011612`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub camera: CameraSpec,
+    pub light: LightSpec,
+    #[serde(rename = "object", default, skip_serializing_if = "Vec::is_empty")]
+    pub objects: Vec<ObjectSpec>,
+}
+
+/// `[camera]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    pub eye: [f64; 3],
+    pub target: [f64; 3],
+    pub fov_y_deg: f64,
+}
+
+/// `[light]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightSpec {
+    pub center: [f64; 3],
+    pub normal: [f64; 3],
+    pub radius: f64,
+    #[serde(default = "one")]
+    pub intensity: f64,
+}
+
+/// One `[[object]]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    pub mesh: String,
+    #[serde(default)]
+    pub translate: [f64; 3],
+    #[serde(default)]
+    pub rotate_deg: [f64; 3],
+    #[serde(default)]
+    pub scale: Scale,
+    #[serde(default = "yes")]
+    pub casts_shadow: bool,
+}
+
+/// `scale`: one number for all axes, or `[x, y, z]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Scale {
+    Uniform(f64),
+    PerAxis([f64; 3]),
+}
+
+impl Default for Scale {
+    fn default() -> Self {
+        Scale::Uniform(1.0)
+    }
+}
+
+impl Scale {
+    /// The three per-axis factors.
+    pub fn xyz(&self) -> [f64; 3] {
+        match *self {
+            Scale::Uniform(s) => [s; 3],
+            Scale::PerAxis(v) => v,
+        }
+    }
+}
+
+impl Serialize for Scale {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Scale::Uniform(x) => s.serialize_f64(*x),
+            Scale::PerAxis(v) => v.serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> de::Visitor<'de> for V {
+            type Value = Scale;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number or an array of three numbers [x, y, z]")
+            }
+            fn visit_f64<E: de::Error>(self, x: f64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(x))
+            }
+            fn visit_i64<E: de::Error>(self, x: i64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(x as f64))
+            }
+            fn visit_u64<E: de::Error>(self, x: u64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(x as f64))
+            }
+            fn visit_seq<A: de::SeqAccess<'de>>(self, mut seq: A) -> Result<Scale, A::Error> {
+                let mut v = [0.0; 3];
+                for (i, slot) in v.iter_mut().enumerate() {
+                    *slot = seq
+                        .next_element()?
+                        .ok_or_else(|| de::Error::invalid_length(i, &self))?;
+                }
+                if seq.next_element::<f64>()?.is_some() {
+                    return Err(de::Error::invalid_length(4, &self));
+                }
+                Ok(Scale::PerAxis(v))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn v3(a: [f64; 3]) -> Vec3 {
+    Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32)
+}
+
+fn show(a: &[f64]) -> String {
+    let parts: Vec<String> = a.iter().map(|x| format!("{x}")).collect();
+    if parts.len() == 1 {
+        parts[0].clone()
+    } else {
+        format!("[{}]", parts.join(", "))
+    }
+}
+
+impl ObjectSpec {
+    /// The object's name: `name`, or else the mesh name.
+    pub fn display_name(&self) -> &str {
+        self.name.as_deref().unwrap_or(&self.mesh)
+    }
+
+    /// The object-to-world transform `T · R · S` (see the module documentation).
+    pub fn transform(&self) -> Affine3A {
+        let r = self.rotate_deg;
+        let rotation = Quat::from_euler(
+            EulerRot::XYZ,
+            (r[0] as f32).to_radians(),
+            (r[1] as f32).to_radians(),
+            (r[2] as f32).to_radians(),
+        );
+        Affine3A::from_scale_rotation_translation(
+            v3(self.scale.xyz()),
+            rotation,
+            v3(self.translate),
+        )
+    }
+}
+
+impl SceneFile {
+    /// Parses and validates scene TOML; `label` names the file in errors.
+    pub fn parse(text: &str, label: &str) -> Result<SceneFile, SceneError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Toml {
+            file: label.to_string(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        file.validate(label)?;
+        Ok(file)
+    }
+
+    /// Checks every value that TOML accepts but a scene cannot use. `parse` calls it; call it
+    /// again after editing a `SceneFile` in code.
+    pub fn validate(&self, label: &str) -> Result<(), SceneError> {
+        let invalid = |key: &str, expected: &str, found: String| SceneError::Invalid {
+            file: label.to_string(),
+            key: key.to_string(),
+            expected: expected.to_string(),
+            found,
+        };
+        let finite = |key: &str, v: &[f64]| {
+            // Meshes and the GPU use f32: a number past f32::MAX is infinite there.
+            if v.iter().all(|&x| x.is_finite() && (x as f32).is_finite()) {
+                Ok(())
+            } else {
+                Err(invalid(
+                    key,
+                    "finite numbers (no nan or inf; magnitude below 3.4e38)",
+                    show(v),
+                ))
+            }
+        };
+
+        let c = &self.camera;
+        finite("camera.eye", &c.eye)?;
+        finite("camera.target", &c.target)?;
+        finite("camera.fov_y_deg", &[c.fov_y_deg])?;
+        if !(c.fov_y_deg > 0.0 && c.fov_y_deg < 180.0) {
+            return Err(invalid(
+                "camera.fov_y_deg",
+                "a vertical field of view in degrees strictly between 0 and 180",
+                show(&[c.fov_y_deg]),
+            ));
+        }
+        if v3(c.eye) == v3(c.target) {
+            return Err(invalid(
+                "camera.target",
+                "a point different from camera.eye",
+                show(&c.target),
+            ));
+        }
+
+        let l = &self.light;
+        finite("light.center", &l.center)?;
+        finite("light.normal", &l.normal)?;
+        finite("light.radius", &[l.radius])?;
+        finite("light.intensity", &[l.intensity])?;
+        let n = v3(l.normal);
+        if n.length() <= 1e-6 || n.try_normalize().is_none() {
+            return Err(invalid(
+                "light.normal",
+                "a non-zero direction (it is normalised)",
+                show(&l.normal),
+            ));
+        }
+        if l.radius <= 0.0 {
+            return Err(invalid(
+                "light.radius",
+                "a positive disk radius",
+                show(&[l.radius]),
+            ));
+        }
+        if l.intensity < 0.0 {
+            return Err(invalid(
+                "light.intensity",
+                "a non-negative number",
+                show(&[l.intensity]),
+            ));
+        }
+
+        for (i, o) in self.objects.iter().enumerate() {
+            let key = |k: &str| format!("object[{i}].{k}");
+            if o.mesh.trim().is_empty() {
+                return Err(invalid(
+                    &key("mesh"),
+                    "a built-in shape name or a path to an .obj file",
+                    "an empty string".into(),
+                ));
+            }
+            finite(&key("translate"), &o.translate)?;
+            finite(&key("rotate_deg"), &o.rotate_deg)?;
+            let s = o.scale.xyz();
+            finite(&key("scale"), &s)?;
+            // f32 is what the mesh gets: a scale that underflows to 0 there is zero too.
+            if s.iter().any(|&x| x as f32 == 0.0) {
+                return Err(invalid(
+                    &key("scale"),
+                    "non-zero scale factors (negative ones mirror)",
+                    match o.scale {
+                        Scale::Uniform(x) => show(&[x]),
+                        Scale::PerAxis(v) => show(&v),
+                    },
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Loads the meshes (relative `.obj` paths are resolved against `base_dir`) and places every
+    /// object in world space. `label` names the scene file in errors; the scene is named after
+    /// `label`'s file stem.
+    pub fn build(&self, base_dir: &Path, label: &str) -> Result<Scene, SceneError> {
+        let name = Path::new(label)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| label.to_string());
+        self.build_named(base_dir, label, &name)
+    }
+
+    /// Like [`SceneFile::build`] with an explicit scene name.
+    pub fn build_named(
+        &self,
+        base_dir: &Path,
+        label: &str,
+        name: &str,
+    ) -> Result<Scene, SceneError> {
+        self.validate(label)?;
+        let c = &self.camera;
+        let l = &self.light;
+        let mut objects = Vec::with_capacity(self.objects.len());
+        for (i, o) in self.objects.iter().enumerate() {
+            let mesh = resolve_mesh(&o.mesh, base_dir, label, &format!("object[{i}].mesh"))?;
+            objects.push(Object {
+                name: o.display_name().to_string(),
+                mesh: mesh.transformed(&o.transform()),
+                casts_shadow: o.casts_shadow,
+            });
+        }
+        Ok(Scene {
+            name: name.to_string(),
+            camera: Camera {
+                eye: v3(c.eye),
+                target: v3(c.target),
+                fov_y_deg: c.fov_y_deg as f32,
+            },
+            light: DiskLight {
+                center: v3(l.center),
+                normal: v3(l.normal).normalize(),
+                radius: l.radius as f32,
+                intensity: l.intensity as f32,
+            },
+            objects,
+        })
+    }
+
+    /// The scene as TOML in the format [`SceneFile::parse`] reads.
+    pub fn to_toml(&self) -> String {
+        // Serialising plain structs of numbers, strings and arrays cannot fail; fall back to a
+        // comment rather than panic if it ever does.
+        toml::to_string(self).unwrap_or_else(|e| format!("# could not serialise the scene: {e}\n"))
+    }
+}
+
+/// A mesh name from a scene file: a built-in shape, else a path to an `.obj` file relative to
+/// `base_dir`. `key` (e.g. `object[2].mesh`) names it in errors.
+pub fn resolve_mesh(
+    mesh: &str,
+    base_dir: &Path,
+    label: &str,
+    key: &str,
+) -> Result<Mesh, SceneError> {
+    if shapes::is_shape_name(mesh) {
+        return shapes::build(mesh).map_err(|e| match e {
+            shapes::ShapeError::Unknown(name) => unknown_mesh(label, key, &name),
+            shapes::ShapeError::BadParams(expected) => SceneError::ShapeParams {
+                file: label.to_string(),
+                key: key.to_string(),
+                expected,
+            },
+        });
+    }
+    let path = base_dir.join(mesh);
+    let is_obj = Path::new(mesh)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if is_obj || path.is_file() {
+        return super::obj::load_obj(&path).map_err(|source| SceneError::Mesh {
+            file: label.to_string(),
+            key: key.to_string(),
+            source: Box::new(source),
+        });
+    }
+    Err(unknown_mesh(label, key, mesh))
+}
+
+fn unknown_mesh(label: &str, key: &str, name: &str) -> SceneError {
+    SceneError::UnknownMesh {
+        file: label.to_string(),
+        key: key.to_string(),
+        name: name.to_string(),
+        known: shapes::NAMES.join(", "),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+[camera]
+eye = [0, 3, 6]
+target = [0, 0.5, 0]
+fov_y_deg = 45
+
+[light]
+center = [0, 4, 0]
+normal = [0, -2, 0]
+radius = 0.5
+
+[[object]]
+mesh = "sphere:8x4"
+scale = [1, 2, 3]
+"#;
+
+    #[test]
+    fn defaults() {
+        let f = SceneFile::parse(MINIMAL, "m.toml").unwrap();
+        assert_eq!(f.light.intensity, 1.0);
+        let o = &f.objects[0];
+        assert!(o.casts_shadow);
+        assert_eq!(o.display_name(), "sphere:8x4");
+        assert_eq!(o.scale, Scale::PerAxis([1.0, 2.0, 3.0]));
+        let s = f.build(Path::new("."), "m.toml").unwrap();
+        assert_eq!(s.name, "m");
+        assert_eq!(s.light.normal, Vec3::new(0.0, -1.0, 0.0));
+        assert_eq!(s.objects[0].mesh.triangles.len(), 2 * 8 * 3);
+    }
+
+    #[test]
+    fn round_trip() {
+        let f = SceneFile::parse(MINIMAL, "m.toml").unwrap();
+        let text = f.to_toml();
+        assert!(text.contains("[[object]]"), "{text}");
+        assert_eq!(SceneFile::parse(&text, "again.toml").unwrap(), f);
+    }
+
+    #[test]
+    fn euler_convention_is_rx_ry_rz() {
+        let o = ObjectSpec {
+            name: None,
+            mesh: "cube".into(),
+            translate: [0.0; 3],
+            rotate_deg: [90.0, 90.0, 0.0],
+            scale: Scale::default(),
+            casts_shadow: true,
+        };
+        // Rx(90)·Ry(90)·x: Ry takes +X to -Z, then Rx takes -Z to +Y.
+        let p = o.transform().transform_point3(Vec3::X);
+        assert!((p - Vec3::Y).length() < 1e-5, "{p}");
+    }
+}
