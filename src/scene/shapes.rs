@@ -18,10 +18,11 @@
 //! | `rounded-box` | `SxK` like `sphere` (`32x16`) | convex superellipsoid (exponent 0.3) in the unit cube | 2·S·(K−1) |
 //! | `torus-knot`  | `TxR` tubular × radial segments (`240x12`) | (2,3) knot in XZ, about 0.95 across | 2·T·R |
 //! | `bunny`       | none                          | the Stanford bunny (`assets/bunny.obj`, embedded), ~10 units tall, feet at y ≈ 0; a decimated scan, closed (see `assets/README.md`) | 3674 |
+//! | `bunny-open`  | none                          | `bunny` opened at its base: the triangles in the bottom 3 % of its height removed, as a range scan leaves them | fewer |
 //!
 //! Examples: `"sphere"`, `"sphere:16x8"`, `"torus:24x20"`, `"torus-knot:240x12"`, `"icosphere:3"`.
 //!
-//! Every shape except `plane` (and `bunny`, which is not generated) is closed, 2-manifold, welded (seams
+//! Every shape except `plane` and `bunny-open` (and `bunny`, which is not generated) is closed, 2-manifold, welded (seams
 //! share vertex indices; no two vertices have the same position) and wound counter-clockwise seen
 //! from outside.
 
@@ -44,6 +45,7 @@ pub const NAMES: &[&str] = &[
     "rounded-box",
     "torus-knot",
     "bunny",
+    "bunny-open",
 ];
 
 /// Largest segment count accepted for one parameter (keeps a typo from allocating gigabytes).
@@ -96,6 +98,11 @@ pub fn build(name: &str) -> Result<Mesh, ShapeError> {
         "wedge" => none(base, params).map(|()| wedge()),
         "bunny" => none(base, params).and_then(|()| {
             bunny().map_err(|e| ShapeError::BadParams(format!("embedded bunny: {e}")))
+        }),
+        "bunny-open" => none(base, params).and_then(|()| {
+            bunny()
+                .map(|m| open_base(&m, BUNNY_OPEN_BASE))
+                .map_err(|e| ShapeError::BadParams(format!("embedded bunny: {e}")))
         }),
         "sphere" => two(base, params, (32, 16), (3, 2)).map(|(s, k)| sphere(s, k)),
         "rounded-box" => two(base, params, (32, 16), (3, 2)).map(|(s, k)| rounded_box(s, k)),
@@ -159,6 +166,27 @@ fn two(
         )));
     }
     Ok((a, b))
+}
+
+/// Share of the bunny's height whose triangles `bunny-open` removes.
+pub const BUNNY_OPEN_BASE: f32 = 0.03;
+
+/// `mesh` without the triangles that lie entirely in the bottom `share` of its height: the mesh
+/// opened at its base, as range scans are (the scanner cannot see under the object). The npm
+/// bunny is the scan with its holes filled; `bunny-open` gives the lab an open boundary of the
+/// kind users' scanned meshes have.
+pub fn open_base(mesh: &Mesh, share: f32) -> Mesh {
+    let Some((lo, hi)) = mesh.bounds() else {
+        return mesh.clone();
+    };
+    let cut = lo.y + share * (hi.y - lo.y);
+    let triangles = mesh
+        .triangles
+        .iter()
+        .copied()
+        .filter(|t| t.iter().any(|&k| mesh.positions[k as usize].y > cut))
+        .collect();
+    Mesh::new(mesh.positions.clone(), triangles)
 }
 
 /// The embedded Stanford bunny, as the npm package `bunny` has it (any holes kept as they are).
