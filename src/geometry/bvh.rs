@@ -10,7 +10,7 @@
 //! interval). `dir` need not be unit length. Any input is safe: NaN or infinite coordinates, zero
 //! `dir` and degenerate triangles give no hits (or the hits brute force gives), never a panic.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A, Vec4};
 
 use super::ray::intersect_precomputed;
 
@@ -45,6 +45,32 @@ struct Node {
     count: u32,
 }
 
+/// The traversal's copy of a [`Node`], 32 bytes, 16-aligned, so the slab test runs on SIMD
+/// lanes: `xyz` of `min`/`max` are the box, the `w` lanes hold the bits of `first`/`count`.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+struct PackedNode {
+    min: Vec4,
+    max: Vec4,
+}
+
+impl PackedNode {
+    fn new(n: &Node) -> Self {
+        Self {
+            min: n.min.extend(f32::from_bits(n.first)),
+            max: n.max.extend(f32::from_bits(n.count)),
+        }
+    }
+    #[inline(always)]
+    fn first(&self) -> u32 {
+        self.min.w.to_bits()
+    }
+    #[inline(always)]
+    fn count(&self) -> u32 {
+        self.max.w.to_bits()
+    }
+}
+
 /// A triangle in leaf order: first corner and the two edges from it, exactly as
 /// [`intersect_triangle`](super::ray::intersect_triangle) computes them.
 #[derive(Clone, Copy, Debug)]
@@ -57,7 +83,7 @@ struct PreTri {
 /// A BVH over a triangle soup. See the module documentation.
 #[derive(Clone, Debug)]
 pub struct Bvh {
-    nodes: Vec<Node>,
+    nodes: Vec<PackedNode>,
     /// Triangles in leaf order.
     pre: Vec<PreTri>,
     /// Original index of each triangle in leaf order.
@@ -71,7 +97,8 @@ pub struct Bvh {
 struct Ray {
     origin: Vec3,
     dir: Vec3,
-    inv: Vec3,
+    origin_a: Vec3A,
+    inv: Vec3A,
 }
 
 impl Ray {
@@ -80,21 +107,21 @@ impl Ray {
         Self {
             origin,
             dir,
-            inv: dir.recip(),
+            origin_a: origin.into(),
+            inv: Vec3A::from(dir).recip(),
         }
     }
 
     /// Entry parameter of the ray into the node's box clipped to `[t_min, t_max]`, or `None`.
     #[inline(always)]
-    fn enter(&self, n: &Node, t_min: f32, t_max: f32) -> Option<f32> {
-        let t1 = (n.min - self.origin) * self.inv;
-        let t2 = (n.max - self.origin) * self.inv;
-        // f32::min/max return the other operand when one is NaN, so a NaN slab (origin on the
-        // slab of a ray parallel to it) is ignored rather than rejecting the box.
-        let near = t1.x.min(t2.x).max(t1.y.min(t2.y)).max(t1.z.min(t2.z));
-        let far = t1.x.max(t2.x).min(t1.y.max(t2.y)).min(t1.z.max(t2.z));
-        let near = near.max(t_min);
-        let far = far.min(t_max);
+    fn enter(&self, n: &PackedNode, t_min: f32, t_max: f32) -> Option<f32> {
+        let t1 = (Vec3A::from_vec4(n.min) - self.origin_a) * self.inv;
+        let t2 = (Vec3A::from_vec4(n.max) - self.origin_a) * self.inv;
+        // A NaN lane (0·inf: the origin exactly on a face of a box the ray runs parallel to)
+        // makes min/max pick the other operand; such a ray lies on the padded face, outside
+        // the triangles' bounds, so whatever the test decides no hit is lost.
+        let near = t1.min(t2).max_element().max(t_min);
+        let far = t1.max(t2).min_element().min(t_max);
         (near <= far).then_some(near)
     }
 }
@@ -185,7 +212,7 @@ impl Bvh {
             .collect();
         let index = items.iter().map(|b| b.index).collect();
         Bvh {
-            nodes,
+            nodes: nodes.iter().map(PackedNode::new).collect(),
             pre,
             index,
             triangles,
@@ -262,9 +289,10 @@ impl Bvh {
         let mut sp = 0usize;
         let mut node = root;
         loop {
-            if node.count > 0 {
-                let first = node.first as usize;
-                let end = first + node.count as usize;
+            let count = node.count();
+            if count > 0 {
+                let first = node.first() as usize;
+                let end = first + count as usize;
                 for k in first..end {
                     // Indices come from the build and are in range; `get` keeps this panic-free.
                     let (Some(p), Some(&i)) = (self.pre.get(k), self.index.get(k)) else {
@@ -277,7 +305,7 @@ impl Bvh {
                     }
                 }
             } else {
-                let l = node.first as usize;
+                let l = node.first() as usize;
                 if let (Some(a), Some(b)) = (self.nodes.get(l), self.nodes.get(l + 1)) {
                     let far = v.limit();
                     let ta = ray.enter(a, t_min, far);
