@@ -12,7 +12,7 @@
 
 use glam::{Vec3, Vec3A, Vec4};
 
-use super::ray::intersect_precomputed;
+use super::ray::intersect_edges;
 
 /// One hit along a ray: the ray parameter and the triangle's index in the order given to
 /// [`Bvh::build`].
@@ -75,9 +75,9 @@ impl PackedNode {
 /// [`intersect_triangle`](super::ray::intersect_triangle) computes them.
 #[derive(Clone, Copy, Debug)]
 struct PreTri {
-    v0: Vec3,
-    e1: Vec3,
-    e2: Vec3,
+    v0: Vec3A,
+    e1: Vec3A,
+    e2: Vec3A,
 }
 
 /// A BVH over a triangle soup. See the module documentation.
@@ -95,9 +95,8 @@ pub struct Bvh {
 /// A ray with what the box test needs precomputed.
 #[derive(Clone, Copy)]
 struct Ray {
-    origin: Vec3,
-    dir: Vec3,
     origin_a: Vec3A,
+    dir_a: Vec3A,
     inv: Vec3A,
 }
 
@@ -105,8 +104,7 @@ impl Ray {
     fn new(origin: Vec3, dir: Vec3) -> Self {
         // 1/0 = ±inf is what the slab test wants; the min/max below ignore the NaN of 0·inf.
         Self {
-            origin,
-            dir,
+            dir_a: dir.into(),
             origin_a: origin.into(),
             inv: Vec3A::from(dir).recip(),
         }
@@ -203,10 +201,11 @@ impl Bvh {
             .iter()
             .map(|b| {
                 let t = &triangles[b.index as usize];
+                let v0 = Vec3A::from(t[0]);
                 PreTri {
-                    v0: t[0],
-                    e1: t[1] - t[0],
-                    e2: t[2] - t[0],
+                    v0,
+                    e1: Vec3A::from(t[1]) - v0,
+                    e2: Vec3A::from(t[2]) - v0,
                 }
             })
             .collect();
@@ -298,7 +297,7 @@ impl Bvh {
                     let (Some(p), Some(&i)) = (self.pre.get(k), self.index.get(k)) else {
                         continue;
                     };
-                    if let Some(t) = intersect_precomputed(ray.origin, ray.dir, p.v0, p.e1, p.e2) {
+                    if let Some(t) = intersect_edges(ray.origin_a, ray.dir_a, p.v0, p.e1, p.e2) {
                         if t >= t_min && t <= v.limit() && v.hit(i, t) {
                             return;
                         }
