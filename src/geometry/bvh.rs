@@ -12,7 +12,7 @@
 
 use glam::{Vec3, Vec3A, Vec4};
 
-use super::ray::intersect_edges;
+use super::ray::{intersect_edges, intersect_triangle};
 
 /// One hit along a ray: the ray parameter and the triangle's index in the order given to
 /// [`Bvh::build`].
@@ -254,12 +254,24 @@ impl Bvh {
 
     /// Whether any triangle is hit with `t_min <= t <= t_max` (stops at the first one found).
     pub fn any_hit(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> bool {
-        let mut v = Any {
-            found: false,
-            t_max,
-        };
+        self.find_any_hit(origin, dir, t_min, t_max).is_some()
+    }
+
+    /// Some hit with `t_min <= t <= t_max`, not necessarily the closest: the first the traversal
+    /// finds (it stops there). Shadow rays use the triangle as a cache for the next ray.
+    pub fn find_any_hit(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
+        let mut v = Any { found: None, t_max };
         self.traverse(&Ray::new(origin, dir), t_min, &mut v);
         v.found
+    }
+
+    /// Whether triangle `i` (original order) is hit with `t_min <= t <= t_max`; `false` when
+    /// `i` is out of range.
+    #[inline]
+    pub fn hits_triangle(&self, i: u32, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> bool {
+        self.triangles.get(i as usize).is_some_and(|tri| {
+            intersect_triangle(origin, dir, tri).is_some_and(|t| t >= t_min && t <= t_max)
+        })
     }
 
     /// Calls `f` once for every hit with `t_min <= t <= t_max`, in no particular order.
@@ -381,7 +393,7 @@ impl Visitor for Closest {
 }
 
 struct Any {
-    found: bool,
+    found: Option<Hit>,
     t_max: f32,
 }
 
@@ -391,8 +403,8 @@ impl Visitor for Any {
         self.t_max
     }
     #[inline(always)]
-    fn hit(&mut self, _: u32, _: f32) -> bool {
-        self.found = true;
+    fn hit(&mut self, triangle: u32, t: f32) -> bool {
+        self.found = Some(Hit { t, triangle });
         true
     }
 }
@@ -585,6 +597,13 @@ mod tests {
         got.sort_unstable();
         assert_eq!(got, all, "all hits, ray {o} {d} [{t0}, {t1}]");
         assert_eq!(bvh.any_hit(o, d, t0, t1), !all.is_empty());
+        if let Some(h) = bvh.find_any_hit(o, d, t0, t1) {
+            assert!(all.contains(&(h.triangle, h.t.to_bits())));
+            assert!(bvh.hits_triangle(h.triangle, o, d, t0, t1));
+        }
+        for &(i, _) in &all {
+            assert!(bvh.hits_triangle(i, o, d, t0, t1));
+        }
         let c = bvh.closest_hit(o, d, t0, t1);
         let b = brute_closest(tris, o, d, t0, t1);
         assert_eq!(

@@ -115,10 +115,19 @@ impl Oracle {
         if !x.is_finite() || h.is_nan() || h <= 0.0 {
             return 0.0;
         }
+        let (t0, t1) = (SELF_EPS, 1.0 - SELF_EPS);
         let mut visible = 0u32;
+        // Shadow cache: neighbouring samples are mostly blocked by the same triangle, so the
+        // last occluder is tried before the BVH. Only genuine hits count: V does not change.
+        let mut last: Option<u32> = None;
         for &s in &self.samples {
-            if !self.bvh.any_hit(x, s - x, SELF_EPS, 1.0 - SELF_EPS) {
-                visible += 1;
+            let d = s - x;
+            if last.is_some_and(|i| self.bvh.hits_triangle(i, x, d, t0, t1)) {
+                continue;
+            }
+            match self.bvh.find_any_hit(x, d, t0, t1) {
+                Some(h) => last = Some(h.triangle),
+                None => visible += 1,
             }
         }
         self.rays
