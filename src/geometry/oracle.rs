@@ -17,7 +17,13 @@
 //!   along the segment from `x` (t = 0) to the sample (t = 1), so neither the receiver under `x`
 //!   nor anything touching the light's plane at the sample shadows it. Occluders closer to `x`
 //!   than `SELF_EPS` times the distance to the light are not seen;
-//! - a point with a NaN or infinite coordinate has `V = 0`; `K = 0` is treated as `K = 1`.
+//! - a point with a NaN or infinite coordinate has `V = 0`, and so has every point when the
+//!   light itself is not finite (NaN or infinite centre, normal or radius); `K = 0` is treated
+//!   as `K = 1`;
+//! - [`Oracle::rays_cast`] counts `K` shadow rays per point in front of the light, including
+//!   those the shadow cache (the last occluder, tried before the BVH) answers.
+//!
+//! Speed: `benches/oracle.rs` (`cargo bench --bench oracle`) measures rays per second.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -43,6 +49,8 @@ pub struct Oracle {
     light: DiskLight,
     /// Sample points on the disk, world space.
     samples: Vec<Vec3>,
+    /// Whether the light's centre, normal and radius are finite (otherwise `V = 0`).
+    light_ok: bool,
     rays: AtomicU64,
 }
 
@@ -52,6 +60,7 @@ impl Clone for Oracle {
             bvh: self.bvh.clone(),
             light: self.light,
             samples: self.samples.clone(),
+            light_ok: self.light_ok,
             rays: AtomicU64::new(self.rays.load(Ordering::Relaxed)),
         }
     }
@@ -61,14 +70,19 @@ impl Oracle {
     /// An oracle where every triangle occludes, with `samples` rays per point (0 means 1).
     pub fn new(triangles: Vec<[Vec3; 3]>, light: DiskLight, samples: usize) -> Oracle {
         let (e1, e2) = light.basis();
-        let samples = disk_samples(samples.max(1))
+        let samples: Vec<Vec3> = disk_samples(samples.max(1))
             .into_iter()
             .map(|p| light.center + light.radius * (p.x * e1 + p.y * e2))
             .collect();
+        let light_ok = light.center.is_finite()
+            && light.normal.is_finite()
+            && light.radius.is_finite()
+            && samples.iter().all(|s: &Vec3| s.is_finite());
         Oracle {
             bvh: Bvh::build(triangles),
             light,
             samples,
+            light_ok,
             rays: AtomicU64::new(0),
         }
     }
@@ -112,7 +126,7 @@ impl Oracle {
     pub fn visibility(&self, x: Vec3) -> f32 {
         // Finite `x` with a finite light gives a finite height; NaN fails the comparison.
         let h = self.light.height_of(x);
-        if !x.is_finite() || h.is_nan() || h <= 0.0 {
+        if !self.light_ok || !x.is_finite() || h.is_nan() || h <= 0.0 {
             return 0.0;
         }
         let (t0, t1) = (SELF_EPS, 1.0 - SELF_EPS);
@@ -255,6 +269,37 @@ mod tests {
     }
 
     #[test]
+    fn a_broken_light_gives_zero_not_a_panic() {
+        for l in [
+            DiskLight {
+                radius: f32::NAN,
+                ..light()
+            },
+            DiskLight {
+                normal: Vec3::NAN,
+                ..light()
+            },
+            DiskLight {
+                center: Vec3::splat(f32::INFINITY),
+                ..light()
+            },
+        ] {
+            let o = Oracle::new(vec![[Vec3::ZERO, Vec3::X, Vec3::Z]], l, 16);
+            assert_eq!(o.visibility(Vec3::new(0.0, 1.0, 0.0)), 0.0);
+        }
+        // A zero radius is a point light: valid.
+        let point = Oracle::new(
+            Vec::new(),
+            DiskLight {
+                radius: 0.0,
+                ..light()
+            },
+            16,
+        );
+        assert_eq!(point.visibility(Vec3::ZERO), 1.0);
+    }
+
+    #[test]
     fn receiver_does_not_shadow_itself() {
         // A ground quad under the light; points on it (and on a tilted one) are fully lit.
         let g = [
@@ -274,6 +319,52 @@ mod tests {
             let p = Vec3::new(-4.9 + 0.19 * i as f32, 0.0, 0.37 * (i % 7) as f32 - 1.0);
             assert_eq!(o.visibility(p), 1.0, "{p}");
         }
+    }
+
+    #[test]
+    fn from_scene_every_object_occludes_casters_or_not() {
+        use crate::scene::{Camera, Mesh, Object};
+        let quad = |y: f32| {
+            Mesh::new(
+                vec![
+                    Vec3::new(-1.0, y, -1.0),
+                    Vec3::new(1.0, y, -1.0),
+                    Vec3::new(1.0, y, 1.0),
+                    Vec3::new(-1.0, y, 1.0),
+                ],
+                vec![[0, 2, 1], [0, 3, 2]],
+            )
+        };
+        let scene = Scene {
+            name: "t".into(),
+            camera: Camera {
+                eye: Vec3::ONE,
+                target: Vec3::ZERO,
+                fov_y_deg: 45.0,
+            },
+            light: light(),
+            objects: vec![
+                Object {
+                    name: "ground".into(),
+                    mesh: quad(0.0),
+                    casts_shadow: false,
+                },
+                Object {
+                    name: "lid".into(),
+                    mesh: quad(2.0),
+                    casts_shadow: false,
+                },
+            ],
+        };
+        let o = Oracle::from_scene(&scene, 64);
+        assert_eq!(o.bvh().len(), 4);
+        assert_eq!(o.sample_count(), 64);
+        assert_eq!(
+            o.visibility(Vec3::ZERO),
+            0.0,
+            "under the lid, on the ground"
+        );
+        assert_eq!(o.visibility(Vec3::new(0.0, 2.0, 0.0)), 1.0, "on the lid");
     }
 
     #[test]
