@@ -12,7 +12,9 @@
 
 use glam::{Vec3, Vec3A, Vec4};
 
-use super::ray::{intersect_edges, intersect_triangle};
+use super::ray::{
+    intersect_edges, intersect_edges_tolerant, intersect_triangle, intersect_triangle_tolerant,
+};
 
 /// One hit along a ray: the ray parameter and the triangle's index in the order given to
 /// [`Bvh::build`].
@@ -248,7 +250,7 @@ impl Bvh {
     /// with the lowest triangle index wins, so the answer does not depend on the tree.
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
         let mut v = Closest { best: None, t_max };
-        self.traverse(&Ray::new(origin, dir), t_min, &mut v);
+        self.traverse::<_, false>(&Ray::new(origin, dir), t_min, &mut v);
         v.best
     }
 
@@ -261,7 +263,7 @@ impl Bvh {
     /// finds (it stops there). Shadow rays use the triangle as a cache for the next ray.
     pub fn find_any_hit(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
         let mut v = Any { found: None, t_max };
-        self.traverse(&Ray::new(origin, dir), t_min, &mut v);
+        self.traverse::<_, false>(&Ray::new(origin, dir), t_min, &mut v);
         v.found
     }
 
@@ -271,6 +273,36 @@ impl Bvh {
     pub fn hits_triangle(&self, i: u32, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> bool {
         self.triangles.get(i as usize).is_some_and(|tri| {
             intersect_triangle(origin, dir, tri).is_some_and(|t| t >= t_min && t <= t_max)
+        })
+    }
+
+    /// [`Bvh::find_any_hit`] with
+    /// [`intersect_triangle_tolerant`](super::ray::intersect_triangle_tolerant): no ray slips
+    /// between two triangles that share an edge. For shadow rays against closed meshes.
+    pub fn find_any_hit_tolerant(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<Hit> {
+        let mut v = Any { found: None, t_max };
+        self.traverse::<_, true>(&Ray::new(origin, dir), t_min, &mut v);
+        v.found
+    }
+
+    /// [`Bvh::hits_triangle`] with the tolerant test.
+    #[inline]
+    pub fn hits_triangle_tolerant(
+        &self,
+        i: u32,
+        origin: Vec3,
+        dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
+        self.triangles.get(i as usize).is_some_and(|tri| {
+            intersect_triangle_tolerant(origin, dir, tri).is_some_and(|t| t >= t_min && t <= t_max)
         })
     }
 
@@ -284,12 +316,12 @@ impl Bvh {
         f: impl FnMut(Hit),
     ) {
         let mut v = Every { f, t_max };
-        self.traverse(&Ray::new(origin, dir), t_min, &mut v);
+        self.traverse::<_, false>(&Ray::new(origin, dir), t_min, &mut v);
     }
 
     /// The one traversal loop, ordered front to back.
     #[inline(always)]
-    fn traverse<V: Visitor>(&self, ray: &Ray, t_min: f32, v: &mut V) {
+    fn traverse<V: Visitor, const TOLERANT: bool>(&self, ray: &Ray, t_min: f32, v: &mut V) {
         let Some(root) = self.nodes.first() else {
             return;
         };
@@ -309,7 +341,12 @@ impl Bvh {
                     let (Some(p), Some(&i)) = (self.pre.get(k), self.index.get(k)) else {
                         continue;
                     };
-                    if let Some(t) = intersect_edges(ray.origin_a, ray.dir_a, p.v0, p.e1, p.e2) {
+                    let hit = if TOLERANT {
+                        intersect_edges_tolerant(ray.origin_a, ray.dir_a, p.v0, p.e1, p.e2)
+                    } else {
+                        intersect_edges(ray.origin_a, ray.dir_a, p.v0, p.e1, p.e2)
+                    };
+                    if let Some(t) = hit {
                         if t >= t_min && t <= v.limit() && v.hit(i, t) {
                             return;
                         }
@@ -603,6 +640,15 @@ mod tests {
         }
         for &(i, _) in &all {
             assert!(bvh.hits_triangle(i, o, d, t0, t1));
+        }
+        let tolerant_any = tris.iter().any(|t| {
+            crate::geometry::ray::intersect_triangle_tolerant(o, d, t)
+                .is_some_and(|t| t >= t0 && t <= t1)
+        });
+        let found = bvh.find_any_hit_tolerant(o, d, t0, t1);
+        assert_eq!(found.is_some(), tolerant_any);
+        if let Some(h) = found {
+            assert!(bvh.hits_triangle_tolerant(h.triangle, o, d, t0, t1));
         }
         let c = bvh.closest_hit(o, d, t0, t1);
         let b = brute_closest(tris, o, d, t0, t1);
