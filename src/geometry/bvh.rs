@@ -3,8 +3,12 @@
 //! Binned SAH build, nodes flattened into one array (two children always adjacent, so a
 //! traversal step reads both child boxes from neighbouring memory), triangles copied into leaf
 //! order with their edges precomputed. Triangles are two-sided, like
-//! [`intersect_triangle`](super::ray::intersect_triangle), and every query gives bit-for-bit the
-//! answer of running that function over all triangles: the BVH only skips work.
+//! [`intersect_triangle`], and the exact queries
+//! ([`Bvh::closest_hit`], [`Bvh::any_hit`], [`Bvh::find_any_hit`], [`Bvh::for_each_hit`]) give
+//! bit-for-bit the answer of running that function over all triangles: the BVH only skips work.
+//! The `_tolerant` queries use
+//! [`intersect_triangle_tolerant`] instead, which no
+//! ray slips through between two triangles sharing an edge (shadow rays of the oracle).
 //!
 //! Queries take a ray `origin + t·dir` and accept hits with `t_min <= t <= t_max` (closed
 //! interval). `dir` need not be unit length. Any input is safe: NaN or infinite coordinates, zero
@@ -26,7 +30,8 @@ pub struct Hit {
 
 /// Number of SAH bins per axis.
 const BINS: usize = 16;
-/// Leaves never hold more triangles than this unless their centroids coincide.
+/// Leaves hold at most this many triangles, unless their centroids coincide or `MAX_DEPTH`
+/// is reached (then they hold whatever is left).
 const MAX_LEAF: usize = 8;
 /// The build stops splitting at this depth, so the traversal stack below never overflows.
 const MAX_DEPTH: usize = 48;
@@ -74,7 +79,7 @@ impl PackedNode {
 }
 
 /// A triangle in leaf order: first corner and the two edges from it, exactly as
-/// [`intersect_triangle`](super::ray::intersect_triangle) computes them.
+/// [`intersect_triangle`] computes them.
 #[derive(Clone, Copy, Debug)]
 struct PreTri {
     v0: Vec3A,
@@ -277,7 +282,7 @@ impl Bvh {
     }
 
     /// [`Bvh::find_any_hit`] with
-    /// [`intersect_triangle_tolerant`](super::ray::intersect_triangle_tolerant): no ray slips
+    /// [`intersect_triangle_tolerant`]: no ray slips
     /// between two triangles that share an edge. For shadow rays against closed meshes.
     pub fn find_any_hit_tolerant(
         &self,
@@ -325,6 +330,9 @@ impl Bvh {
         let Some(root) = self.nodes.first() else {
             return;
         };
+        if self.pre.is_empty() {
+            return;
+        }
         if ray.enter(root, t_min, v.limit()).is_none() {
             return;
         }
