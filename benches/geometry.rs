@@ -27,8 +27,14 @@ fn casters() -> Vec<(String, Mesh)> {
     let mut list = vec![
         ("sphere-224".to_string(), placed(shapes::sphere(16, 8))),
         ("sphere-960".to_string(), placed(shapes::sphere(32, 16))),
-        ("rounded-box-1440".to_string(), placed(shapes::rounded_box(48, 16))),
-        ("rounded-box-5760".to_string(), placed(shapes::rounded_box(96, 31))),
+        (
+            "rounded-box-1440".to_string(),
+            placed(shapes::rounded_box(48, 16)),
+        ),
+        (
+            "rounded-box-5760".to_string(),
+            placed(shapes::rounded_box(96, 31)),
+        ),
     ];
     if let Ok(s) = scene::load("fig8c-complex") {
         if let Some(o) = s.casters().next() {
@@ -56,7 +62,10 @@ fn geometry(c: &mut Criterion) {
 
     let mut group = c.benchmark_group("prepare");
     group.sample_size(10);
-    for (name, mesh) in casters().into_iter().filter(|(n, _)| n.contains("5760") || n.contains("1M")) {
+    for (name, mesh) in casters()
+        .into_iter()
+        .filter(|(n, _)| n.contains("5760") || n.contains("1M"))
+    {
         group.throughput(Throughput::Elements(mesh.triangles.len() as u64));
         group.bench_with_input(BenchmarkId::from_parameter(&name), &mesh, |b, m| {
             b.iter(|| CasterMesh::new("caster", m))

@@ -37,8 +37,17 @@ pub fn inspect(name: &str, samples: Option<usize>) -> Result<()> {
     );
     println!(
         "{:<16} {:>9} {:>9} {:>9} {:>6} {:>6} {:>7} {:>7} {:>5} {:>8} {:>8}",
-        "caster", "tris", "all-fr", "none-fr", "sil-A", "sil-B", "umb-e", "pen-e", "fans",
-        "umb-tri", "pen-tri"
+        "caster",
+        "tris",
+        "all-fr",
+        "none-fr",
+        "sil-A",
+        "sil-B",
+        "umb-e",
+        "pen-e",
+        "fans",
+        "umb-tri",
+        "pen-tri"
     );
     for c in &geometry.casters {
         let s = c.stats;
@@ -71,7 +80,10 @@ pub fn inspect(name: &str, samples: Option<usize>) -> Result<()> {
         let n = 64;
         let points: Vec<_> = (0..n * n)
             .map(|i| {
-                let (x, z) = ((i % n) as f32 / (n - 1) as f32, (i / n) as f32 / (n - 1) as f32);
+                let (x, z) = (
+                    (i % n) as f32 / (n - 1) as f32,
+                    (i / n) as f32 / (n - 1) as f32,
+                );
                 glam::Vec3::new(l.center.x - 3.0 + 6.0 * x, 0.0, l.center.z - 3.0 + 6.0 * z)
             })
             .collect();

@@ -152,7 +152,7 @@ impl CasterMesh {
             let [a, b, c] = v.map(|k| positions[k as usize]);
             let n = (b - a).cross(c - a);
             let len = n.length();
-            if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] || !(len > 0.0) || !len.is_finite() {
+            if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] || !len.is_finite() || len <= 0.0 {
                 report.degenerate_faces += 1;
                 continue;
             }

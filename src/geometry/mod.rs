@@ -11,6 +11,7 @@ pub mod bvh;
 pub mod classify;
 pub mod hull;
 pub mod metrics;
+pub mod oracle;
 pub mod ray;
 pub mod silhouette;
 pub mod twin;

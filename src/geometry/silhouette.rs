@@ -47,7 +47,7 @@ pub fn tangent_points(v1: Vec3, v2: Vec3, light: &DiskLight) -> Option<[Vec3; 2]
     let (c, n, r) = (light.center, light.normal, light.radius);
     let dir = v2 - v1;
     let len = dir.length();
-    if !(len > 0.0) || !(r > 0.0) {
+    if len.is_nan() || len <= 0.0 || r.is_nan() || r <= 0.0 {
         return None;
     }
     let denom = dir.dot(n);
@@ -61,7 +61,7 @@ pub fn tangent_points(v1: Vec3, v2: Vec3, light: &DiskLight) -> Option<[Vec3; 2]
     let mut ac = a - c;
     ac -= ac.dot(n) * n;
     let d = ac.length();
-    if !(d > r * (1.0 + 1e-5)) || !d.is_finite() {
+    if !d.is_finite() || d <= r * (1.0 + 1e-5) {
         return None;
     }
     let u = ac / d;

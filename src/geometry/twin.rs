@@ -157,7 +157,8 @@ impl DBufferTwin {
     pub fn sample(&self, x: Vec3) -> TwinSample {
         let v = x - self.light.center;
         let d = v.length();
-        if !(self.light.height_of(x) > 0.0) || !d.is_finite() {
+        let height = self.light.height_of(x);
+        if height.is_nan() || height <= 0.0 || !d.is_finite() {
             // Behind the one-sided light (or not a point): it receives nothing.
             return TwinSample {
                 d,

@@ -89,7 +89,7 @@ impl VolumeVertex {
         if self.kind.is_silhouette_face() {
             return (hit - light.center).length();
         }
-        if !(along > 0.0) {
+        if along.is_nan() || along <= 0.0 {
             return f32::INFINITY;
         }
         let e = closest_point_on_line(self.edge[0], self.edge[1], self.extrusion, hit);
@@ -103,7 +103,7 @@ pub fn closest_point_on_line(a: Vec3, b: Vec3, p: Vec3, q: Vec3) -> Vec3 {
     let (aa, bb, cc) = (d1.dot(d1), d1.dot(d2), d2.dot(d2));
     let (dd, ee) = (d1.dot(w0), d2.dot(w0));
     let den = aa * cc - bb * bb;
-    if !(den > 1e-12 * aa * cc) {
+    if den.is_nan() || den <= 1e-12 * aa * cc {
         return a;
     }
     a + d1 * ((bb * ee - cc * dd) / den)
@@ -349,7 +349,10 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
     let behind = mesh
         .positions
         .iter()
-        .filter(|&&p| !(light.height_of(p) > 0.0))
+        .filter(|&&p| {
+            let h = light.height_of(p);
+            h.is_nan() || h <= 0.0
+        })
         .count();
     if behind > 0 {
         warnings.push(format!(
@@ -389,6 +392,9 @@ fn penumbra_gap(apex: Vec3, b1: Vec3, p1: Vec3, b2: Vec3, p2: Vec3, c: Vec3) -> 
     inside(b2, p2, g1) && inside(b1, p1, g2)
 }
 
+/// The fan at `apex` between the penumbra quads of its two edges, from `p1` to `p2` along the
+/// shorter disk arc. At a convex silhouette corner of interior angle α the fan sweeps the exterior
+/// angle 180° − α, which is the shorter arc; reflex corners get no fan ([`penumbra_gap`]).
 fn push_fan(
     volumes: &mut VolumeMesh,
     apex: Vec3,

@@ -1,0 +1,443 @@
+//! The ray-cast ground truth: `V(x)`, the fraction of the disk light visible from a point.
+//!
+//! `V(x)` is estimated with shadow rays from `x` to `K` stratified sample points on the disk
+//! (design §4). The samples are the cells of a jittered grid on the unit square, mapped to the
+//! disk by Shirley and Chiu's area-preserving concentric map, so every sample stands for the
+//! same area `πr²/K`. The jitter comes from a fixed-seed hash: the same `K` always gives the same
+//! samples and the same `V`, on every run and thread.
+//!
+//! When `K` is not a perfect square the grid has `m = round(√K)` rows; the first `K mod m` rows
+//! hold one cell more than the others, and each row's height is proportional to its cell count,
+//! so every cell still has area `1/K` (for a square `K` this is the plain `√K × √K` grid).
+//!
+//! Conventions:
+//! - the light is one-sided: a point on or behind its plane (`height_of(x) <= 0`) has `V = 0`;
+//! - the disk itself is not geometry;
+//! - occlusion uses [`intersect_triangle_tolerant`](super::ray::intersect_triangle_tolerant):
+//!   plain `f32` Möller–Trumbore lets about one shadow ray in 10⁵ slip through the shared edge
+//!   of two triangles of a closed mesh, which would light umbra points;
+//! - `x` is usually on a receiver surface. A hit counts only for `SELF_EPS <= t <= 1 − SELF_EPS`
+//!   along the segment from `x` (t = 0) to the sample (t = 1), so neither the receiver under `x`
+//!   nor anything touching the light's plane at the sample shadows it. Occluders closer to `x`
+//!   than `SELF_EPS` times the distance to the light are not seen;
+//! - a point with a NaN or infinite coordinate has `V = 0`, and so has every point when the
+//!   light itself is not finite (NaN or infinite centre, normal or radius); `K = 0` is treated
+//!   as `K = 1`;
+//! - [`Oracle::rays_cast`] counts `K` shadow rays per point in front of the light, including
+//!   those the shadow cache (the last occluder, tried before the BVH) answers.
+//!
+//! Speed: `benches/oracle.rs` (`cargo bench --bench oracle`) measures rays per second.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use super::bvh::Bvh;
+use crate::scene::{DiskLight, Scene};
+
+/// Default number of light samples per point (seed 000's Fig. 7b and 8d).
+pub const DEFAULT_SAMPLES: usize = 1024;
+
+/// Hits closer than this fraction of the segment to either end are ignored (self-intersection).
+pub const SELF_EPS: f32 = 1e-4;
+
+/// Seed of the jitter hash. Changing it changes every reference image.
+const JITTER_SEED: u64 = 0x0d1b_5eed_0000_0000;
+
+/// The ray-cast visibility oracle. See the module documentation.
+#[derive(Debug)]
+pub struct Oracle {
+    bvh: Bvh,
+    light: DiskLight,
+    /// Sample points on the disk, world space.
+    samples: Vec<Vec3>,
+    /// Whether the light's centre, normal and radius are finite (otherwise `V = 0`).
+    light_ok: bool,
+    rays: AtomicU64,
+}
+
+impl Clone for Oracle {
+    fn clone(&self) -> Self {
+        Self {
+            bvh: self.bvh.clone(),
+            light: self.light,
+            samples: self.samples.clone(),
+            light_ok: self.light_ok,
+            rays: AtomicU64::new(self.rays.load(Ordering::Relaxed)),
+        }
+    }
+}
+
+impl Oracle {
+    /// An oracle where every triangle occludes, with `samples` rays per point (0 means 1).
+    pub fn new(triangles: Vec<[Vec3; 3]>, light: DiskLight, samples: usize) -> Oracle {
+        let (e1, e2) = light.basis();
+        let samples: Vec<Vec3> = disk_samples(samples.max(1))
+            .into_iter()
+            .map(|p| light.center + light.radius * (p.x * e1 + p.y * e2))
+            .collect();
+        let light_ok = light.center.is_finite()
+            && light.normal.is_finite()
+            && light.radius.is_finite()
+            && samples.iter().all(|s: &Vec3| s.is_finite());
+        Oracle {
+            bvh: Bvh::build(triangles),
+            light,
+            samples,
+            light_ok,
+            rays: AtomicU64::new(0),
+        }
+    }
+
+    /// The oracle for a scene: every object occludes, casters or not.
+    pub fn from_scene(scene: &Scene, samples: usize) -> Oracle {
+        Oracle::new(scene.all_triangles(), scene.light, samples)
+    }
+
+    /// The light.
+    pub fn light(&self) -> &DiskLight {
+        &self.light
+    }
+
+    /// The BVH of the occluders.
+    pub fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    /// Number of light samples (rays per point in front of the light).
+    pub fn sample_count(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// The light sample points, world space.
+    pub fn sample_points(&self) -> &[Vec3] {
+        &self.samples
+    }
+
+    /// Shadow rays cast so far by this oracle (all threads).
+    pub fn rays_cast(&self) -> u64 {
+        self.rays.load(Ordering::Relaxed)
+    }
+
+    /// Sets the ray counter back to zero.
+    pub fn reset_ray_count(&self) {
+        self.rays.store(0, Ordering::Relaxed);
+    }
+
+    /// `V(x)` in `[0, 1]`: the fraction of the light's samples visible from `x`.
+    pub fn visibility(&self, x: Vec3) -> f32 {
+        // Finite `x` with a finite light gives a finite height; NaN fails the comparison.
+        let h = self.light.height_of(x);
+        if !self.light_ok || !x.is_finite() || h.is_nan() || h <= 0.0 {
+            return 0.0;
+        }
+        let (t0, t1) = (SELF_EPS, 1.0 - SELF_EPS);
+        let mut visible = 0u32;
+        // Shadow cache: neighbouring samples are mostly blocked by the same triangle, so the
+        // last occluder is tried before the BVH. Only genuine hits count: V does not change.
+        let mut last: Option<u32> = None;
+        for &s in &self.samples {
+            let d = s - x;
+            if last.is_some_and(|i| self.bvh.hits_triangle_tolerant(i, x, d, t0, t1)) {
+                continue;
+            }
+            match self.bvh.find_any_hit_tolerant(x, d, t0, t1) {
+                Some(h) => last = Some(h.triangle),
+                None => visible += 1,
+            }
+        }
+        self.rays
+            .fetch_add(self.samples.len() as u64, Ordering::Relaxed);
+        visible as f32 / self.samples.len() as f32
+    }
+
+    /// [`Oracle::visibility`] for many points, in parallel on all cores; same order as `xs`.
+    pub fn visibility_many(&self, xs: &[Vec3]) -> Vec<f32> {
+        xs.par_iter().map(|&x| self.visibility(x)).collect()
+    }
+}
+
+/// `k` stratified points on the unit disk (see the module documentation), deterministic.
+pub fn disk_samples(k: usize) -> Vec<Vec2> {
+    if k == 0 {
+        return Vec::new();
+    }
+    let rows = ((k as f64).sqrt().round() as usize).clamp(1, k);
+    let base = k / rows;
+    let extra = k % rows;
+    let mut out = Vec::with_capacity(k);
+    let mut y0 = 0.0f64;
+    for row in 0..rows {
+        let cols = base + usize::from(row < extra);
+        let h = cols as f64 / k as f64;
+        for col in 0..cols {
+            let i = out.len() as u64;
+            let jx = unit_hash(i, 0);
+            let jy = unit_hash(i, 1);
+            let u = (col as f64 + jx) / cols as f64;
+            let v = y0 + h * jy;
+            out.push(concentric(u as f32, v as f32));
+        }
+        y0 += h;
+    }
+    out
+}
+
+/// Shirley and Chiu's concentric map from the unit square to the unit disk (area-preserving).
+pub fn concentric(u: f32, v: f32) -> Vec2 {
+    let a = 2.0 * u - 1.0;
+    let b = 2.0 * v - 1.0;
+    if a == 0.0 && b == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, phi) = if a.abs() > b.abs() {
+        (a, std::f32::consts::FRAC_PI_4 * (b / a))
+    } else {
+        (
+            b,
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (a / b),
+        )
+    };
+    Vec2::new(r * phi.cos(), r * phi.sin())
+}
+
+/// A hash of `(i, lane)` to `[0, 1)` (SplitMix64 finaliser).
+fn unit_hash(i: u64, lane: u64) -> f64 {
+    let mut z = JITTER_SEED ^ i.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (lane << 62);
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 53) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn light() -> DiskLight {
+        DiskLight {
+            center: Vec3::new(0.0, 4.0, 0.0),
+            normal: Vec3::NEG_Y,
+            radius: 0.5,
+            intensity: 1.0,
+        }
+    }
+
+    #[test]
+    fn samples_are_stratified_inside_the_disk_for_any_k() {
+        for k in [1usize, 2, 3, 5, 10, 64, 100, 1000, 1024, 1025] {
+            let s = disk_samples(k);
+            assert_eq!(s.len(), k);
+            assert!(s.iter().all(|p| p.length() <= 1.0 + 1e-6));
+            // Equal-area cells: the fraction inside radius 1/√2 is about one half.
+            if k >= 64 {
+                let inner = s.iter().filter(|p| p.length() < 0.5f32.sqrt()).count();
+                let f = inner as f32 / k as f32;
+                // Only the cells the circle crosses (about √k of them) add error.
+                let tol = 2.0 / (k as f32).powf(0.75);
+                assert!((f - 0.5).abs() < tol, "k={k}: {f}");
+            }
+            assert_eq!(s, disk_samples(k), "deterministic");
+        }
+    }
+
+    #[test]
+    fn empty_scene_is_lit_in_front_and_dark_behind() {
+        let o = Oracle::new(Vec::new(), light(), 64);
+        assert_eq!(o.visibility(Vec3::ZERO), 1.0);
+        assert_eq!(o.visibility(Vec3::new(3.0, -2.0, 1.0)), 1.0);
+        assert_eq!(
+            o.visibility(Vec3::new(0.0, 4.0, 0.0)),
+            0.0,
+            "on the light plane"
+        );
+        assert_eq!(
+            o.visibility(Vec3::new(0.0, 5.0, 0.0)),
+            0.0,
+            "behind the light"
+        );
+        assert_eq!(o.visibility(Vec3::new(f32::NAN, 0.0, 0.0)), 0.0);
+        assert_eq!(o.visibility(Vec3::new(f32::INFINITY, 0.0, 0.0)), 0.0);
+        assert_eq!(o.rays_cast(), 128);
+        o.reset_ray_count();
+        assert_eq!(o.rays_cast(), 0);
+        let v = o.visibility_many(&[Vec3::ZERO, Vec3::Y * 10.0, Vec3::X]);
+        assert_eq!(v, vec![1.0, 0.0, 1.0]);
+        assert_eq!(
+            Oracle::new(Vec::new(), light(), 0).visibility(Vec3::ZERO),
+            1.0
+        );
+    }
+
+    #[test]
+    fn a_broken_light_gives_zero_not_a_panic() {
+        for l in [
+            DiskLight {
+                radius: f32::NAN,
+                ..light()
+            },
+            DiskLight {
+                normal: Vec3::NAN,
+                ..light()
+            },
+            DiskLight {
+                center: Vec3::splat(f32::INFINITY),
+                ..light()
+            },
+        ] {
+            let o = Oracle::new(vec![[Vec3::ZERO, Vec3::X, Vec3::Z]], l, 16);
+            assert_eq!(o.visibility(Vec3::new(0.0, 1.0, 0.0)), 0.0);
+        }
+        // A zero radius is a point light: valid.
+        let point = Oracle::new(
+            Vec::new(),
+            DiskLight {
+                radius: 0.0,
+                ..light()
+            },
+            16,
+        );
+        assert_eq!(point.visibility(Vec3::ZERO), 1.0);
+    }
+
+    #[test]
+    fn receiver_does_not_shadow_itself() {
+        // A ground quad under the light; points on it (and on a tilted one) are fully lit.
+        let g = [
+            [
+                Vec3::new(-5.0, 0.0, -5.0),
+                Vec3::new(5.0, 0.0, -5.0),
+                Vec3::new(5.0, 0.0, 5.0),
+            ],
+            [
+                Vec3::new(-5.0, 0.0, -5.0),
+                Vec3::new(5.0, 0.0, 5.0),
+                Vec3::new(-5.0, 0.0, 5.0),
+            ],
+        ];
+        let o = Oracle::new(g.to_vec(), light(), 256);
+        for i in 0..50 {
+            let p = Vec3::new(-4.9 + 0.19 * i as f32, 0.0, 0.37 * (i % 7) as f32 - 1.0);
+            assert_eq!(o.visibility(p), 1.0, "{p}");
+        }
+    }
+
+    #[test]
+    fn from_scene_every_object_occludes_casters_or_not() {
+        use crate::scene::{Camera, Mesh, Object};
+        let quad = |y: f32| {
+            Mesh::new(
+                vec![
+                    Vec3::new(-1.0, y, -1.0),
+                    Vec3::new(1.0, y, -1.0),
+                    Vec3::new(1.0, y, 1.0),
+                    Vec3::new(-1.0, y, 1.0),
+                ],
+                vec![[0, 2, 1], [0, 3, 2]],
+            )
+        };
+        let scene = Scene {
+            name: "t".into(),
+            camera: Camera {
+                eye: Vec3::ONE,
+                target: Vec3::ZERO,
+                fov_y_deg: 45.0,
+            },
+            light: light(),
+            objects: vec![
+                Object {
+                    name: "ground".into(),
+                    mesh: quad(0.0),
+                    casts_shadow: false,
+                },
+                Object {
+                    name: "lid".into(),
+                    mesh: quad(2.0),
+                    casts_shadow: false,
+                },
+            ],
+        };
+        let o = Oracle::from_scene(&scene, 64);
+        assert_eq!(o.bvh().len(), 4);
+        assert_eq!(o.sample_count(), 64);
+        assert_eq!(
+            o.visibility(Vec3::ZERO),
+            0.0,
+            "under the lid, on the ground"
+        );
+        assert_eq!(o.visibility(Vec3::new(0.0, 2.0, 0.0)), 1.0, "on the lid");
+    }
+
+    #[test]
+    fn points_on_a_convex_caster_do_not_shadow_themselves() {
+        // A UV sphere (convex polyhedron): from a point on a facet, the caster lies behind the
+        // facet's plane, so V is 1 when the whole disk is in front of that plane and 0 when it
+        // is all behind (the face classes of design §2), whatever the rounding of the point.
+        let l = DiskLight {
+            center: Vec3::new(0.3, 3.0, -0.2),
+            normal: Vec3::new(-0.1, -1.0, 0.05).normalize(),
+            radius: 0.6,
+            intensity: 1.0,
+        };
+        let (nu, nv) = (64, 32);
+        let p = |i: usize, j: usize| {
+            let (u, v) = (
+                std::f32::consts::TAU * i as f32 / nu as f32,
+                std::f32::consts::PI * j as f32 / nv as f32,
+            );
+            Vec3::new(u.cos() * v.sin(), v.cos(), u.sin() * v.sin()) * 0.7 + Vec3::Y
+        };
+        let mut tris = Vec::new();
+        for i in 0..nu {
+            for j in 0..nv {
+                let (a, b, c, d) = (p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
+                tris.push([a, b, c]);
+                tris.push([a, c, d]);
+            }
+        }
+        let o = Oracle::new(tris.clone(), l, 256);
+        let (mut lit, mut dark) = (0, 0);
+        for t in &tris {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            if n.length() < 1e-6 {
+                continue; // the poles' zero-area triangles
+            }
+            let centroid = (t[0] + t[1] + t[2]) / 3.0;
+            let n = n.normalize() * n.dot(centroid - Vec3::Y).signum();
+            let n_perp = n - n.dot(l.normal) * l.normal;
+            let f_c = n.dot(l.center - t[0]);
+            let spread = l.radius * n_perp.length();
+            let v = o.visibility(centroid);
+            if f_c - spread > 1e-3 {
+                assert_eq!(v, 1.0, "all-frontfacing facet at {centroid}");
+                lit += 1;
+            } else if f_c + spread < -1e-3 {
+                assert_eq!(v, 0.0, "none-frontfacing facet at {centroid}");
+                dark += 1;
+            }
+        }
+        assert!(lit > 500 && dark > 500, "{lit} lit, {dark} dark");
+    }
+
+    #[test]
+    fn blocker_between_gives_zero() {
+        let big = 50.0;
+        let tris = vec![
+            [
+                Vec3::new(-big, 2.0, -big),
+                Vec3::new(big, 2.0, -big),
+                Vec3::new(big, 2.0, big),
+            ],
+            [
+                Vec3::new(-big, 2.0, -big),
+                Vec3::new(big, 2.0, big),
+                Vec3::new(-big, 2.0, big),
+            ],
+        ];
+        let o = Oracle::new(tris, light(), DEFAULT_SAMPLES);
+        assert_eq!(o.visibility(Vec3::ZERO), 0.0);
+        assert_eq!(o.visibility(Vec3::new(0.0, 3.0, 0.0)), 1.0);
+    }
+}
