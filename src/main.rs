@@ -51,9 +51,16 @@ enum Command {
     /// Print what the geometry stage makes of a scene: classes, silhouettes, volumes, warnings.
     Inspect {
         scene: String,
-        /// Also measure ground-truth visibility under the casters with this many disk samples.
+        /// Also compare the CPU twin of the method with ray-cast ground truth over the camera's
+        /// view, with this many disk samples per pixel.
         #[arg(long)]
         samples: Option<usize>,
+        /// View size for the comparison, WxH.
+        #[arg(long, default_value = "96x96")]
+        size: String,
+        /// V(t) variant for the comparison.
+        #[arg(long, default_value = "exact")]
+        vt: String,
     },
 }
 
@@ -61,7 +68,12 @@ fn main() -> ExitCode {
     let args = Args::parse();
     let result = match args.command {
         Some(Command::Scenes) => cli::scenes(),
-        Some(Command::Inspect { scene, samples }) => cli::inspect(&scene, samples),
+        Some(Command::Inspect {
+            scene,
+            samples,
+            size,
+            vt,
+        }) => cli::inspect(&scene, samples, &size, &vt),
         None | Some(Command::Gui { .. }) => cli::not_yet("the lab window", 5),
         Some(Command::Render { .. }) => cli::not_yet("render", 3),
         Some(Command::Compare { .. }) => cli::not_yet("compare", 4),

@@ -5,8 +5,10 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use dbuffer::geometry::oracle::Oracle;
-use dbuffer::geometry::{PreparedCasters, VolumeParams};
+use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
 use dbuffer::scene;
+use glam::Vec3;
+use rayon::prelude::*;
 
 pub fn scenes() -> Result<()> {
     for name in scene::builtin::names() {
@@ -19,7 +21,7 @@ pub fn not_yet(what: &str, issue: u32) -> Result<()> {
     bail!("{what} is not yet available (it lands with issue #{issue}); try `dbuffer inspect SCENE`")
 }
 
-pub fn inspect(name: &str, samples: Option<usize>) -> Result<()> {
+pub fn inspect(name: &str, samples: Option<usize>, size: &str, vt: &str) -> Result<()> {
     let scene = scene::load(name).with_context(|| format!("cannot load scene '{name}'"))?;
     let t0 = Instant::now();
     let prepared = PreparedCasters::new(&scene);
@@ -75,32 +77,90 @@ pub fn inspect(name: &str, samples: Option<usize>) -> Result<()> {
         if k == 0 {
             bail!("--samples must be at least 1");
         }
-        let oracle = Oracle::from_scene(&scene, k);
-        // A grid of points on the y = 0 plane under the light, where the built-ins put the ground.
-        let n = 64;
-        let points: Vec<_> = (0..n * n)
-            .map(|i| {
-                let (x, z) = (
-                    (i % n) as f32 / (n - 1) as f32,
-                    (i / n) as f32 / (n - 1) as f32,
-                );
-                glam::Vec3::new(l.center.x - 3.0 + 6.0 * x, 0.0, l.center.z - 3.0 + 6.0 * z)
-            })
-            .collect();
-        let t2 = Instant::now();
-        let v = oracle.visibility_many(&points);
-        let secs = t2.elapsed().as_secs_f64();
-        let (umbra, lit) = (
-            v.iter().filter(|&&v| v <= 0.004).count(),
-            v.iter().filter(|&&v| v >= 0.996).count(),
-        );
-        println!(
-            "oracle    {} points x {k} samples in {:.1} ms ({:.1} M rays/s); ground 6x6 m: {umbra} umbra, {} penumbra, {lit} lit",
-            points.len(),
-            secs * 1e3,
-            (points.len() * k) as f64 / secs / 1e6,
-            points.len() - umbra - lit
-        );
+        let (width, height) = parse_size(size)?;
+        let vt: VtVariant = vt.parse().map_err(anyhow::Error::msg)?;
+        compare_twin(&scene, &geometry, k, width, height, vt);
     }
     Ok(())
+}
+
+/// `WxH` with both at least 1.
+pub fn parse_size(text: &str) -> Result<(u32, u32)> {
+    let parsed = text
+        .split_once(['x', 'X'])
+        .and_then(|(w, h)| Some((w.trim().parse::<u32>().ok()?, h.trim().parse::<u32>().ok()?)));
+    match parsed {
+        Some((w, h)) if w > 0 && h > 0 && u64::from(w) * u64::from(h) <= 1 << 26 => Ok((w, h)),
+        _ => bail!("--size expects WxH with positive integers (at most 64 Mpixels), e.g. 512x512; found '{text}'"),
+    }
+}
+
+/// The CPU twin of the method against the oracle over the camera's view (design.md §4 metrics).
+fn compare_twin(
+    scene: &scene::Scene,
+    geometry: &dbuffer::geometry::SceneGeometry,
+    k: usize,
+    width: u32,
+    height: u32,
+    vt: VtVariant,
+) {
+    let oracle = Oracle::from_scene(scene, k);
+    let twin = DBufferTwin::new(scene, &geometry.casters);
+    let pixels = view::receivers(scene, oracle.bvh(), width, height);
+    let points: Vec<Vec3> = pixels
+        .iter()
+        .map(|r| r.map_or(Vec3::ZERO, |r| r.position))
+        .collect();
+    let mask: Vec<bool> = pixels
+        .iter()
+        .map(|r| r.is_some_and(|r| r.faces_light))
+        .collect();
+    let t0 = Instant::now();
+    let reference: Vec<f32> = points
+        .par_iter()
+        .zip(&mask)
+        .map(|(&x, &on)| if on { oracle.visibility(x) } else { 0.0 })
+        .collect();
+    let oracle_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let method: Vec<f32> = points
+        .par_iter()
+        .zip(&mask)
+        .map(|(&x, &on)| {
+            if on {
+                twin.visibility(x, vt) as f32
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let twin_s = t1.elapsed().as_secs_f64();
+    let m = metrics::compare(&reference, &method, &mask);
+    let rays = mask.iter().filter(|&&m| m).count() * k;
+    println!(
+        "twin vs oracle ({width}x{height}, {} px facing the light, V(t) {vt}, K = {k}):",
+        m.pixels
+    );
+    println!(
+        "  class mismatch {:.2} %   MAE {:.4}   penumbra MAE {:.4} ({} px)   p99 |dV| {:.3}",
+        m.class_mismatch_pct, m.mae, m.penumbra_mae, m.penumbra_pixels, m.p99
+    );
+    println!("  pixels by class, reference (rows) against the twin (columns):");
+    println!("  {:>10} {:>9} {:>9} {:>9}", "", "lit", "penumbra", "umbra");
+    for rc in metrics::ShadowClass::ALL {
+        let row = m.confusion[rc.index()];
+        println!(
+            "  {:>10} {:>9} {:>9} {:>9}",
+            rc.name(),
+            row[0],
+            row[1],
+            row[2]
+        );
+    }
+    println!(
+        "  oracle {:.0} ms ({:.1} M rays/s), twin {:.0} ms",
+        oracle_s * 1e3,
+        rays as f64 / oracle_s / 1e6,
+        twin_s * 1e3
+    );
 }

@@ -17,6 +17,20 @@ pub enum ShadowClass {
 }
 
 impl ShadowClass {
+    pub const ALL: [ShadowClass; 3] = [ShadowClass::Lit, ShadowClass::Penumbra, ShadowClass::Umbra];
+
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ShadowClass::Lit => "lit",
+            ShadowClass::Penumbra => "penumbra",
+            ShadowClass::Umbra => "umbra",
+        }
+    }
+
     pub fn of(v: f64) -> ShadowClass {
         if v >= 1.0 - CLASS_EPS {
             ShadowClass::Lit
@@ -41,6 +55,8 @@ pub struct Metrics {
     pub penumbra_mae: f64,
     /// 99th percentile of |ΔV|.
     pub p99: f64,
+    /// Pixel counts by `[reference class][method class]`, indexed by [`ShadowClass::index`].
+    pub confusion: [[usize; 3]; 3],
 }
 
 /// Compare `method` to `reference` over the pixels where `mask` is set. Non-finite values count
@@ -48,6 +64,7 @@ pub struct Metrics {
 pub fn compare(reference: &[f32], method: &[f32], mask: &[bool]) -> Metrics {
     let mut errors = Vec::new();
     let (mut mismatch, mut pen, mut pen_sum) = (0usize, 0usize, 0.0f64);
+    let mut confusion = [[0usize; 3]; 3];
     for ((&r, &m), &on) in reference.iter().zip(method).zip(mask) {
         if !on {
             continue;
@@ -59,7 +76,16 @@ pub fn compare(reference: &[f32], method: &[f32], mask: &[bool]) -> Metrics {
             1.0
         };
         let rc = ShadowClass::of(r);
-        mismatch += usize::from(!m.is_finite() || rc != ShadowClass::of(m));
+        // A non-finite method value can be in no class but the wrong one.
+        let mc = if m.is_finite() {
+            ShadowClass::of(m)
+        } else if rc == ShadowClass::Lit {
+            ShadowClass::Umbra
+        } else {
+            ShadowClass::Lit
+        };
+        confusion[rc.index()][mc.index()] += 1;
+        mismatch += usize::from(rc != mc);
         if rc == ShadowClass::Penumbra {
             pen += 1;
             pen_sum += err;
@@ -80,6 +106,7 @@ pub fn compare(reference: &[f32], method: &[f32], mask: &[bool]) -> Metrics {
         mae,
         penumbra_mae: if pen > 0 { pen_sum / pen as f64 } else { 0.0 },
         p99,
+        confusion,
     }
 }
 
@@ -108,6 +135,8 @@ mod tests {
         assert!((m.mae - 0.7 / 4.0).abs() < 1e-6);
         assert!((m.penumbra_mae - 0.1).abs() < 1e-6);
         assert!((m.p99 - 0.5).abs() < 1e-6);
+        // Reference umbra/penumbra/lit/penumbra; method umbra/penumbra/penumbra/penumbra.
+        assert_eq!(m.confusion, [[0, 1, 0], [0, 2, 0], [0, 0, 1]]);
         // A NaN that is compared counts as a full error and a mismatch.
         let m = compare(&reference, &method, &[false, false, false, false, true]);
         assert_eq!((m.mae, m.class_mismatch_pct), (1.0, 100.0));

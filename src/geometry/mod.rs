@@ -15,6 +15,7 @@ pub mod oracle;
 pub mod ray;
 pub mod silhouette;
 pub mod twin;
+pub mod view;
 pub mod visibility;
 pub mod volumes;
 

@@ -9,8 +9,13 @@
 //!   silhouette faces face `c` and are culled). Untrimmed umbra quads cross each other at convex
 //!   corners and beyond the apex of a closing umbra; the true boundary is always the first exit.
 //!   Over casters the **farthest** of these wins (seed 000 §4, overlapping casters).
-//! - `|cx_pv|`: the **farthest penumbra entry** — a hit on a penumbra quad or fan whose normal
-//!   faces `c`. For a convex caster the penumbra surface is closed and crossed once.
+//! - `|cx_pv|`: the **nearest penumbra entry** — a hit on a penumbra quad or fan whose normal
+//!   faces `c`. A ray from `c` enters a caster's penumbra once and never leaves it (every
+//!   penumbra plane separates the disk, `c` included, from the caster), so along the ray the union
+//!   of several penumbrae — overlapping casters, the parts of a concave one — starts at the
+//!   nearest entry. The paper's "farthest wins" would call the points between two entries lit; on
+//!   the built-ins it triples the class mismatch of the concave and overlapping scenes (measured in
+//!   `tests/twin_builtins.rs`). For a single convex caster the two rules agree.
 //! - `|cx_s|`: eq. (2) from the fragment that won each volume channel, so it is kept per volume
 //!   (`s_u`, `s_p`), as `dbuffer.exr` + `dbuffer_s.exr` store it.
 //!
@@ -139,10 +144,10 @@ impl DBufferTwin {
                     texel.s_u = attrs.edge_plane_distance(c + t * w, w, &self.light);
                 }
             }
-            // Farthest penumbra entry over all casters.
+            // Nearest penumbra entry over all casters.
             caster.penumbra.for_each_hit(c, w, 0.0, f32::INFINITY, |h| {
                 if facing(caster.penumbra.triangle(h.triangle as usize)) < 0.0
-                    && texel.p.is_none_or(|p| h.t > p)
+                    && texel.p.is_none_or(|p| h.t < p)
                 {
                     texel.p = Some(h.t);
                     let attrs = &caster.penumbra_attrs[h.triangle as usize];

@@ -11,7 +11,7 @@ pub use error::SceneError;
 pub use file::SceneFile;
 pub use mesh::Mesh;
 
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 use std::path::{Path, PathBuf};
 
 /// A one-sided disk light: centre `c`, unit normal `n_c` (the side it emits to), radius `r`.
@@ -41,6 +41,42 @@ pub struct Camera {
     pub eye: Vec3,
     pub target: Vec3,
     pub fov_y_deg: f32,
+}
+
+impl Camera {
+    /// Up direction for the view: +Y, or +Z when looking straight up or down.
+    fn up(&self) -> Vec3 {
+        let forward = (self.target - self.eye).normalize_or_zero();
+        if forward.cross(Vec3::Y).length_squared() < 1e-8 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        }
+    }
+
+    /// World to view (right-handed, looking down −Z).
+    pub fn view(&self) -> Mat4 {
+        Mat4::look_at_rh(self.eye, self.target, self.up())
+    }
+
+    /// View to clip for an aspect ratio (width / height), wgpu depth range 0..1.
+    pub fn projection(&self, aspect: f32, near: f32, far: f32) -> Mat4 {
+        Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, near, far)
+    }
+
+    /// The ray (origin, unit direction) through the centre of pixel (`px`, `py`) of a
+    /// `width`×`height` image, row 0 at the top — the pixel the GPU shades there.
+    pub fn pixel_ray(&self, px: u32, py: u32, width: u32, height: u32) -> (Vec3, Vec3) {
+        let (w, h) = (width.max(1) as f32, height.max(1) as f32);
+        let ndc_x = 2.0 * (px as f32 + 0.5) / w - 1.0;
+        let ndc_y = 1.0 - 2.0 * (py as f32 + 0.5) / h;
+        let tan = (0.5 * self.fov_y_deg.to_radians()).tan();
+        let forward = (self.target - self.eye).normalize_or_zero();
+        let right = forward.cross(self.up()).normalize_or_zero();
+        let up = right.cross(forward);
+        let dir = forward + right * (ndc_x * tan * w / h) + up * (ndc_y * tan);
+        (self.eye, dir.normalize_or_zero())
+    }
 }
 
 /// An object of the scene with its mesh already in world space.
