@@ -6,5 +6,6 @@
 //!   D-buffer lookup and the ray-cast visibility oracle (plain Rust, no GPU types).
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod fsutil;
 pub mod geometry;
 pub mod scene;

@@ -61,6 +61,9 @@ enum Command {
         /// V(t) variant for the comparison.
         #[arg(long, default_value = "exact")]
         vt: String,
+        /// Also write the comparison as a PNG: method | reference | |ΔV| (0 … 0.25).
+        #[arg(long)]
+        out: Option<std::path::PathBuf>,
     },
 }
 
@@ -73,7 +76,8 @@ fn main() -> ExitCode {
             samples,
             size,
             vt,
-        }) => cli::inspect(&scene, samples, &size, &vt),
+            out,
+        }) => cli::inspect(&scene, samples, &size, &vt, out.as_deref()),
         None | Some(Command::Gui { .. }) => cli::not_yet("the lab window", 5),
         Some(Command::Render { .. }) => cli::not_yet("render", 3),
         Some(Command::Compare { .. }) => cli::not_yet("compare", 4),

@@ -1,6 +1,7 @@
 //! The subcommands. Each one loads through [`dbuffer::scene`] and computes through the same
 //! library code the GUI uses; nothing here renders or computes on its own.
 
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
@@ -21,7 +22,13 @@ pub fn not_yet(what: &str, issue: u32) -> Result<()> {
     bail!("{what} is not yet available (it lands with issue #{issue}); try `dbuffer inspect SCENE`")
 }
 
-pub fn inspect(name: &str, samples: Option<usize>, size: &str, vt: &str) -> Result<()> {
+pub fn inspect(
+    name: &str,
+    samples: Option<usize>,
+    size: &str,
+    vt: &str,
+    out: Option<&Path>,
+) -> Result<()> {
     let scene = scene::load(name).with_context(|| format!("cannot load scene '{name}'"))?;
     let t0 = Instant::now();
     let prepared = PreparedCasters::new(&scene);
@@ -79,7 +86,13 @@ pub fn inspect(name: &str, samples: Option<usize>, size: &str, vt: &str) -> Resu
         }
         let (width, height) = parse_size(size)?;
         let vt: VtVariant = vt.parse().map_err(anyhow::Error::msg)?;
-        compare_twin(&scene, &geometry, k, width, height, vt);
+        let frames = compare_twin(&scene, &geometry, k, width, height, vt);
+        if let Some(path) = out {
+            write_comparison(path, &frames, width, height)?;
+            println!("wrote {}", path.display());
+        }
+    } else if out.is_some() {
+        bail!("--out needs --samples: the picture compares the method with the reference");
     }
     Ok(())
 }
@@ -95,6 +108,13 @@ pub fn parse_size(text: &str) -> Result<(u32, u32)> {
     }
 }
 
+/// Per pixel of the view: the method's V, the reference V, and whether it counts.
+struct Frames {
+    method: Vec<f32>,
+    reference: Vec<f32>,
+    mask: Vec<bool>,
+}
+
 /// The CPU twin of the method against the oracle over the camera's view (design.md §4 metrics).
 fn compare_twin(
     scene: &scene::Scene,
@@ -103,7 +123,7 @@ fn compare_twin(
     width: u32,
     height: u32,
     vt: VtVariant,
-) {
+) -> Frames {
     let oracle = Oracle::from_scene(scene, k);
     let twin = DBufferTwin::new(scene, &geometry.casters);
     let pixels = view::receivers(scene, oracle.bvh(), width, height);
@@ -163,4 +183,38 @@ fn compare_twin(
         rays as f64 / oracle_s / 1e6,
         twin_s * 1e3
     );
+    Frames {
+        method,
+        reference,
+        mask,
+    }
+}
+
+/// Method | reference | |ΔV| side by side; pixels that do not count are dark blue.
+fn write_comparison(path: &Path, f: &Frames, width: u32, height: u32) -> Result<()> {
+    let mut img = image::RgbImage::new(width * 3, height);
+    let gray = |v: f32| {
+        let g = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        image::Rgb([g, g, g])
+    };
+    for i in 0..(width * height) as usize {
+        let (x, y) = (i as u32 % width, i as u32 / width);
+        let panels = if f.mask[i] {
+            let err = (f.method[i] - f.reference[i]).abs() / 0.25;
+            [gray(f.method[i]), gray(f.reference[i]), gray(err)]
+        } else {
+            [image::Rgb([20, 24, 48]); 3]
+        };
+        for (k, px) in panels.into_iter().enumerate() {
+            img.put_pixel(x + k as u32 * width, y, px);
+        }
+    }
+    let mut bytes = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .context("encoding the PNG")?;
+    dbuffer::fsutil::write_atomic(path, &bytes)
+        .with_context(|| format!("cannot write {}", path.display()))
 }

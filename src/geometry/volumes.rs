@@ -8,10 +8,10 @@
 //!   closing umbra; they are not trimmed here. The D-buffer rule resolves that: per caster, the
 //!   *nearest* umbra exit along the ray is the boundary (see [`super::twin`]).
 //! - **Penumbra volume**: a quad per penumbra-silhouette edge, extruded away from its `p_p`,
-//!   oriented with its normal *toward* `c` (a ray from `c` enters the penumbra through it); at a
-//!   vertex where two penumbra quads leave a gap (a convex corner), a fan of triangles from the
-//!   vertex extruded away from rim points interpolated along the shorter disk arc between the two
-//!   edges' `p_p` closes it. At reflex corners the quads cross and no fan is needed.
+//!   oriented with its normal *toward* `c` (a ray from `c` enters the penumbra through it).
+//! - **Fans** close both surfaces: at every vertex shared by two quads of one volume, triangles
+//!   from the vertex extruded away from rim points interpolated along the shorter disk arc between
+//!   the two edges' extrusion points (see `Fans::close` for why every such vertex gets one).
 //!
 //! Each vertex carries the silhouette edge and the extrusion point it came from, so the light pass
 //! (and [`VolumeVertex::edge_plane_distance`], its CPU twin) can evaluate eq. (2) per fragment.
@@ -31,6 +31,8 @@ pub enum VolumeKind {
     SilhouetteFaceA,
     /// A silhouette face of category B, rendered as part of the umbra volume.
     SilhouetteFaceB,
+    /// Closes the umbra surface between two umbra quads at a shared vertex.
+    UmbraFan,
     PenumbraQuad,
     PenumbraFan,
 }
@@ -39,7 +41,10 @@ impl VolumeKind {
     pub fn is_umbra(self) -> bool {
         matches!(
             self,
-            VolumeKind::UmbraQuad | VolumeKind::SilhouetteFaceA | VolumeKind::SilhouetteFaceB
+            VolumeKind::UmbraQuad
+                | VolumeKind::UmbraFan
+                | VolumeKind::SilhouetteFaceA
+                | VolumeKind::SilhouetteFaceB
         )
     }
 
@@ -58,6 +63,7 @@ impl VolumeKind {
             VolumeKind::SilhouetteFaceB => 2,
             VolumeKind::PenumbraQuad => 3,
             VolumeKind::PenumbraFan => 4,
+            VolumeKind::UmbraFan => 5,
         }
     }
 }
@@ -209,7 +215,10 @@ pub struct GeometryStats {
     pub silhouette_b: usize,
     pub umbra_edges: usize,
     pub penumbra_edges: usize,
+    /// Penumbra fans.
     pub fans: usize,
+    /// Umbra fans.
+    pub umbra_fans: usize,
     pub umbra_triangles: usize,
     pub penumbra_triangles: usize,
     /// Silhouette edges whose line meets the disk: no tangent plane, no volume.
@@ -226,6 +235,7 @@ impl std::ops::AddAssign for GeometryStats {
         self.umbra_edges += o.umbra_edges;
         self.penumbra_edges += o.penumbra_edges;
         self.fans += o.fans;
+        self.umbra_fans += o.umbra_fans;
         self.umbra_triangles += o.umbra_triangles;
         self.penumbra_triangles += o.penumbra_triangles;
         self.unextruded_edges += o.unextruded_edges;
@@ -264,7 +274,8 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
     }
 
     let extrude = |v: Vec3, p: Vec3| v + (v - p).normalize_or_zero() * params.far;
-    // (welded vertex, p_p, edge index) at both ends of every extruded penumbra edge.
+    // (welded vertex, edge index, extrusion point) at both ends of every extruded edge.
+    let mut umbra_ends: Vec<(u32, u32, Vec3)> = Vec::new();
     let mut penumbra_ends: Vec<(u32, u32, Vec3)> = Vec::new();
     for s in &silhouettes {
         stats.umbra_edges += usize::from(s.umbra);
@@ -283,6 +294,9 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
                 extrusion: p,
             };
             volumes.push_polygon(&[a, b, extrude(b, p), extrude(a, p)], template, c, false);
+            let ids = mesh.edges[s.edge as usize].v;
+            umbra_ends.push((ids[0], s.edge, p));
+            umbra_ends.push((ids[1], s.edge, p));
         }
         if s.penumbra {
             let p = points.penumbra;
@@ -299,26 +313,14 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
         }
     }
 
-    // Close the penumbra at vertices shared by exactly two penumbra edges.
-    penumbra_ends.sort_unstable_by_key(|&(v, e, _)| (v, e));
-    for pair in penumbra_ends.chunk_by(|x, y| x.0 == y.0) {
-        let [(v, e1, p1), (_, e2, p2)] = pair else {
-            continue;
-        };
-        let apex = mesh.position(*v);
-        let other_end = |e: u32| {
-            let ids = mesh.edges[e as usize].v;
-            mesh.position(if ids[0] == *v { ids[1] } else { ids[0] })
-        };
-        if !penumbra_gap(apex, other_end(*e1), *p1, other_end(*e2), *p2, c) {
-            continue;
-        }
-        let before = volumes.triangle_count();
-        push_fan(&mut volumes, apex, *p1, *p2, light, params, &extrude);
-        if volumes.triangle_count() > before {
-            stats.fans += 1;
-        }
-    }
+    // Close both surfaces at the vertices where two quads of one volume meet.
+    let fans = Fans {
+        mesh,
+        light,
+        params,
+    };
+    stats.fans = fans.close(&mut volumes, &mut penumbra_ends, VolumeKind::PenumbraFan);
+    stats.umbra_fans = fans.close(&mut volumes, &mut umbra_ends, VolumeKind::UmbraFan);
 
     for (face, class) in mesh.faces.iter().zip(&classes) {
         let kind = match class {
@@ -378,71 +380,83 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
     }
 }
 
-/// Do the penumbra quads of the edges `apex→b1` (from `p1`) and `apex→b2` (from `p2`) leave a gap
-/// at `apex`? They do when the far edge of each quad at the apex lies on the caster side of the
-/// other quad's plane (a convex corner); at a reflex corner the quads cross instead.
-fn penumbra_gap(apex: Vec3, b1: Vec3, p1: Vec3, b2: Vec3, p2: Vec3, c: Vec3) -> bool {
-    let inside = |b: Vec3, p: Vec3, g: Vec3| {
-        let n = (b - apex).cross(p - apex);
-        // The caster side of a penumbra plane is the side away from c.
-        n.dot(g - apex) * n.dot(c - apex) < 0.0
-    };
-    let g1 = apex + (apex - p1);
-    let g2 = apex + (apex - p2);
-    inside(b2, p2, g1) && inside(b1, p1, g2)
+/// Closing fans at the vertices where two quads of one volume meet.
+struct Fans<'a> {
+    mesh: &'a CasterMesh,
+    light: &'a DiskLight,
+    params: &'a VolumeParams,
 }
 
-/// The fan at `apex` between the penumbra quads of its two edges, from `p1` to `p2` along the
-/// shorter disk arc. At a convex silhouette corner of interior angle α the fan sweeps the exterior
-/// angle 180° − α, which is the shorter arc; reflex corners get no fan ([`penumbra_gap`]).
-fn push_fan(
-    volumes: &mut VolumeMesh,
-    apex: Vec3,
-    p1: Vec3,
-    p2: Vec3,
-    light: &DiskLight,
-    params: &VolumeParams,
-    extrude: &impl Fn(Vec3, Vec3) -> Vec3,
-) {
-    let (u, w) = light.basis();
-    let c = light.center;
-    let angle = |p: Vec3| (p - c).dot(w).atan2((p - c).dot(u));
-    let a1 = angle(p1);
-    let mut delta = angle(p2) - a1;
-    if delta > std::f32::consts::PI {
-        delta -= std::f32::consts::TAU;
-    } else if delta < -std::f32::consts::PI {
-        delta += std::f32::consts::TAU;
-    }
-    let step = params.fan_step_deg.to_radians().max(1e-3);
-    let n = (delta.abs() / step).ceil() as usize;
-    if n == 0 {
-        return;
-    }
-    let rim = |k: usize| {
-        if k == 0 {
-            return p1;
+impl Fans<'_> {
+    /// At every vertex shared by exactly two extruded edges of `ends` (welded vertex, edge,
+    /// extrusion point), add a fan of `kind` between the two quads. Returns the number of fans.
+    ///
+    /// The fan's rays `v + s(v − q)`, for rim points `q` between the two extrusion points, join
+    /// the two quads' end rays at `v`, so the surface is closed whether the quads leave a gap
+    /// there (a convex corner of the penumbra silhouette, a reflex one of the umbra silhouette,
+    /// or consecutive edges that are nearly collinear, where a gap opens *along* the chain) or
+    /// cross. Where they cross, the fan lies outside the umbra or inside the penumbra, where the
+    /// D-buffer rules (nearest umbra exit, nearest penumbra entry) never let it win. Deciding
+    /// "gap or cross" by which side of the other quad's plane each far edge falls is unreliable
+    /// for nearly collinear edges: it sees only the offset across the chain.
+    fn close(
+        &self,
+        volumes: &mut VolumeMesh,
+        ends: &mut [(u32, u32, Vec3)],
+        kind: VolumeKind,
+    ) -> usize {
+        ends.sort_unstable_by_key(|&(v, e, _)| (v, e));
+        let mut count = 0;
+        for pair in ends.chunk_by(|x, y| x.0 == y.0) {
+            let [(v, _, p1), (_, _, p2)] = pair else {
+                continue;
+            };
+            let apex = self.mesh.position(*v);
+            let before = volumes.triangle_count();
+            self.push_fan(volumes, apex, *p1, *p2, kind);
+            count += usize::from(volumes.triangle_count() > before);
         }
-        if k == n {
-            return p2;
+        count
+    }
+
+    /// The fan at `apex` between the quads of its two edges, from `p1` to `p2` along the shorter
+    /// disk arc (a silhouette turns by less than 180° at a vertex).
+    fn push_fan(&self, volumes: &mut VolumeMesh, apex: Vec3, p1: Vec3, p2: Vec3, kind: VolumeKind) {
+        let light = self.light;
+        let (u, w) = light.basis();
+        let c = light.center;
+        let angle = |p: Vec3| (p - c).dot(w).atan2((p - c).dot(u));
+        let a1 = angle(p1);
+        let mut delta = angle(p2) - a1;
+        if delta > std::f32::consts::PI {
+            delta -= std::f32::consts::TAU;
+        } else if delta < -std::f32::consts::PI {
+            delta += std::f32::consts::TAU;
         }
-        let a = a1 + delta * k as f32 / n as f32;
-        c + light.radius * (a.cos() * u + a.sin() * w)
-    };
-    for k in 0..n {
-        let (q0, q1) = (rim(k), rim(k + 1));
-        let template = VolumeVertex {
-            position: apex,
-            kind: VolumeKind::PenumbraFan,
-            edge: [apex, apex],
-            extrusion: q0,
+        let step = self.params.fan_step_deg.to_radians().max(1e-3);
+        let n = (delta.abs() / step).ceil() as usize;
+        let rim = |k: usize| {
+            if k == 0 {
+                return p1;
+            }
+            if k == n {
+                return p2;
+            }
+            let a = a1 + delta * k as f32 / n as f32;
+            c + light.radius * (a.cos() * u + a.sin() * w)
         };
-        volumes.push_polygon(
-            &[apex, extrude(apex, q0), extrude(apex, q1)],
-            template,
-            c,
-            true,
-        );
+        let extrude = |q: Vec3| apex + (apex - q).normalize_or_zero() * self.params.far;
+        for k in 0..n {
+            let (q0, q1) = (rim(k), rim(k + 1));
+            let template = VolumeVertex {
+                position: apex,
+                kind,
+                edge: [apex, apex],
+                extrusion: q0,
+            };
+            let corners = [apex, extrude(q0), extrude(q1)];
+            volumes.push_polygon(&corners, template, c, !kind.is_umbra());
+        }
     }
 }
 
@@ -497,7 +511,14 @@ mod tests {
         let g = build_caster(&mesh, &l, &VolumeParams::default());
         assert_eq!(g.stats.umbra_edges, 4);
         assert_eq!(g.stats.penumbra_edges, 4);
-        assert_eq!(g.stats.fans, 4, "one fan per convex corner of the top rim");
+        assert_eq!(
+            g.stats.fans, 4,
+            "one penumbra fan per corner of the top rim"
+        );
+        assert_eq!(
+            g.stats.umbra_fans, 4,
+            "one umbra fan per corner of the bottom rim"
+        );
         assert_eq!(g.stats.silhouette_a, 8);
         assert!(g.warnings.is_empty(), "{:?}", g.warnings);
         for i in 0..g.volumes.triangle_count() {
@@ -505,7 +526,9 @@ mod tests {
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
             let facing_c = n.dot(l.center - t[0]) > 0.0;
             match attrs.kind {
-                VolumeKind::UmbraQuad | VolumeKind::SilhouetteFaceA => assert!(!facing_c),
+                VolumeKind::UmbraQuad | VolumeKind::UmbraFan | VolumeKind::SilhouetteFaceA => {
+                    assert!(!facing_c)
+                }
                 VolumeKind::PenumbraQuad | VolumeKind::PenumbraFan => assert!(facing_c),
                 VolumeKind::SilhouetteFaceB => {}
             }
