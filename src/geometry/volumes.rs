@@ -274,9 +274,9 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
     }
 
     let extrude = |v: Vec3, p: Vec3| v + (v - p).normalize_or_zero() * params.far;
-    // (welded vertex, edge index, extrusion point) at both ends of every extruded edge.
-    let mut umbra_ends: Vec<(u32, u32, Vec3)> = Vec::new();
-    let mut penumbra_ends: Vec<(u32, u32, Vec3)> = Vec::new();
+    // Both ends of every extruded edge, for the fans.
+    let mut umbra_ends: Vec<EdgeEnd> = Vec::new();
+    let mut penumbra_ends: Vec<EdgeEnd> = Vec::new();
     for s in &silhouettes {
         stats.umbra_edges += usize::from(s.umbra);
         stats.penumbra_edges += usize::from(s.penumbra);
@@ -294,9 +294,13 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
                 extrusion: p,
             };
             volumes.push_polygon(&[a, b, extrude(b, p), extrude(a, p)], template, c, false);
-            let ids = mesh.edges[s.edge as usize].v;
-            umbra_ends.push((ids[0], s.edge, p));
-            umbra_ends.push((ids[1], s.edge, p));
+            umbra_ends.extend(EdgeEnd::both(
+                mesh,
+                &classes,
+                s.edge,
+                FaceClass::NoneFront,
+                p,
+            ));
         }
         if s.penumbra {
             let p = points.penumbra;
@@ -307,9 +311,13 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
                 extrusion: p,
             };
             volumes.push_polygon(&[a, b, extrude(b, p), extrude(a, p)], template, c, true);
-            let ids = mesh.edges[s.edge as usize].v;
-            penumbra_ends.push((ids[0], s.edge, p));
-            penumbra_ends.push((ids[1], s.edge, p));
+            penumbra_ends.extend(EdgeEnd::both(
+                mesh,
+                &classes,
+                s.edge,
+                FaceClass::AllFront,
+                p,
+            ));
         }
     }
 
@@ -380,7 +388,52 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
     }
 }
 
-/// Closing fans at the vertices where two quads of one volume meet.
+/// One end of an extruded silhouette edge.
+#[derive(Clone, Copy, Debug)]
+struct EdgeEnd {
+    /// Welded vertex.
+    vertex: u32,
+    edge: u32,
+    /// The edge leaves this vertex when walked with the volume's inside face (none-front for the
+    /// umbra, all-front for the penumbra) on its left.
+    outgoing: bool,
+    extrusion: Vec3,
+}
+
+impl EdgeEnd {
+    fn both(
+        mesh: &CasterMesh,
+        classes: &[FaceClass],
+        edge: u32,
+        inside: FaceClass,
+        extrusion: Vec3,
+    ) -> [EdgeEnd; 2] {
+        let e = &mesh.edges[edge as usize];
+        // `e.v` is the direction the first face walks the edge (counter-clockwise).
+        let forward = super::silhouette::edge_classes(e, classes).0 == inside;
+        let (from, to) = if forward {
+            (e.v[0], e.v[1])
+        } else {
+            (e.v[1], e.v[0])
+        };
+        [
+            EdgeEnd {
+                vertex: from,
+                edge,
+                outgoing: true,
+                extrusion,
+            },
+            EdgeEnd {
+                vertex: to,
+                edge,
+                outgoing: false,
+                extrusion,
+            },
+        ]
+    }
+}
+
+/// Closing fans at the vertices where quads of one volume meet.
 struct Fans<'a> {
     mesh: &'a CasterMesh,
     light: &'a DiskLight,
@@ -388,8 +441,8 @@ struct Fans<'a> {
 }
 
 impl Fans<'_> {
-    /// At every vertex shared by exactly two extruded edges of `ends` (welded vertex, edge,
-    /// extrusion point), add a fan of `kind` between the two quads. Returns the number of fans.
+    /// At every vertex shared by extruded edges of `ends`, add a fan of `kind` between the quads of
+    /// each pair of edges that meet there ([`Fans::pairs`]). Returns the number of fans.
     ///
     /// The fan's rays `v + s(v − q)`, for rim points `q` between the two extrusion points, join
     /// the two quads' end rays at `v`, so the surface is closed whether the quads leave a gap
@@ -399,24 +452,47 @@ impl Fans<'_> {
     /// D-buffer rules (nearest umbra exit, nearest penumbra entry) never let it win. Deciding
     /// "gap or cross" by which side of the other quad's plane each far edge falls is unreliable
     /// for nearly collinear edges: it sees only the offset across the chain.
-    fn close(
-        &self,
-        volumes: &mut VolumeMesh,
-        ends: &mut [(u32, u32, Vec3)],
-        kind: VolumeKind,
-    ) -> usize {
-        ends.sort_unstable_by_key(|&(v, e, _)| (v, e));
+    fn close(&self, volumes: &mut VolumeMesh, ends: &mut [EdgeEnd], kind: VolumeKind) -> usize {
+        ends.sort_unstable_by_key(|e| (e.vertex, e.edge, e.outgoing));
         let mut count = 0;
-        for pair in ends.chunk_by(|x, y| x.0 == y.0) {
-            let [(v, _, p1), (_, _, p2)] = pair else {
-                continue;
-            };
-            let apex = self.mesh.position(*v);
-            let before = volumes.triangle_count();
-            self.push_fan(volumes, apex, *p1, *p2, kind);
-            count += usize::from(volumes.triangle_count() > before);
+        for group in ends.chunk_by(|x, y| x.vertex == y.vertex) {
+            let apex = self.mesh.position(group[0].vertex);
+            for (i, j) in self.pairs(group) {
+                let before = volumes.triangle_count();
+                self.push_fan(volumes, apex, group[i].extrusion, group[j].extrusion, kind);
+                count += usize::from(volumes.triangle_count() > before);
+            }
         }
         count
+    }
+
+    /// Which edge ends at one vertex belong together. Two: each other. More (silhouette chains
+    /// touching at a vertex): each chain arrives and leaves, so an incoming end pairs with an
+    /// outgoing one, the closest on the disk rim first; ends left over (inconsistent winding)
+    /// pair by distance alone.
+    fn pairs(&self, group: &[EdgeEnd]) -> Vec<(usize, usize)> {
+        if group.len() == 2 {
+            return vec![(0, 1)];
+        }
+        let mut candidates: Vec<(bool, f32, usize, usize)> = Vec::new();
+        for i in 0..group.len() {
+            for j in i + 1..group.len() {
+                let mixed = group[i].outgoing != group[j].outgoing;
+                let gap = group[i].extrusion.distance(group[j].extrusion);
+                candidates.push((!mixed, gap, i, j));
+            }
+        }
+        candidates.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let mut used = vec![false; group.len()];
+        let mut pairs = Vec::new();
+        for (_, _, i, j) in candidates {
+            if !used[i] && !used[j] {
+                used[i] = true;
+                used[j] = true;
+                pairs.push((i, j));
+            }
+        }
+        pairs
     }
 
     /// The fan at `apex` between the quads of its two edges, from `p1` to `p2` along the shorter
