@@ -285,39 +285,38 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
             continue;
         };
         let [a, b] = s.v;
-        if s.umbra {
-            let p = points.umbra;
+        let volumes_of_edge = [
+            (
+                s.umbra,
+                VolumeKind::UmbraQuad,
+                points.umbra,
+                &mut umbra_ends,
+            ),
+            (
+                s.penumbra,
+                VolumeKind::PenumbraQuad,
+                points.penumbra,
+                &mut penumbra_ends,
+            ),
+        ];
+        for (on, kind, p, ends) in volumes_of_edge {
+            if !on {
+                continue;
+            }
             let template = VolumeVertex {
                 position: a,
-                kind: VolumeKind::UmbraQuad,
+                kind,
                 edge: s.v,
                 extrusion: p,
             };
-            volumes.push_polygon(&[a, b, extrude(b, p), extrude(a, p)], template, c, false);
-            umbra_ends.extend(EdgeEnd::both(
-                mesh,
-                &classes,
-                s.edge,
-                FaceClass::NoneFront,
-                p,
-            ));
-        }
-        if s.penumbra {
-            let p = points.penumbra;
-            let template = VolumeVertex {
-                position: a,
-                kind: VolumeKind::PenumbraQuad,
-                edge: s.v,
-                extrusion: p,
+            let umbra = kind.is_umbra();
+            volumes.push_polygon(&[a, b, extrude(b, p), extrude(a, p)], template, c, !umbra);
+            let inside = if umbra {
+                FaceClass::NoneFront
+            } else {
+                FaceClass::AllFront
             };
-            volumes.push_polygon(&[a, b, extrude(b, p), extrude(a, p)], template, c, true);
-            penumbra_ends.extend(EdgeEnd::both(
-                mesh,
-                &classes,
-                s.edge,
-                FaceClass::AllFront,
-                p,
-            ));
+            ends.extend(EdgeEnd::both(mesh, &classes, s.edge, inside, p));
         }
     }
 
