@@ -8,9 +8,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# System packages the tests load at run time (none yet for the CPU-only geometry core; the
-# render core adds Mesa's Vulkan driver here).
-PACKAGES=()
+# System packages the tests load at run time: Mesa's Vulkan driver (lavapipe, a CPU adapter for
+# wgpu on machines without a GPU) and the Vulkan loader.
+PACKAGES=(mesa-vulkan-drivers libvulkan1)
 
 missing=()
 for p in "${PACKAGES[@]}"; do

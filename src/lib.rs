@@ -8,4 +8,5 @@
 
 pub mod fsutil;
 pub mod geometry;
+pub mod render;
 pub mod scene;

@@ -10,6 +10,7 @@ pub mod adjacency;
 pub mod bvh;
 pub mod classify;
 pub mod hull;
+pub mod light_view;
 pub mod metrics;
 pub mod oracle;
 pub mod ray;

@@ -1,0 +1,172 @@
+// The light pass: the D-buffer rendered from the light centre c (seed 000 §3; design.md §2).
+// Its CPU twin is src/geometry/twin.rs; the channel rules must match it:
+//   |cx_o|   nearest scene surface (depth test Less)                     -> fs_surface
+//   |cx_uv|  per caster the nearest umbra exit (faces whose normal points away from c), then
+//            the farthest over casters (fs_umbra into a scratch target, fs_merge with depth
+//            test Greater)
+//   |cx_pv|  the nearest penumbra entry (faces whose normal points toward c)  -> fs_penumbra
+//   |cx_s|   eq. (2) from the fragment that won, kept per volume (the .y of the volume targets)
+// Distances are true Euclidean |p - c| per fragment, not interpolated vertex distances.
+
+struct LightUniforms {
+    view_proj: mat4x4<f32>,
+    // xyz: the disk centre c.
+    center: vec4<f32>,
+    // xyz: the unit normal n_c, toward the emitting side.
+    normal: vec4<f32>,
+    // x: 1 / far, to store a distance as depth in the merge pass.
+    depth_scale: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> light: LightUniforms;
+
+// ---- Surfaces: |cx_o| ----
+
+struct SurfaceIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) albedo: f32,
+};
+
+struct SurfaceOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+};
+
+@vertex
+fn vs_surface(v: SurfaceIn) -> SurfaceOut {
+    var out: SurfaceOut;
+    out.clip = light.view_proj * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    return out;
+}
+
+@fragment
+fn fs_surface(f: SurfaceOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(distance(f.world, light.center.xyz), 0.0, 0.0, 0.0);
+}
+
+// ---- Volumes: |cx_uv|, |cx_pv| and |cx_s| ----
+
+// Kinds, as geometry::VolumeKind::code().
+const KIND_SILHOUETTE_FACE_A: u32 = 1u;
+const KIND_SILHOUETTE_FACE_B: u32 = 2u;
+
+struct VolumeIn {
+    @location(0) position: vec3<f32>,
+    @location(1) kind: u32,
+    // The triangle's normal (its winding: away from c for umbra faces, toward c for penumbra).
+    @location(2) normal: vec3<f32>,
+    // The silhouette edge and the rim point the triangle was extruded from.
+    @location(3) edge_a: vec3<f32>,
+    @location(4) edge_b: vec3<f32>,
+    @location(5) extrusion: vec3<f32>,
+};
+
+struct VolumeOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) @interpolate(flat) kind: u32,
+    @location(2) @interpolate(flat) normal: vec3<f32>,
+    @location(3) @interpolate(flat) edge_a: vec3<f32>,
+    @location(4) @interpolate(flat) edge_b: vec3<f32>,
+    @location(5) @interpolate(flat) extrusion: vec3<f32>,
+};
+
+@vertex
+fn vs_volume(v: VolumeIn) -> VolumeOut {
+    var out: VolumeOut;
+    out.clip = light.view_proj * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    out.kind = v.kind;
+    out.normal = v.normal;
+    out.edge_a = v.edge_a;
+    out.edge_b = v.edge_b;
+    out.extrusion = v.extrusion;
+    return out;
+}
+
+// The point of the line a-b closest to the line p-q (a when parallel or a = b); the CPU twin is
+// geometry::volumes::closest_point_on_line.
+fn closest_point_on_line(a: vec3<f32>, b: vec3<f32>, p: vec3<f32>, q: vec3<f32>) -> vec3<f32> {
+    let d1 = b - a;
+    let d2 = q - p;
+    let w0 = a - p;
+    let aa = dot(d1, d1);
+    let bb = dot(d1, d2);
+    let cc = dot(d2, d2);
+    let dd = dot(d1, w0);
+    let ee = dot(d2, w0);
+    let den = aa * cc - bb * bb;
+    if !(den > 1e-12 * aa * cc) {
+        return a;
+    }
+    return a + d1 * ((bb * ee - cc * dd) / den);
+}
+
+// |cx_s| (eq. 2 as the brief defines it in words): the distance along the ray from c to the plane
+// through the silhouette edge parallel to the disk, at the edge point this fragment was extruded
+// from. A silhouette face is its own edge. Twin: VolumeVertex::edge_plane_distance.
+fn edge_plane_distance(f: VolumeOut, dir: vec3<f32>) -> f32 {
+    if f.kind == KIND_SILHOUETTE_FACE_A || f.kind == KIND_SILHOUETTE_FACE_B {
+        return distance(f.world, light.center.xyz);
+    }
+    let along = dot(dir, light.normal.xyz);
+    if !(along > 0.0) {
+        return 3.0e38;
+    }
+    let e = closest_point_on_line(f.edge_a, f.edge_b, f.extrusion, f.world);
+    return dot(e - light.center.xyz, light.normal.xyz) / along;
+}
+
+// Umbra exits: only faces whose normal points away from c.
+@fragment
+fn fs_umbra(f: VolumeOut) -> @location(0) vec4<f32> {
+    let to_fragment = f.world - light.center.xyz;
+    let d = length(to_fragment);
+    let dir = to_fragment / d;
+    if !(dot(f.normal, dir) > 0.0) {
+        discard;
+    }
+    return vec4<f32>(d, edge_plane_distance(f, dir), 0.0, 0.0);
+}
+
+// Penumbra entries: only faces whose normal points toward c.
+@fragment
+fn fs_penumbra(f: VolumeOut) -> @location(0) vec4<f32> {
+    let to_fragment = f.world - light.center.xyz;
+    let d = length(to_fragment);
+    let dir = to_fragment / d;
+    if !(dot(f.normal, dir) < 0.0) {
+        discard;
+    }
+    return vec4<f32>(d, edge_plane_distance(f, dir), 0.0, 0.0);
+}
+
+// ---- Merge: the farthest of the casters' nearest umbra exits ----
+
+@group(1) @binding(0) var scratch: texture_2d<f32>;
+
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let x = f32((i << 1u) & 2u) * 2.0 - 1.0;
+    let y = f32(i & 2u) * 2.0 - 1.0;
+    return vec4<f32>(x, y, 0.0, 1.0);
+}
+
+struct MergeOut {
+    @location(0) value: vec4<f32>,
+    @builtin(frag_depth) depth: f32,
+};
+
+@fragment
+fn fs_merge(@builtin(position) p: vec4<f32>) -> MergeOut {
+    let s = textureLoad(scratch, vec2<i32>(p.xy), 0);
+    if !(s.x > 0.0) {
+        discard;
+    }
+    var out: MergeOut;
+    out.value = s;
+    out.depth = clamp(s.x * light.depth_scale.x, 0.0, 1.0);
+    return out;
+}

@@ -1,0 +1,206 @@
+//! The D-buffer's view from the light centre: a perspective frustum fitted to where the casters'
+//! penumbrae can be, so texels are spent where shadows fall (design.md §2, "fit it to their
+//! bounds").
+//!
+//! A point in a caster's penumbra sees some disk point `q` through the caster, so it lies on a ray
+//! `v + s(v − q)` from a caster point `v` away from a rim point. Seen from `c`, such points lie in
+//! the cone spanned by the directions `v − c` and, for far points, `v − q`. The frustum is fitted
+//! to those directions over every caster vertex and rim samples (grown slightly so the polygon of
+//! samples covers the circle).
+
+use glam::{Mat4, Vec3};
+
+use crate::scene::{DiskLight, Scene};
+
+/// The largest angle between the frustum axis and a direction it must cover. Wider penumbrae are
+/// clipped to it (and reported), since a perspective projection cannot reach 90°.
+pub const MAX_HALF_ANGLE_DEG: f32 = 80.0;
+
+/// The light-view camera of the D-buffer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightView {
+    pub view: Mat4,
+    pub projection: Mat4,
+    pub near: f32,
+    pub far: f32,
+    /// Some directions of the casters' penumbrae fall outside [`MAX_HALF_ANGLE_DEG`].
+    pub clipped: bool,
+}
+
+impl LightView {
+    pub fn view_projection(&self) -> Mat4 {
+        self.projection * self.view
+    }
+
+    /// Fit to the scene's casters; with no caster, a 90° cone around the light normal.
+    pub fn fit(scene: &Scene) -> LightView {
+        let light = scene.light;
+        let mut vertices: Vec<Vec3> = scene
+            .casters()
+            .flat_map(|o| o.mesh.positions.iter().copied())
+            .filter(|p| p.is_finite())
+            .collect();
+        if vertices.is_empty() {
+            vertices.push(light.center + light.normal);
+        }
+        let all: Vec<Vec3> = scene
+            .objects
+            .iter()
+            .flat_map(|o| o.mesh.positions.iter().copied())
+            .filter(|p| p.is_finite())
+            .collect();
+        let extrusion = crate::geometry::VolumeParams::for_scene(scene).far;
+        fit_directions(&light, &vertices, &all, extrusion)
+    }
+}
+
+/// Number of rim samples; the sample polygon is grown by `1/cos(π/n)` to cover the circle.
+const RIM_SAMPLES: usize = 16;
+
+/// `extrusion`: how far volumes reach beyond the casters. The far plane must hold them: an umbra
+/// exit clipped away would count as "no exit" and lose the farthest-over-casters contest.
+fn fit_directions(
+    light: &DiskLight,
+    casters: &[Vec3],
+    everything: &[Vec3],
+    extrusion: f32,
+) -> LightView {
+    let c = light.center;
+    let (u, w) = light.basis();
+    let grow = 1.0 / (std::f32::consts::PI / RIM_SAMPLES as f32).cos();
+    let rim: Vec<Vec3> = (0..RIM_SAMPLES)
+        .map(|k| {
+            let a = k as f32 / RIM_SAMPLES as f32 * std::f32::consts::TAU;
+            c + light.radius * grow * (a.cos() * u + a.sin() * w)
+        })
+        .collect();
+    let mut dirs: Vec<Vec3> = Vec::with_capacity(casters.len() * (RIM_SAMPLES + 1));
+    for &v in casters {
+        if light.height_of(v) <= 0.0 {
+            continue; // behind the one-sided light: casts nothing
+        }
+        dirs.extend((v - c).try_normalize());
+        dirs.extend(rim.iter().filter_map(|&q| (v - q).try_normalize()));
+    }
+    // Directions pointing behind the light plane cannot hold a lit receiver.
+    dirs.retain(|d| d.dot(light.normal) > 1e-4);
+    if dirs.is_empty() {
+        dirs.push(light.normal);
+    }
+    let axis = dirs
+        .iter()
+        .copied()
+        .sum::<Vec3>()
+        .try_normalize()
+        .unwrap_or(light.normal);
+    let up_hint = if axis.cross(Vec3::Y).length_squared() > 1e-6 {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    };
+    let view = Mat4::look_to_rh(c, axis, up_hint);
+    let max_tan = MAX_HALF_ANGLE_DEG.to_radians().tan();
+    let (mut l, mut r, mut b, mut t) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+    let mut clipped = false;
+    for d in &dirs {
+        let p = view.transform_vector3(*d);
+        // Looking down −Z: slopes x/(−z), y/(−z).
+        let depth = -p.z;
+        let (sx, sy) = if depth > 1e-6 {
+            (p.x / depth, p.y / depth)
+        } else {
+            (p.x.signum() * f32::MAX, p.y.signum() * f32::MAX)
+        };
+        let (cx, cy) = (sx.clamp(-max_tan, max_tan), sy.clamp(-max_tan, max_tan));
+        clipped |= cx != sx || cy != sy;
+        l = l.min(cx);
+        r = r.max(cx);
+        b = b.min(cy);
+        t = t.max(cy);
+    }
+    // At least a tiny frustum, and a one-texel-ish margin.
+    let pad = 0.01 * (r - l).max(t - b).max(1e-3);
+    let (l, r, b, t) = (l - pad, r + pad, b - pad, t + pad);
+
+    let mut nearest = f32::MAX;
+    let mut farthest = 0.0f32;
+    for &p in everything.iter().chain(casters) {
+        let d = (p - c).length();
+        nearest = nearest.min(d);
+        farthest = farthest.max(d);
+    }
+    let far = (farthest * 2.0 + extrusion).max(1.0);
+    let near = (nearest * 0.5).clamp(far * 1e-6, far * 1e-2).max(1e-4);
+    LightView {
+        view,
+        projection: off_center_perspective(l, r, b, t, near, far),
+        near,
+        far,
+        clipped,
+    }
+}
+
+/// A right-handed perspective looking down −Z with the image spanning slopes `[l, r] × [b, t]`,
+/// depth 0 at `near` and 1 at `far` (wgpu's clip space).
+pub fn off_center_perspective(l: f32, r: f32, b: f32, t: f32, near: f32, far: f32) -> Mat4 {
+    let (w, h) = (r - l, t - b);
+    let z = far / (near - far);
+    Mat4::from_cols(
+        glam::Vec4::new(2.0 / w, 0.0, 0.0, 0.0),
+        glam::Vec4::new(0.0, 2.0 / h, 0.0, 0.0),
+        glam::Vec4::new((r + l) / w, (t + b) / h, z, -1.0),
+        glam::Vec4::new(0.0, 0.0, near * z, 0.0),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{PreparedCasters, VolumeParams};
+
+    #[test]
+    fn off_center_perspective_maps_its_bounds() {
+        let m = off_center_perspective(-0.5, 1.5, -1.0, 0.25, 0.1, 50.0);
+        let corner = |sx: f32, sy: f32, d: f32| m.project_point3(Vec3::new(sx * d, sy * d, -d));
+        let p = corner(-0.5, -1.0, 0.1);
+        assert!((p - Vec3::new(-1.0, -1.0, 0.0)).length() < 1e-5, "{p}");
+        let p = corner(1.5, 0.25, 50.0);
+        assert!((p - Vec3::new(1.0, 1.0, 1.0)).length() < 1e-4, "{p}");
+        let p = corner(0.5, -0.375, 3.0);
+        assert!(
+            p.x.abs() < 1e-5 && p.y.abs() < 1e-5 && p.z > 0.0 && p.z < 1.0,
+            "{p}"
+        );
+    }
+
+    /// Every penumbra point the twin finds on the ground must land inside the frustum.
+    #[test]
+    fn fitted_view_covers_every_penumbra_on_the_ground() {
+        for name in crate::scene::builtin::names() {
+            let Ok(scene) = crate::scene::load(name) else {
+                panic!("{name} loads");
+            };
+            let view = LightView::fit(&scene);
+            let vp = view.view_projection();
+            let geometry =
+                PreparedCasters::new(&scene).build(&scene.light, &VolumeParams::for_scene(&scene));
+            let twin = crate::geometry::DBufferTwin::new(&scene, &geometry.casters);
+            let mut shadowed = 0;
+            for i in 0..60 {
+                for j in 0..60 {
+                    let x = Vec3::new(-5.0 + i as f32 / 6.0, 0.0, -5.0 + j as f32 / 6.0);
+                    if twin.sample(x).branch == crate::geometry::Branch::Lit {
+                        continue;
+                    }
+                    shadowed += 1;
+                    let ndc = vp.project_point3(x);
+                    assert!(
+                        ndc.x.abs() <= 1.0 && ndc.y.abs() <= 1.0 && (0.0..=1.0).contains(&ndc.z),
+                        "{name}: shadowed ground point {x} falls outside the D-buffer ({ndc})"
+                    );
+                }
+            }
+            assert!(shadowed > 0, "{name}: no shadow on the ground grid");
+        }
+    }
+}

@@ -1,0 +1,323 @@
+//! One frame, in the order of design.md §1: (geometry, cached by the caller and uploaded into a
+//! [`GpuScene`]) → light pass (the D-buffer from the light centre) → camera pass (per pixel |cx|,
+//! branch, t, V(t), shading) → readback.
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::Mat4;
+
+use super::camera_pass::CameraPass;
+use super::context::GpuContext;
+use super::gpu_scene::GpuScene;
+use super::light_pass::LightPass;
+use super::readback;
+use super::{CameraUniforms, LightUniforms, RenderError};
+use crate::geometry::light_view::LightView;
+use crate::geometry::VtVariant;
+use crate::scene::Scene;
+
+/// How the camera pass turns the D-buffer into visibility.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// The D-buffer method of seed 000.
+    #[default]
+    DBuffer,
+    /// A hard shadow map from the light centre: the `|cx_o|` test alone.
+    Hard,
+}
+
+impl Method {
+    pub const ALL: [Method; 2] = [Method::DBuffer, Method::Hard];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::DBuffer => "dbuffer",
+            Method::Hard => "hard",
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| format!("unknown method '{s}': expected one of dbuffer, hard"))
+    }
+}
+
+/// What to render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameRequest {
+    pub width: u32,
+    pub height: u32,
+    /// The D-buffer is `dbuffer_size`² texels.
+    pub dbuffer_size: u32,
+    pub method: Method,
+    pub vt: VtVariant,
+}
+
+/// A rendered frame, read back. Images are row-major, row 0 at the top.
+#[derive(Clone, Debug, Default)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// Shaded colour, sRGB 8-bit RGBA.
+    pub color: Vec<[u8; 4]>,
+    /// V per pixel.
+    pub visibility: Vec<f32>,
+    /// t per pixel.
+    pub t: Vec<f32>,
+    /// Branch code per pixel ([`crate::geometry::Branch::code`]).
+    pub branch: Vec<u8>,
+    /// World position, and 1 where a surface was hit (0 elsewhere).
+    pub position: Vec<[f32; 4]>,
+    pub dbuffer_size: u32,
+    /// `|cx_o|` per texel ([`super::light_pass::NO_SURFACE`] where none).
+    pub distance: Vec<f32>,
+    /// `(|cx_uv|, |cx_s|)` per texel, 0 where no umbra exit.
+    pub umbra: Vec<[f32; 2]>,
+    /// `(|cx_pv|, |cx_s|)` per texel, 0 where no penumbra entry.
+    pub penumbra: Vec<[f32; 2]>,
+    /// GPU milliseconds per pass from timestamp queries; empty without them.
+    pub gpu_ms: Vec<(String, f64)>,
+}
+
+/// Bias of the hidden-from-centre test: relative to `|cx|`, plus the slope one texel spans times
+/// the tangent of the incidence angle, times this factor.
+pub const BIAS_CONSTANT: f32 = 2e-4;
+pub const BIAS_SLOPE: f32 = 1.5;
+/// Ambient share of the shading, so shadowed surfaces keep their shape.
+pub const AMBIENT: f32 = 0.1;
+
+/// The session-long passes and their size-dependent targets.
+pub struct FrameRenderer {
+    light: LightPass,
+    camera: CameraPass,
+    timer: Option<Timer>,
+}
+
+struct Timer {
+    queries: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+}
+
+const QUERIES: u32 = 4;
+
+impl FrameRenderer {
+    pub fn new(ctx: &GpuContext) -> FrameRenderer {
+        let device = &ctx.device;
+        let timer = ctx.timestamps.then(|| Timer {
+            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("FrameRenderer::queries"),
+                ty: wgpu::QueryType::Timestamp,
+                count: QUERIES,
+            }),
+            resolve: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("FrameRenderer::resolve"),
+                size: u64::from(QUERIES) * 8,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+        });
+        FrameRenderer {
+            light: LightPass::new(device),
+            camera: CameraPass::new(device),
+            timer,
+        }
+    }
+
+    /// Render `scene` (whose volumes `gpu` holds) and read everything back.
+    pub fn render(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        light_view: &LightView,
+        request: &FrameRequest,
+    ) -> Result<Frame, RenderError> {
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        let max = device.limits().max_texture_dimension_2d;
+        for (what, size) in [
+            ("image width", request.width),
+            ("image height", request.height),
+            ("D-buffer size", request.dbuffer_size),
+        ] {
+            if size == 0 || size > max {
+                return Err(RenderError::Size { what, size, max });
+            }
+        }
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        self.light.resize(device, request.dbuffer_size);
+        self.camera.resize(device, request.width, request.height);
+        let (Some(dbuffer), Some(targets)) = (self.light.targets(), self.camera.targets()) else {
+            return Err(RenderError::Gpu("render targets were not created".into()));
+        };
+
+        let light = scene.light;
+        let light_vp = light_view.view_projection();
+        self.light.prepare(
+            queue,
+            &LightUniforms {
+                view_proj: light_vp.to_cols_array_2d(),
+                center: light.center.extend(1.0).to_array(),
+                normal: light.normal.extend(0.0).to_array(),
+                depth_scale: [1.0 / light_view.far, 0.0, 0.0, 0.0],
+            },
+        );
+        let aspect = request.width as f32 / request.height as f32;
+        let (near, far) = camera_range(scene);
+        let camera_vp = scene.camera.projection(aspect, near, far) * scene.camera.view();
+        let slope = texel_slope(&light_view.projection, request.dbuffer_size);
+        self.camera.prepare(
+            queue,
+            &CameraUniforms {
+                view_proj: camera_vp.to_cols_array_2d(),
+                light_view_proj: light_vp.to_cols_array_2d(),
+                eye: scene.camera.eye.extend(1.0).to_array(),
+                light_center: light.center.extend(light.radius).to_array(),
+                light_normal: light.normal.extend(light.intensity).to_array(),
+                bias: [
+                    BIAS_CONSTANT,
+                    BIAS_SLOPE,
+                    request.dbuffer_size as f32,
+                    slope,
+                ],
+                mode: [
+                    match request.method {
+                        Method::DBuffer => 0,
+                        Method::Hard => 1,
+                    },
+                    match request.vt {
+                        VtVariant::Smoothstep => 0,
+                        VtVariant::Sqrt => 1,
+                        VtVariant::Exact => 2,
+                        VtVariant::Linear => 3,
+                    },
+                    (AMBIENT * 1000.0) as u32,
+                    0,
+                ],
+            },
+        );
+
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("FrameRenderer::encoder"),
+        });
+        let timer = self.timer.as_ref();
+        self.light
+            .record(&mut encoder, gpu, timer.map(|t| (&t.queries, 0, 1)));
+        self.camera.record(
+            device,
+            &mut encoder,
+            gpu,
+            dbuffer,
+            timer.map(|t| (&t.queries, 2, 3)),
+        );
+        let stamps = timer.map(|t| {
+            encoder.resolve_query_set(&t.queries, 0..QUERIES, &t.resolve, 0);
+            let out = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("FrameRenderer::timestamps"),
+                size: u64::from(QUERIES) * 8,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            encoder.copy_buffer_to_buffer(&t.resolve, 0, &out, 0, u64::from(QUERIES) * 8);
+            out
+        });
+        let color = readback::copy(device, &mut encoder, &targets.color, 4);
+        let data = readback::copy(device, &mut encoder, &targets.data, 8);
+        let position = readback::copy(device, &mut encoder, &targets.position, 16);
+        let distance = readback::copy(device, &mut encoder, &dbuffer.distance.texture, 4);
+        let umbra = readback::copy(device, &mut encoder, &dbuffer.umbra.texture, 8);
+        let penumbra = readback::copy(device, &mut encoder, &dbuffer.penumbra.texture, 8);
+        queue.submit([encoder.finish()]);
+
+        // Errors raised before the scope (creating pipelines) come first: they are the cause.
+        let scoped = pollster::block_on(scope.pop());
+        if let Some(e) = ctx.take_uncaptured_errors().into_iter().next() {
+            return Err(RenderError::Gpu(e));
+        }
+        if let Some(e) = scoped {
+            return Err(RenderError::Gpu(e.to_string()));
+        }
+
+        let rgba = |v: Vec<f32>| {
+            v.chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect()
+        };
+        let pairs = |v: Vec<f32>| v.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+        let mut gpu_ms = Vec::new();
+        if let Some(buffer) = stamps {
+            let bytes = readback::map_bytes(device, &buffer)?;
+            let ticks: Vec<u64> = bytes
+                .chunks_exact(8)
+                .map(|b| u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
+                .collect();
+            let period_ms = f64::from(queue.get_timestamp_period()) * 1e-6;
+            let ms = |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * period_ms;
+            gpu_ms.push(("light_pass".to_string(), ms(0, 1)));
+            gpu_ms.push(("camera_pass".to_string(), ms(2, 3)));
+        }
+        let data = data.read_f32(device)?;
+        let (visibility, t_branch): (Vec<f32>, Vec<f32>) =
+            data.chunks_exact(2).map(|c| (c[0], c[1])).unzip();
+        // The shader stores t + 2·branch: umbra 0, hidden [2, 2.5], visible [4.5, 5], lit 7, so
+        // round((x − ½)/2) is the branch and the rest is t, both exact.
+        let branch: Vec<u8> = t_branch
+            .iter()
+            .map(|&x| ((x - 0.5) / 2.0).round().clamp(0.0, 3.0) as u8)
+            .collect();
+        let t = t_branch
+            .iter()
+            .zip(&branch)
+            .map(|(&x, &b)| x - 2.0 * f32::from(b))
+            .collect();
+        Ok(Frame {
+            width: request.width,
+            height: request.height,
+            color: color
+                .read_bytes(device)?
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect(),
+            visibility,
+            t,
+            branch,
+            position: rgba(position.read_f32(device)?),
+            dbuffer_size: request.dbuffer_size,
+            distance: distance.read_f32(device)?,
+            umbra: pairs(umbra.read_f32(device)?),
+            penumbra: pairs(penumbra.read_f32(device)?),
+            gpu_ms,
+        })
+    }
+}
+
+/// Near and far planes that hold the whole scene as seen from the camera.
+fn camera_range(scene: &Scene) -> (f32, f32) {
+    let eye = scene.camera.eye;
+    let mut far = 1.0f32;
+    for o in &scene.objects {
+        for p in &o.mesh.positions {
+            far = far.max((*p - eye).length());
+        }
+    }
+    let far = far * 1.5;
+    (far * 1e-4, far)
+}
+
+/// The slope one D-buffer texel spans (the larger of its two axes).
+fn texel_slope(projection: &Mat4, size: u32) -> f32 {
+    let w = 2.0 / projection.x_axis.x;
+    let h = 2.0 / projection.y_axis.y;
+    w.abs().max(h.abs()) / size.max(1) as f32
+}

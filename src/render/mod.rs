@@ -1,0 +1,159 @@
+//! The render core on wgpu: the D-buffer from the light centre, then the camera pass. Headless
+//! (`dbuffer render`, the tests) and inside the lab window alike; the pass order is in
+//! [`frame`], each pass is one file here with its WGSL twin of the same name in `shaders/`.
+
+pub mod camera_pass;
+pub mod context;
+pub mod frame;
+pub mod gpu_scene;
+pub mod light_pass;
+mod readback;
+
+pub use context::GpuContext;
+pub use frame::{Frame, FrameRenderer, FrameRequest, Method};
+
+/// What can go wrong on the GPU side. Never a panic: a message for the user.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error("no GPU adapter found ({0}); on a machine without a GPU install Mesa's Vulkan driver (Debian: mesa-vulkan-drivers) and set WGPU_BACKEND=vulkan")]
+    NoAdapter(String),
+    #[error("the GPU refused to open a device: {0}")]
+    Device(String),
+    #[error("the GPU reported an error: {0}")]
+    Gpu(String),
+    #[error("reading back from the GPU failed: {0}")]
+    Readback(String),
+    #[error("{what} of {size} is not supported: expected 1 to {max}")]
+    Size {
+        what: &'static str,
+        size: u32,
+        max: u32,
+    },
+}
+
+/// GPU vertex of a scene surface (both passes). Layout checked against the WGSL `SurfaceIn` by
+/// `tests/render_layout.rs`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SurfaceVertex {
+    pub position: [f32; 3],
+    pub albedo: f32,
+    pub normal: [f32; 3],
+    pub _pad: f32,
+}
+
+impl SurfaceVertex {
+    pub const ATTRIBUTES: [wgpu::VertexAttribute; 3] = [
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x3,
+            offset: 0,
+            shader_location: 0,
+        },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x3,
+            offset: 16,
+            shader_location: 1,
+        },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32,
+            offset: 12,
+            shader_location: 2,
+        },
+    ];
+
+    pub fn layout() -> wgpu::VertexBufferLayout<'static> {
+        wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<SurfaceVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &Self::ATTRIBUTES,
+        }
+    }
+}
+
+/// GPU vertex of a shadow volume: position, kind, the triangle's normal, and the silhouette edge
+/// and rim point it was extruded from (for eq. 2 per fragment).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct VolumeVertex {
+    pub position: [f32; 3],
+    pub kind: u32,
+    pub normal: [f32; 3],
+    pub _pad0: f32,
+    pub edge_a: [f32; 3],
+    pub _pad1: f32,
+    pub edge_b: [f32; 3],
+    pub _pad2: f32,
+    pub extrusion: [f32; 3],
+    pub _pad3: f32,
+}
+
+impl VolumeVertex {
+    pub const ATTRIBUTES: [wgpu::VertexAttribute; 6] = [
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x3,
+            offset: 0,
+            shader_location: 0,
+        },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Uint32,
+            offset: 12,
+            shader_location: 1,
+        },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x3,
+            offset: 16,
+            shader_location: 2,
+        },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x3,
+            offset: 32,
+            shader_location: 3,
+        },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x3,
+            offset: 48,
+            shader_location: 4,
+        },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x3,
+            offset: 64,
+            shader_location: 5,
+        },
+    ];
+
+    pub fn layout() -> wgpu::VertexBufferLayout<'static> {
+        wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<VolumeVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &Self::ATTRIBUTES,
+        }
+    }
+}
+
+/// `LightUniforms` of `shaders/light_pass.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct LightUniforms {
+    pub view_proj: [[f32; 4]; 4],
+    pub center: [f32; 4],
+    pub normal: [f32; 4],
+    pub depth_scale: [f32; 4],
+}
+
+/// `CameraUniforms` of `shaders/camera_pass.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct CameraUniforms {
+    pub view_proj: [[f32; 4]; 4],
+    pub light_view_proj: [[f32; 4]; 4],
+    pub eye: [f32; 4],
+    pub light_center: [f32; 4],
+    pub light_normal: [f32; 4],
+    pub bias: [f32; 4],
+    pub mode: [u32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<SurfaceVertex>() == 32);
+const _: () = assert!(std::mem::size_of::<VolumeVertex>() == 80);
+const _: () = assert!(std::mem::size_of::<LightUniforms>() == 112);
+const _: () = assert!(std::mem::size_of::<CameraUniforms>() == 208);

@@ -1,0 +1,139 @@
+//! The GPU render core against its CPU twin, on the CPU adapter (lavapipe) the test command
+//! installs. Per pixel, the GPU's V is compared with the twin evaluated exactly at the world
+//! position the GPU shaded: mean |ΔV| < 0.01, and any larger disagreement must sit within two
+//! D-buffer texels of a boundary (where the twin's branch changes), since the GPU looks the
+//! channels up per texel and the twin per exact ray.
+
+use dbuffer::geometry::light_view::LightView;
+use dbuffer::geometry::{
+    Branch, DBufferTwin, PreparedCasters, SceneGeometry, VolumeParams, VtVariant,
+};
+use dbuffer::render::gpu_scene::GpuScene;
+use dbuffer::render::{Frame, FrameRenderer, FrameRequest, GpuContext, Method};
+use dbuffer::scene::{self, Scene};
+use glam::Vec3;
+
+const SIZE: u32 = 96;
+const DBUFFER: u32 = 1024;
+
+fn context() -> GpuContext {
+    match GpuContext::headless() {
+        Ok(ctx) => ctx,
+        Err(e) => {
+            panic!("the render tests need a wgpu adapter (./scripts/test.sh installs Mesa's): {e}")
+        }
+    }
+}
+
+fn render(
+    ctx: &GpuContext,
+    renderer: &mut FrameRenderer,
+    name: &str,
+    method: Method,
+) -> (Scene, SceneGeometry, LightView, Frame) {
+    let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let geometry =
+        PreparedCasters::new(&scene).build(&scene.light, &VolumeParams::for_scene(&scene));
+    let gpu = GpuScene::new(&ctx.device, &scene, &geometry);
+    let view = LightView::fit(&scene);
+    let request = FrameRequest {
+        width: SIZE,
+        height: SIZE,
+        dbuffer_size: DBUFFER,
+        method,
+        vt: VtVariant::Exact,
+    };
+    let frame = renderer
+        .render(ctx, &scene, &gpu, &view, &request)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    (scene, geometry, view, frame)
+}
+
+#[test]
+fn gpu_agrees_with_the_cpu_twin() {
+    let ctx = context();
+    let mut renderer = FrameRenderer::new(&ctx);
+    println!("adapter: {}", ctx.adapter_description());
+    for name in [
+        "table1-224",
+        "fig7-concave",
+        "fig8b-light-size",
+        "overlap",
+        "acute-corner",
+        "fig8c-complex",
+    ] {
+        let (scene, geometry, view, frame) = render(&ctx, &mut renderer, name, Method::DBuffer);
+        let twin = DBufferTwin::new(&scene, &geometry.casters);
+        let slope = 2.0
+            / view
+                .projection
+                .x_axis
+                .x
+                .abs()
+                .min(view.projection.y_axis.y.abs())
+            / DBUFFER as f32;
+        let (mut n, mut sum, mut far_from_boundary, mut shadowed) =
+            (0usize, 0.0f64, Vec::new(), 0usize);
+        for (i, (v_gpu, p)) in frame.visibility.iter().zip(&frame.position).enumerate() {
+            if p[3] < 0.5 {
+                continue;
+            }
+            let x = Vec3::new(p[0], p[1], p[2]);
+            let s = twin.sample(x);
+            let v_twin = VtVariant::Exact.apply(s.t);
+            let dv = (f64::from(*v_gpu) - v_twin).abs();
+            n += 1;
+            sum += dv;
+            shadowed += usize::from(s.branch != Branch::Lit);
+            if dv > 0.1 {
+                // Near a boundary? Probe the twin two texel footprints around x.
+                let w = (x - scene.light.center).normalize();
+                let (a, b) = w.any_orthonormal_pair();
+                let reach = 2.0 * slope * s.d;
+                let near_boundary = [a, -a, b, -b, a + b, a - b, -a + b, -a - b]
+                    .iter()
+                    .any(|o| twin.sample(x + *o * reach).branch != s.branch);
+                if !near_boundary {
+                    far_from_boundary.push((i % SIZE as usize, i / SIZE as usize, *v_gpu, v_twin));
+                }
+            }
+        }
+        let mean = sum / n.max(1) as f64;
+        println!(
+            "{name:<18} {n} px, {shadowed} in shadow, mean |dV| {mean:.4}, {} far from a boundary",
+            far_from_boundary.len()
+        );
+        assert!(
+            n > 2000 && shadowed > 100,
+            "{name}: the view must show the shadow"
+        );
+        assert!(mean < 0.01, "{name}: mean |dV| {mean}");
+        assert!(
+            far_from_boundary.is_empty(),
+            "{name}: GPU and twin disagree away from boundaries at {:?}",
+            &far_from_boundary[..far_from_boundary.len().min(5)]
+        );
+    }
+}
+
+#[test]
+fn hard_shadow_is_the_centre_test_alone() {
+    let ctx = context();
+    let mut renderer = FrameRenderer::new(&ctx);
+    let (scene, geometry, _, frame) = render(&ctx, &mut renderer, "table1-960", Method::Hard);
+    let twin = DBufferTwin::new(&scene, &geometry.casters);
+    let (mut agree, mut n) = (0, 0);
+    for (&v, p) in frame.visibility.iter().zip(&frame.position) {
+        if p[3] < 0.5 {
+            continue;
+        }
+        assert!(v == 0.0 || v == 1.0, "hard shadows are binary, got {v}");
+        let s = twin.sample(Vec3::new(p[0], p[1], p[2]));
+        n += 1;
+        agree += usize::from((v == 0.0) == s.hidden);
+    }
+    assert!(
+        agree as f64 >= 0.99 * n as f64,
+        "{agree}/{n} pixels agree with the twin's hidden test"
+    );
+}
