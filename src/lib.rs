@@ -3,10 +3,13 @@
 //! Layers, each depending only on those below:
 //! - [`scene`]: scene files, built-in shapes and scenes, meshes;
 //! - [`geometry`]: face classes, silhouettes, umbra/penumbra volumes, the CPU twin of the
-//!   D-buffer lookup and the ray-cast visibility oracle (plain Rust, no GPU types).
+//!   D-buffer lookup and the ray-cast visibility oracle (plain Rust, no GPU types);
+//! - [`render`]: the wgpu render core (light pass, camera pass), headless or in the lab;
+//! - [`output`]: writing one render's files (PNG, EXR, JSON), all or nothing.
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod fsutil;
 pub mod geometry;
+pub mod output;
 pub mod render;
 pub mod scene;
