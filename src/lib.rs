@@ -3,9 +3,11 @@
 //! Layers, each depending only on those below:
 //! - [`scene`]: scene files, built-in shapes and scenes, meshes;
 //! - [`geometry`]: face classes, silhouettes, umbra/penumbra volumes, the CPU twin of the
-//!   D-buffer lookup and the ray-cast visibility oracle (plain Rust, no GPU types).
+//!   D-buffer lookup and the ray-cast visibility oracle (plain Rust, no GPU types);
+//! - [`shader_source`]: WGSL sources from `shaders/` with their `// #include` lines expanded.
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod fsutil;
 pub mod geometry;
 pub mod scene;
+pub mod shader_source;
