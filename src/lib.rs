@@ -6,6 +6,7 @@
 //!   D-buffer lookup and the ray-cast visibility oracle (plain Rust, no GPU types);
 //! - [`render`]: the wgpu render core (light pass, camera pass), headless or in the lab;
 //! - [`output`]: writing one render's files (PNG, EXR, JSON), all or nothing.
+//! - [`shader_source`]: WGSL sources from `shaders/` with their `// #include` lines expanded.
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod fsutil;
@@ -13,3 +14,4 @@ pub mod geometry;
 pub mod output;
 pub mod render;
 pub mod scene;
+pub mod shader_source;
