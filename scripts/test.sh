@@ -34,6 +34,8 @@ if ! command -v cargo >/dev/null; then
 fi
 
 export WGPU_BACKEND="${WGPU_BACKEND:-vulkan}"
+# Mesa's device-select layer complains without a session; it has nothing to choose here.
+export NODEVICE_SELECT="${NODEVICE_SELECT:-1}"
 cargo fmt --all --check
 cargo clippy --all-targets --locked -- -D warnings
 cargo test --locked

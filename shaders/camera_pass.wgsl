@@ -80,8 +80,10 @@ fn visibility(x: vec3<f32>, n: vec3<f32>) -> Visibility {
     let c = u.light_center.xyz;
     let to_x = x - c;
     let d = length(to_x);
-    // Behind the one-sided light: nothing arrives.
-    if !(dot(to_x, u.light_normal.xyz) > 0.0) {
+    // Behind the one-sided light, or on a side turned away from the light centre (self-shadowed:
+    // the point lies on its own caster's umbra exit, where D ≈ |cx_uv| is decided by rounding):
+    // nothing arrives. The oracle agrees: rays from such a point run into the object.
+    if !(dot(to_x, u.light_normal.xyz) > 0.0) || !(dot(n, -to_x) > 0.0) {
         out.v = 0.0;
         out.t = 0.0;
         out.branch = UMBRA;

@@ -21,15 +21,27 @@ enum Command {
     Gui { scene: Option<String> },
     /// Render a scene headless into DIR (image.png, visibility.exr, ...).
     Render {
+        /// A built-in scene name, a .toml scene file or an .obj mesh.
         scene: String,
+        /// Folder for image.png, visibility.exr, position.exr, dbuffer.exr, dbuffer_s.exr,
+        /// classes.png and meta.json (created if missing; written all or nothing).
         #[arg(long)]
         out: std::path::PathBuf,
+        /// Image size, WxH.
         #[arg(long, default_value = "512x512")]
         size: String,
+        /// dbuffer (the method) or hard (a shadow map from the light centre).
         #[arg(long, default_value = "dbuffer")]
         method: String,
+        /// V(t): smoothstep, sqrt, exact or linear.
         #[arg(long, default_value = "smoothstep")]
         vt: String,
+        /// The D-buffer is N×N texels.
+        #[arg(long, default_value_t = 1024)]
+        dbuffer_size: u32,
+        /// Print the adapter and the timings.
+        #[arg(short, long)]
+        verbose: bool,
     },
     /// Render every method and the ray-traced reference, and report their errors.
     Compare {
@@ -79,7 +91,23 @@ fn main() -> ExitCode {
             out,
         }) => cli::inspect(&scene, samples, &size, &vt, out.as_deref()),
         None | Some(Command::Gui { .. }) => cli::not_yet("the lab window", 5),
-        Some(Command::Render { .. }) => cli::not_yet("render", 3),
+        Some(Command::Render {
+            scene,
+            out,
+            size,
+            method,
+            vt,
+            dbuffer_size,
+            verbose,
+        }) => cli::render(&cli::RenderArgs {
+            scene: &scene,
+            out: &out,
+            size: &size,
+            method: &method,
+            vt: &vt,
+            dbuffer_size,
+            verbose,
+        }),
         Some(Command::Compare { .. }) => cli::not_yet("compare", 4),
         Some(Command::Bench { .. }) => cli::not_yet("bench", 6),
     };

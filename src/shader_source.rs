@@ -149,6 +149,14 @@ pub fn from_dir_mapped(dir: &Path, name: &str) -> Result<Expanded, ShaderSourceE
 /// time.
 pub const EMBEDDED: &[(&str, &str)] = &[
     (
+        "camera_pass.wgsl",
+        include_str!("../shaders/camera_pass.wgsl"),
+    ),
+    (
+        "light_pass.wgsl",
+        include_str!("../shaders/light_pass.wgsl"),
+    ),
+    (
         "fullscreen.wgsl",
         include_str!("../shaders/fullscreen.wgsl"),
     ),

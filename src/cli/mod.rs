@@ -7,6 +7,9 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
+use dbuffer::output;
+use dbuffer::render::offline::Offline;
+use dbuffer::render::{FrameRequest, Method};
 use dbuffer::scene;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -14,6 +17,61 @@ use rayon::prelude::*;
 pub fn scenes() -> Result<()> {
     for name in scene::builtin::names() {
         println!("{name}");
+    }
+    Ok(())
+}
+
+/// The arguments of `dbuffer render`, as typed.
+pub struct RenderArgs<'a> {
+    pub scene: &'a str,
+    pub out: &'a Path,
+    pub size: &'a str,
+    pub method: &'a str,
+    pub vt: &'a str,
+    pub dbuffer_size: u32,
+    pub verbose: bool,
+}
+
+pub fn render(args: &RenderArgs) -> Result<()> {
+    let (width, height) = parse_size(args.size)?;
+    let method: Method = args.method.parse().map_err(anyhow::Error::msg)?;
+    let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
+    if !(1..=8192).contains(&args.dbuffer_size) {
+        bail!(
+            "--dbuffer-size expects a texel count from 1 to 8192, found {}",
+            args.dbuffer_size
+        );
+    }
+    let scene =
+        scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
+    let mut offline = Offline::new()?;
+    if args.verbose {
+        eprintln!("adapter   {}", offline.ctx.adapter_description());
+    }
+    let request = FrameRequest {
+        width,
+        height,
+        dbuffer_size: args.dbuffer_size,
+        method,
+        vt,
+    };
+    let (_, outputs) = offline.render(&scene.name, &scene, &request)?;
+    for w in &outputs.meta.warnings {
+        eprintln!("warning   {w}");
+    }
+    if args.verbose {
+        for (stage, ms) in &outputs.meta.cpu_ms {
+            eprintln!("cpu ms    {stage:<20} {ms:8.3}");
+        }
+        for (pass, ms) in &outputs.meta.gpu_ms {
+            eprintln!("gpu ms    {pass:<20} {ms:8.3}");
+        }
+    }
+    let written = output::write_render(args.out, &outputs)?;
+    if args.verbose {
+        for path in written {
+            eprintln!("wrote     {}", path.display());
+        }
     }
     Ok(())
 }

@@ -5,6 +5,7 @@
 
 use super::gpu_scene::GpuScene;
 use super::light_pass::LightTargets;
+use super::shader;
 use super::{CameraUniforms, SurfaceVertex};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -57,7 +58,7 @@ impl CameraPass {
     pub fn new(device: &wgpu::Device) -> CameraPass {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("CameraPass::module"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/camera_pass.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(shader("camera_pass.wgsl").into()),
         });
         let dbuffer_texture = |binding| wgpu::BindGroupLayoutEntry {
             binding,

@@ -6,6 +6,7 @@
 //! depth); every penumbra entry (nearest by depth). See the shader for the rules.
 
 use super::gpu_scene::GpuScene;
+use super::shader;
 use super::{LightUniforms, SurfaceVertex, VolumeVertex};
 
 pub const DISTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
@@ -86,7 +87,7 @@ impl LightPass {
     pub fn new(device: &wgpu::Device) -> LightPass {
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("LightPass::module"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/light_pass.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(shader("light_pass.wgsl").into()),
         });
         let uniforms_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("LightPass::uniforms_layout"),

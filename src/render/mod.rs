@@ -7,10 +7,18 @@ pub mod context;
 pub mod frame;
 pub mod gpu_scene;
 pub mod light_pass;
+pub mod offline;
 mod readback;
 
 pub use context::GpuContext;
 pub use frame::{Frame, FrameRenderer, FrameRequest, Method};
+
+/// The expanded source of an embedded shader. The embedded set is fixed at compile time and
+/// `tests/shaders.rs` expands and validates every file of it, so a failure here is a build defect;
+/// it still yields WGSL (an empty module) rather than a panic, and pipeline creation then reports it.
+pub(crate) fn shader(name: &str) -> String {
+    crate::shader_source::load(name).unwrap_or_else(|e| format!("// {e}\n"))
+}
 
 /// What can go wrong on the GPU side. Never a panic: a message for the user.
 #[derive(Debug, thiserror::Error)]
