@@ -1,0 +1,138 @@
+//! `dbuffer render` end to end, through the binary: every output written and readable; bad input
+//! exits non-zero with a one-line reason and leaves no half-written folder.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use dbuffer::output::{self, read_exr_rgba};
+
+fn dbuffer() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_dbuffer"));
+    c.env(
+        "WGPU_BACKEND",
+        std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()),
+    );
+    c.env("NODEVICE_SELECT", "1");
+    c
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("dbuffer-render-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn render_writes_every_output() {
+    let dir = temp_dir("ok");
+    let out = dbuffer()
+        .args([
+            "render",
+            "fig7-concave",
+            "--size",
+            "96x64",
+            "--dbuffer-size",
+            "256",
+            "--vt",
+            "exact",
+            "-v",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("adapter"),
+        "-v prints the adapter: {stderr}"
+    );
+    for name in output::FILE_NAMES {
+        assert!(dir.join(name).is_file(), "{name} missing");
+    }
+    let image = image::open(dir.join("image.png")).expect("image.png reads");
+    assert_eq!((image.width(), image.height()), (96, 64));
+    let (w, h, v) = read_exr_rgba(&dir.join("visibility.exr")).expect("visibility.exr reads");
+    assert_eq!((w, h), (96, 64));
+    let hit = v.iter().filter(|p| p[3] == 1.0).count();
+    let shadow = v.iter().filter(|p| p[3] == 1.0 && p[0] < 0.5).count();
+    assert!(
+        hit > 3000 && shadow > 50,
+        "{hit} pixels hit, {shadow} in shadow"
+    );
+    assert!(v.iter().all(|p| (0.0..=1.0).contains(&p[0])));
+    let (dw, dh, d) = read_exr_rgba(&dir.join("dbuffer.exr")).expect("dbuffer.exr reads");
+    assert_eq!((dw, dh), (256, 256));
+    assert!(
+        d.iter().any(|t| t[1] > 0.0) && d.iter().any(|t| t[2] > 0.0),
+        "the volumes reached the D-buffer"
+    );
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("meta.json")).expect("meta.json"))
+            .expect("json");
+    assert_eq!(meta["scene"], "fig7-concave");
+    assert_eq!(meta["variant"], "exact");
+    assert!(meta["adapter"].as_str().is_some_and(|a| !a.is_empty()));
+    assert!(meta["cpu_ms"]["geometry_volumes"].as_f64().is_some());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn fails_with(args: &[&str], dir: &Path, needle: &str) {
+    let out = dbuffer()
+        .args(args)
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{args:?} should fail");
+    assert!(
+        stderr.contains(needle),
+        "{args:?}: expected '{needle}' in: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+    assert!(!dir.exists(), "{args:?} left a folder behind");
+}
+
+#[test]
+fn bad_input_is_refused_with_a_reason() {
+    let dir = temp_dir("bad");
+    fails_with(&["render", "no-such-scene"], &dir, "no-such-scene");
+    fails_with(
+        &["render", "fig7-concave", "--size", "0x10"],
+        &dir,
+        "--size",
+    );
+    fails_with(
+        &["render", "fig7-concave", "--size", "banana"],
+        &dir,
+        "--size",
+    );
+    fails_with(
+        &["render", "fig7-concave", "--method", "magic"],
+        &dir,
+        "unknown method 'magic'",
+    );
+    fails_with(
+        &["render", "fig7-concave", "--vt", "cubic"],
+        &dir,
+        "unknown V(t) variant 'cubic'",
+    );
+    fails_with(
+        &["render", "fig7-concave", "--dbuffer-size", "0"],
+        &dir,
+        "--dbuffer-size",
+    );
+    let bad_scene = std::env::temp_dir().join(format!("dbuffer-bad-{}.toml", std::process::id()));
+    let text = "[camera]\neye = [0, 3, 6]\ntarget = [0, 0, 0]\nfov_y_deg = 45\n\n\
+                [light]\ncenter = [0, 4, 0]\nnormal = [0, -1, 0]\nradius = 0\n\n\
+                [[object]]\nmesh = \"cube\"\n";
+    std::fs::write(&bad_scene, text).expect("write");
+    fails_with(
+        &["render", bad_scene.to_str().expect("utf-8")],
+        &dir,
+        "radius",
+    );
+    let _ = std::fs::remove_file(&bad_scene);
+}

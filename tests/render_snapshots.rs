@@ -1,0 +1,50 @@
+//! Every built-in scene rendered at 128×128 (D-buffer 512², V(t) smoothstep) against its PNG in
+//! `tests/snapshots/` (tolerance in `tests/snapshots/tolerance.toml`). `UPDATE_SNAPSHOTS=1`
+//! writes missing or failing ones; a failure leaves `NAME.new.png` and `NAME.diff.png` beside.
+
+#[path = "support/snapshot.rs"]
+#[allow(dead_code)]
+mod snapshot;
+
+use dbuffer::geometry::VtVariant;
+use dbuffer::render::offline::Offline;
+use dbuffer::render::{FrameRequest, Method};
+use dbuffer::scene;
+
+#[test]
+fn every_built_in_matches_its_snapshot() {
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    for name in scene::builtin::names() {
+        let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let request = FrameRequest {
+            width: 128,
+            height: 128,
+            dbuffer_size: 512,
+            method: Method::DBuffer,
+            vt: VtVariant::Smoothstep,
+        };
+        let (frame, _) = offline
+            .render(name, &scene, &request)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let rgba: Vec<u8> = frame.color.iter().flatten().copied().collect();
+        snapshot::check_snapshot(&format!("render-{name}"), 128, 128, &rgba);
+    }
+}
+
+#[test]
+fn hard_method_matches_its_snapshot() {
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let scene = scene::load("fig8c-complex").unwrap_or_else(|e| panic!("{e}"));
+    let request = FrameRequest {
+        width: 128,
+        height: 128,
+        dbuffer_size: 512,
+        method: Method::Hard,
+        vt: VtVariant::Smoothstep,
+    };
+    let (frame, _) = offline
+        .render("fig8c-complex", &scene, &request)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let rgba: Vec<u8> = frame.color.iter().flatten().copied().collect();
+    snapshot::check_snapshot("render-hard-fig8c-complex", 128, 128, &rgba);
+}
