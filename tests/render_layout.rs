@@ -2,7 +2,6 @@
 //! drift apart silently.
 
 #[path = "support/wgsl_layout.rs"]
-#[allow(dead_code)]
 mod wgsl_layout;
 
 use dbuffer::render::{CameraUniforms, LightUniforms, SurfaceVertex, VolumeVertex};

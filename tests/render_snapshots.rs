@@ -3,7 +3,6 @@
 //! writes missing or failing ones; a failure leaves `NAME.new.png` and `NAME.diff.png` beside.
 
 #[path = "support/snapshot.rs"]
-#[allow(dead_code)]
 mod snapshot;
 
 use dbuffer::geometry::VtVariant;
