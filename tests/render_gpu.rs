@@ -64,6 +64,14 @@ fn gpu_agrees_with_the_cpu_twin() {
     ] {
         let (scene, geometry, view, frame) = render(&ctx, &mut renderer, name, Method::DBuffer);
         let twin = DBufferTwin::new(&scene, &geometry.casters);
+        // The twin knows no receiver normal: compare where the surface faces the light (the
+        // pixels every metric uses); a surface turned away from the light must read V = 0.
+        let receivers = dbuffer::geometry::view::receivers(
+            &scene,
+            &dbuffer::geometry::bvh::Bvh::build(scene.all_triangles()),
+            SIZE,
+            SIZE,
+        );
         let slope = 2.0
             / view
                 .projection
@@ -76,6 +84,13 @@ fn gpu_agrees_with_the_cpu_twin() {
             (0usize, 0.0f64, Vec::new(), 0usize);
         for (i, (v_gpu, p)) in frame.visibility.iter().zip(&frame.position).enumerate() {
             if p[3] < 0.5 {
+                continue;
+            }
+            let Some(receiver) = receivers[i] else {
+                continue;
+            };
+            if !receiver.faces_light {
+                assert_eq!(*v_gpu, 0.0, "{name}: pixel {i} faces away from the light");
                 continue;
             }
             let x = Vec3::new(p[0], p[1], p[2]);

@@ -9,6 +9,7 @@ pub mod gpu_scene;
 pub mod light_pass;
 pub mod offline;
 mod readback;
+pub mod session;
 
 pub use context::GpuContext;
 pub use frame::{Frame, FrameRenderer, FrameRequest, Method};

@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# Run dbuffer on a fresh Debian/Ubuntu machine, GPU or not: installs what it needs
+# (scripts/setup-system.sh), builds in release, and passes its arguments on:
+#
+#   ./scripts/lab.sh                                   the lab (the window lands with issue #5)
+#   ./scripts/lab.sh render fig7-concave --out out/    a headless render
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/setup-system.sh
+exec cargo run --release --locked --quiet -- "$@"
