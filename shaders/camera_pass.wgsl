@@ -1,6 +1,7 @@
 // The camera pass: per pixel |cx|, the hidden-from-centre test against |cx_o|, the parameter t by
 // the corrected eq. (3), V(t), and diffuse shading from the disk times V. Its CPU twin is
 // DBufferTwin::sample (src/geometry/twin.rs) with geometry::visibility.
+// #include shared/surface.wgsl
 
 struct CameraUniforms {
     view_proj: mat4x4<f32>,
@@ -23,12 +24,6 @@ struct CameraUniforms {
 @group(0) @binding(1) var d_o: texture_2d<f32>;
 @group(0) @binding(2) var d_u: texture_2d<f32>;
 @group(0) @binding(3) var d_p: texture_2d<f32>;
-
-struct SurfaceIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) albedo: f32,
-};
 
 struct SurfaceOut {
     @builtin(position) clip: vec4<f32>,

@@ -7,6 +7,7 @@
 //   |cx_pv|  the nearest penumbra entry (faces whose normal points toward c)  -> fs_penumbra
 //   |cx_s|   eq. (2) from the fragment that won, kept per volume (the .y of the volume targets)
 // Distances are true Euclidean |p - c| per fragment, not interpolated vertex distances.
+// #include shared/surface.wgsl
 
 struct LightUniforms {
     view_proj: mat4x4<f32>,
@@ -21,12 +22,6 @@ struct LightUniforms {
 @group(0) @binding(0) var<uniform> light: LightUniforms;
 
 // ---- Surfaces: |cx_o| ----
-
-struct SurfaceIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) albedo: f32,
-};
 
 struct SurfaceOut {
     @builtin(position) clip: vec4<f32>,

@@ -161,6 +161,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/fullscreen.wgsl"),
     ),
     (
+        "shared/surface.wgsl",
+        include_str!("../shaders/shared/surface.wgsl"),
+    ),
+    (
         "shared/fullscreen_vs.wgsl",
         include_str!("../shaders/shared/fullscreen_vs.wgsl"),
     ),

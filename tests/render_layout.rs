@@ -70,8 +70,10 @@ fn vertex_attributes_match_the_structs() {
             (5, offset_of!(VolumeVertex, extrusion) as u64),
         ]
     );
-    // The WGSL inputs use those locations with the matching types.
+    // The WGSL inputs use those locations with the matching types (SurfaceIn comes from
+    // shared/surface.wgsl, which both passes include).
     let light = source("light_pass.wgsl");
+    assert!(source("camera_pass.wgsl").contains("@location(2) albedo: f32"));
     for decl in [
         "@location(0) position: vec3<f32>",
         "@location(1) kind: u32",
