@@ -124,7 +124,7 @@ fn fit_directions(
 
     let mut nearest = f32::MAX;
     let mut farthest = 0.0f32;
-    for &p in everything.iter().chain(casters) {
+    for &p in everything {
         let d = (p - c).length();
         nearest = nearest.min(d);
         farthest = farthest.max(d);

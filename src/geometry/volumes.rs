@@ -273,7 +273,7 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
         }
     }
 
-    let extrude = |v: Vec3, p: Vec3| v + (v - p).normalize_or_zero() * params.far;
+    let extrude = |v: Vec3, p: Vec3| extrude_away(v, p, params.far);
     // Both ends of every extruded edge, for the fans.
     let mut umbra_ends: Vec<EdgeEnd> = Vec::new();
     let mut penumbra_ends: Vec<EdgeEnd> = Vec::new();
@@ -385,6 +385,13 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
         stats,
         warnings,
     }
+}
+
+/// `v` moved `far` further along the ray from the rim point `p` through it. Quads and fans both
+/// extrude with this one function, so the end rays they share are bit-identical and the volume
+/// surfaces stay closed (`tests/twin_builtins.rs` welds them by position).
+fn extrude_away(v: Vec3, p: Vec3, far: f32) -> Vec3 {
+    v + (v - p).normalize_or_zero() * far
 }
 
 /// One end of an extruded silhouette edge.
@@ -520,7 +527,7 @@ impl Fans<'_> {
             let a = a1 + delta * k as f32 / n as f32;
             c + light.radius * (a.cos() * u + a.sin() * w)
         };
-        let extrude = |q: Vec3| apex + (apex - q).normalize_or_zero() * self.params.far;
+        let extrude = |q: Vec3| extrude_away(apex, q, self.params.far);
         for k in 0..n {
             let (q0, q1) = (rim(k), rim(k + 1));
             let template = VolumeVertex {

@@ -28,6 +28,8 @@ pub struct CameraPass {
     layout: wgpu::BindGroupLayout,
     uniforms: wgpu::Buffer,
     targets: Option<CameraTargets>,
+    /// The uniforms and the D-buffer textures; made again only when those textures are.
+    bind_group: Option<wgpu::BindGroup>,
 }
 
 fn texture(
@@ -143,6 +145,7 @@ impl CameraPass {
             layout,
             uniforms,
             targets: None,
+            bind_group: None,
         }
     }
 
@@ -205,24 +208,13 @@ impl CameraPass {
         self.targets.as_ref()
     }
 
-    pub fn prepare(&self, queue: &wgpu::Queue, uniforms: &CameraUniforms) {
-        queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
-    }
-
-    /// Record the pass, reading the light pass's D-buffer.
-    pub fn record(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &GpuScene,
-        dbuffer: &LightTargets,
-        timestamps: Option<(&wgpu::QuerySet, u32, u32)>,
-    ) {
-        let Some(t) = &self.targets else {
-            return;
+    /// Bind the light pass's D-buffer; needed once, and again whenever its targets are recreated.
+    pub fn bind_dbuffer(&mut self, device: &wgpu::Device, dbuffer: &LightTargets) {
+        let texture = |binding, view| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(view),
         };
-        // Small, and it must follow the D-buffer textures when those are recreated.
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        self.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("CameraPass::bind_group"),
             layout: &self.layout,
             entries: &[
@@ -230,20 +222,34 @@ impl CameraPass {
                     binding: 0,
                     resource: self.uniforms.as_entire_binding(),
                 },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&dbuffer.distance.view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&dbuffer.umbra.view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&dbuffer.penumbra.view),
-                },
+                texture(1, &dbuffer.distance.view),
+                texture(2, &dbuffer.umbra.view),
+                texture(3, &dbuffer.penumbra.view),
             ],
-        });
+        }));
+    }
+
+    pub fn is_bound(&self) -> bool {
+        self.bind_group.is_some()
+    }
+
+    pub fn prepare(&self, queue: &wgpu::Queue, uniforms: &CameraUniforms) {
+        queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
+    }
+
+    /// Record the pass, reading the D-buffer bound by [`CameraPass::bind_dbuffer`].
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        timestamps: Option<(&wgpu::QuerySet, u32, u32)>,
+    ) {
+        let Some(t) = &self.targets else {
+            return;
+        };
+        let Some(bind_group) = &self.bind_group else {
+            return;
+        };
         let attachment = |view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -279,7 +285,7 @@ impl CameraPass {
             multiview_mask: None,
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
+        pass.set_bind_group(0, bind_group, &[]);
         scene.surfaces.draw(&mut pass);
     }
 }

@@ -156,8 +156,13 @@ impl FrameRenderer {
             }
         }
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        self.light.resize(device, request.dbuffer_size);
+        let new_dbuffer = self.light.resize(device, request.dbuffer_size);
         self.camera.resize(device, request.width, request.height);
+        if let Some(dbuffer) = self.light.targets() {
+            if new_dbuffer || !self.camera.is_bound() {
+                self.camera.bind_dbuffer(device, dbuffer);
+            }
+        }
         let (Some(dbuffer), Some(targets)) = (self.light.targets(), self.camera.targets()) else {
             return Err(RenderError::Gpu("render targets were not created".into()));
         };
@@ -174,7 +179,7 @@ impl FrameRenderer {
             },
         );
         let aspect = request.width as f32 / request.height as f32;
-        let (near, far) = camera_range(scene);
+        let (near, far) = camera_range(scene.camera.eye, gpu.bounds);
         let camera_vp = scene.camera.projection(aspect, near, far) * scene.camera.view();
         let slope = texel_slope(&light_view.projection, request.dbuffer_size);
         self.camera.prepare(
@@ -214,13 +219,8 @@ impl FrameRenderer {
         let timer = self.timer.as_ref();
         self.light
             .record(&mut encoder, gpu, timer.map(|t| (&t.queries, 0, 1)));
-        self.camera.record(
-            device,
-            &mut encoder,
-            gpu,
-            dbuffer,
-            timer.map(|t| (&t.queries, 2, 3)),
-        );
+        self.camera
+            .record(&mut encoder, gpu, timer.map(|t| (&t.queries, 2, 3)));
         let stamps = timer.map(|t| {
             encoder.resolve_query_set(&t.queries, 0..QUERIES, &t.resolve, 0);
             let out = device.create_buffer(&wgpu::BufferDescriptor {
@@ -302,13 +302,19 @@ impl FrameRenderer {
     }
 }
 
-/// Near and far planes that hold the whole scene as seen from the camera.
-fn camera_range(scene: &Scene) -> (f32, f32) {
-    let eye = scene.camera.eye;
+/// Near and far planes that hold the whole scene, given by its bounds, as seen from `eye`.
+fn camera_range(eye: glam::Vec3, (lo, hi): (glam::Vec3, glam::Vec3)) -> (f32, f32) {
     let mut far = 1.0f32;
-    for o in &scene.objects {
-        for p in &o.mesh.positions {
-            far = far.max((*p - eye).length());
+    for corner in 0..8 {
+        let pick = |bit: u32, a: f32, b: f32| if corner & bit == 0 { a } else { b };
+        let p = glam::Vec3::new(
+            pick(1, lo.x, hi.x),
+            pick(2, lo.y, hi.y),
+            pick(4, lo.z, hi.z),
+        );
+        let d = (p - eye).length();
+        if d.is_finite() {
+            far = far.max(d);
         }
     }
     let far = far * 1.5;

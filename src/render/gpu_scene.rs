@@ -2,6 +2,7 @@
 //! umbra and penumbra volumes (the light pass). Surfaces are uploaded once per scene; volumes again
 //! whenever the geometry stage ran (the light or a caster moved).
 
+use glam::Vec3;
 use wgpu::util::DeviceExt;
 
 use super::{SurfaceVertex, VolumeVertex};
@@ -52,12 +53,19 @@ pub struct GpuScene {
     pub casters: Vec<CasterVolumes>,
     /// Every caster's penumbra triangles: one rule (nearest entry) over all of them.
     pub penumbra: VertexBuffer,
+    /// Bounds `(min, max)` of every surface, taken once at upload (the camera's depth range is
+    /// derived from them each frame).
+    pub bounds: (Vec3, Vec3),
 }
 
 impl GpuScene {
     pub fn new(device: &wgpu::Device, scene: &Scene, geometry: &SceneGeometry) -> GpuScene {
         let mut surfaces = Vec::new();
+        let mut bounds = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for object in &scene.objects {
+            if let Some((lo, hi)) = object.mesh.bounds() {
+                bounds = (bounds.0.min(lo), bounds.1.max(hi));
+            }
             let albedo = if object.casts_shadow {
                 CASTER_ALBEDO
             } else {
@@ -77,6 +85,7 @@ impl GpuScene {
             surfaces: VertexBuffer::new(device, "GpuScene::surfaces", &surfaces),
             casters: Vec::new(),
             penumbra: VertexBuffer::new::<VolumeVertex>(device, "GpuScene::penumbra", &[]),
+            bounds,
         };
         gpu.set_volumes(device, geometry);
         gpu

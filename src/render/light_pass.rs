@@ -226,9 +226,10 @@ impl LightPass {
     }
 
     /// (Re)create the targets for a `size`² D-buffer; a no-op when the size is unchanged.
-    pub fn resize(&mut self, device: &wgpu::Device, size: u32) {
+    /// Returns whether the targets are new (whoever binds them must bind them again).
+    pub fn resize(&mut self, device: &wgpu::Device, size: u32) -> bool {
         if self.targets.as_ref().is_some_and(|t| t.size == size) {
-            return;
+            return false;
         }
         use wgpu::TextureUsages as U;
         let color = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
@@ -260,6 +261,7 @@ impl LightPass {
             penumbra_depth: depth("LightTargets::penumbra_depth"),
             merge_bind_group,
         });
+        true
     }
 
     pub fn targets(&self) -> Option<&LightTargets> {
