@@ -64,6 +64,7 @@ fn main() -> anyhow::Result<()> {
             dbuffer_size: 1024,
             method: Method::DBuffer,
             vt: VtVariant::Smoothstep,
+            ..FrameRequest::default()
         };
         let (mut light, mut camera, mut wall) = (Vec::new(), Vec::new(), Vec::new());
         for i in 0..frames + 2 {

@@ -22,6 +22,7 @@ fn measure(offline: &mut Offline, name: &str) -> Metrics {
         dbuffer_size: 1024,
         method: Method::DBuffer,
         vt: VtVariant::Exact,
+        ..FrameRequest::default()
     };
     let (frame, _) = offline
         .render(name, &scene, &request)

@@ -42,6 +42,7 @@ fn render(
         dbuffer_size: DBUFFER,
         method,
         vt: VtVariant::Exact,
+        ..FrameRequest::default()
     };
     let frame = renderer
         .render(ctx, &scene, &gpu, &view, &request)

@@ -18,6 +18,7 @@ fn geometry_is_rebuilt_only_when_something_moved() {
         dbuffer_size: 256,
         method: Method::DBuffer,
         vt: VtVariant::Smoothstep,
+        ..FrameRequest::default()
     };
     let first = session
         .frame(&ctx, &request)

@@ -21,6 +21,7 @@ fn every_built_in_matches_its_snapshot() {
             dbuffer_size: 512,
             method: Method::DBuffer,
             vt: VtVariant::Smoothstep,
+            ..FrameRequest::default()
         };
         let (frame, _) = offline
             .render(name, &scene, &request)
@@ -40,6 +41,7 @@ fn hard_method_matches_its_snapshot() {
         dbuffer_size: 512,
         method: Method::Hard,
         vt: VtVariant::Smoothstep,
+        ..FrameRequest::default()
     };
     let (frame, _) = offline
         .render("fig8c-complex", &scene, &request)

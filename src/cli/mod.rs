@@ -54,6 +54,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         dbuffer_size: args.dbuffer_size,
         method,
         vt,
+        ..FrameRequest::default()
     };
     let (_, outputs) = offline.render(&scene.name, &scene, &request)?;
     for w in &outputs.meta.warnings {

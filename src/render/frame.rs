@@ -17,24 +17,70 @@ use crate::geometry::light_view::LightView;
 use crate::geometry::VtVariant;
 use crate::scene::Scene;
 
-/// How the camera pass turns the D-buffer into visibility.
+/// How a frame's visibility is computed: the D-buffer, the techniques people use instead, or the
+/// ray-cast reference (design.md §4). Each method's knobs are in [`MethodParams`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Method {
     /// The D-buffer method of seed 000.
     #[default]
     DBuffer,
-    /// A hard shadow map from the light centre: the `|cx_o|` test alone.
+    /// The D-buffer with silhouettes and volumes taken from the light centre only: the
+    /// penumbra-wedge approximation seed 000 Fig. 1 criticises.
+    DBufferCenter,
+    /// A hard shadow map from the light centre (Williams): the `|cx_o|` test alone, with
+    /// slope-scaled bias.
     Hard,
+    /// Percentage-closer filtering of the hard shadow map ([`MethodParams::pcf_radius`]).
+    Pcf,
+    /// Percentage-closer soft shadows (Fernando 2005) sized by the disk radius: blocker search,
+    /// then filtering, with a rotated Poisson kernel.
+    Pcss,
+    /// N shadow maps from N stratified points on the disk, averaged (seed 002 §3.1).
+    Sampled,
+    /// Rays to K stratified disk samples per pixel (the geometry oracle); progressive in a
+    /// [`super::session::Session`].
+    Reference,
 }
 
 impl Method {
-    pub const ALL: [Method; 2] = [Method::DBuffer, Method::Hard];
+    pub const ALL: [Method; 7] = [
+        Method::DBuffer,
+        Method::DBufferCenter,
+        Method::Hard,
+        Method::Pcf,
+        Method::Pcss,
+        Method::Sampled,
+        Method::Reference,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::DBuffer => "dbuffer",
+            Method::DBufferCenter => "dbuffer-center",
             Method::Hard => "hard",
+            Method::Pcf => "pcf",
+            Method::Pcss => "pcss",
+            Method::Sampled => "sampled",
+            Method::Reference => "reference",
         }
+    }
+
+    /// One line for menus and `--help`.
+    pub fn description(self) -> &'static str {
+        match self {
+            Method::DBuffer => "D-buffer soft shadows (Jakobsen et al. 2004)",
+            Method::DBufferCenter => "D-buffer with silhouettes from the light centre only",
+            Method::Hard => "hard shadow map from the light centre",
+            Method::Pcf => "percentage-closer filtering of the shadow map",
+            Method::Pcss => "percentage-closer soft shadows (Fernando 2005)",
+            Method::Sampled => "N shadow maps from points on the disk, averaged",
+            Method::Reference => "ray-cast ground truth (K disk samples per pixel)",
+        }
+    }
+
+    /// Whether the method's volumes are built from the light centre only.
+    pub fn center_silhouettes(self) -> bool {
+        self == Method::DBufferCenter
     }
 }
 
@@ -50,7 +96,75 @@ impl FromStr for Method {
         Method::ALL
             .into_iter()
             .find(|m| m.name() == s)
-            .ok_or_else(|| format!("unknown method '{s}': expected one of dbuffer, hard"))
+            .ok_or_else(|| {
+                let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+                format!("unknown method '{s}': expected one of {}", names.join(", "))
+            })
+    }
+}
+
+/// The knobs of the comparison methods.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MethodParams {
+    /// PCF kernel radius in shadow-map texels: (2r + 1)² taps. 0 to [`MAX_PCF_RADIUS`].
+    pub pcf_radius: u32,
+    /// PCSS blocker-search taps, 1 to [`MAX_TAPS`].
+    pub pcss_blocker_taps: u32,
+    /// PCSS filter taps, 1 to [`MAX_TAPS`].
+    pub pcss_filter_taps: u32,
+    /// Shadow maps of the `sampled` method, 1 to [`MAX_SAMPLED_LIGHTS`].
+    pub sampled_lights: u32,
+    /// Disk samples per pixel of the reference (K), 1 to [`MAX_REFERENCE_SAMPLES`].
+    pub reference_samples: u32,
+    /// Samples per pixel a [`super::session::Session`] adds to the reference per frame.
+    pub reference_step: u32,
+}
+
+pub const MAX_PCF_RADIUS: u32 = 8;
+pub const MAX_TAPS: u32 = 64;
+pub const MAX_SAMPLED_LIGHTS: u32 = 64;
+pub const MAX_REFERENCE_SAMPLES: u32 = 65536;
+
+impl Default for MethodParams {
+    fn default() -> Self {
+        Self {
+            pcf_radius: 2,
+            pcss_blocker_taps: 16,
+            pcss_filter_taps: 32,
+            sampled_lights: 16,
+            reference_samples: crate::geometry::oracle::DEFAULT_SAMPLES as u32,
+            reference_step: 8,
+        }
+    }
+}
+
+impl MethodParams {
+    /// Every knob in its range, or which one is not and what was expected.
+    pub fn validate(&self) -> Result<(), String> {
+        let checks = [
+            ("PCF radius", self.pcf_radius, 0, MAX_PCF_RADIUS),
+            ("PCSS blocker taps", self.pcss_blocker_taps, 1, MAX_TAPS),
+            ("PCSS filter taps", self.pcss_filter_taps, 1, MAX_TAPS),
+            ("sampled lights", self.sampled_lights, 1, MAX_SAMPLED_LIGHTS),
+            (
+                "reference samples",
+                self.reference_samples,
+                1,
+                MAX_REFERENCE_SAMPLES,
+            ),
+            (
+                "reference step",
+                self.reference_step,
+                1,
+                MAX_REFERENCE_SAMPLES,
+            ),
+        ];
+        for (what, value, lo, hi) in checks {
+            if !(lo..=hi).contains(&value) {
+                return Err(format!("{what} of {value}: expected {lo} to {hi}"));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -59,10 +173,28 @@ impl FromStr for Method {
 pub struct FrameRequest {
     pub width: u32,
     pub height: u32,
-    /// The D-buffer is `dbuffer_size`² texels.
+    /// The D-buffer (and every shadow map) is `dbuffer_size`² texels.
     pub dbuffer_size: u32,
     pub method: Method,
     pub vt: VtVariant,
+    pub params: MethodParams,
+    /// Read the light-view maps back into [`Frame`] (`distance`, `umbra`, `penumbra`); off, they
+    /// are left empty and the frame costs less.
+    pub read_dbuffer: bool,
+}
+
+impl Default for FrameRequest {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            dbuffer_size: 1024,
+            method: Method::DBuffer,
+            vt: VtVariant::Smoothstep,
+            params: MethodParams::default(),
+            read_dbuffer: true,
+        }
+    }
 }
 
 /// A rendered frame, read back. Images are row-major, row 0 at the top.
@@ -155,6 +287,16 @@ impl FrameRenderer {
                 return Err(RenderError::Size { what, size, max });
             }
         }
+        request.params.validate().map_err(RenderError::Request)?;
+        let mode = match request.method {
+            Method::DBuffer | Method::DBufferCenter => 0,
+            Method::Hard => 1,
+            other => {
+                return Err(RenderError::Request(format!(
+                    "the {other} method is not available yet"
+                )))
+            }
+        };
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let new_dbuffer = self.light.resize(device, request.dbuffer_size);
         self.camera.resize(device, request.width, request.height);
@@ -197,10 +339,7 @@ impl FrameRenderer {
                     slope,
                 ],
                 mode: [
-                    match request.method {
-                        Method::DBuffer => 0,
-                        Method::Hard => 1,
-                    },
+                    mode,
                     match request.vt {
                         VtVariant::Smoothstep => 0,
                         VtVariant::Sqrt => 1,
@@ -235,9 +374,13 @@ impl FrameRenderer {
         let color = readback::copy(device, &mut encoder, &targets.color, 4);
         let data = readback::copy(device, &mut encoder, &targets.data, 8);
         let position = readback::copy(device, &mut encoder, &targets.position, 16);
-        let distance = readback::copy(device, &mut encoder, &dbuffer.distance.texture, 4);
-        let umbra = readback::copy(device, &mut encoder, &dbuffer.umbra.texture, 8);
-        let penumbra = readback::copy(device, &mut encoder, &dbuffer.penumbra.texture, 8);
+        let maps = request.read_dbuffer.then(|| {
+            [
+                readback::copy(device, &mut encoder, &dbuffer.distance.texture, 4),
+                readback::copy(device, &mut encoder, &dbuffer.umbra.texture, 8),
+                readback::copy(device, &mut encoder, &dbuffer.penumbra.texture, 8),
+            ]
+        });
         queue.submit([encoder.finish()]);
 
         // Errors raised before the scope (creating pipelines) come first: they are the cause.
@@ -281,6 +424,14 @@ impl FrameRenderer {
             .zip(&branch)
             .map(|(&x, &b)| x - 2.0 * f32::from(b))
             .collect();
+        let (distance, umbra, penumbra) = match maps {
+            Some([d, u, p]) => (
+                d.read_f32(device)?,
+                pairs(u.read_f32(device)?),
+                pairs(p.read_f32(device)?),
+            ),
+            None => Default::default(),
+        };
         Ok(Frame {
             width: request.width,
             height: request.height,
@@ -294,9 +445,9 @@ impl FrameRenderer {
             branch,
             position: rgba(position.read_f32(device)?),
             dbuffer_size: request.dbuffer_size,
-            distance: distance.read_f32(device)?,
-            umbra: pairs(umbra.read_f32(device)?),
-            penumbra: pairs(penumbra.read_f32(device)?),
+            distance,
+            umbra,
+            penumbra,
             gpu_ms,
         })
     }

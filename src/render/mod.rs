@@ -12,7 +12,7 @@ mod readback;
 pub mod session;
 
 pub use context::GpuContext;
-pub use frame::{Frame, FrameRenderer, FrameRequest, Method};
+pub use frame::{Frame, FrameRenderer, FrameRequest, Method, MethodParams};
 
 /// The expanded source of an embedded shader. The embedded set is fixed at compile time and
 /// `tests/shaders.rs` expands and validates every file of it, so a failure here is a build defect;
@@ -30,6 +30,8 @@ pub enum RenderError {
     Device(String),
     #[error("the GPU reported an error: {0}")]
     Gpu(String),
+    #[error("{0}")]
+    Request(String),
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
     #[error("{what} of {size} is not supported: expected 1 to {max}")]
