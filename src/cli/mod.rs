@@ -77,6 +77,18 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// The lab window. `DBUFFER_SMOKE_SCREENSHOT=shot.png` makes it screenshot itself once frames
+/// show and exit (the scripted smoke run under Xvfb).
+pub fn gui(scene: Option<String>) -> Result<()> {
+    let smoke_screenshot = std::env::var_os("DBUFFER_SMOKE_SCREENSHOT").map(Into::into);
+    dbuffer::app::run(dbuffer::app::LabOptions {
+        scene,
+        fresh_settings: smoke_screenshot.is_some(),
+        smoke_screenshot,
+        ..Default::default()
+    })
+}
+
 pub fn not_yet(what: &str, issue: u32) -> Result<()> {
     bail!("{what} is not yet available (it lands with issue #{issue}); try `dbuffer inspect SCENE`")
 }
