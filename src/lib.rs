@@ -9,6 +9,7 @@
 //! - [`shader_source`]: WGSL sources from `shaders/` with their `// #include` lines expanded.
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod compare;
 pub mod fsutil;
 pub mod geometry;
 pub mod output;

@@ -273,12 +273,15 @@ impl LightPass {
     }
 
     /// Record every draw of the light pass. `timestamps`: a query set and the indices to write at
-    /// the start of the first and the end of the last render pass.
+    /// the start of the first and the end of the last render pass. Without `volumes` only
+    /// `|cx_o|` is drawn (the shadow map of `hard`, `pcf` and `pcss`); the volume targets are
+    /// cleared to "no crossing".
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
         timestamps: Option<(&wgpu::QuerySet, u32, u32)>,
+        volumes: bool,
     ) {
         let Some(t) = &self.targets else {
             return;
@@ -352,7 +355,8 @@ impl LightPass {
                 multiview_mask: None,
             });
         }
-        for caster in &scene.casters {
+        let casters = if volumes { &scene.casters[..] } else { &[] };
+        for caster in casters {
             // This caster's nearest umbra exit...
             {
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -396,9 +400,11 @@ impl LightPass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.penumbra_pipeline);
-            pass.set_bind_group(0, &self.bind_group, &[]);
-            scene.penumbra.draw(&mut pass);
+            if volumes {
+                pass.set_pipeline(&self.penumbra_pipeline);
+                pass.set_bind_group(0, &self.bind_group, &[]);
+                scene.penumbra.draw(&mut pass);
+            }
         }
     }
 }

@@ -9,6 +9,8 @@ pub mod gpu_scene;
 pub mod light_pass;
 pub mod offline;
 mod readback;
+pub mod reference;
+pub mod sample_maps;
 pub mod session;
 
 pub use context::GpuContext;
@@ -164,6 +166,37 @@ pub struct CameraUniforms {
     pub mode: [u32; 4],
 }
 
+/// `MethodUniforms` of `shaders/camera_pass.wgsl`: the knobs of the comparison methods.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MethodUniforms {
+    /// PCF radius (texels), PCSS blocker taps, PCSS filter taps, sampled lights.
+    pub params: [f32; 4],
+    /// x: the nearest caster's distance from the light centre (PCSS blocker search).
+    pub pcss: [f32; 4],
+    /// Light-view clip space back to world (receiver-plane depth of filter taps).
+    pub inv_light_view_proj: [[f32; 4]; 4],
+    /// 64 Poisson-disk points in the unit disk, two per entry (xy, zw); every prefix is spread.
+    pub poisson: [[f32; 4]; 32],
+}
+
+/// One point light of the `sampled` method (`shaders/shared/sample_lights.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SampleLight {
+    pub view_proj: [[f32; 4]; 4],
+    pub point: [f32; 4],
+}
+
+/// Every point light of the `sampled` method.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SampleLights {
+    pub lights: [SampleLight; 64],
+}
+
+const _: () = assert!(std::mem::size_of::<MethodUniforms>() == 608);
+const _: () = assert!(std::mem::size_of::<SampleLights>() == 64 * 80);
 const _: () = assert!(std::mem::size_of::<SurfaceVertex>() == 32);
 const _: () = assert!(std::mem::size_of::<VolumeVertex>() == 80);
 const _: () = assert!(std::mem::size_of::<LightUniforms>() == 112);
