@@ -116,7 +116,11 @@ impl Session {
 
     /// Run the geometry stage if something moved or `method` builds volumes differently.
     fn update_geometry(&mut self, ctx: &GpuContext, method: Method) {
-        let center = method.center_silhouettes();
+        // Methods without volumes keep whichever volumes there are.
+        let center = match method {
+            Method::DBuffer | Method::DBufferCenter => method.center_silhouettes(),
+            _ => self.center_silhouettes,
+        };
         if !self.dirty && center == self.center_silhouettes {
             return;
         }
