@@ -7,7 +7,8 @@ use super::gpu_scene::GpuScene;
 use super::light_pass::LightTargets;
 use super::sample_maps::SampleMaps;
 use super::shader;
-use super::{CameraUniforms, MethodUniforms, SurfaceVertex};
+use super::{opaque, surface_pipeline, texture_entry, uniform_entry};
+use super::{CameraUniforms, MethodUniforms};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub const DATA_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
@@ -106,60 +107,24 @@ impl CameraPass {
             label: Some("CameraPass::module"),
             source: wgpu::ShaderSource::Wgsl(shader("camera_pass.wgsl").into()),
         });
-        let dbuffer_texture = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
+        use wgpu::ShaderStages as S;
+        use wgpu::TextureViewDimension as D;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("CameraPass::layout"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                dbuffer_texture(1),
-                dbuffer_texture(2),
-                dbuffer_texture(3),
+                uniform_entry(0, S::VERTEX_FRAGMENT),
+                texture_entry(1, D::D2),
+                texture_entry(2, D::D2),
+                texture_entry(3, D::D2),
             ],
         });
-        let uniform = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
         let methods_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("CameraPass::methods_layout"),
             entries: &[
-                uniform(0),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                uniform(2),
-                dbuffer_texture(3),
+                uniform_entry(0, S::FRAGMENT),
+                texture_entry(1, D::D2Array),
+                uniform_entry(2, S::FRAGMENT),
+                texture_entry(3, D::D2),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -167,45 +132,17 @@ impl CameraPass {
             bind_group_layouts: &[Some(&layout), Some(&methods_layout)],
             immediate_size: 0,
         });
-        let target = |format| {
-            Some(wgpu::ColorTargetState {
-                format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        };
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("CameraPass::pipeline"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(SurfaceVertex::layout())],
-            },
-            // Surfaces are two-sided (open meshes, the ground seen from below).
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: wgpu::StencilState::default(),
-                bias: wgpu::DepthBiasState::default(),
-            }),
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[
-                    target(COLOR_FORMAT),
-                    target(DATA_FORMAT),
-                    target(POSITION_FORMAT),
-                ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = surface_pipeline(
+            device,
+            "CameraPass::pipeline",
+            &module,
+            &pipeline_layout,
+            &[
+                opaque(COLOR_FORMAT),
+                opaque(DATA_FORMAT),
+                opaque(POSITION_FORMAT),
+            ],
+        );
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("CameraPass::uniforms"),
             size: std::mem::size_of::<CameraUniforms>() as u64,

@@ -12,7 +12,7 @@ use glam::Mat4;
 use super::gpu_scene::GpuScene;
 use super::light_pass::{DEPTH_FORMAT, DISTANCE_FORMAT, NO_SURFACE};
 use super::shader;
-use super::{SampleLight, SampleLights, SurfaceVertex};
+use super::{opaque, surface_pipeline, uniform_entry, SampleLight, SampleLights};
 use crate::geometry::light_view::LightView;
 use crate::geometry::oracle::disk_samples;
 use crate::scene::DiskLight;
@@ -60,53 +60,20 @@ impl SampleMaps {
         });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("SampleMaps::layout"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("SampleMaps::pipeline_layout"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("SampleMaps::pipeline"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(SurfaceVertex::layout())],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: wgpu::StencilState::default(),
-                bias: wgpu::DepthBiasState::default(),
-            }),
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: DISTANCE_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = surface_pipeline(
+            device,
+            "SampleMaps::pipeline",
+            &module,
+            &pipeline_layout,
+            &[opaque(DISTANCE_FORMAT)],
+        );
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("SampleMaps::uniforms"),
             size: std::mem::size_of::<SampleLights>() as u64,
