@@ -61,7 +61,10 @@ fn starts_on_the_default_scene_with_soft_shadows() {
     let dark = lit.iter().filter(|v| **v < 0.05).count();
     let bright = lit.iter().filter(|v| **v > 0.95).count();
     let soft = lit.iter().filter(|v| (0.1..0.9).contains(*v)).count();
-    assert!(dark > 50 && bright > 50 && soft > 20, "umbra {dark}, lit {bright}, penumbra {soft}");
+    assert!(
+        dark > 50 && bright > 50 && soft > 20,
+        "umbra {dark}, lit {bright}, penumbra {soft}"
+    );
 }
 
 #[test]
@@ -169,7 +172,10 @@ fn dragging_the_light_moves_the_shadow() {
     h.key_press(egui::Key::F);
     h.run();
     let start = h.state().scene().expect("scene").light.center;
-    let at = h.state().light_screen_pos().expect("the light is in view after F");
+    let at = h
+        .state()
+        .light_screen_pos()
+        .expect("the light is in view after F");
     let rect = h.state().viewport_rect().expect("viewport");
     assert!(rect.contains(at), "{at:?} outside {rect:?}");
     // The darkest pixel (deepest umbra) before the move.
@@ -216,13 +222,17 @@ fn a_malformed_scene_is_reported_and_the_scene_kept() {
     h.run();
     let frames = h.state().frames_rendered();
     h.get_by_label("Scene path").focus();
-    h.get_by_label("Scene path").type_text(&bad.display().to_string());
+    h.get_by_label("Scene path")
+        .type_text(&bad.display().to_string());
     h.run();
     click(&mut h, "Open path");
     let app = h.state();
     let (text, level) = app.status();
     assert_eq!(level, Level::Error);
-    assert!(text.contains("broken.toml") && text.contains("light.radius"), "{text}");
+    assert!(
+        text.contains("broken.toml") && text.contains("light.radius"),
+        "{text}"
+    );
     assert_eq!(app.scene_name(), dbuffer::app::DEFAULT_SCENE);
     assert!(app.shown().is_some());
     assert!(app.frames_rendered() >= frames);

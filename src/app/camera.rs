@@ -57,7 +57,9 @@ pub fn zoom(camera: &Camera, steps: f32) -> Camera {
 pub fn frame_all(camera: &Camera, (lo, hi): (Vec3, Vec3)) -> Camera {
     let centre = (lo + hi) * 0.5;
     let radius = ((hi - lo).length() * 0.5).max(0.1);
-    let dir = (camera.eye - camera.target).try_normalize().unwrap_or(Vec3::Z);
+    let dir = (camera.eye - camera.target)
+        .try_normalize()
+        .unwrap_or(Vec3::Z);
     let half = 0.5 * camera.fov_y_deg.to_radians();
     let distance = radius / half.sin().max(0.05) * 1.1;
     Camera {
@@ -101,7 +103,7 @@ impl Projector {
         self.view_proj * p.extend(1.0)
     }
 
-    fn to_screen(&self, c: Vec4) -> Pos2 {
+    fn screen_of(&self, c: Vec4) -> Pos2 {
         let (x, y) = (c.x / c.w, c.y / c.w);
         Pos2::new(
             self.rect.left() + (x * 0.5 + 0.5) * self.rect.width(),
@@ -112,7 +114,7 @@ impl Projector {
     /// The screen position of `p`, or `None` behind the camera.
     pub fn point(&self, p: Vec3) -> Option<Pos2> {
         let c = self.clip(p);
-        (c.w > NEAR_W && c.is_finite()).then(|| self.to_screen(c))
+        (c.w > NEAR_W && c.is_finite()).then(|| self.screen_of(c))
     }
 
     /// The segment `a b` cut to what is in front of the camera and near the viewport.
@@ -128,7 +130,10 @@ impl Projector {
         }
         // Liang–Barsky against a box twice the viewport, in normalised device coordinates, so
         // extruded volume edges do not reach the tessellator at 1e6 points.
-        let (pa, pb) = (ca.truncate().truncate() / ca.w, cb.truncate().truncate() / cb.w);
+        let (pa, pb) = (
+            ca.truncate().truncate() / ca.w,
+            cb.truncate().truncate() / cb.w,
+        );
         let d = pb - pa;
         let (mut t0, mut t1) = (0.0f32, 1.0f32);
         for (p, q) in [
@@ -227,9 +232,16 @@ mod tests {
         assert_eq!(f.target, Vec3::ZERO);
         // The box's bounding sphere fits in the vertical field of view.
         let p = Projector::new(&f, Rect::from_min_size(Pos2::ZERO, [100.0, 100.0].into()));
-        for corner in [Vec3::splat(1.0), Vec3::splat(-1.0), Vec3::new(1.0, -1.0, 1.0)] {
+        for corner in [
+            Vec3::splat(1.0),
+            Vec3::splat(-1.0),
+            Vec3::new(1.0, -1.0, 1.0),
+        ] {
             let s = p.point(corner).unwrap();
-            assert!((0.0..=100.0).contains(&s.x) && (0.0..=100.0).contains(&s.y), "{s:?}");
+            assert!(
+                (0.0..=100.0).contains(&s.x) && (0.0..=100.0).contains(&s.y),
+                "{s:?}"
+            );
         }
     }
 

@@ -1,6 +1,7 @@
 //! The render core as the lab holds it: a [`Session`] on eframe's own wgpu device. Every pixel
 //! the lab shows comes from here, through the same calls `dbuffer render` makes.
 
+use crate::geometry::light_view::LightView;
 use crate::geometry::SceneGeometry;
 use crate::render::session::Session;
 use crate::render::{Frame, FrameRequest, GpuContext, RenderError};
@@ -44,37 +45,40 @@ impl Core {
     }
 
     pub fn set_camera(&mut self, camera: Camera) {
-        if self.session.scene().camera != camera {
-            // Until `Session::set_camera` lands: a session on the same scene with the new camera.
-            let mut scene = self.session.scene().clone();
-            scene.camera = camera;
-            self.session = Session::new(&self.ctx, scene);
-        }
+        self.session.set_camera(camera);
+    }
+
+    /// The D-buffer's view from the light centre (maps world points to texels).
+    pub fn light_view(&self) -> &LightView {
+        self.session.light_view()
+    }
+
+    /// CPU milliseconds of the last geometry build.
+    pub fn geometry_ms(&self) -> f64 {
+        self.session.geometry_ms()
     }
 
     pub fn frame(&mut self, request: &FrameRequest) -> Result<Frame, RenderError> {
         self.session.frame(&self.ctx, request)
     }
 
-    /// Reference samples per pixel done and asked for, while a reference is being accumulated.
+    /// Reference samples per pixel done and asked for, once a reference has been started.
     pub fn reference_progress(&self) -> Option<(u32, u32)> {
-        None
+        self.session.reference_progress()
     }
 
-    /// The accumulated reference V of the last frame size (row-major), for the error view.
+    /// The accumulated reference V of the last size it was advanced for (row-major).
     pub fn reference_visibility(&self) -> Option<&[f32]> {
-        None
+        self.session.reference_visibility()
     }
 
-    /// Add reference samples without showing the reference.
-    pub fn advance_reference(&mut self, _request: &FrameRequest) -> Result<(), RenderError> {
-        Err(RenderError::Request(
-            "the reference is not available yet".into(),
-        ))
+    /// Add reference samples without showing the reference (for the error view).
+    pub fn advance_reference(&mut self, request: &FrameRequest) -> Result<(), RenderError> {
+        self.session.advance_reference(&self.ctx, request)
     }
 
     /// The reference is still adding samples.
     pub fn converging(&self) -> bool {
-        false
+        self.session.converging()
     }
 }

@@ -186,7 +186,9 @@ impl SceneDoc {
         };
         let same_dir = same_path(&target_dir, &self.base_dir);
         for o in &mut file.objects {
-            if !scene::shapes::is_shape_name(&o.mesh) && Path::new(&o.mesh).is_relative() && !same_dir
+            if !scene::shapes::is_shape_name(&o.mesh)
+                && Path::new(&o.mesh).is_relative()
+                && !same_dir
             {
                 let absolute = std::path::absolute(self.base_dir.join(&o.mesh))
                     .unwrap_or_else(|_| self.base_dir.join(&o.mesh));
@@ -206,9 +208,10 @@ impl SceneDoc {
 
     /// The `.toml` this scene would be saved to without asking (`None`: built-in or `.obj`).
     pub fn toml_path(&self) -> Option<&Path> {
-        self.path
-            .as_deref()
-            .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")))
+        self.path.as_deref().filter(|p| {
+            p.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+        })
     }
 }
 
@@ -231,7 +234,9 @@ pub fn f3(v: Vec3) -> [f64; 3] {
 
 /// The light's normal as tilt from straight down and azimuth about +Y, in degrees.
 pub fn tilt_azimuth(normal: [f64; 3]) -> (f64, f64) {
-    let n = glam::DVec3::from(normal).try_normalize().unwrap_or(glam::DVec3::NEG_Y);
+    let n = glam::DVec3::from(normal)
+        .try_normalize()
+        .unwrap_or(glam::DVec3::NEG_Y);
     let tilt = (-n.y).clamp(-1.0, 1.0).acos().to_degrees();
     let azimuth = if n.x.abs() + n.z.abs() < 1e-12 {
         0.0

@@ -24,7 +24,10 @@ pub fn encode_png(image: &egui::ColorImage) -> Result<Vec<u8>, String> {
         .ok_or_else(|| "screenshot of an inconsistent size".to_string())?;
     let mut bytes = Vec::new();
     buffer
-        .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
         .map_err(|e| format!("encoding the PNG: {e}"))?;
     Ok(bytes)
 }

@@ -31,6 +31,7 @@ impl LabApp {
     pub(super) fn inspector_panel(&mut self, ui: &mut egui::Ui) {
         egui::Panel::right("inspector")
             .default_size(230.0)
+            .max_size(300.0)
             .resizable(true)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
@@ -74,8 +75,14 @@ impl LabApp {
                 rows.push(("surface".into(), "none".into()));
             } else {
                 let x = Vec3::new(p[0], p[1], p[2]);
-                rows.push(("position".into(), format!("{:.3}, {:.3}, {:.3}", x.x, x.y, x.z)));
-                rows.push(("|cx|".into(), format!("{:.5}", (x - shown.light.center).length())));
+                rows.push((
+                    "position".into(),
+                    format!("{:.3}, {:.3}, {:.3}", x.x, x.y, x.z),
+                ));
+                rows.push((
+                    "|cx|".into(),
+                    format!("{:.5}", (x - shown.light.center).length()),
+                ));
                 if let Some(t) = texel_of(shown, x).and_then(|(tx, ty)| views::texel(f, tx, ty)) {
                     for (c, name) in CHANNELS.iter().enumerate().take(3) {
                         rows.push(((*name).into(), value(t.channel(c))));
@@ -103,20 +110,27 @@ impl LabApp {
                 rows.push((format!("reference V{samples}"), value(reference)));
             }
         }
-        egui::Grid::new("pixel-grid").num_columns(2).show(ui, |ui| {
-            for (k, v) in rows {
-                ui.label(k);
-                ui.label(RichText::new(v).monospace());
-                ui.end_row();
-            }
-        });
+        egui::Grid::new("pixel-grid")
+            .num_columns(2)
+            .max_col_width(140.0)
+            .show(ui, |ui| {
+                for (k, v) in rows {
+                    ui.label(k);
+                    ui.label(RichText::new(v).monospace());
+                    ui.end_row();
+                }
+            });
     }
 
     fn stats_section(&self, ui: &mut egui::Ui) {
         let s = &self.stats;
         let mut rows: Vec<(String, String)> = Vec::new();
-        if let Some(a) = self.adapter() {
-            rows.push(("adapter".into(), a));
+        if let Some(core) = self.core.as_ref() {
+            let mut name = core.ctx.adapter.name.clone();
+            if name.chars().count() > 18 {
+                name = name.chars().take(17).collect::<String>() + "…";
+            }
+            rows.push(("adapter".into(), name));
         }
         if let Some(main) = &self.viewport.main {
             rows.push((
@@ -134,16 +148,18 @@ impl LabApp {
             None => "—".into(),
         };
         rows.push(("render (CPU wall)".into(), ms(s.median_wall_ms(false))));
-        rows.push((
-            "  with geometry".into(),
-            ms(s.median_wall_ms(true)),
-        ));
+        rows.push(("  with geometry".into(), ms(s.median_wall_ms(true))));
+        rows.push(("CPU geometry".into(), ms(s.median_geometry_ms())));
         let gpu = s.median_gpu_ms();
         if gpu.is_empty() {
             rows.push(("GPU passes".into(), "no timestamp queries".into()));
         }
         for (pass, v) in gpu {
-            let v = if hide { "(hidden)".into() } else { format!("{v:.2} ms") };
+            let v = if hide {
+                "(hidden)".into()
+            } else {
+                format!("{v:.2} ms")
+            };
             rows.push((format!("GPU {pass}"), v));
         }
         rows.push((
@@ -169,26 +185,45 @@ impl LabApp {
             ));
             rows.push((
                 "volume triangles".into(),
-                format!("{} umbra, {} penumbra", g.umbra_triangles, g.penumbra_triangles),
+                format!(
+                    "{} umbra, {} penumbra",
+                    g.umbra_triangles, g.penumbra_triangles
+                ),
             ));
             rows.push(("geometry builds".into(), core.geometry_builds().to_string()));
         }
-        egui::Grid::new("stats-grid").num_columns(2).show(ui, |ui| {
-            for (k, v) in rows {
-                ui.label(k);
-                ui.label(RichText::new(v).monospace());
-                ui.end_row();
-            }
-        });
+        egui::Grid::new("stats-grid")
+            .num_columns(2)
+            .max_col_width(140.0)
+            .show(ui, |ui| {
+                for (k, v) in rows {
+                    ui.label(k);
+                    ui.label(RichText::new(v).monospace());
+                    ui.end_row();
+                }
+            });
         ui.label(RichText::new("render ms (white) · frame ms (green)").small());
         if hide {
             return;
         }
-        let (rect, _) = ui.allocate_exact_size(Vec2::new(ui.available_width().max(60.0), 60.0), Sense::hover());
-        plot(ui, rect, &[
-            (s.renders.iter().map(|r| r.wall_ms as f32).collect(), Color32::WHITE),
-            (s.frame_dt.iter().map(|dt| dt * 1000.0).collect(), Color32::from_rgb(120, 220, 120)),
-        ]);
+        let (rect, _) = ui.allocate_exact_size(
+            Vec2::new(ui.available_width().max(60.0), 60.0),
+            Sense::hover(),
+        );
+        plot(
+            ui,
+            rect,
+            &[
+                (
+                    s.renders.iter().map(|r| r.wall_ms as f32).collect(),
+                    Color32::WHITE,
+                ),
+                (
+                    s.frame_dt.iter().map(|dt| dt * 1000.0).collect(),
+                    Color32::from_rgb(120, 220, 120),
+                ),
+            ],
+        );
     }
 }
 

@@ -237,10 +237,9 @@ impl LabApp {
                     .map(|c| c.geometry().warnings.clone())
                     .unwrap_or_default();
                 match warnings.first() {
-                    Some(w) => self.set_status(
-                        format!("opened {}: {w}", self.doc.label),
-                        Level::Warning,
-                    ),
+                    Some(w) => {
+                        self.set_status(format!("opened {}: {w}", self.doc.label), Level::Warning)
+                    }
                     None => self.set_status(self.opened_message(), Level::Info),
                 }
             }

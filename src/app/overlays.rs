@@ -69,9 +69,16 @@ fn volume_edges(v: &VolumeMesh, umbra: bool, out: &mut Vec<[Vec3; 2]>, cap: usiz
             *count.entry((a.min(b), a.max(b))).or_default() += 1;
         }
     }
+    // In index order, so the lines are drawn (and blended) the same way every run.
+    let mut once: Vec<(u32, u32)> = count
+        .into_iter()
+        .filter(|&(_, n)| n == 1)
+        .map(|(e, _)| e)
+        .collect();
+    once.sort_unstable();
     let mut total = 0;
-    for (&(a, b), &n) in &count {
-        if n == 1 {
+    for (a, b) in once {
+        {
             total += 1;
             if out.len() < cap {
                 out.push([
@@ -114,7 +121,9 @@ impl LabApp {
             let mut mesh = egui::Mesh::default();
             let mut drawn = 0;
             let total: usize = geometry.casters.iter().map(|c| c.classes.len()).sum();
-            'casters: for (caster, prepared) in geometry.casters.iter().zip(&self.overlay_cache.casters) {
+            'casters: for (caster, prepared) in
+                geometry.casters.iter().zip(&self.overlay_cache.casters)
+            {
                 for (face, class) in prepared.faces.iter().zip(&caster.classes) {
                     if drawn >= MAX_FACES {
                         break 'casters;
@@ -128,7 +137,8 @@ impl LabApp {
                         continue;
                     };
                     // Faces turned away from the camera are hidden behind the front ones.
-                    let area = (p[1] - p[0]).x * (p[2] - p[0]).y - (p[1] - p[0]).y * (p[2] - p[0]).x;
+                    let area =
+                        (p[1] - p[0]).x * (p[2] - p[0]).y - (p[1] - p[0]).y * (p[2] - p[0]).x;
                     if area >= 0.0 {
                         continue;
                     }
@@ -150,7 +160,12 @@ impl LabApp {
 
         for (on, umbra, color, name) in [
             (overlays.umbra_volume, true, UMBRA_COLOR, "umbra volume"),
-            (overlays.penumbra_volume, false, PENUMBRA_COLOR, "penumbra volume"),
+            (
+                overlays.penumbra_volume,
+                false,
+                PENUMBRA_COLOR,
+                "penumbra volume",
+            ),
         ] {
             if !on {
                 continue;
@@ -197,7 +212,11 @@ impl LabApp {
                     projector.point(light.center + light.radius * (a.cos() * u + a.sin() * v))
                 })
                 .collect();
-            let color = if selected_light { HIGHLIGHT } else { LIGHT_COLOR };
+            let color = if selected_light {
+                HIGHLIGHT
+            } else {
+                LIGHT_COLOR
+            };
             if selected_light && rim.len() > 2 {
                 painter.add(egui::Shape::convex_polygon(
                     rim.clone(),
@@ -259,7 +278,10 @@ impl LabApp {
                     View::Error => {
                         let reference = self.viewport.main.as_ref().and_then(|s| {
                             if s.method == Method::Reference {
-                                Some(format!("K = {} (the shown reference)", self.settings.reference_samples))
+                                Some(format!(
+                                    "K = {} (the shown reference)",
+                                    self.settings.reference_samples
+                                ))
                             } else {
                                 s.reference
                                     .map(|(done, total)| format!("K = {done} of {total} samples"))
@@ -282,7 +304,17 @@ impl LabApp {
             }
             View::Final => {}
         }
-        let o = self.settings.overlays;
+        let mut o = self.settings.overlays;
+        if view == View::DBuffer {
+            // Overlays are drawn over the camera views only.
+            o = super::Overlays {
+                classes: false,
+                umbra_volume: false,
+                penumbra_volume: false,
+                silhouettes: false,
+                light_disk: false,
+            };
+        }
         if o.classes {
             for (_, c, name) in CLASS_COLORS {
                 rows.push((Some(c.to_opaque()), format!("face: {name}")));
@@ -317,28 +349,56 @@ impl LabApp {
         let mut y = frame.top() + 4.0;
         let font = egui::FontId::proportional(12.0);
         if let Some(m) = bar {
-            let bar_rect = Rect::from_min_size(Pos2::new(frame.left() + 6.0, y), Vec2::new(width - 12.0, 8.0));
+            let bar_rect = Rect::from_min_size(
+                Pos2::new(frame.left() + 6.0, y),
+                Vec2::new(width - 12.0, 8.0),
+            );
             let steps = 48;
             for k in 0..steps {
                 let x0 = bar_rect.left() + bar_rect.width() * k as f32 / steps as f32;
                 let x1 = bar_rect.left() + bar_rect.width() * (k + 1) as f32 / steps as f32;
                 painter.rect_filled(
-                    Rect::from_min_max(Pos2::new(x0, bar_rect.top()), Pos2::new(x1, bar_rect.bottom())),
+                    Rect::from_min_max(
+                        Pos2::new(x0, bar_rect.top()),
+                        Pos2::new(x1, bar_rect.bottom()),
+                    ),
                     0.0,
                     m.map.color((k as f32 + 0.5) / steps as f32),
                 );
             }
-            painter.text(Pos2::new(bar_rect.left(), bar_rect.bottom() + 1.0), egui::Align2::LEFT_TOP, format!("{:.4}", m.black), font.clone(), Color32::WHITE);
-            painter.text(Pos2::new(bar_rect.right(), bar_rect.bottom() + 1.0), egui::Align2::RIGHT_TOP, format!("{:.4}", m.white), font.clone(), Color32::WHITE);
+            painter.text(
+                Pos2::new(bar_rect.left(), bar_rect.bottom() + 1.0),
+                egui::Align2::LEFT_TOP,
+                format!("{:.4}", m.black),
+                font.clone(),
+                Color32::WHITE,
+            );
+            painter.text(
+                Pos2::new(bar_rect.right(), bar_rect.bottom() + 1.0),
+                egui::Align2::RIGHT_TOP,
+                format!("{:.4}", m.white),
+                font.clone(),
+                Color32::WHITE,
+            );
             y += bar_h;
         }
         for (color, text) in rows {
             let mut x = frame.left() + 6.0;
             if let Some(c) = color {
-                painter.rect_filled(Rect::from_min_size(Pos2::new(x, y + 3.0), Vec2::splat(10.0)), 2.0, c);
+                painter.rect_filled(
+                    Rect::from_min_size(Pos2::new(x, y + 3.0), Vec2::splat(10.0)),
+                    2.0,
+                    c,
+                );
                 x += 16.0;
             }
-            painter.text(Pos2::new(x, y), egui::Align2::LEFT_TOP, text, font.clone(), Color32::WHITE);
+            painter.text(
+                Pos2::new(x, y),
+                egui::Align2::LEFT_TOP,
+                text,
+                font.clone(),
+                Color32::WHITE,
+            );
             y += row_h;
         }
     }

@@ -363,7 +363,11 @@ impl LabApp {
         let mut changed = number_row(ui, "Centre", &mut light.center, 0.01);
         let (mut tilt, mut azimuth) = tilt_azimuth(light.normal);
         changed |= ui
-            .add(Slider::new(&mut light.radius, 0.01..=5.0).text("Radius").logarithmic(true))
+            .add(
+                Slider::new(&mut light.radius, 0.01..=5.0)
+                    .text("Radius")
+                    .logarithmic(true),
+            )
             .changed();
         changed |= ui
             .add(Slider::new(&mut light.center[1], -5.0..=20.0).text("Height"))

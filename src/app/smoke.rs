@@ -42,6 +42,9 @@ fn not_blank(image: &egui::ColorImage, what: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// Where a smoke run leaves its result: written once, read after the window closed.
+pub type Outcome = Arc<Mutex<Option<Result<(), String>>>>;
+
 pub struct Smoke {
     path: PathBuf,
     started: Instant,
@@ -49,7 +52,7 @@ pub struct Smoke {
     requested: bool,
     shot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
     /// Where the result goes for [`super::run`] to report.
-    pub outcome: Option<Arc<Mutex<Option<Result<(), String>>>>>,
+    pub outcome: Option<Outcome>,
 }
 
 impl Smoke {

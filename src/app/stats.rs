@@ -11,7 +11,8 @@ const KEEP: usize = 240;
 #[derive(Clone, Debug, Default)]
 pub struct RenderTiming {
     pub wall_ms: f64,
-    pub geometry_rebuilt: bool,
+    /// CPU milliseconds of the geometry stage, when this render rebuilt it.
+    pub geometry_ms: Option<f64>,
     pub gpu_ms: Vec<(String, f64)>,
 }
 
@@ -36,13 +37,13 @@ impl Stats {
         self.last_frame = Some(now);
     }
 
-    pub fn render(&mut self, wall_ms: f64, geometry_rebuilt: bool, gpu_ms: &[(String, f64)]) {
+    pub fn render(&mut self, wall_ms: f64, geometry_ms: Option<f64>, gpu_ms: &[(String, f64)]) {
         self.renders_total += 1;
         push(
             &mut self.renders,
             RenderTiming {
                 wall_ms,
-                geometry_rebuilt,
+                geometry_ms,
                 gpu_ms: gpu_ms.to_vec(),
             },
         );
@@ -53,10 +54,15 @@ impl Stats {
         median(
             self.renders
                 .iter()
-                .filter(|r| r.geometry_rebuilt == rebuilt)
+                .filter(|r| r.geometry_ms.is_some() == rebuilt)
                 .map(|r| r.wall_ms)
                 .collect(),
         )
+    }
+
+    /// Median CPU milliseconds of the geometry stage over the renders that rebuilt it.
+    pub fn median_geometry_ms(&self) -> Option<f64> {
+        median(self.renders.iter().filter_map(|r| r.geometry_ms).collect())
     }
 
     /// Median GPU milliseconds per pass over the kept renders, in pass order.
@@ -70,7 +76,12 @@ impl Stats {
                 let values = self
                     .renders
                     .iter()
-                    .flat_map(|r| r.gpu_ms.iter().filter(|(p, _)| p == pass).map(|(_, ms)| *ms))
+                    .flat_map(|r| {
+                        r.gpu_ms
+                            .iter()
+                            .filter(|(p, _)| p == pass)
+                            .map(|(_, ms)| *ms)
+                    })
                     .collect();
                 median(values).map(|m| (pass.clone(), m))
             })
@@ -114,16 +125,17 @@ mod tests {
     #[test]
     fn medians_split_by_geometry_rebuilds() {
         let mut s = Stats::default();
-        s.render(10.0, true, &[("light_pass".into(), 1.0)]);
+        s.render(10.0, Some(7.0), &[("light_pass".into(), 1.0)]);
         for ms in [2.0, 3.0, 4.0] {
-            s.render(ms, false, &[("light_pass".into(), ms / 2.0)]);
+            s.render(ms, None, &[("light_pass".into(), ms / 2.0)]);
         }
         assert_eq!(s.median_wall_ms(true), Some(10.0));
+        assert_eq!(s.median_geometry_ms(), Some(7.0));
         assert_eq!(s.median_wall_ms(false), Some(3.0));
         assert_eq!(s.median_gpu_ms(), vec![("light_pass".to_string(), 1.5)]);
         assert_eq!(s.renders_total, 4);
         for _ in 0..KEEP {
-            s.render(1.0, false, &[]);
+            s.render(1.0, None, &[]);
         }
         assert_eq!(s.renders.len(), KEEP);
     }

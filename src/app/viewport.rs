@@ -13,7 +13,7 @@ use glam::Vec3;
 use super::camera::{self, Projector};
 use super::doc::f3;
 use super::views::{self, Mapping, View};
-use super::{Level, LabApp, Selection};
+use super::{LabApp, Level, Selection};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::light_view::LightView;
 use crate::render::{Frame, FrameRequest, Method, MethodParams};
@@ -97,9 +97,7 @@ impl LabApp {
         let ctx = ui.ctx().clone();
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
-        response.widget_info(|| {
-            egui::WidgetInfo::labeled(egui::Role::Canvas, true, "viewport")
-        });
+        response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "viewport"));
         self.viewport.rect = Some(rect);
         ui.painter().rect_filled(rect, 0.0, views::NO_DATA);
         let ppp = ctx.pixels_per_point();
@@ -146,7 +144,10 @@ impl LabApp {
         if let Some(e) = &self.render_error {
             return Some(e.clone());
         }
-        self.viewport.main.as_ref().and_then(|s| s.view_note.clone())
+        self.viewport
+            .main
+            .as_ref()
+            .and_then(|s| s.view_note.clone())
     }
 
     fn base_request(&self, width: u32, height: u32) -> FrameRequest {
@@ -158,7 +159,10 @@ impl LabApp {
             vt: self.settings.vt(),
             params: MethodParams {
                 reference_samples: self.settings.reference_samples,
-                reference_step: self.settings.reference_step.min(self.settings.reference_samples),
+                reference_step: self
+                    .settings
+                    .reference_step
+                    .min(self.settings.reference_samples),
                 ..MethodParams::default()
             },
             read_dbuffer: true,
@@ -198,11 +202,12 @@ impl LabApp {
             match core.frame(&request) {
                 Ok(frame) => {
                     let wall_ms = t0.elapsed().as_secs_f64() * 1e3;
-                    self.stats
-                        .render(wall_ms, core.geometry_builds() != builds, &frame.gpu_ms);
+                    let rebuilt = core.geometry_builds() != builds;
+                    let geometry_ms = rebuilt.then(|| core.geometry_ms());
+                    self.stats.render(wall_ms, geometry_ms, &frame.gpu_ms);
                     self.viewport.serial += 1;
                     let shown = Shown {
-                        light_view: LightView::fit(core.scene()),
+                        light_view: *core.light_view(),
                         light: core.scene().light,
                         reference: core.reference_progress(),
                         frame,
@@ -289,7 +294,8 @@ impl LabApp {
                 continue;
             }
             let mut mapping = mapping.unwrap_or_else(Mapping::unit);
-            let (image, note) = view_image(shown, view, channels, &mut mapping, reference.as_deref());
+            let (image, note) =
+                view_image(shown, view, channels, &mut mapping, reference.as_deref());
             if let Some(m) = self.settings.mapping_mut(view) {
                 *m = mapping;
             }

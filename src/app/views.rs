@@ -95,17 +95,33 @@ impl ColorMap {
                 rgb(r, g, b)
             }
             ColorMap::Turbo => {
-                // Polynomial fit of Google's Turbo (Mikhailov 2019).
-                let (x2, x3, x4, x5) = (x * x, x * x * x, x.powi(4), x.powi(5));
-                let r = 0.13572138 + 4.6153926 * x - 42.66032258 * x2 + 132.13108234 * x3
-                    - 152.94239396 * x4
-                    + 59.28637943 * x5;
-                let g = 0.09140261 + 2.19418839 * x + 4.84296658 * x2 - 14.18503333 * x3
-                    + 4.27729857 * x4
-                    + 2.82956604 * x5;
-                let b = 0.1066733 + 12.64194608 * x - 60.58204836 * x2 + 110.36276771 * x3
-                    - 89.90310912 * x4
-                    + 27.34824973 * x5;
+                // Polynomial fit of Google's Turbo (Mikhailov 2019), in f64 like its source.
+                let x = f64::from(x);
+                let poly = |c: [f64; 6]| c.iter().rev().fold(0.0, |acc, k| acc * x + k) as f32;
+                let r = poly([
+                    0.13572138,
+                    4.6153926,
+                    -42.66032258,
+                    132.13108234,
+                    -152.94239396,
+                    59.28637943,
+                ]);
+                let g = poly([
+                    0.09140261,
+                    2.19418839,
+                    4.84296658,
+                    -14.18503333,
+                    4.27729857,
+                    2.82956604,
+                ]);
+                let b = poly([
+                    0.1066733,
+                    12.64194608,
+                    -60.58204836,
+                    110.36276771,
+                    -89.90310912,
+                    27.34824973,
+                ]);
                 rgb(r, g, b)
             }
         }
@@ -172,18 +188,22 @@ impl Mapping {
         self.map.color(self.normalise(v))
     }
 
-    /// Fit black and white to the smallest and largest of `values`; leaves the range alone when
-    /// there is none.
+    /// Fit black and white to `values`, from the 0.5th to the 99.5th percentile (extruded volume
+    /// ends reach hundreds of metres and would squash everything else into one colour); leaves
+    /// the range alone when there are no finite values.
     pub fn fit(&mut self, values: impl Iterator<Item = f32>) {
-        let (lo, hi) = values
-            .filter(|v| v.is_finite())
-            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| {
-                (lo.min(v), hi.max(v))
-            });
-        if lo <= hi {
-            self.black = lo;
-            self.white = hi;
+        let mut v: Vec<f32> = values.filter(|v| v.is_finite()).collect();
+        if v.is_empty() {
+            return;
         }
+        let last = v.len() - 1;
+        let lo_i = (last as f32 * 0.005).floor() as usize;
+        let hi_i = ((last as f32 * 0.995).ceil() as usize).min(last);
+        let (_, hi, _) = v.select_nth_unstable_by(hi_i, f32::total_cmp);
+        let hi = *hi;
+        let (_, lo, _) = v.select_nth_unstable_by(lo_i, f32::total_cmp);
+        self.black = *lo;
+        self.white = hi;
     }
 }
 
@@ -193,8 +213,14 @@ pub const NO_DATA: Color32 = Color32::from_rgb(20, 24, 48);
 /// Colours of the classes view, by [`crate::geometry::Branch::code`].
 pub const BRANCH_COLORS: [(Color32, &str); 4] = [
     (Color32::from_rgb(40, 60, 160), "umbra"),
-    (Color32::from_rgb(230, 120, 40), "penumbra, hidden from centre"),
-    (Color32::from_rgb(250, 200, 90), "penumbra, visible from centre"),
+    (
+        Color32::from_rgb(230, 120, 40),
+        "penumbra, hidden from centre",
+    ),
+    (
+        Color32::from_rgb(250, 200, 90),
+        "penumbra, visible from centre",
+    ),
     (Color32::from_rgb(200, 196, 186), "lit"),
 ];
 
@@ -397,6 +423,9 @@ mod tests {
         assert_eq!((m.black, m.white), (-1.0, 3.0));
         m.fit(std::iter::empty());
         assert_eq!((m.black, m.white), (-1.0, 3.0), "no values: range kept");
+        // A few far outliers do not set the range.
+        m.fit((0..1000).map(|i| i as f32 / 1000.0).chain([300.0, 290.0]));
+        assert!(m.black < 0.01 && (0.98..1.0).contains(&m.white), "{m:?}");
     }
 
     #[test]
@@ -413,7 +442,11 @@ mod tests {
         let f = frame();
         let t = texel(&f, 0, 0).unwrap();
         assert_eq!((t.o, t.uv, t.pv), (Some(1.0), None, Some(1.5)));
-        assert_eq!(t.channel(3), Some(1.2), "|cx_s| of the penumbra without an umbra");
+        assert_eq!(
+            t.channel(3),
+            Some(1.2),
+            "|cx_s| of the penumbra without an umbra"
+        );
         let t = texel(&f, 0, 1).unwrap();
         assert_eq!(t.o, None, "NO_SURFACE is no surface");
         assert!(texel(&f, 2, 0).is_none());
@@ -438,6 +471,10 @@ mod tests {
         let f = frame();
         assert!(error_image(&f, &[0.0], &mut Mapping::error()).is_none());
         let img = error_image(&f, &[0.0, 0.0], &mut Mapping::error()).unwrap();
-        assert_eq!(img.pixels[0], Color32::WHITE, "0.25 is the top of the heat map");
+        assert_eq!(
+            img.pixels[0],
+            Color32::WHITE,
+            "0.25 is the top of the heat map"
+        );
     }
 }
