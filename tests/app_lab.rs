@@ -75,13 +75,9 @@ fn every_method_and_variant_switches_and_shows_at_once() {
         click(&mut h, m.name());
         let app = h.state();
         assert_eq!(app.settings.method(), m);
-        // Either the method rendered, or (while it is not implemented) the status says why.
         let shown = app.shown().expect("a frame").method;
-        assert!(
-            shown == m || app.status().0.contains(m.name()),
-            "{m}: shown {shown}, status {:?}",
-            app.status()
-        );
+        assert_eq!(shown, m, "status: {:?}", app.status());
+        assert_ne!(app.status().1, Level::Error, "{m}: {:?}", app.status());
     }
     click(&mut h, Method::DBuffer.name());
     let mut images = Vec::new();
@@ -120,8 +116,6 @@ fn every_view_and_overlay_changes_the_viewport() {
     }
     for i in 0..shots.len() {
         for j in i + 1..shots.len() {
-            // The error view has no reference before the reference method lands: it shows the
-            // final image with a note, so it may match "final" only in the viewport's pixels.
             assert!(
                 shots[i].1 != shots[j].1,
                 "views {} and {} look the same",
@@ -147,6 +141,25 @@ fn every_view_and_overlay_changes_the_viewport() {
     assert!(!o.classes && !o.umbra_volume && !o.penumbra_volume && !o.silhouettes);
     click(&mut h, "Light disk");
     assert!(!h.state().settings.overlays.light_disk);
+}
+
+#[test]
+fn split_view_shows_two_methods() {
+    let mut h = lab(None);
+    h.run();
+    click(&mut h, "Split view");
+    let app = h.state();
+    assert!(app.settings.split);
+    let left = app.shown().expect("left").method;
+    let right = app.shown_split().expect("right").method;
+    assert_eq!((left, right), (Method::DBuffer, Method::Reference));
+    // The reference on the right has converged (K = 16, 8 per frame) and differs from the method.
+    assert_ne!(
+        app.shown().expect("left").frame.visibility,
+        app.shown_split().expect("right").frame.visibility
+    );
+    h.run();
+    assert!(h.state().settings.split, "still split after more frames");
 }
 
 #[test]

@@ -303,7 +303,8 @@ impl LabApp {
 
     /// Keyboard shortcuts that act on the whole lab (not while typing in a field).
     fn shortcuts(&mut self, ctx: &egui::Context) {
-        if ctx.memory(|m| m.focused().is_some()) {
+        // Not while typing in a text field (a clicked button has focus too, and must not block).
+        if ctx.egui_wants_keyboard_input() {
             return;
         }
         use egui::{Key, KeyboardShortcut, Modifiers};

@@ -439,12 +439,19 @@ impl LabApp {
                 .text("Resolution")
                 .custom_formatter(|v, _| format!("{:.0} %", v * 100.0)),
         );
-        ui.add(
-            Slider::new(&mut self.settings.reference_samples, 16..=4096)
-                .text("Reference K")
-                .logarithmic(true),
-        );
-        ui.add(Slider::new(&mut self.settings.reference_step, 1..=64).text("K per frame"));
+        let max = crate::render::frame::MAX_REFERENCE_SAMPLES;
+        ui.horizontal(|ui| {
+            let l = ui.label("Reference K");
+            ui.add(DragValue::new(&mut self.settings.reference_samples).range(1..=max))
+                .labelled_by(l.id)
+                .on_hover_text("disk samples per pixel of the reference");
+            let l = ui.label("per frame");
+            ui.add(
+                DragValue::new(&mut self.settings.reference_step)
+                    .range(1..=self.settings.reference_samples.max(1)),
+            )
+            .labelled_by(l.id);
+        });
     }
 }
 

@@ -90,6 +90,9 @@ impl Stats {
 
     /// Window frames per second over the last second of frames.
     pub fn fps(&self) -> Option<f32> {
+        if *self.frame_dt.back()? > 1.0 {
+            return None; // idle: nothing changed, nothing drawn
+        }
         let mut total = 0.0;
         let mut n = 0;
         for dt in self.frame_dt.iter().rev() {

@@ -246,10 +246,16 @@ impl LabApp {
                 if let Err(e) = core.advance_reference(&request) {
                     errors.push(format!("reference: {e}"));
                 }
-                if let Some(main) = self.viewport.main.as_mut() {
-                    main.reference = core.reference_progress();
-                }
             }
+        }
+        // Every shown frame reports the reference as it stands now (legend, inspector, and the
+        // error view redraws as it converges).
+        let progress = core.reference_progress();
+        for shown in [self.viewport.main.as_mut(), self.viewport.split.as_mut()]
+            .into_iter()
+            .flatten()
+        {
+            shown.reference = progress;
         }
         if core.converging() && (shows_reference || self.settings.view == View::Error) {
             ctx.request_repaint();
