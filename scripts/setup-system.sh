@@ -4,7 +4,9 @@
 #
 # mesa-vulkan-drivers + libvulkan1: lavapipe, Mesa's Vulkan on the CPU, so wgpu has an adapter
 # on machines without a GPU (and a GPU machine keeps its own driver).
-DBUFFER_PACKAGES=(mesa-vulkan-drivers libvulkan1)
+# xvfb + xauth + the X11 client libraries winit loads: the lab's window, and its smoke run under
+# Xvfb in scripts/test.sh (scripts/xvfb-smoke.sh).
+DBUFFER_PACKAGES=(mesa-vulkan-drivers libvulkan1 xvfb xauth libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1)
 
 dbuffer_install_packages() {
   local missing=() p SUDO

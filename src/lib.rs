@@ -6,9 +6,11 @@
 //!   D-buffer lookup and the ray-cast visibility oracle (plain Rust, no GPU types);
 //! - [`render`]: the wgpu render core (light pass, camera pass), headless or in the lab;
 //! - [`output`]: writing one render's files (PNG, EXR, JSON), all or nothing.
+//! - [`app`]: the lab window (eframe), around the same render core;
 //! - [`shader_source`]: WGSL sources from `shaders/` with their `// #include` lines expanded.
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod app;
 pub mod compare;
 pub mod fsutil;
 pub mod geometry;

@@ -102,7 +102,8 @@ fn main() -> ExitCode {
             vt,
             out,
         }) => cli::inspect(&scene, samples, &size, &vt, out.as_deref()),
-        None | Some(Command::Gui { .. }) => cli::not_yet("the lab window", 5),
+        None => cli::gui(None),
+        Some(Command::Gui { scene }) => cli::gui(scene),
         Some(Command::Render {
             scene,
             out,

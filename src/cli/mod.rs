@@ -152,6 +152,18 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// The lab window. `DBUFFER_SMOKE_SCREENSHOT=shot.png` makes it screenshot itself once frames
+/// show and exit (the scripted smoke run under Xvfb).
+pub fn gui(scene: Option<String>) -> Result<()> {
+    let smoke_screenshot = std::env::var_os("DBUFFER_SMOKE_SCREENSHOT").map(Into::into);
+    dbuffer::app::run(dbuffer::app::LabOptions {
+        scene,
+        fresh_settings: smoke_screenshot.is_some(),
+        smoke_screenshot,
+        ..Default::default()
+    })
+}
+
 fn check_dbuffer_size(size: u32) -> Result<()> {
     if !(1..=8192).contains(&size) {
         bail!("--dbuffer-size expects a texel count from 1 to 8192, found {size}");

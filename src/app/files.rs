@@ -1,0 +1,175 @@
+//! Files: open a scene or an OBJ (dialog, path field, built-ins, recent files), save the scene
+//! (temporary file, then rename), export a PNG of the viewport as shown (overlays included).
+//! Every failure goes to the status line; the lab keeps running on what it had.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+use eframe::egui;
+
+use super::{LabApp, Level};
+
+/// A viewport screenshot asked for and not yet written.
+pub struct PendingExport {
+    pub path: PathBuf,
+    pub rect: egui::Rect,
+    pub shot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
+}
+
+/// `image` as PNG bytes.
+pub fn encode_png(image: &egui::ColorImage) -> Result<Vec<u8>, String> {
+    let [w, h] = image.size;
+    let rgba: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+    let buffer = image::RgbaImage::from_raw(w as u32, h as u32, rgba)
+        .ok_or_else(|| "screenshot of an inconsistent size".to_string())?;
+    let mut bytes = Vec::new();
+    buffer
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| format!("encoding the PNG: {e}"))?;
+    Ok(bytes)
+}
+
+/// The part of a window screenshot inside `rect` (points), at `pixels_per_point`.
+pub fn crop(image: &egui::ColorImage, rect: egui::Rect, pixels_per_point: f32) -> egui::ColorImage {
+    let [w, h] = image.size;
+    let x0 = ((rect.left() * pixels_per_point).round().max(0.0) as usize).min(w);
+    let y0 = ((rect.top() * pixels_per_point).round().max(0.0) as usize).min(h);
+    let x1 = ((rect.right() * pixels_per_point).round().max(0.0) as usize).clamp(x0, w);
+    let y1 = ((rect.bottom() * pixels_per_point).round().max(0.0) as usize).clamp(y0, h);
+    let mut pixels = Vec::with_capacity((x1 - x0) * (y1 - y0));
+    for y in y0..y1 {
+        pixels.extend_from_slice(&image.pixels[y * w + x0..y * w + x1]);
+    }
+    egui::ColorImage::new([x1 - x0, y1 - y0], pixels)
+}
+
+fn with_extension(path: PathBuf, ext: &str) -> PathBuf {
+    if path.extension().is_some() {
+        path
+    } else {
+        path.with_extension(ext)
+    }
+}
+
+impl LabApp {
+    pub(super) fn open_dialog(&mut self) {
+        let mut dialog = rfd::FileDialog::new()
+            .set_title("Open a scene or a mesh")
+            .add_filter("scene or mesh", &["toml", "obj"]);
+        if let Some(dir) = self.doc.path.as_deref().and_then(Path::parent) {
+            dialog = dialog.set_directory(dir);
+        }
+        if let Some(path) = dialog.pick_file() {
+            self.open_scene(&path.display().to_string());
+        }
+    }
+
+    pub(super) fn save(&mut self) {
+        match self.doc.toml_path().map(Path::to_path_buf) {
+            Some(path) => self.save_to(&path),
+            None => self.save_as_dialog(),
+        }
+    }
+
+    pub(super) fn save_as_dialog(&mut self) {
+        let name = format!("{}.toml", self.doc.name);
+        if let Some(path) = rfd::FileDialog::new()
+            .set_title("Save the scene")
+            .add_filter("scene", &["toml"])
+            .set_file_name(name)
+            .save_file()
+        {
+            self.save_to(&with_extension(path, "toml"));
+        }
+    }
+
+    pub fn save_to(&mut self, path: &Path) {
+        let camera = self.camera;
+        match self.doc.save(path, &camera) {
+            Ok(()) => {
+                self.settings.push_recent(&path.display().to_string());
+                self.set_status(format!("saved {}", path.display()), Level::Info);
+            }
+            Err(e) => self.set_status(format!("not saved: {e}"), Level::Error),
+        }
+    }
+
+    pub(super) fn export_dialog(&mut self, ctx: &egui::Context) {
+        let Some(rect) = self.viewport.rect else {
+            return;
+        };
+        let name = format!("{}-{}.png", self.doc.name, self.settings.method);
+        if let Some(path) = rfd::FileDialog::new()
+            .set_title("Export the viewport as PNG")
+            .add_filter("PNG image", &["png"])
+            .set_file_name(name)
+            .save_file()
+        {
+            self.export_to(ctx, with_extension(path, "png"), rect);
+        }
+    }
+
+    /// Screenshot the window on the next frame and write the viewport's part to `path`.
+    pub fn export_to(&mut self, ctx: &egui::Context, path: PathBuf, rect: egui::Rect) {
+        let shot = Arc::new(Mutex::new(None));
+        let slot = Arc::clone(&shot);
+        ctx.request_screenshot(move |image| {
+            if let Ok(mut s) = slot.lock() {
+                *s = Some(image);
+            }
+        });
+        self.export = Some(PendingExport { path, rect, shot });
+    }
+
+    /// Write a screenshot that has arrived.
+    pub(super) fn finish_export(&mut self, ctx: &egui::Context) {
+        let Some(pending) = self.export.as_ref() else {
+            return;
+        };
+        let image = pending.shot.lock().ok().and_then(|mut s| s.take());
+        let Some(image) = image else {
+            ctx.request_repaint();
+            return;
+        };
+        let path = pending.path.clone();
+        let cropped = crop(&image, pending.rect, ctx.pixels_per_point());
+        self.export = None;
+        let result = encode_png(&cropped).and_then(|png| {
+            crate::fsutil::write_atomic(&path, &png)
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        });
+        match result {
+            Ok(()) => self.set_status(format!("exported {}", path.display()), Level::Info),
+            Err(e) => self.set_status(format!("not exported: {e}"), Level::Error),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crop_takes_the_rect_in_pixels() {
+        let mut image = egui::ColorImage::filled([4, 4], egui::Color32::BLACK);
+        image.pixels[2 * 4 + 3] = egui::Color32::RED;
+        let rect = egui::Rect::from_min_max(egui::pos2(1.0, 1.0), egui::pos2(2.0, 1.5));
+        let c = crop(&image, rect, 2.0);
+        assert_eq!(c.size, [2, 1]);
+        assert_eq!(c.pixels[1], egui::Color32::RED);
+        let outside = egui::Rect::from_min_max(egui::pos2(10.0, 10.0), egui::pos2(20.0, 20.0));
+        assert_eq!(crop(&image, outside, 1.0).size, [0, 0]);
+    }
+
+    #[test]
+    fn png_round_trip() {
+        let image = egui::ColorImage::filled([3, 2], egui::Color32::from_rgb(1, 2, 3));
+        let png = encode_png(&image).unwrap();
+        let back = image::load_from_memory(&png).unwrap().to_rgba8();
+        assert_eq!(back.dimensions(), (3, 2));
+        assert_eq!(back.get_pixel(2, 1).0, [1, 2, 3, 255]);
+    }
+}

@@ -1,0 +1,425 @@
+//! The lab: an eframe window around the render core. `dbuffer` opens it on the default scene,
+//! `dbuffer gui SCENE` on a scene file or built-in name. It renders nothing itself: every image
+//! is a [`crate::render::Frame`] from the same [`crate::render::session::Session`] calls
+//! `dbuffer render` makes, on eframe's own wgpu device, shown as a texture.
+//!
+//! One file per part: [`settings`] (what persists), [`doc`] (the scene being edited, undo),
+//! [`core`] (the render core as the lab holds it), [`camera`] (controls and the one projection
+//! overlays and picking use), [`views`] (frame arrays → pixels), [`viewport`] (render, show,
+//! interact), [`overlays`], [`panels`] (the controls), [`inspector`] (pixel values, stats),
+//! [`files`] (open, save, export).
+
+pub mod camera;
+pub mod core;
+pub mod doc;
+mod files;
+mod inspector;
+mod overlays;
+mod panels;
+pub mod settings;
+mod smoke;
+mod stats;
+mod viewport;
+pub mod views;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use eframe::egui;
+use eframe::egui_wgpu;
+
+use self::core::Core;
+use self::doc::{Edit, History, SceneDoc};
+pub use self::settings::{Overlays, Settings, DEFAULT_SCENE};
+use self::stats::Stats;
+pub use self::viewport::Shown;
+pub use self::views::View;
+use crate::geometry::bvh::Bvh;
+use crate::render::GpuContext;
+use crate::scene::Camera;
+
+/// How the lab starts.
+#[derive(Clone, Debug, Default)]
+pub struct LabOptions {
+    /// Built-in scene name or path; the default scene when `None`.
+    pub scene: Option<String>,
+    /// Take a screenshot of the window into this PNG once frames are showing, then exit
+    /// (`DBUFFER_SMOKE_SCREENSHOT`; the Xvfb smoke run).
+    pub smoke_screenshot: Option<PathBuf>,
+    /// Start from default settings rather than the saved ones.
+    pub fresh_settings: bool,
+    /// Tests and snapshots: default settings, and no timings on screen (they differ per run).
+    pub deterministic: bool,
+}
+
+/// What a click picked.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Selection {
+    #[default]
+    None,
+    Light,
+    Object(usize),
+}
+
+/// How serious a status line is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Level {
+    Info,
+    Warning,
+    Error,
+}
+
+pub struct LabApp {
+    pub settings: Settings,
+    /// The camera the lab looks through (not part of undo; saved with the scene).
+    pub camera: Camera,
+    pub selection: Selection,
+    core: Option<Core>,
+    doc: SceneDoc,
+    history: History,
+    /// Bumped by every scene edit and scene change: a new frame is needed.
+    revision: u64,
+    /// Per object, a BVH for picking, built when first needed after the object moved.
+    bvhs: Vec<Option<Bvh>>,
+    status: (String, Level),
+    render_error: Option<String>,
+    viewport: viewport::ViewportState,
+    stats: Stats,
+    open_text: String,
+    smoke: Option<smoke::Smoke>,
+    export: Option<files::PendingExport>,
+    overlay_cache: overlays::OverlayCache,
+    /// What the overlays could not draw in full, for the legend.
+    overlay_notes: Vec<String>,
+    deterministic: bool,
+}
+
+impl LabApp {
+    /// The lab on eframe's (or the test harness's) wgpu device.
+    pub fn new(cc: &eframe::CreationContext<'_>, options: LabOptions) -> LabApp {
+        let mut settings: Settings = if options.fresh_settings || options.deterministic {
+            Settings::default()
+        } else {
+            cc.storage
+                .and_then(|s| eframe::get_value(s, eframe::APP_KEY))
+                .unwrap_or_default()
+        };
+        settings.sanitize();
+        let wanted = options.scene.as_deref().unwrap_or(DEFAULT_SCENE);
+        let mut status = (String::new(), Level::Info);
+        let (doc, scene) = match SceneDoc::open(wanted) {
+            Ok(loaded) => loaded,
+            Err(e) => {
+                status = (format!("{e}; showing {DEFAULT_SCENE}"), Level::Error);
+                match SceneDoc::open(DEFAULT_SCENE) {
+                    Ok(loaded) => loaded,
+                    // The built-in scenes are embedded and tested; still no panic.
+                    Err(e) => {
+                        status = (format!("{e}"), Level::Error);
+                        SceneDoc::empty()
+                    }
+                }
+            }
+        };
+        let core = match cc.wgpu_render_state.as_ref() {
+            Some(rs) => Some(Core::new(context_of(rs), scene)),
+            None => {
+                status = (
+                    "no wgpu device: the lab needs eframe's wgpu renderer".into(),
+                    Level::Error,
+                );
+                None
+            }
+        };
+        let camera = doc.camera();
+        let objects = doc.file.objects.len();
+        let mut app = LabApp {
+            settings,
+            camera,
+            selection: Selection::None,
+            core,
+            doc,
+            history: History::default(),
+            revision: 0,
+            bvhs: vec![None; objects],
+            status,
+            render_error: None,
+            viewport: viewport::ViewportState::default(),
+            stats: Stats::default(),
+            open_text: String::new(),
+            smoke: options.smoke_screenshot.map(smoke::Smoke::new),
+            export: None,
+            overlay_cache: overlays::OverlayCache::default(),
+            overlay_notes: Vec::new(),
+            deterministic: options.deterministic,
+        };
+        if app.status.0.is_empty() {
+            app.status = (app.opened_message(), Level::Info);
+        }
+        app
+    }
+
+    /// The status line: the last message and how serious it is.
+    pub fn status(&self) -> (&str, Level) {
+        (&self.status.0, self.status.1)
+    }
+
+    pub fn scene_name(&self) -> &str {
+        &self.doc.name
+    }
+
+    /// The scene as the render core has it.
+    pub fn scene(&self) -> Option<&crate::scene::Scene> {
+        self.core.as_ref().map(|c| c.scene())
+    }
+
+    /// The frame the viewport shows (left side of a split).
+    pub fn shown(&self) -> Option<&Shown> {
+        self.viewport.main.as_ref()
+    }
+
+    /// The right side of a split view.
+    pub fn shown_split(&self) -> Option<&Shown> {
+        self.viewport.split.as_ref()
+    }
+
+    /// Where the viewport was last drawn, in points.
+    pub fn viewport_rect(&self) -> Option<egui::Rect> {
+        self.viewport.rect
+    }
+
+    /// How many frames the render core has made for the lab.
+    pub fn frames_rendered(&self) -> u64 {
+        self.stats.renders_total
+    }
+
+    pub fn adapter(&self) -> Option<String> {
+        self.core.as_ref().map(|c| c.ctx.adapter_description())
+    }
+
+    fn set_status(&mut self, text: impl Into<String>, level: Level) {
+        self.status = (text.into(), level);
+    }
+
+    fn opened_message(&self) -> String {
+        let warnings = self
+            .core
+            .as_ref()
+            .map_or(0, |c| c.geometry().warnings.len());
+        if warnings > 0 {
+            format!("opened {} ({warnings} warnings)", self.doc.label)
+        } else {
+            format!("opened {}", self.doc.label)
+        }
+    }
+
+    /// Open a built-in scene name, a `.toml` scene or an `.obj`; on failure the error goes to
+    /// the status line and the current scene stays.
+    pub fn open_scene(&mut self, name_or_path: &str) {
+        match SceneDoc::open(name_or_path) {
+            Ok((doc, scene)) => {
+                if let Some(core) = self.core.as_mut() {
+                    core.replace_scene(scene);
+                }
+                self.bvhs = vec![None; doc.file.objects.len()];
+                self.camera = doc.camera();
+                self.doc = doc;
+                self.history.clear();
+                self.selection = Selection::None;
+                self.revision += 1;
+                self.viewport.drag = None;
+                if !SceneDoc::is_builtin(name_or_path) {
+                    self.settings.push_recent(name_or_path);
+                }
+                let warnings = self
+                    .core
+                    .as_ref()
+                    .map(|c| c.geometry().warnings.clone())
+                    .unwrap_or_default();
+                match warnings.first() {
+                    Some(w) => {
+                        self.set_status(format!("opened {}: {w}", self.doc.label), Level::Warning)
+                    }
+                    None => self.set_status(self.opened_message(), Level::Info),
+                }
+            }
+            Err(e) => self.set_status(
+                format!("cannot open {name_or_path}: {e} (kept {})", self.doc.name),
+                Level::Error,
+            ),
+        }
+    }
+
+    /// Change the scene through `change` (one undo step per gesture).
+    fn edit_scene(&mut self, change: impl FnOnce(&mut Edit)) {
+        let before = self.doc.edit();
+        let mut after = before.clone();
+        change(&mut after);
+        if after != before {
+            self.history.checkpoint(before);
+            self.apply_edit(&after);
+        }
+    }
+
+    fn apply_edit(&mut self, edit: &Edit) {
+        let previous = self.doc.edit();
+        let (light, moved) = self.doc.apply(edit);
+        if let Err(e) = self.doc.validate() {
+            self.doc.apply(&previous);
+            self.set_status(format!("edit refused: {e}"), Level::Error);
+            return;
+        }
+        if let Some(core) = self.core.as_mut() {
+            if light {
+                core.set_light(self.doc.light());
+            }
+            for &i in &moved {
+                if let Some(mesh) = self.doc.world_mesh(i) {
+                    core.set_object_mesh(i, mesh);
+                }
+            }
+        }
+        for &i in &moved {
+            if let Some(b) = self.bvhs.get_mut(i) {
+                *b = None;
+            }
+        }
+        self.revision += 1;
+    }
+
+    pub fn undo(&mut self) {
+        if let Some(edit) = self.history.undo(self.doc.edit()) {
+            self.apply_edit(&edit);
+            self.set_status("undone", Level::Info);
+        }
+    }
+
+    pub fn redo(&mut self) {
+        if let Some(edit) = self.history.redo(self.doc.edit()) {
+            self.apply_edit(&edit);
+            self.set_status("redone", Level::Info);
+        }
+    }
+
+    /// Keyboard shortcuts that act on the whole lab (not while typing in a field).
+    fn shortcuts(&mut self, ctx: &egui::Context) {
+        // Not while typing in a text field (a clicked button has focus too, and must not block).
+        if ctx.egui_wants_keyboard_input() {
+            return;
+        }
+        use egui::{Key, KeyboardShortcut, Modifiers};
+        let redo = KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
+        let redo_y = KeyboardShortcut::new(Modifiers::COMMAND, Key::Y);
+        let undo = KeyboardShortcut::new(Modifiers::COMMAND, Key::Z);
+        if ctx.input_mut(|i| i.consume_shortcut(&redo) || i.consume_shortcut(&redo_y)) {
+            self.redo();
+        } else if ctx.input_mut(|i| i.consume_shortcut(&undo)) {
+            self.undo();
+        }
+        if ctx.input(|i| i.key_pressed(Key::F) && i.modifiers.is_none()) {
+            self.frame_all();
+        }
+    }
+
+    /// Point the camera at every caster and the light.
+    pub fn frame_all(&mut self) {
+        let Some(scene) = self.scene() else { return };
+        let light = scene.light;
+        let mut lo = light.center - glam::Vec3::splat(light.radius);
+        let mut hi = light.center + glam::Vec3::splat(light.radius);
+        for o in scene.casters() {
+            if let Some((a, b)) = o.mesh.bounds() {
+                lo = lo.min(a);
+                hi = hi.max(b);
+            }
+        }
+        self.camera = camera::frame_all(&self.camera, (lo, hi));
+    }
+}
+
+/// The render core's context on a device eframe (or the test harness) opened.
+fn context_of(rs: &egui_wgpu::RenderState) -> GpuContext {
+    GpuContext::new(rs.device.clone(), rs.queue.clone(), rs.adapter.get_info())
+}
+
+impl eframe::App for LabApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        self.stats.ui_frame(&ctx);
+        self.shortcuts(&ctx);
+        self.menu_bar(ui);
+        self.status_bar(ui);
+        self.controls_panel(ui);
+        self.inspector_panel(ui);
+        egui::CentralPanel::no_frame().show(ui, |ui| self.viewport_ui(ui));
+        if !ctx.input(|i| i.pointer.any_down()) {
+            self.history.close();
+        }
+        self.finish_export(&ctx);
+        self.smoke_step(&ctx);
+    }
+
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        if self.smoke.is_some() || self.deterministic {
+            return; // scripted runs leave the user's settings alone
+        }
+        eframe::set_value(storage, eframe::APP_KEY, &self.settings);
+    }
+}
+
+/// Open the lab window (blocks until it is closed).
+pub fn run(options: LabOptions) -> anyhow::Result<()> {
+    let smoke = options.smoke_screenshot.clone();
+    let setup = egui_wgpu::WgpuSetupCreateNew {
+        // What `GpuContext::from_adapter` asks for: timestamp queries where the adapter has them,
+        // so the stats show GPU time per pass.
+        device_descriptor: Arc::new(|adapter: &egui_wgpu::wgpu::Adapter| {
+            egui_wgpu::wgpu::DeviceDescriptor {
+                label: Some("dbuffer::lab device"),
+                required_features: adapter.features() & egui_wgpu::wgpu::Features::TIMESTAMP_QUERY,
+                required_limits: egui_wgpu::wgpu::Limits {
+                    max_texture_dimension_2d: 8192,
+                    ..egui_wgpu::wgpu::Limits::default()
+                }
+                .using_resolution(adapter.limits()),
+                ..Default::default()
+            }
+        }),
+        ..egui_wgpu::WgpuSetupCreateNew::without_display_handle()
+    };
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title("dbuffer lab")
+            .with_inner_size([1280.0, 800.0])
+            .with_min_inner_size([480.0, 320.0]),
+        renderer: eframe::Renderer::Wgpu,
+        wgpu_options: egui_wgpu::WgpuConfiguration {
+            wgpu_setup: egui_wgpu::WgpuSetup::CreateNew(setup),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let outcome = Arc::new(std::sync::Mutex::new(None::<Result<(), String>>));
+    let sink = Arc::clone(&outcome);
+    eframe::run_native(
+        "dbuffer",
+        native,
+        Box::new(move |cc| {
+            let mut app = LabApp::new(cc, options);
+            if let Some(s) = app.smoke.as_mut() {
+                s.outcome = Some(sink);
+            }
+            Ok(Box::new(app))
+        }),
+    )
+    .map_err(|e| anyhow::anyhow!("the lab window failed: {e}"))?;
+    if smoke.is_some() {
+        let result = outcome.lock().ok().and_then(|mut o| o.take());
+        match result {
+            Some(Ok(())) => {}
+            Some(Err(e)) => anyhow::bail!("smoke run: {e}"),
+            None => anyhow::bail!("smoke run: the window closed before a screenshot was taken"),
+        }
+    }
+    Ok(())
+}

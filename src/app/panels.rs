@@ -1,0 +1,463 @@
+//! The controls: menu bar, status line, and the left panel (scene, method, V(t), view, display
+//! mapping, overlays, the selection's numbers, render settings).
+
+use eframe::egui::{self, Color32, DragValue, RichText, Slider};
+
+use super::doc::{normal_from, tilt_azimuth};
+use super::views::{ColorMap, View, CHANNELS};
+use super::{LabApp, Level, Selection};
+use crate::geometry::VtVariant;
+use crate::render::Method;
+use crate::scene::builtin;
+use crate::scene::file::Scale;
+
+/// A labelled row of number fields: the label names them for screen readers and tests.
+fn number_row(ui: &mut egui::Ui, label: &str, values: &mut [f64], speed: f64) -> bool {
+    let mut changed = false;
+    ui.horizontal(|ui| {
+        let l = ui.label(label);
+        for v in values.iter_mut() {
+            changed |= ui
+                .add(DragValue::new(v).speed(speed).max_decimals(4))
+                .labelled_by(l.id)
+                .changed();
+        }
+    });
+    changed
+}
+
+impl LabApp {
+    pub(super) fn menu_bar(&mut self, ui: &mut egui::Ui) {
+        let ctx = ui.ctx().clone();
+        egui::Panel::top("menu").show(ui, |ui| {
+            egui::MenuBar::new().ui(ui, |ui| {
+                ui.menu_button("File", |ui| {
+                    if ui.button("Open…").clicked() {
+                        self.open_dialog();
+                    }
+                    ui.menu_button("Built-in scene", |ui| {
+                        for name in builtin::names() {
+                            if ui.button(*name).clicked() {
+                                self.open_scene(name);
+                            }
+                        }
+                    });
+                    ui.menu_button("Recent", |ui| {
+                        if self.settings.recent.is_empty() {
+                            ui.label("(none yet)");
+                        }
+                        for entry in self.settings.recent.clone() {
+                            if ui.button(&entry).clicked() {
+                                self.open_scene(&entry);
+                            }
+                        }
+                    });
+                    ui.separator();
+                    if ui.button("Save scene").clicked() {
+                        self.save();
+                    }
+                    if ui.button("Save scene as…").clicked() {
+                        self.save_as_dialog();
+                    }
+                    if ui.button("Export PNG…").clicked() {
+                        self.export_dialog(&ctx);
+                    }
+                    ui.separator();
+                    if ui.button("Quit").clicked() {
+                        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                    }
+                });
+                ui.menu_button("Edit", |ui| {
+                    if ui
+                        .add_enabled(self.history.can_undo(), egui::Button::new("Undo (Ctrl+Z)"))
+                        .clicked()
+                    {
+                        self.undo();
+                    }
+                    if ui
+                        .add_enabled(
+                            self.history.can_redo(),
+                            egui::Button::new("Redo (Ctrl+Shift+Z)"),
+                        )
+                        .clicked()
+                    {
+                        self.redo();
+                    }
+                });
+                ui.menu_button("Camera", |ui| {
+                    if ui.button("Frame all (F)").clicked() {
+                        self.frame_all();
+                    }
+                    if ui.button("Scene camera").clicked() {
+                        self.camera = self.doc.camera();
+                    }
+                });
+                ui.menu_button("Help", |ui| {
+                    ui.label(CONTROLS);
+                });
+            });
+        });
+    }
+
+    pub(super) fn status_bar(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::bottom("status").show(ui, |ui| {
+            ui.horizontal(|ui| {
+                let (text, level) = self.status();
+                let color = match level {
+                    Level::Info => ui.visuals().text_color(),
+                    Level::Warning => Color32::from_rgb(230, 190, 60),
+                    Level::Error => Color32::from_rgb(255, 110, 100),
+                };
+                ui.label(RichText::new(text).color(color))
+                    .on_hover_text("the last message");
+                if let Some(core) = self.core.as_ref() {
+                    let warnings = &core.geometry().warnings;
+                    if !warnings.is_empty() {
+                        ui.label(
+                            RichText::new(format!("⚠ {} geometry warnings", warnings.len()))
+                                .color(Color32::from_rgb(230, 190, 60)),
+                        )
+                        .on_hover_text(warnings.join("\n"));
+                    }
+                    if let Some((done, total)) = core.reference_progress() {
+                        if done < total {
+                            ui.add(
+                                egui::ProgressBar::new(done as f32 / total.max(1) as f32)
+                                    .desired_width(160.0)
+                                    .text(format!("reference {done}/{total} samples")),
+                            );
+                        }
+                    }
+                }
+            });
+        });
+    }
+
+    pub(super) fn controls_panel(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::left("controls")
+            .default_size(250.0)
+            .resizable(true)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    self.scene_section(ui);
+                    ui.separator();
+                    self.method_section(ui);
+                    ui.separator();
+                    self.view_section(ui);
+                    ui.separator();
+                    self.overlay_section(ui);
+                    ui.separator();
+                    self.selection_section(ui);
+                    ui.separator();
+                    self.render_section(ui);
+                });
+            });
+    }
+
+    fn scene_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Scene");
+        ui.label(RichText::new(&self.doc.label).small());
+        let mut pick = None;
+        egui::ComboBox::from_label("Built-in")
+            .selected_text(if self.doc.path.is_none() {
+                self.doc.name.clone()
+            } else {
+                "(file)".into()
+            })
+            .show_ui(ui, |ui| {
+                for name in builtin::names() {
+                    if ui.selectable_label(*name == self.doc.name, *name).clicked() {
+                        pick = Some(name.to_string());
+                    }
+                }
+            });
+        ui.horizontal(|ui| {
+            let l = ui.label("Scene path");
+            let field = ui
+                .add(
+                    egui::TextEdit::singleline(&mut self.open_text)
+                        .hint_text("scene.toml or mesh.obj")
+                        .desired_width(120.0),
+                )
+                .labelled_by(l.id);
+            let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+            if (ui.button("Open path").clicked() || enter) && !self.open_text.trim().is_empty() {
+                pick = Some(self.open_text.trim().to_string());
+            }
+        });
+        if ui.button("Open file…").clicked() {
+            self.open_dialog();
+        }
+        if let Some(name) = pick {
+            self.open_scene(&name);
+        }
+    }
+
+    fn method_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Method");
+        let current = self.settings.method();
+        ui.horizontal_wrapped(|ui| {
+            for m in Method::ALL {
+                if ui
+                    .selectable_label(current == m, m.name())
+                    .on_hover_text(m.description())
+                    .clicked()
+                {
+                    self.settings.method = m.name().into();
+                }
+            }
+        });
+        ui.label("V(t)");
+        let vt = self.settings.vt();
+        ui.horizontal_wrapped(|ui| {
+            for v in VtVariant::ALL {
+                if ui.selectable_label(vt == v, v.name()).clicked() {
+                    self.settings.vt = v.name().into();
+                }
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.settings.split, "Split view");
+            let split = self.settings.split_method();
+            egui::ComboBox::from_id_salt("split-method")
+                .selected_text(format!("right: {}", split.name()))
+                .show_ui(ui, |ui| {
+                    for m in Method::ALL {
+                        if ui.selectable_label(split == m, m.name()).clicked() {
+                            self.settings.split_method = m.name().into();
+                        }
+                    }
+                })
+                .response
+                .on_hover_text("the method on the right of the split");
+        });
+    }
+
+    fn view_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("View");
+        let current = self.settings.view;
+        ui.horizontal_wrapped(|ui| {
+            for v in View::ALL.into_iter().filter(|v| *v != View::DBuffer) {
+                if ui
+                    .selectable_label(current == v, v.name())
+                    .on_hover_text(v.description())
+                    .clicked()
+                {
+                    self.settings.view = v;
+                }
+            }
+        });
+        ui.horizontal_wrapped(|ui| {
+            for (c, name) in CHANNELS.iter().enumerate() {
+                let only = current == View::DBuffer
+                    && self.settings.channels == std::array::from_fn(|k| k == c);
+                if ui
+                    .selectable_label(only, *name)
+                    .on_hover_text("this D-buffer channel alone")
+                    .clicked()
+                {
+                    self.settings.view = View::DBuffer;
+                    self.settings.channels = std::array::from_fn(|k| k == c);
+                }
+            }
+        });
+        if current == View::DBuffer {
+            ui.horizontal(|ui| {
+                ui.label("Channels");
+                for (c, letter) in ["R", "G", "B", "A"].iter().enumerate() {
+                    ui.checkbox(&mut self.settings.channels[c], *letter)
+                        .on_hover_text(format!("{} (several: R, G, B composite)", CHANNELS[c]));
+                }
+            });
+        }
+        let view = self.settings.view;
+        if let Some(m) = self.settings.mapping_mut(view) {
+            ui.horizontal(|ui| {
+                let l = ui.label("Range");
+                let speed = ((m.white - m.black).abs() * 0.005).max(1e-4);
+                let b = ui
+                    .add(DragValue::new(&mut m.black).speed(speed).max_decimals(4))
+                    .labelled_by(l.id)
+                    .on_hover_text("black point");
+                let w = ui
+                    .add(DragValue::new(&mut m.white).speed(speed).max_decimals(4))
+                    .labelled_by(l.id)
+                    .on_hover_text("white point");
+                if b.changed() || w.changed() {
+                    m.auto = false;
+                }
+            });
+            ui.horizontal(|ui| {
+                ui.checkbox(&mut m.auto, "Auto-fit");
+                egui::ComboBox::from_label("Colour map")
+                    .selected_text(m.map.name())
+                    .show_ui(ui, |ui| {
+                        for map in ColorMap::ALL {
+                            ui.selectable_value(&mut m.map, map, map.name());
+                        }
+                    });
+            });
+        }
+    }
+
+    fn overlay_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Overlays");
+        let o = &mut self.settings.overlays;
+        ui.checkbox(&mut o.classes, "Face classes");
+        ui.checkbox(&mut o.umbra_volume, "Umbra volume");
+        ui.checkbox(&mut o.penumbra_volume, "Penumbra volume");
+        ui.checkbox(&mut o.silhouettes, "Silhouette edges");
+        ui.checkbox(&mut o.light_disk, "Light disk");
+    }
+
+    fn selection_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Selection");
+        ui.horizontal_wrapped(|ui| {
+            if ui
+                .selectable_label(self.selection == Selection::Light, "light")
+                .clicked()
+            {
+                self.selection = Selection::Light;
+            }
+            let names: Vec<String> = self
+                .doc
+                .file
+                .objects
+                .iter()
+                .map(|o| o.display_name().to_string())
+                .collect();
+            for (i, name) in names.iter().enumerate() {
+                if ui
+                    .selectable_label(self.selection == Selection::Object(i), name)
+                    .clicked()
+                {
+                    self.selection = Selection::Object(i);
+                }
+            }
+        });
+        match self.selection {
+            Selection::None => {
+                ui.label(RichText::new("click the light or an object in the viewport").small());
+            }
+            Selection::Light => self.light_fields(ui),
+            Selection::Object(i) => self.object_fields(ui, i),
+        }
+        ui.horizontal(|ui| {
+            if ui
+                .add_enabled(self.history.can_undo(), egui::Button::new("Undo"))
+                .clicked()
+            {
+                self.undo();
+            }
+            if ui
+                .add_enabled(self.history.can_redo(), egui::Button::new("Redo"))
+                .clicked()
+            {
+                self.redo();
+            }
+        });
+    }
+
+    fn light_fields(&mut self, ui: &mut egui::Ui) {
+        let mut light = self.doc.file.light.clone();
+        let mut changed = number_row(ui, "Centre", &mut light.center, 0.01);
+        let (mut tilt, mut azimuth) = tilt_azimuth(light.normal);
+        changed |= ui
+            .add(
+                Slider::new(&mut light.radius, 0.01..=5.0)
+                    .text("Radius")
+                    .logarithmic(true),
+            )
+            .changed();
+        changed |= ui
+            .add(Slider::new(&mut light.center[1], -5.0..=20.0).text("Height"))
+            .changed();
+        let t = ui.add(Slider::new(&mut tilt, 0.0..=80.0).text("Tilt °"));
+        let a = ui.add(Slider::new(&mut azimuth, -180.0..=180.0).text("Azimuth °"));
+        if t.changed() || a.changed() {
+            light.normal = normal_from(tilt, azimuth);
+            changed = true;
+        }
+        if changed {
+            self.edit_scene(|e| e.light = light);
+        }
+    }
+
+    fn object_fields(&mut self, ui: &mut egui::Ui, i: usize) {
+        let Some(mut object) = self.doc.file.objects.get(i).cloned() else {
+            self.selection = Selection::None;
+            return;
+        };
+        ui.label(RichText::new(format!("mesh {}", object.mesh)).small());
+        let mut changed = number_row(ui, "Position", &mut object.translate, 0.01);
+        changed |= number_row(ui, "Rotation °", &mut object.rotate_deg, 0.5);
+        let mut uniform = matches!(object.scale, Scale::Uniform(_));
+        let mut xyz = object.scale.xyz();
+        if uniform {
+            let mut s = [xyz[0]];
+            if number_row(ui, "Scale", &mut s, 0.005) {
+                changed = true;
+                xyz = [s[0]; 3];
+            }
+        } else {
+            changed |= number_row(ui, "Scale xyz", &mut xyz, 0.005);
+        }
+        if ui.checkbox(&mut uniform, "Uniform scale").changed() {
+            changed = true;
+        }
+        // A zero factor is refused by the scene file; keep the field off it.
+        for v in &mut xyz {
+            if v.abs() < 1e-4 {
+                *v = 1e-4_f64.copysign(*v);
+            }
+        }
+        object.scale = if uniform {
+            Scale::Uniform(xyz[0])
+        } else {
+            Scale::PerAxis(xyz)
+        };
+        if changed {
+            self.edit_scene(|e| {
+                if let Some(o) = e.objects.get_mut(i) {
+                    *o = object;
+                }
+            });
+        }
+    }
+
+    fn render_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Render");
+        egui::ComboBox::from_label("D-buffer size")
+            .selected_text(format!("{}²", self.settings.dbuffer_size))
+            .show_ui(ui, |ui| {
+                for n in [256, 512, 1024, 2048] {
+                    ui.selectable_value(&mut self.settings.dbuffer_size, n, format!("{n}²"));
+                }
+            });
+        ui.add(
+            Slider::new(&mut self.settings.render_scale, 0.25..=1.0)
+                .text("Resolution")
+                .custom_formatter(|v, _| format!("{:.0} %", v * 100.0)),
+        );
+        let max = crate::render::frame::MAX_REFERENCE_SAMPLES;
+        ui.horizontal(|ui| {
+            let l = ui.label("Reference K");
+            ui.add(DragValue::new(&mut self.settings.reference_samples).range(1..=max))
+                .labelled_by(l.id)
+                .on_hover_text("disk samples per pixel of the reference");
+            let l = ui.label("per frame");
+            ui.add(
+                DragValue::new(&mut self.settings.reference_step)
+                    .range(1..=self.settings.reference_samples.max(1)),
+            )
+            .labelled_by(l.id);
+        });
+    }
+}
+
+/// Controls, for the Help menu and the README.
+pub const CONTROLS: &str = "\
+Left drag: orbit · Middle or right drag: pan · Wheel: zoom · F: frame all
+Click: select the light or an object · Drag the selection: move it on a plane facing the camera
+Shift + drag the selection: move it along the ground · Ctrl+Z / Ctrl+Shift+Z: undo / redo
+Split view: drag the yellow divider";

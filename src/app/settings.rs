@@ -1,0 +1,183 @@
+//! What the lab remembers between runs (eframe persistence): the method, V(t), view, display
+//! mappings, overlays and recent files. The scene itself is not restored: `dbuffer` opens the
+//! default scene, `dbuffer gui SCENE` the one named.
+
+use serde::{Deserialize, Serialize};
+
+use super::views::{Mapping, View};
+use crate::geometry::VtVariant;
+use crate::render::Method;
+
+/// The scene `dbuffer` opens with no arguments.
+pub const DEFAULT_SCENE: &str = "fig7-concave";
+
+/// How many recent files the File menu keeps.
+pub const MAX_RECENT: usize = 8;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Settings {
+    /// Method name (kept as text so a renamed method does not lose the other settings).
+    pub method: String,
+    /// The right-hand method of the split view.
+    pub split_method: String,
+    pub split: bool,
+    /// Where the split divider is, 0..1 of the viewport width.
+    pub split_at: f32,
+    pub vt: String,
+    pub view: View,
+    /// Channel isolation of the D-buffer view: `|cx_o|`, `|cx_uv|`, `|cx_pv|`, `|cx_s|`.
+    pub channels: [bool; 4],
+    pub v_map: Mapping,
+    pub t_map: Mapping,
+    pub error_map: Mapping,
+    pub dbuffer_map: Mapping,
+    pub overlays: Overlays,
+    /// D-buffer (and shadow map) size in texels.
+    pub dbuffer_size: u32,
+    /// Render at this fraction of the viewport's physical pixels (speed on slow adapters).
+    pub render_scale: f32,
+    /// Reference samples per pixel (K) and how many each frame adds.
+    pub reference_samples: u32,
+    pub reference_step: u32,
+    pub recent: Vec<String>,
+}
+
+/// Overlays drawn over the viewport, each toggled on its own.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Overlays {
+    pub classes: bool,
+    pub umbra_volume: bool,
+    pub penumbra_volume: bool,
+    pub silhouettes: bool,
+    pub light_disk: bool,
+}
+
+impl Default for Overlays {
+    fn default() -> Self {
+        Self {
+            classes: false,
+            umbra_volume: false,
+            penumbra_volume: false,
+            silhouettes: false,
+            light_disk: true,
+        }
+    }
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            method: Method::DBuffer.name().into(),
+            split_method: Method::Reference.name().into(),
+            split: false,
+            split_at: 0.5,
+            vt: VtVariant::Smoothstep.name().into(),
+            view: View::Final,
+            channels: [true, false, false, false],
+            v_map: Mapping::unit(),
+            t_map: Mapping::unit(),
+            error_map: Mapping::error(),
+            dbuffer_map: Mapping::auto(),
+            overlays: Overlays::default(),
+            dbuffer_size: 1024,
+            render_scale: 1.0,
+            reference_samples: 256,
+            reference_step: 8,
+            recent: Vec::new(),
+        }
+    }
+}
+
+impl Settings {
+    /// The method, falling back to the D-buffer for a name this build does not know.
+    pub fn method(&self) -> Method {
+        self.method.parse().unwrap_or_default()
+    }
+
+    pub fn split_method(&self) -> Method {
+        self.split_method.parse().unwrap_or(Method::Reference)
+    }
+
+    pub fn vt(&self) -> VtVariant {
+        self.vt.parse().unwrap_or(VtVariant::Smoothstep)
+    }
+
+    /// The display mapping of a scalar view (V, t, error, D-buffer); `None` for the others.
+    pub fn mapping(&self, view: View) -> Option<&Mapping> {
+        match view {
+            View::Visibility => Some(&self.v_map),
+            View::T => Some(&self.t_map),
+            View::Error => Some(&self.error_map),
+            View::DBuffer => Some(&self.dbuffer_map),
+            View::Final | View::Classes => None,
+        }
+    }
+
+    pub fn mapping_mut(&mut self, view: View) -> Option<&mut Mapping> {
+        match view {
+            View::Visibility => Some(&mut self.v_map),
+            View::T => Some(&mut self.t_map),
+            View::Error => Some(&mut self.error_map),
+            View::DBuffer => Some(&mut self.dbuffer_map),
+            View::Final | View::Classes => None,
+        }
+    }
+
+    /// Put `entry` first in the recent files, without duplicates.
+    pub fn push_recent(&mut self, entry: &str) {
+        self.recent.retain(|r| r != entry);
+        self.recent.insert(0, entry.to_string());
+        self.recent.truncate(MAX_RECENT);
+    }
+
+    /// Values a hand-edited or old settings file may have put out of range, brought back in.
+    pub fn sanitize(&mut self) {
+        self.dbuffer_size = self.dbuffer_size.clamp(64, 4096);
+        if !(self.render_scale.is_finite() && (0.1..=2.0).contains(&self.render_scale)) {
+            self.render_scale = 1.0;
+        }
+        if !(self.split_at.is_finite() && (0.0..=1.0).contains(&self.split_at)) {
+            self.split_at = 0.5;
+        }
+        self.reference_samples = self
+            .reference_samples
+            .clamp(1, crate::render::frame::MAX_REFERENCE_SAMPLES);
+        self.reference_step = self.reference_step.clamp(1, self.reference_samples);
+        self.recent.truncate(MAX_RECENT);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn recent_files_are_unique_most_recent_first_and_capped() {
+        let mut s = Settings::default();
+        for i in 0..12 {
+            s.push_recent(&format!("scene{i}.toml"));
+        }
+        s.push_recent("scene5.toml");
+        assert_eq!(s.recent.len(), MAX_RECENT);
+        assert_eq!(s.recent[0], "scene5.toml");
+        assert_eq!(s.recent.iter().filter(|r| *r == "scene5.toml").count(), 1);
+    }
+
+    #[test]
+    fn unknown_names_and_bad_numbers_fall_back() {
+        let mut s = Settings {
+            method: "no-such-method".into(),
+            vt: "cubic".into(),
+            render_scale: f32::NAN,
+            dbuffer_size: 0,
+            ..Settings::default()
+        };
+        s.sanitize();
+        assert_eq!(s.method(), Method::DBuffer);
+        assert_eq!(s.vt(), VtVariant::Smoothstep);
+        assert_eq!(s.render_scale, 1.0);
+        assert_eq!(s.dbuffer_size, 64);
+    }
+}

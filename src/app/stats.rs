@@ -1,0 +1,155 @@
+//! Timings the lab shows: per render, the render core's wall time (with or without a geometry
+//! rebuild) and GPU time per pass from timestamp queries; per window frame, the frame rate.
+
+use std::collections::VecDeque;
+
+use eframe::egui;
+
+/// Samples kept for the plots and medians.
+const KEEP: usize = 240;
+
+#[derive(Clone, Debug, Default)]
+pub struct RenderTiming {
+    pub wall_ms: f64,
+    /// CPU milliseconds of the geometry stage, when this render rebuilt it.
+    pub geometry_ms: Option<f64>,
+    pub gpu_ms: Vec<(String, f64)>,
+}
+
+#[derive(Default)]
+pub struct Stats {
+    /// Window frame intervals, seconds.
+    pub frame_dt: VecDeque<f32>,
+    pub renders: VecDeque<RenderTiming>,
+    pub renders_total: u64,
+    last_frame: Option<f64>,
+}
+
+impl Stats {
+    pub fn ui_frame(&mut self, ctx: &egui::Context) {
+        let now = ctx.input(|i| i.time);
+        if let Some(last) = self.last_frame {
+            let dt = (now - last) as f32;
+            if dt > 0.0 && dt.is_finite() {
+                push(&mut self.frame_dt, dt);
+            }
+        }
+        self.last_frame = Some(now);
+    }
+
+    pub fn render(&mut self, wall_ms: f64, geometry_ms: Option<f64>, gpu_ms: &[(String, f64)]) {
+        self.renders_total += 1;
+        push(
+            &mut self.renders,
+            RenderTiming {
+                wall_ms,
+                geometry_ms,
+                gpu_ms: gpu_ms.to_vec(),
+            },
+        );
+    }
+
+    /// Median render wall time of the renders with (`true`) or without a geometry rebuild.
+    pub fn median_wall_ms(&self, rebuilt: bool) -> Option<f64> {
+        median(
+            self.renders
+                .iter()
+                .filter(|r| r.geometry_ms.is_some() == rebuilt)
+                .map(|r| r.wall_ms)
+                .collect(),
+        )
+    }
+
+    /// Median CPU milliseconds of the geometry stage over the renders that rebuilt it.
+    pub fn median_geometry_ms(&self) -> Option<f64> {
+        median(self.renders.iter().filter_map(|r| r.geometry_ms).collect())
+    }
+
+    /// Median GPU milliseconds per pass over the kept renders, in pass order.
+    pub fn median_gpu_ms(&self) -> Vec<(String, f64)> {
+        let Some(last) = self.renders.back() else {
+            return Vec::new();
+        };
+        last.gpu_ms
+            .iter()
+            .filter_map(|(pass, _)| {
+                let values = self
+                    .renders
+                    .iter()
+                    .flat_map(|r| {
+                        r.gpu_ms
+                            .iter()
+                            .filter(|(p, _)| p == pass)
+                            .map(|(_, ms)| *ms)
+                    })
+                    .collect();
+                median(values).map(|m| (pass.clone(), m))
+            })
+            .collect()
+    }
+
+    /// Window frames per second over the last second of frames.
+    pub fn fps(&self) -> Option<f32> {
+        if *self.frame_dt.back()? > 1.0 {
+            return None; // idle: nothing changed, nothing drawn
+        }
+        let mut total = 0.0;
+        let mut n = 0;
+        for dt in self.frame_dt.iter().rev() {
+            if total >= 1.0 {
+                break;
+            }
+            total += dt;
+            n += 1;
+        }
+        (n > 0 && total > 0.0).then(|| n as f32 / total)
+    }
+}
+
+fn push<T>(q: &mut VecDeque<T>, v: T) {
+    if q.len() == KEEP {
+        q.pop_front();
+    }
+    q.push_back(v);
+}
+
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(v[v.len() / 2])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn medians_split_by_geometry_rebuilds() {
+        let mut s = Stats::default();
+        s.render(10.0, Some(7.0), &[("light_pass".into(), 1.0)]);
+        for ms in [2.0, 3.0, 4.0] {
+            s.render(ms, None, &[("light_pass".into(), ms / 2.0)]);
+        }
+        assert_eq!(s.median_wall_ms(true), Some(10.0));
+        assert_eq!(s.median_geometry_ms(), Some(7.0));
+        assert_eq!(s.median_wall_ms(false), Some(3.0));
+        assert_eq!(s.median_gpu_ms(), vec![("light_pass".to_string(), 1.5)]);
+        assert_eq!(s.renders_total, 4);
+        for _ in 0..KEEP {
+            s.render(1.0, None, &[]);
+        }
+        assert_eq!(s.renders.len(), KEEP);
+    }
+
+    #[test]
+    fn fps_over_the_last_second() {
+        let mut s = Stats::default();
+        for _ in 0..30 {
+            s.frame_dt.push_back(0.02);
+        }
+        let fps = s.fps().unwrap();
+        assert!((fps - 50.0).abs() < 2.0, "{fps}");
+    }
+}

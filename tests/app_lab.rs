@@ -1,0 +1,253 @@
+//! The lab as a user drives it: the whole eframe app on the wgpu (lavapipe) adapter, through its
+//! widgets and the mouse. Snapshot thresholds are in `kittest.toml`.
+
+use dbuffer::app::{LabApp, LabOptions, Level, Selection, View};
+use dbuffer::render::Method;
+use eframe::egui;
+use egui_kittest::kittest::Queryable;
+use egui_kittest::Harness;
+
+fn lab(scene: Option<&str>) -> Harness<'static, LabApp> {
+    let scene = scene.map(str::to_string);
+    Harness::builder()
+        .with_size(egui::vec2(900.0, 640.0))
+        .with_max_steps(24)
+        .with_render_cursor(false)
+        .wgpu()
+        .build_eframe(move |cc| {
+            let mut app = LabApp::new(
+                cc,
+                LabOptions {
+                    scene,
+                    deterministic: true,
+                    ..LabOptions::default()
+                },
+            );
+            // Small and quick on a CPU adapter.
+            app.settings.dbuffer_size = 256;
+            app.settings.render_scale = 0.5;
+            app.settings.reference_samples = 16;
+            app.settings.reference_step = 8;
+            app
+        })
+}
+
+/// V of the shown frame at a pixel.
+fn v_at(h: &Harness<'_, LabApp>, x: u32, y: u32) -> f32 {
+    let f = &h.state().shown().expect("a frame").frame;
+    f.visibility[(y * f.width + x) as usize]
+}
+
+fn click(h: &mut Harness<'_, LabApp>, label: &str) {
+    h.get_by_label(label).click();
+    h.run();
+}
+
+#[test]
+fn starts_on_the_default_scene_with_soft_shadows() {
+    let mut h = lab(None);
+    h.run();
+    let app = h.state();
+    assert_eq!(app.scene_name(), dbuffer::app::DEFAULT_SCENE);
+    assert_ne!(app.status().1, Level::Error, "{}", app.status().0);
+    let f = &app.shown().expect("the first frame is shown").frame;
+    let rect = app.viewport_rect().expect("a viewport");
+    // Rendered at the resolution setting (half the viewport's pixels).
+    assert_eq!(f.width, (rect.width() * 0.5).round() as u32);
+    let lit: Vec<f32> = (0..f.visibility.len())
+        .filter(|&i| f.position[i][3] > 0.5)
+        .map(|i| f.visibility[i])
+        .collect();
+    let dark = lit.iter().filter(|v| **v < 0.05).count();
+    let bright = lit.iter().filter(|v| **v > 0.95).count();
+    let soft = lit.iter().filter(|v| (0.1..0.9).contains(*v)).count();
+    assert!(
+        dark > 50 && bright > 50 && soft > 20,
+        "umbra {dark}, lit {bright}, penumbra {soft}"
+    );
+}
+
+#[test]
+fn every_method_and_variant_switches_and_shows_at_once() {
+    let mut h = lab(None);
+    h.run();
+    for m in Method::ALL {
+        click(&mut h, m.name());
+        let app = h.state();
+        assert_eq!(app.settings.method(), m);
+        let shown = app.shown().expect("a frame").method;
+        assert_eq!(shown, m, "status: {:?}", app.status());
+        assert_ne!(app.status().1, Level::Error, "{m}: {:?}", app.status());
+    }
+    click(&mut h, Method::DBuffer.name());
+    let mut images = Vec::new();
+    for vt in dbuffer::geometry::VtVariant::ALL {
+        click(&mut h, vt.name());
+        assert_eq!(h.state().settings.vt(), vt);
+        images.push(h.state().shown().expect("frame").frame.visibility.clone());
+    }
+    // smoothstep, sqrt, exact and linear give four different V images.
+    for i in 0..images.len() {
+        for j in i + 1..images.len() {
+            assert_ne!(images[i], images[j], "variants {i} and {j} look the same");
+        }
+    }
+}
+
+#[test]
+fn every_view_and_overlay_changes_the_viewport() {
+    let mut h = lab(None);
+    h.run();
+    let mut shots = Vec::new();
+    for (label, view) in [
+        ("final", View::Final),
+        ("V", View::Visibility),
+        ("t", View::T),
+        ("classes", View::Classes),
+        ("error", View::Error),
+        ("|cx_o|", View::DBuffer),
+        ("|cx_uv|", View::DBuffer),
+        ("|cx_pv|", View::DBuffer),
+        ("|cx_s|", View::DBuffer),
+    ] {
+        click(&mut h, label);
+        assert_eq!(h.state().settings.view, view, "{label}");
+        shots.push((label, h.render().expect("render")));
+    }
+    for i in 0..shots.len() {
+        for j in i + 1..shots.len() {
+            assert!(
+                shots[i].1 != shots[j].1,
+                "views {} and {} look the same",
+                shots[i].0,
+                shots[j].0
+            );
+        }
+    }
+    click(&mut h, "final");
+    let before = h.render().expect("render");
+    for label in [
+        "Face classes",
+        "Umbra volume",
+        "Penumbra volume",
+        "Silhouette edges",
+    ] {
+        click(&mut h, label);
+        let on = h.render().expect("render");
+        assert!(on != before, "{label} drew nothing");
+        click(&mut h, label);
+    }
+    let o = h.state().settings.overlays;
+    assert!(!o.classes && !o.umbra_volume && !o.penumbra_volume && !o.silhouettes);
+    click(&mut h, "Light disk");
+    assert!(!h.state().settings.overlays.light_disk);
+}
+
+#[test]
+fn split_view_shows_two_methods() {
+    let mut h = lab(None);
+    h.run();
+    click(&mut h, "Split view");
+    let app = h.state();
+    assert!(app.settings.split);
+    let left = app.shown().expect("left").method;
+    let right = app.shown_split().expect("right").method;
+    assert_eq!((left, right), (Method::DBuffer, Method::Reference));
+    // The reference on the right has converged (K = 16, 8 per frame) and differs from the method.
+    assert_ne!(
+        app.shown().expect("left").frame.visibility,
+        app.shown_split().expect("right").frame.visibility
+    );
+    h.run();
+    assert!(h.state().settings.split, "still split after more frames");
+}
+
+#[test]
+fn snapshots() {
+    let mut h = lab(Some("table1-224"));
+    h.run();
+    h.snapshot("app-table1-224");
+    click(&mut h, "classes");
+    click(&mut h, "Umbra volume");
+    click(&mut h, "Penumbra volume");
+    h.snapshot("app-classes-volumes");
+    click(&mut h, "|cx_pv|");
+    h.snapshot("app-dbuffer-pv");
+}
+
+#[test]
+fn dragging_the_light_moves_the_shadow() {
+    let mut h = lab(None);
+    h.run();
+    click(&mut h, "V");
+    click(&mut h, "light");
+    assert_eq!(h.state().selection, Selection::Light);
+    h.key_press(egui::Key::F);
+    h.run();
+    let start = h.state().scene().expect("scene").light.center;
+    let at = h
+        .state()
+        .light_screen_pos()
+        .expect("the light is in view after F");
+    let rect = h.state().viewport_rect().expect("viewport");
+    assert!(rect.contains(at), "{at:?} outside {rect:?}");
+    // The darkest pixel (deepest umbra) before the move.
+    let f = &h.state().shown().expect("frame").frame;
+    let (x, y) = (0..f.visibility.len())
+        .filter(|&i| f.position[i][3] > 0.5)
+        .min_by(|&a, &b| f.visibility[a].total_cmp(&f.visibility[b]))
+        .map(|i| (i as u32 % f.width, i as u32 / f.width))
+        .expect("a surface");
+    let before = v_at(&h, x, y);
+    assert!(before < 0.05, "{before}");
+
+    h.drag_at(at);
+    h.step();
+    for k in 1..=6 {
+        h.hover_at(at + egui::vec2(25.0 * k as f32, 0.0));
+        h.step();
+    }
+    h.drop_at(at + egui::vec2(150.0, 0.0));
+    h.run();
+    let moved = h.state().scene().expect("scene").light.center;
+    assert!((moved - start).length() > 0.5, "light {start} → {moved}");
+    let after = v_at(&h, x, y);
+    assert!(after > before + 0.5, "V at ({x}, {y}): {before} → {after}");
+
+    // One drag, one undo step.
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run();
+    assert_eq!(h.state().scene().expect("scene").light.center, start);
+    assert!((v_at(&h, x, y) - before).abs() < 1e-6);
+}
+
+#[test]
+fn a_malformed_scene_is_reported_and_the_scene_kept() {
+    let dir = std::env::temp_dir().join(format!("dbuffer-app-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let bad = dir.join("broken.toml");
+    std::fs::write(
+        &bad,
+        "[camera]\neye = [0, 3, 6]\ntarget = [0, 0, 0]\nfov_y_deg = 45\n[light]\ncenter = [0, 4, 0]\nnormal = [0, -1, 0]\nradius = 0\n",
+    )
+    .expect("write");
+    let mut h = lab(None);
+    h.run();
+    let frames = h.state().frames_rendered();
+    h.get_by_label("Scene path").focus();
+    h.get_by_label("Scene path")
+        .type_text(&bad.display().to_string());
+    h.run();
+    click(&mut h, "Open path");
+    let app = h.state();
+    let (text, level) = app.status();
+    assert_eq!(level, Level::Error);
+    assert!(
+        text.contains("broken.toml") && text.contains("light.radius"),
+        "{text}"
+    );
+    assert_eq!(app.scene_name(), dbuffer::app::DEFAULT_SCENE);
+    assert!(app.shown().is_some());
+    assert!(app.frames_rendered() >= frames);
+    let _ = std::fs::remove_dir_all(&dir);
+}
