@@ -7,8 +7,10 @@
 //! - [`render`]: the wgpu render core (light pass, camera pass), headless or in the lab;
 //! - [`output`]: writing one render's files (PNG, EXR, JSON), all or nothing.
 //! - [`shader_source`]: WGSL sources from `shaders/` with their `// #include` lines expanded.
+//! - [`bench`]: `dbuffer bench` (Table 1, the competition, coherence, geometry scaling).
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod bench;
 pub mod fsutil;
 pub mod geometry;
 pub mod output;

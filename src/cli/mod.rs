@@ -14,6 +14,8 @@ use dbuffer::scene;
 use glam::Vec3;
 use rayon::prelude::*;
 
+pub mod bench;
+
 pub fn scenes() -> Result<()> {
     for name in scene::builtin::names() {
         println!("{name}");
