@@ -11,6 +11,7 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod bench;
+pub mod compare;
 pub mod fsutil;
 pub mod geometry;
 pub mod output;

@@ -30,7 +30,7 @@ enum Command {
         /// Image size, WxH.
         #[arg(long, default_value = "512x512")]
         size: String,
-        /// dbuffer (the method) or hard (a shadow map from the light centre).
+        /// dbuffer, dbuffer-center, hard, pcf, pcss, sampled or reference.
         #[arg(long, default_value = "dbuffer")]
         method: String,
         /// V(t): smoothstep, sqrt, exact or linear.
@@ -39,19 +39,31 @@ enum Command {
         /// The D-buffer is N×N texels.
         #[arg(long, default_value_t = 1024)]
         dbuffer_size: u32,
+        #[command(flatten)]
+        knobs: cli::MethodFlags,
         /// Print the adapter and the timings.
         #[arg(short, long)]
         verbose: bool,
     },
-    /// Render every method and the ray-traced reference, and report their errors.
+    /// Render every method and the ray-traced reference, and report their errors: each
+    /// method's image, visibility EXR and error heatmap, report.md and report.json.
     Compare {
+        /// A built-in scene name, a .toml scene file or an .obj mesh.
         scene: String,
+        /// Folder for the images and reports (created if missing).
         #[arg(long)]
         out: std::path::PathBuf,
+        /// Image size, WxH.
         #[arg(long, default_value = "512x512")]
         size: String,
+        /// V(t) of the D-buffer methods: smoothstep, sqrt, exact or linear.
+        #[arg(long, default_value = "exact")]
+        vt: String,
+        /// The D-buffer and the shadow maps are N×N texels.
         #[arg(long, default_value_t = 1024)]
-        samples: usize,
+        dbuffer_size: u32,
+        #[command(flatten)]
+        knobs: cli::MethodFlags,
     },
     /// Time every method on seed 000's Table 1 scenes, and the geometry from 1k to 1M triangles;
     /// print markdown tables and write bench.json, bench.md and geometry-scaling.png.
@@ -118,6 +130,7 @@ fn main() -> ExitCode {
             method,
             vt,
             dbuffer_size,
+            knobs,
             verbose,
         }) => cli::render(&cli::RenderArgs {
             scene: &scene,
@@ -126,9 +139,24 @@ fn main() -> ExitCode {
             method: &method,
             vt: &vt,
             dbuffer_size,
+            knobs: &knobs,
             verbose,
         }),
-        Some(Command::Compare { .. }) => cli::not_yet("compare", 4),
+        Some(Command::Compare {
+            scene,
+            out,
+            size,
+            vt,
+            dbuffer_size,
+            knobs,
+        }) => cli::compare(&cli::CompareArgs {
+            scene: &scene,
+            out: &out,
+            size: &size,
+            vt: &vt,
+            dbuffer_size,
+            knobs: &knobs,
+        }),
         Some(Command::Bench {
             quick,
             out,

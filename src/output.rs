@@ -537,14 +537,14 @@ fn encode(name: &str, target: &Path, out: &RenderOutputs) -> Result<Vec<u8>, Out
 }
 
 /// A PNG of 8-bit RGB `bytes` (`3·w·h` of them, checked by `validate`).
-fn png_rgb8(w: u32, h: u32, bytes: &[u8]) -> image::ImageResult<Vec<u8>> {
+pub fn png_rgb8(w: u32, h: u32, bytes: &[u8]) -> image::ImageResult<Vec<u8>> {
     let mut png = Vec::new();
     PngEncoder::new(&mut png).write_image(bytes, w, h, ExtendedColorType::Rgb8)?;
     Ok(png)
 }
 
 /// An uncompressed RGBA f32 EXR of `w·h` pixels (the count is checked by `validate`).
-fn exr_rgba32f(
+pub fn exr_rgba32f(
     w: u32,
     h: u32,
     pixels: impl Iterator<Item = [f32; 4]>,

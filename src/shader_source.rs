@@ -161,6 +161,14 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/fullscreen.wgsl"),
     ),
     (
+        "sample_maps.wgsl",
+        include_str!("../shaders/sample_maps.wgsl"),
+    ),
+    (
+        "shared/sample_lights.wgsl",
+        include_str!("../shaders/shared/sample_lights.wgsl"),
+    ),
+    (
         "shared/surface.wgsl",
         include_str!("../shaders/shared/surface.wgsl"),
     ),

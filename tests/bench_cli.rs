@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-use dbuffer::bench::Report;
+use dbuffer::bench::{FrameSource, Report};
 use dbuffer::render::Method;
 
 fn dbuffer() -> Command {
@@ -88,7 +88,16 @@ fn tiny_bench_writes_json_markdown_and_plot() {
         "one geometry build per rebuilt frame"
     );
     assert_eq!(report.targets.len(), 3);
-    assert!(report.reference_rays_per_s.is_none_or(|r| r > 0.0));
+    let reference = report
+        .timing("table1-224", 32, Method::Reference)
+        .expect("the reference renders");
+    assert_eq!(
+        reference.frame_source,
+        FrameSource::FencedWall,
+        "its rays are CPU work"
+    );
+    assert!(reference.rays_ms.is_some());
+    assert!(report.reference_rays_per_s.is_some_and(|r| r > 0.0));
 
     let md = std::fs::read_to_string(dir.join("bench.md")).expect("bench.md written");
     for column in [

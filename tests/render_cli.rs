@@ -24,6 +24,66 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 #[test]
+fn compare_writes_the_report_and_prints_the_table() {
+    let dir = temp_dir("compare");
+    let out = dbuffer()
+        .args([
+            "compare",
+            "table1-224",
+            "--size",
+            "48x40",
+            "--samples",
+            "16",
+            "--lights",
+            "4",
+        ])
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("the binary runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for method in dbuffer::render::Method::ALL {
+        assert!(
+            stdout.contains(&format!("| {method} |")),
+            "{method} row: {stdout}"
+        );
+        assert!(dir.join(format!("{method}.png")).is_file());
+        assert!(dir.join(format!("{method}-visibility.exr")).is_file());
+    }
+    assert!(dir.join("pcss-error.png").is_file());
+    assert!(dir.join("report.md").is_file() && dir.join("report.json").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn every_method_renders_from_the_command_line() {
+    for method in dbuffer::render::Method::ALL {
+        let dir = temp_dir(&format!("method-{method}"));
+        let out = dbuffer()
+            .args(["render", "table1-224", "--size", "40x32", "--samples", "8"])
+            .args(["--method", method.name(), "--out"])
+            .arg(&dir)
+            .output()
+            .expect("the binary runs");
+        assert!(
+            out.status.success(),
+            "{method}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let meta: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("meta.json")).expect("meta.json"))
+                .expect("json");
+        assert_eq!(meta["method"], method.name());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+#[test]
 fn render_writes_every_output() {
     let dir = temp_dir("ok");
     let out = dbuffer()
@@ -124,6 +184,31 @@ fn bad_input_is_refused_with_a_reason() {
         &dir,
         "--dbuffer-size",
     );
+    // The knobs of the comparison methods, on both commands that take them.
+    for command in ["render", "compare"] {
+        for (flag, value) in [
+            ("--pcf-radius", "9"),
+            ("--blocker-taps", "0"),
+            ("--filter-taps", "65"),
+            ("--lights", "0"),
+            ("--lights", "65"),
+            ("--samples", "0"),
+        ] {
+            fails_with(&[command, "fig7-concave", flag, value], &dir, flag);
+        }
+        fails_with(
+            &[command, "fig7-concave", "--lights", "many"],
+            &dir,
+            "--lights",
+        );
+    }
+    fails_with(
+        &["compare", "fig7-concave", "--size", "0x0"],
+        &dir,
+        "--size",
+    );
+    fails_with(&["compare", "fig7-concave", "--vt", "cubic"], &dir, "cubic");
+    fails_with(&["compare", "no-such-scene"], &dir, "no-such-scene");
     let bad_scene = std::env::temp_dir().join(format!("dbuffer-bad-{}.toml", std::process::id()));
     let text = "[camera]\neye = [0, 3, 6]\ntarget = [0, 0, 0]\nfov_y_deg = 45\n\n\
                 [light]\ncenter = [0, 4, 0]\nnormal = [0, -1, 0]\nradius = 0\n\n\

@@ -4,7 +4,10 @@
 #[path = "support/wgsl_layout.rs"]
 mod wgsl_layout;
 
-use dbuffer::render::{CameraUniforms, LightUniforms, SurfaceVertex, VolumeVertex};
+use dbuffer::render::{
+    CameraUniforms, LightUniforms, MethodUniforms, SampleLight, SampleLights, SurfaceVertex,
+    VolumeVertex,
+};
 use dbuffer::shader_source;
 
 fn source(name: &str) -> String {
@@ -36,6 +39,20 @@ fn uniforms_match_their_wgsl() {
         bias,
         mode
     );
+    assert_wgsl_layout!(
+        MethodUniforms,
+        &camera,
+        "MethodUniforms",
+        params,
+        pcss,
+        inv_light_view_proj,
+        poisson
+    );
+    // The sampled method's lights, read by its own pass and by the camera pass.
+    for shader in [camera.as_str(), &source("sample_maps.wgsl")] {
+        assert_wgsl_layout!(SampleLight, shader, "SampleLight", view_proj, point);
+        assert_wgsl_layout!(SampleLights, shader, "SampleLights", lights);
+    }
 }
 
 /// Vertex inputs are not laid out by WGSL; the attribute offsets in Rust must match the Rust

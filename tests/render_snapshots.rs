@@ -49,3 +49,29 @@ fn hard_method_matches_its_snapshot() {
     let rgba: Vec<u8> = frame.color.iter().flatten().copied().collect();
     snapshot::check_snapshot("render-hard-fig8c-complex", 128, 128, &rgba);
 }
+
+/// One snapshot per method (fig7-concave, 96×96, D-buffer 512², default knobs; the reference
+/// with K = 64 so the test stays quick).
+#[test]
+fn every_method_matches_its_snapshot() {
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let scene = scene::load("fig7-concave").unwrap_or_else(|e| panic!("{e}"));
+    for method in Method::ALL {
+        let request = FrameRequest {
+            width: 96,
+            height: 96,
+            dbuffer_size: 512,
+            method,
+            params: dbuffer::render::MethodParams {
+                reference_samples: 64,
+                ..Default::default()
+            },
+            ..FrameRequest::default()
+        };
+        let (frame, _) = offline
+            .render("fig7-concave", &scene, &request)
+            .unwrap_or_else(|e| panic!("{method}: {e}"));
+        let rgba: Vec<u8> = frame.color.iter().flatten().copied().collect();
+        snapshot::check_snapshot(&format!("method-{method}-fig7-concave"), 96, 96, &rgba);
+    }
+}

@@ -274,6 +274,10 @@ pub struct Timing {
     pub wall_ms: Stat,
     /// Pixels of the image that hit a surface.
     pub hit_pixels: usize,
+    /// The reference only: one more sample per pixel without rendering a frame
+    /// (`Session::advance_reference`), i.e. the ray casting alone.
+    #[serde(default)]
+    pub rays_ms: Option<Stat>,
 }
 
 impl Timing {
@@ -327,8 +331,11 @@ pub struct Coherence {
     pub rebuilt_wall_ms: Stat,
     pub cached_gpu_ms: Option<Stat>,
     pub rebuilt_gpu_ms: Option<Stat>,
-    /// Geometry builds during the rebuilt frames (one per frame when it worked).
+    /// The geometry stage inside the rebuilt frames (`Session::geometry_ms`).
+    pub rebuilt_geometry_ms: Option<Stat>,
+    /// Geometry builds during the timed rebuilt frames (one per frame when it worked).
     pub rebuilds: u64,
+    /// Timed frames of each kind (cached and rebuilt alternate).
     pub frames: usize,
 }
 
@@ -626,6 +633,16 @@ fn time_case(
         }
         hit_pixels = frame.position.iter().filter(|p| p[3] > 0.5).count();
     }
+    let mut rays = Vec::new();
+    if case.cpu_side() {
+        for _ in 0..config.frames {
+            let t = Instant::now();
+            if session.advance_reference(ctx, &req).is_err() {
+                break;
+            }
+            rays.push(ms_since(t));
+        }
+    }
     let wall_ms = Stat::of(&wall).unwrap_or_default();
     let gpu_total_ms = Stat::of(&totals);
     let (frame_ms, frame_source) = match gpu_total_ms {
@@ -652,53 +669,57 @@ fn time_case(
         gpu_total_ms,
         wall_ms,
         hit_pixels,
+        rays_ms: Stat::of(&rays),
     });
     run
 }
 
-/// The D-buffer's steady frame with the geometry cached, then with the light nudged every frame
-/// (what a dragged light does), so the session rebuilds the geometry each time.
+/// The D-buffer's steady frame with the geometry cached, then with the geometry invalidated before
+/// every frame (`Session::invalidate_geometry`: what a light dragged every frame costs).
 fn coherence(ctx: &GpuContext, scene: &Scene, config: &Config, size: u32) -> Coherence {
     let mut session = Session::new(ctx, scene.clone());
     let req = request(config, size, &Case::for_method(Method::DBuffer));
     let frames = config.frames.max(3);
-    let measure = |session: &mut Session, nudge: bool| {
-        let (mut wall, mut gpu) = (Vec::new(), Vec::new());
-        let light = session.scene().light;
-        for i in 0..config.warmup + frames {
-            if nudge {
-                // A tenth of a millimetre back and forth: the volumes change, the picture not.
-                let dx = if i % 2 == 0 { 1e-4 } else { -1e-4 };
-                session.set_light(DiskLight {
-                    center: light.center + Vec3::new(dx, 0.0, 0.0),
-                    ..light
-                });
-            }
-            let t = Instant::now();
-            let Ok(frame) = session.frame(ctx, &req) else {
-                continue;
-            };
-            if i >= config.warmup {
-                wall.push(ms_since(t));
-                if let Some(g) = gpu_total(&frame) {
-                    gpu.push(g);
-                }
-            }
+    // Cached and rebuilt frames alternate, so both see the same machine (a shared CPU adapter
+    // drifts more over a run than the geometry stage costs).
+    let (mut cached_wall, mut cached_gpu) = (Vec::new(), Vec::new());
+    let (mut rebuilt_wall, mut rebuilt_gpu, mut geometry) = (Vec::new(), Vec::new(), Vec::new());
+    let mut rebuilds = 0;
+    for i in 0..2 * (config.warmup + frames) {
+        let rebuild = i % 2 == 1;
+        let before = session.geometry_builds();
+        if rebuild {
+            session.invalidate_geometry();
         }
-        (wall, gpu)
-    };
-    let (cached_wall, cached_gpu) = measure(&mut session, false);
-    let before = session.geometry_builds();
-    let (rebuilt_wall, rebuilt_gpu) = measure(&mut session, true);
-    let rebuilds = session.geometry_builds() - before;
+        let t = Instant::now();
+        let Ok(frame) = session.frame(ctx, &req) else {
+            continue;
+        };
+        let ms = ms_since(t);
+        let built = session.geometry_builds() - before;
+        if i < 2 * config.warmup {
+            continue;
+        }
+        let gpu = gpu_total(&frame);
+        if rebuild {
+            rebuilds += built;
+            rebuilt_wall.push(ms);
+            rebuilt_gpu.extend(gpu);
+            geometry.push(session.geometry_ms());
+        } else {
+            cached_wall.push(ms);
+            cached_gpu.extend(gpu);
+        }
+    }
     Coherence {
         scene: scene.name.clone(),
         size,
-        rebuild_by: "light moved by 0.1 mm before every frame (Session::set_light)".into(),
+        rebuild_by: "Session::invalidate_geometry() before every frame".into(),
         cached_wall_ms: Stat::of(&cached_wall).unwrap_or_default(),
         rebuilt_wall_ms: Stat::of(&rebuilt_wall).unwrap_or_default(),
         cached_gpu_ms: Stat::of(&cached_gpu),
         rebuilt_gpu_ms: Stat::of(&rebuilt_gpu),
+        rebuilt_geometry_ms: Stat::of(&geometry),
         rebuilds,
         frames,
     }
@@ -754,14 +775,16 @@ fn scaling_point(triangles: u32, runs: usize) -> ScalingPoint {
     }
 }
 
-/// Rays per second of the reference frames: one ray per hit pixel per frame, over the frame's
-/// whole wall time (so a lower bound), the best over the runs.
+/// Shadow rays per second of the reference: one ray per hit pixel per 1-spp step of
+/// `Session::advance_reference` (surfaces facing away from the light may cast none, so this is a
+/// lower bound), the best over the runs.
 fn reference_throughput(runs: &[Run]) -> Option<f64> {
     runs.iter()
         .filter(|r| r.method == Method::Reference.name())
         .filter_map(|r| r.timing.as_ref())
-        .filter(|t| t.wall_ms.median > 0.0 && t.hit_pixels > 0)
-        .map(|t| t.hit_pixels as f64 / (t.wall_ms.median * 1e-3))
+        .filter_map(|t| Some((t.hit_pixels, t.rays_ms?.median)))
+        .filter(|&(px, ms)| ms > 0.0 && px > 0)
+        .map(|(px, ms)| px as f64 / (ms * 1e-3))
         .max_by(f64::total_cmp)
 }
 

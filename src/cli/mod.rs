@@ -9,12 +9,85 @@ use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
 use dbuffer::output;
 use dbuffer::render::offline::Offline;
-use dbuffer::render::{FrameRequest, Method};
+use dbuffer::render::{FrameRequest, Method, MethodParams};
 use dbuffer::scene;
 use glam::Vec3;
 use rayon::prelude::*;
 
 pub mod bench;
+mod compare;
+pub use compare::{compare, CompareArgs};
+
+/// The knobs of the comparison methods, as flags of `render` and `compare`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct MethodFlags {
+    /// pcf: kernel radius in shadow-map texels ((2R+1)² taps), 0 to 8.
+    #[arg(long, default_value_t = MethodParams::default().pcf_radius)]
+    pub pcf_radius: u32,
+    /// pcss: blocker-search taps (rotated Poisson disk), 1 to 64.
+    #[arg(long, default_value_t = MethodParams::default().pcss_blocker_taps)]
+    pub blocker_taps: u32,
+    /// pcss: filter taps (rotated Poisson disk), 1 to 64.
+    #[arg(long, default_value_t = MethodParams::default().pcss_filter_taps)]
+    pub filter_taps: u32,
+    /// sampled: shadow maps from this many stratified points on the disk, 1 to 64.
+    #[arg(long, default_value_t = MethodParams::default().sampled_lights)]
+    pub lights: u32,
+    /// reference: rays to this many stratified disk samples per pixel (K).
+    #[arg(long, default_value_t = MethodParams::default().reference_samples)]
+    pub samples: u32,
+}
+
+impl MethodFlags {
+    /// The knobs, each checked against its range (the message names the flag).
+    pub fn params(&self) -> Result<MethodParams> {
+        let checks = [
+            (
+                "--pcf-radius",
+                self.pcf_radius,
+                0,
+                dbuffer::render::frame::MAX_PCF_RADIUS,
+            ),
+            (
+                "--blocker-taps",
+                self.blocker_taps,
+                1,
+                dbuffer::render::frame::MAX_TAPS,
+            ),
+            (
+                "--filter-taps",
+                self.filter_taps,
+                1,
+                dbuffer::render::frame::MAX_TAPS,
+            ),
+            (
+                "--lights",
+                self.lights,
+                1,
+                dbuffer::render::frame::MAX_SAMPLED_LIGHTS,
+            ),
+            (
+                "--samples",
+                self.samples,
+                1,
+                dbuffer::render::frame::MAX_REFERENCE_SAMPLES,
+            ),
+        ];
+        for (flag, value, lo, hi) in checks {
+            if !(lo..=hi).contains(&value) {
+                bail!("{flag} expects {lo} to {hi}, found {value}");
+            }
+        }
+        Ok(MethodParams {
+            pcf_radius: self.pcf_radius,
+            pcss_blocker_taps: self.blocker_taps,
+            pcss_filter_taps: self.filter_taps,
+            sampled_lights: self.lights,
+            reference_samples: self.samples,
+            ..MethodParams::default()
+        })
+    }
+}
 
 pub fn scenes() -> Result<()> {
     for name in scene::builtin::names() {
@@ -31,6 +104,7 @@ pub struct RenderArgs<'a> {
     pub method: &'a str,
     pub vt: &'a str,
     pub dbuffer_size: u32,
+    pub knobs: &'a MethodFlags,
     pub verbose: bool,
 }
 
@@ -38,12 +112,8 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let (width, height) = parse_size(args.size)?;
     let method: Method = args.method.parse().map_err(anyhow::Error::msg)?;
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
-    if !(1..=8192).contains(&args.dbuffer_size) {
-        bail!(
-            "--dbuffer-size expects a texel count from 1 to 8192, found {}",
-            args.dbuffer_size
-        );
-    }
+    check_dbuffer_size(args.dbuffer_size)?;
+    let params = args.knobs.params()?;
     let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
     let mut offline = Offline::new()?;
@@ -56,8 +126,12 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         dbuffer_size: args.dbuffer_size,
         method,
         vt,
+        params,
         ..FrameRequest::default()
     };
+    if method == Method::Reference {
+        offline.progress = Some(progress_line("reference"));
+    }
     let (_, outputs) = offline.render(&scene.name, &scene, &request)?;
     for w in &outputs.meta.warnings {
         eprintln!("warning   {w}");
@@ -77,6 +151,27 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+fn check_dbuffer_size(size: u32) -> Result<()> {
+    if !(1..=8192).contains(&size) {
+        bail!("--dbuffer-size expects a texel count from 1 to 8192, found {size}");
+    }
+    Ok(())
+}
+
+/// A progress callback that rewrites one stderr line: "what: done/total samples".
+fn progress_line(what: &'static str) -> Box<dyn FnMut(usize, usize)> {
+    let start = Instant::now();
+    Box::new(move |done, total| {
+        eprint!(
+            "\r{what}: {done}/{total} samples per pixel ({:.1} s)",
+            start.elapsed().as_secs_f64()
+        );
+        if done >= total {
+            eprintln!();
+        }
+    })
 }
 
 pub fn not_yet(what: &str, issue: u32) -> Result<()> {

@@ -13,6 +13,7 @@ pub mod hull;
 pub mod light_view;
 pub mod metrics;
 pub mod oracle;
+pub mod progressive;
 pub mod ray;
 pub mod silhouette;
 pub mod twin;

@@ -127,17 +127,24 @@ impl Oracle {
 
     /// `V(x)` in `[0, 1]`: the fraction of the light's samples visible from `x`.
     pub fn visibility(&self, x: Vec3) -> f32 {
+        self.count_visible(x, &self.samples) as f32 / self.samples.len() as f32
+    }
+
+    /// How many of `samples` (points on the light) `x` sees; 0 for a point behind the light, a
+    /// non-finite point or a non-finite light. The progressive reference calls it with slices of
+    /// the sample set.
+    pub fn count_visible(&self, x: Vec3, samples: &[Vec3]) -> u32 {
         // Finite `x` with a finite light gives a finite height; NaN fails the comparison.
         let h = self.light.height_of(x);
         if !self.light_ok || !x.is_finite() || h.is_nan() || h <= 0.0 {
-            return 0.0;
+            return 0;
         }
         let (t0, t1) = (SELF_EPS, 1.0 - SELF_EPS);
         let mut visible = 0u32;
         // Shadow cache: neighbouring samples are mostly blocked by the same triangle, so the
         // last occluder is tried before the BVH. Only genuine hits count: V does not change.
         let mut last: Option<u32> = None;
-        for &s in &self.samples {
+        for &s in samples {
             let d = s - x;
             if last.is_some_and(|i| self.bvh.hits_triangle_tolerant(i, x, d, t0, t1)) {
                 continue;
@@ -147,9 +154,8 @@ impl Oracle {
                 None => visible += 1,
             }
         }
-        self.rays
-            .fetch_add(self.samples.len() as u64, Ordering::Relaxed);
-        visible as f32 / self.samples.len() as f32
+        self.rays.fetch_add(samples.len() as u64, Ordering::Relaxed);
+        visible
     }
 
     /// [`Oracle::visibility`] for many points, in parallel on all cores; same order as `xs`.

@@ -171,6 +171,10 @@ pub struct VolumeParams {
     pub far: f32,
     /// Largest angle of the disk arc one fan triangle covers, in degrees.
     pub fan_step_deg: f32,
+    /// Classify faces against the light centre alone (a point light), then extrude those
+    /// silhouettes over the whole disk: the penumbra-wedge approximation seed 000 Fig. 1
+    /// criticises (method `dbuffer-center`). Off, faces are classified against the disk.
+    pub center_silhouettes: bool,
 }
 
 impl Default for VolumeParams {
@@ -178,6 +182,7 @@ impl Default for VolumeParams {
         Self {
             far: 1000.0,
             fan_step_deg: 11.25,
+            center_silhouettes: false,
         }
     }
 }
@@ -256,7 +261,17 @@ pub struct CasterGeometry {
 
 /// Classify, find silhouettes and build both volumes of one caster.
 pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams) -> CasterGeometry {
-    let classes = classify(mesh, light);
+    let classes = if params.center_silhouettes {
+        classify(
+            mesh,
+            &DiskLight {
+                radius: 0.0,
+                ..*light
+            },
+        )
+    } else {
+        classify(mesh, light)
+    };
     let silhouettes = find_silhouettes(mesh, &classes);
     let c = light.center;
     let mut volumes = VolumeMesh::default();

@@ -7,12 +7,13 @@ use std::str::FromStr;
 
 use glam::Mat4;
 
-use super::camera_pass::CameraPass;
+use super::camera_pass::{poisson_disk, CameraPass};
 use super::context::GpuContext;
 use super::gpu_scene::GpuScene;
 use super::light_pass::LightPass;
 use super::readback;
-use super::{CameraUniforms, LightUniforms, RenderError};
+use super::sample_maps::{sample_lights, SampleMaps};
+use super::{CameraUniforms, LightUniforms, MethodUniforms, RenderError};
 use crate::geometry::light_view::LightView;
 use crate::geometry::VtVariant;
 use crate::scene::Scene;
@@ -178,8 +179,9 @@ pub struct FrameRequest {
     pub method: Method,
     pub vt: VtVariant,
     pub params: MethodParams,
-    /// Read the light-view maps back into [`Frame`] (`distance`, `umbra`, `penumbra`); off, they
-    /// are left empty and the frame costs less.
+    /// Render the whole D-buffer (volumes included, whatever the method) and read it back into
+    /// [`Frame`] (`distance`, `umbra`, `penumbra`). Off, each method runs only the passes it needs
+    /// (as the benchmark times them) and those fields are left empty.
     pub read_dbuffer: bool,
 }
 
@@ -234,6 +236,8 @@ pub const AMBIENT: f32 = 0.1;
 pub struct FrameRenderer {
     light: LightPass,
     camera: CameraPass,
+    sample_maps: SampleMaps,
+    poisson: [[f32; 4]; 32],
     timer: Option<Timer>,
 }
 
@@ -242,7 +246,8 @@ struct Timer {
     resolve: wgpu::Buffer,
 }
 
-const QUERIES: u32 = 4;
+/// Begin and end of the light pass, the camera pass and the `sampled` maps.
+const QUERIES: u32 = 6;
 
 impl FrameRenderer {
     pub fn new(ctx: &GpuContext) -> FrameRenderer {
@@ -260,14 +265,22 @@ impl FrameRenderer {
                 mapped_at_creation: false,
             }),
         });
+        let mut poisson = [[0.0; 4]; 32];
+        for (i, p) in poisson_disk(64).iter().enumerate() {
+            poisson[i / 2][2 * (i % 2)] = p.x;
+            poisson[i / 2][2 * (i % 2) + 1] = p.y;
+        }
         FrameRenderer {
             light: LightPass::new(device),
             camera: CameraPass::new(device),
+            sample_maps: SampleMaps::new(device),
+            poisson,
             timer,
         }
     }
 
-    /// Render `scene` (whose volumes `gpu` holds) and read everything back.
+    /// Render `scene` (whose volumes `gpu` holds) and read everything back. The reference needs
+    /// its V: see [`FrameRenderer::render_with`].
     pub fn render(
         &mut self,
         ctx: &GpuContext,
@@ -275,6 +288,20 @@ impl FrameRenderer {
         gpu: &GpuScene,
         light_view: &LightView,
         request: &FrameRequest,
+    ) -> Result<Frame, RenderError> {
+        self.render_with(ctx, scene, gpu, light_view, request, None)
+    }
+
+    /// [`FrameRenderer::render`], with V per pixel given (row-major, `width`×`height`) for
+    /// [`Method::Reference`], which is shaded like every other method.
+    pub fn render_with(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu: &GpuScene,
+        light_view: &LightView,
+        request: &FrameRequest,
+        external: Option<&[f32]>,
     ) -> Result<Frame, RenderError> {
         let (device, queue) = (&ctx.device, &ctx.queue);
         let max = device.limits().max_texture_dimension_2d;
@@ -288,21 +315,52 @@ impl FrameRenderer {
             }
         }
         request.params.validate().map_err(RenderError::Request)?;
-        let mode = match request.method {
+        let method = request.method;
+        let mode = match method {
             Method::DBuffer | Method::DBufferCenter => 0,
             Method::Hard => 1,
-            other => {
-                return Err(RenderError::Request(format!(
-                    "the {other} method is not available yet"
-                )))
-            }
+            Method::Pcf => 2,
+            Method::Pcss => 3,
+            Method::Sampled => 4,
+            Method::Reference => 5,
         };
+        let pixels = request.width as usize * request.height as usize;
+        if method == Method::Reference && external.is_none_or(|v| v.len() != pixels) {
+            return Err(RenderError::Request(format!(
+                "the reference needs V for each of the {pixels} pixels"
+            )));
+        }
+        // Which passes this method needs: the light view (with volumes for the D-buffer), the
+        // point-light maps of `sampled`. A request that reads the D-buffer back gets all of it.
+        let light_pass =
+            request.read_dbuffer || !matches!(method, Method::Sampled | Method::Reference);
+        let volumes =
+            request.read_dbuffer || matches!(method, Method::DBuffer | Method::DBufferCenter);
+        let sampled = method == Method::Sampled;
+
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let new_dbuffer = self.light.resize(device, request.dbuffer_size);
-        self.camera.resize(device, request.width, request.height);
+        let new_camera = self.camera.resize(device, request.width, request.height);
         if let Some(dbuffer) = self.light.targets() {
             if new_dbuffer || !self.camera.is_bound() {
                 self.camera.bind_dbuffer(device, dbuffer);
+            }
+        }
+        // The maps of `sampled` exist at least as one 1×1 layer, so the camera pass can bind them.
+        let new_maps = if sampled {
+            self.sample_maps
+                .resize(device, request.dbuffer_size, request.params.sampled_lights)
+        } else if self.sample_maps.targets().is_none() {
+            self.sample_maps.resize(device, 1, 1)
+        } else {
+            false
+        };
+        if new_camera || new_maps || !self.camera.methods_bound() {
+            self.camera.bind_methods(device, &self.sample_maps);
+        }
+        if let Some(v) = external {
+            if method == Method::Reference {
+                self.camera.set_external_visibility(queue, v);
             }
         }
         let (Some(dbuffer), Some(targets)) = (self.light.targets(), self.camera.targets()) else {
@@ -324,6 +382,33 @@ impl FrameRenderer {
         let (near, far) = camera_range(scene.camera.eye, gpu.bounds);
         let camera_vp = scene.camera.projection(aspect, near, far) * scene.camera.view();
         let slope = texel_slope(&light_view.projection, request.dbuffer_size);
+        if sampled {
+            self.sample_maps.prepare(
+                queue,
+                &sample_lights(&light, light_view, request.params.sampled_lights),
+            );
+        }
+        let p = &request.params;
+        let methods = MethodUniforms {
+            params: [
+                p.pcf_radius as f32,
+                p.pcss_blocker_taps as f32,
+                p.pcss_filter_taps as f32,
+                p.sampled_lights as f32,
+            ],
+            pcss: [
+                if method == Method::Pcss {
+                    nearest_caster(scene)
+                } else {
+                    0.0
+                },
+                0.0,
+                0.0,
+                0.0,
+            ],
+            inv_light_view_proj: light_vp.inverse().to_cols_array_2d(),
+            poisson: self.poisson,
+        };
         self.camera.prepare(
             queue,
             &CameraUniforms {
@@ -350,14 +435,25 @@ impl FrameRenderer {
                     0,
                 ],
             },
+            &methods,
         );
 
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("FrameRenderer::encoder"),
         });
         let timer = self.timer.as_ref();
-        self.light
-            .record(&mut encoder, gpu, timer.map(|t| (&t.queries, 0, 1)));
+        if light_pass {
+            self.light.record(
+                &mut encoder,
+                gpu,
+                timer.map(|t| (&t.queries, 0, 1)),
+                volumes,
+            );
+        }
+        if sampled {
+            self.sample_maps
+                .record(&mut encoder, gpu, timer.map(|t| (&t.queries, 4, 5)));
+        }
         self.camera
             .record(&mut encoder, gpu, timer.map(|t| (&t.queries, 2, 3)));
         let stamps = timer.map(|t| {
@@ -374,7 +470,7 @@ impl FrameRenderer {
         let color = readback::copy(device, &mut encoder, &targets.color, 4);
         let data = readback::copy(device, &mut encoder, &targets.data, 8);
         let position = readback::copy(device, &mut encoder, &targets.position, 16);
-        let maps = request.read_dbuffer.then(|| {
+        let maps = (request.read_dbuffer && light_pass).then(|| {
             [
                 readback::copy(device, &mut encoder, &dbuffer.distance.texture, 4),
                 readback::copy(device, &mut encoder, &dbuffer.umbra.texture, 8),
@@ -407,7 +503,12 @@ impl FrameRenderer {
                 .collect();
             let period_ms = f64::from(queue.get_timestamp_period()) * 1e-6;
             let ms = |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * period_ms;
-            gpu_ms.push(("light_pass".to_string(), ms(0, 1)));
+            if light_pass {
+                gpu_ms.push(("light_pass".to_string(), ms(0, 1)));
+            }
+            if sampled {
+                gpu_ms.push(("sample_maps".to_string(), ms(4, 5)));
+            }
             gpu_ms.push(("camera_pass".to_string(), ms(2, 3)));
         }
         let data = data.read_f32(device)?;
@@ -470,6 +571,20 @@ fn camera_range(eye: glam::Vec3, (lo, hi): (glam::Vec3, glam::Vec3)) -> (f32, f3
     }
     let far = far * 1.5;
     (far * 1e-4, far)
+}
+
+/// The distance from the light centre to the nearest caster vertex in front of the light: where
+/// PCSS's blocker search stops.
+fn nearest_caster(scene: &Scene) -> f32 {
+    let light = scene.light;
+    scene
+        .casters()
+        .flat_map(|o| o.mesh.positions.iter())
+        .filter(|v| light.height_of(**v) > 0.0)
+        .map(|v| (*v - light.center).length())
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .fold(f32::MAX, f32::min)
+        .min(1e30)
 }
 
 /// The slope one D-buffer texel spans (the larger of its two axes).

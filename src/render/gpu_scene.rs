@@ -36,9 +36,14 @@ impl VertexBuffer {
 
     /// Draw all vertices, if any.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        self.draw_instances(pass, 0..1);
+    }
+
+    /// Draw all vertices for each of `instances` (a shader may read its `instance_index`).
+    pub fn draw_instances(&self, pass: &mut wgpu::RenderPass<'_>, instances: std::ops::Range<u32>) {
         if let Some(b) = &self.buffer {
             pass.set_vertex_buffer(0, b.slice(..));
-            pass.draw(0..self.count, 0..1);
+            pass.draw(0..self.count, instances);
         }
     }
 }

@@ -7,6 +7,7 @@
 
 use super::gpu_scene::GpuScene;
 use super::shader;
+use super::{opaque, texture_entry, uniform_entry};
 use super::{LightUniforms, SurfaceVertex, VolumeVertex};
 
 pub const DISTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
@@ -91,29 +92,11 @@ impl LightPass {
         });
         let uniforms_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("LightPass::uniforms_layout"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
+            entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
         });
         let merge_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("LightPass::merge_layout"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            }],
+            entries: &[texture_entry(0, wgpu::TextureViewDimension::D2)],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("LightPass::layout"),
@@ -151,11 +134,7 @@ impl LightPass {
                     module: &module,
                     entry_point: Some(fs),
                     compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
+                    targets: &[opaque(format)],
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -273,12 +252,15 @@ impl LightPass {
     }
 
     /// Record every draw of the light pass. `timestamps`: a query set and the indices to write at
-    /// the start of the first and the end of the last render pass.
+    /// the start of the first and the end of the last render pass. Without `volumes` only
+    /// `|cx_o|` is drawn (the shadow map of `hard`, `pcf` and `pcss`); the volume targets are
+    /// cleared to "no crossing".
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
         timestamps: Option<(&wgpu::QuerySet, u32, u32)>,
+        volumes: bool,
     ) {
         let Some(t) = &self.targets else {
             return;
@@ -352,7 +334,8 @@ impl LightPass {
                 multiview_mask: None,
             });
         }
-        for caster in &scene.casters {
+        let casters = if volumes { &scene.casters[..] } else { &[] };
+        for caster in casters {
             // This caster's nearest umbra exit...
             {
                 let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -396,9 +379,11 @@ impl LightPass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.penumbra_pipeline);
-            pass.set_bind_group(0, &self.bind_group, &[]);
-            scene.penumbra.draw(&mut pass);
+            if volumes {
+                pass.set_pipeline(&self.penumbra_pipeline);
+                pass.set_bind_group(0, &self.bind_group, &[]);
+                scene.penumbra.draw(&mut pass);
+            }
         }
     }
 }

@@ -9,6 +9,8 @@ pub mod gpu_scene;
 pub mod light_pass;
 pub mod offline;
 mod readback;
+pub mod reference;
+pub mod sample_maps;
 pub mod session;
 
 pub use context::GpuContext;
@@ -19,6 +21,89 @@ pub use frame::{Frame, FrameRenderer, FrameRequest, Method, MethodParams};
 /// it still yields WGSL (an empty module) rather than a panic, and pipeline creation then reports it.
 pub(crate) fn shader(name: &str) -> String {
     crate::shader_source::load(name).unwrap_or_else(|e| format!("// {e}\n"))
+}
+
+/// A uniform-buffer entry of a bind group layout.
+pub(crate) fn uniform_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A fragment-stage entry for a float texture read with `textureLoad` (not filterable: the
+/// 32-bit float targets are not).
+pub(crate) fn texture_entry(
+    binding: u32,
+    view_dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// A colour target written as is (no blending).
+pub(crate) fn opaque(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
+/// A pipeline that draws the scene's surfaces ([`SurfaceVertex`]) with `vs_main`/`fs_main` of
+/// `module`, two-sided, nearest depth (Depth32Float) wins.
+pub(crate) fn surface_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[Some(SurfaceVertex::layout())],
+        },
+        // Surfaces are two-sided (open meshes, the ground seen from below).
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: wgpu::StencilState::default(),
+            bias: wgpu::DepthBiasState::default(),
+        }),
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
 }
 
 /// What can go wrong on the GPU side. Never a panic: a message for the user.
@@ -164,6 +249,37 @@ pub struct CameraUniforms {
     pub mode: [u32; 4],
 }
 
+/// `MethodUniforms` of `shaders/camera_pass.wgsl`: the knobs of the comparison methods.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MethodUniforms {
+    /// PCF radius (texels), PCSS blocker taps, PCSS filter taps, sampled lights.
+    pub params: [f32; 4],
+    /// x: the nearest caster's distance from the light centre (PCSS blocker search).
+    pub pcss: [f32; 4],
+    /// Light-view clip space back to world (receiver-plane depth of filter taps).
+    pub inv_light_view_proj: [[f32; 4]; 4],
+    /// 64 Poisson-disk points in the unit disk, two per entry (xy, zw); every prefix is spread.
+    pub poisson: [[f32; 4]; 32],
+}
+
+/// One point light of the `sampled` method (`shaders/shared/sample_lights.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SampleLight {
+    pub view_proj: [[f32; 4]; 4],
+    pub point: [f32; 4],
+}
+
+/// Every point light of the `sampled` method.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SampleLights {
+    pub lights: [SampleLight; 64],
+}
+
+const _: () = assert!(std::mem::size_of::<MethodUniforms>() == 608);
+const _: () = assert!(std::mem::size_of::<SampleLights>() == 64 * 80);
 const _: () = assert!(std::mem::size_of::<SurfaceVertex>() == 32);
 const _: () = assert!(std::mem::size_of::<VolumeVertex>() == 80);
 const _: () = assert!(std::mem::size_of::<LightUniforms>() == 112);

@@ -3,9 +3,10 @@
 
 use std::time::Instant;
 
-use super::frame::{Frame, FrameRenderer, FrameRequest};
+use super::frame::{Frame, FrameRenderer, FrameRequest, Method};
 use super::gpu_scene::GpuScene;
 use super::light_pass::NO_SURFACE;
+use super::reference;
 use super::{GpuContext, RenderError};
 use crate::geometry::light_view::LightView;
 use crate::geometry::metrics::ShadowClass;
@@ -17,13 +18,19 @@ use crate::scene::Scene;
 pub struct Offline {
     pub ctx: GpuContext,
     renderer: FrameRenderer,
+    /// Called with (samples done, samples total) while the reference accumulates.
+    pub progress: Option<Box<dyn FnMut(usize, usize)>>,
 }
 
 impl Offline {
     pub fn new() -> Result<Offline, RenderError> {
         let ctx = GpuContext::headless()?;
         let renderer = FrameRenderer::new(&ctx);
-        Ok(Offline { ctx, renderer })
+        Ok(Offline {
+            ctx,
+            renderer,
+            progress: None,
+        })
     }
 
     /// Render `scene` (called `name` in meta.json) as `request` says.
@@ -37,16 +44,50 @@ impl Offline {
         let prepared = PreparedCasters::new(scene);
         let prepare_ms = ms(t0);
         let t1 = Instant::now();
-        let geometry = prepared.build(&scene.light, &VolumeParams::for_scene(scene));
+        let params = VolumeParams {
+            center_silhouettes: request.method.center_silhouettes(),
+            ..VolumeParams::for_scene(scene)
+        };
+        let geometry = prepared.build(&scene.light, &params);
         let volumes_ms = ms(t1);
         let t2 = Instant::now();
         let view = LightView::fit(scene);
         let gpu = GpuScene::new(&self.ctx.device, scene, &geometry);
         let upload_ms = ms(t2);
+        let mut reference_ms = Vec::new();
         let t3 = Instant::now();
-        let frame = self
-            .renderer
-            .render(&self.ctx, scene, &gpu, &view, request)?;
+        let frame = if request.method == Method::Reference {
+            let positions = self.renderer.render(
+                &self.ctx,
+                scene,
+                &gpu,
+                &view,
+                &reference::positions_request(request),
+            )?;
+            let t = Instant::now();
+            let mut r = reference::start(scene, &positions, request.params.reference_samples);
+            let total = r.samples_total();
+            // Steps of about a second's work on this machine's CPU, for the progress line.
+            let step = (total / 16).max(1);
+            while r.step(step) > 0 {
+                if let Some(progress) = &mut self.progress {
+                    progress(r.samples_done(), total);
+                }
+            }
+            let rays_ms = ms(t);
+            reference_ms.push(("reference_rays".to_string(), rays_ms));
+            self.renderer.render_with(
+                &self.ctx,
+                scene,
+                &gpu,
+                &view,
+                request,
+                Some(r.visibility()),
+            )?
+        } else {
+            self.renderer
+                .render(&self.ctx, scene, &gpu, &view, request)?
+        };
         let frame_ms = ms(t3);
 
         let mut warnings = geometry.warnings.clone();
@@ -111,12 +152,15 @@ impl Offline {
                 dbuffer_size: frame.dbuffer_size,
                 adapter: self.ctx.adapter.name.clone(),
                 backend: format!("{:?}", self.ctx.adapter.backend),
-                cpu_ms: vec![
+                cpu_ms: [
                     ("geometry_prepare".into(), prepare_ms),
                     ("geometry_volumes".into(), volumes_ms),
                     ("upload".into(), upload_ms),
                     ("frame_and_readback".into(), frame_ms),
-                ],
+                ]
+                .into_iter()
+                .chain(reference_ms)
+                .collect(),
                 gpu_ms: frame.gpu_ms.clone(),
                 triangles: scene.objects.iter().map(|o| o.mesh.triangles.len()).sum(),
                 caster_triangles: scene.caster_triangle_count(),

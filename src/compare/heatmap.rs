@@ -1,0 +1,193 @@
+//! The error heatmap: `|V − V_ref|` per pixel through a perceptual colour map, with a legend bar
+//! and its tick labels drawn by a tiny built-in bitmap font (so no font file is needed).
+
+use image::{Rgb, RgbImage};
+
+/// The error at which the colour map saturates; larger errors share its colour.
+pub const FULL_SCALE: f32 = 0.5;
+/// Pixels that do not count (no surface, or turned away from the light).
+pub const MASKED_RGB: [u8; 3] = [28, 30, 38];
+
+/// A perceptual dark-to-bright colour map (inferno-like, piecewise linear through 6 stops), for
+/// `x` in [0, 1].
+pub fn colormap(x: f32) -> [u8; 3] {
+    const STOPS: [[f32; 3]; 6] = [
+        [0.0, 0.0, 4.0],
+        [40.0, 11.0, 84.0],
+        [101.0, 21.0, 110.0],
+        [188.0, 55.0, 84.0],
+        [249.0, 142.0, 9.0],
+        [252.0, 255.0, 164.0],
+    ];
+    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+    let f = x * (STOPS.len() - 1) as f32;
+    let i = (f.floor() as usize).min(STOPS.len() - 2);
+    let t = f - i as f32;
+    let mut out = [0u8; 3];
+    for (k, o) in out.iter_mut().enumerate() {
+        *o = (STOPS[i][k] + (STOPS[i + 1][k] - STOPS[i][k]) * t).round() as u8;
+    }
+    out
+}
+
+/// The colour of an error `|ΔV|`.
+pub fn error_rgb(err: f32) -> [u8; 3] {
+    colormap(err / FULL_SCALE)
+}
+
+const LEGEND_HEIGHT: u32 = 34;
+
+/// The heatmap of `|method − reference|` over `width`×`height`, with a legend strip below it.
+pub fn render(
+    reference: &[f32],
+    method: &[f32],
+    mask: &[bool],
+    width: u32,
+    height: u32,
+) -> RgbImage {
+    let mut img = RgbImage::from_pixel(width, height + LEGEND_HEIGHT, Rgb([255, 255, 255]));
+    for (i, ((r, m), on)) in reference.iter().zip(method).zip(mask).enumerate() {
+        let (x, y) = (i as u32 % width, i as u32 / width);
+        if y >= height {
+            break;
+        }
+        let rgb = if *on {
+            error_rgb((m - r).abs())
+        } else {
+            MASKED_RGB
+        };
+        img.put_pixel(x, y, Rgb(rgb));
+    }
+    draw_legend(&mut img, height, width);
+    img
+}
+
+/// A colour bar over most of the width, ticks at 0, 0.1 … 0.5 with labels, and "|dV|".
+fn draw_legend(img: &mut RgbImage, top: u32, width: u32) {
+    let scale = if width >= 256 { 2 } else { 1 };
+    let label = "|dV|";
+    let label_w = text_width(label, scale) + 4 * scale;
+    let margin = 4 * scale;
+    let x0 = label_w + margin;
+    let x1 = width.saturating_sub(margin + 3 * 4 * scale);
+    if x1 <= x0 + 10 {
+        return; // too narrow for a legend
+    }
+    draw_text(img, label, 2, top + 4, scale, [0, 0, 0]);
+    let bar_h = 6 * scale;
+    for x in x0..=x1 {
+        let f = (x - x0) as f32 / (x1 - x0) as f32;
+        for y in top + 4..top + 4 + bar_h {
+            img.put_pixel(x, y, Rgb(colormap(f)));
+        }
+    }
+    let ticks = 5;
+    for k in 0..=ticks {
+        let f = k as f32 / ticks as f32;
+        let x = x0 + ((x1 - x0) as f32 * f).round() as u32;
+        for y in top + 4 + bar_h..top + 7 + bar_h {
+            img.put_pixel(x, y, Rgb([0, 0, 0]));
+        }
+        let text = if k == ticks {
+            format!("{:.1}+", f * FULL_SCALE)
+        } else {
+            format!("{:.1}", f * FULL_SCALE)
+        };
+        let tw = text_width(&text, 1);
+        let tx = x.saturating_sub(tw / 2).min(width.saturating_sub(tw));
+        draw_text(img, &text, tx, top + 8 + bar_h, 1, [0, 0, 0]);
+    }
+}
+
+/// 3×5 glyphs, one `u16` per glyph, rows top to bottom, 3 bits a row (MSB left).
+fn glyph(c: char) -> Option<u16> {
+    Some(match c {
+        '0' => 0b111_101_101_101_111,
+        '1' => 0b010_110_010_010_111,
+        '2' => 0b111_001_111_100_111,
+        '3' => 0b111_001_111_001_111,
+        '4' => 0b101_101_111_001_001,
+        '5' => 0b111_100_111_001_111,
+        '6' => 0b111_100_111_101_111,
+        '7' => 0b111_001_010_010_010,
+        '8' => 0b111_101_111_101_111,
+        '9' => 0b111_101_111_001_111,
+        '.' => 0b000_000_000_000_010,
+        '+' => 0b000_010_111_010_000,
+        '|' => 0b010_010_010_010_010,
+        'd' => 0b001_001_111_101_111,
+        'V' => 0b101_101_101_101_010,
+        ' ' => 0,
+        _ => return None,
+    })
+}
+
+fn text_width(text: &str, scale: u32) -> u32 {
+    text.chars().count() as u32 * 4 * scale
+}
+
+/// Draw `text` with its top-left at (x, y); unknown characters are skipped.
+fn draw_text(img: &mut RgbImage, text: &str, x: u32, y: u32, scale: u32, rgb: [u8; 3]) {
+    for (i, c) in text.chars().enumerate() {
+        let Some(bits) = glyph(c) else { continue };
+        let gx = x + i as u32 * 4 * scale;
+        for row in 0..5u32 {
+            for col in 0..3u32 {
+                if bits >> (14 - (row * 3 + col)) & 1 == 1 {
+                    for sy in 0..scale {
+                        for sx in 0..scale {
+                            let (px, py) = (gx + col * scale + sx, y + row * scale + sy);
+                            if px < img.width() && py < img.height() {
+                                img.put_pixel(px, py, Rgb(rgb));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_colormap_runs_dark_to_bright() {
+        let luma =
+            |c: [u8; 3]| 0.3 * f32::from(c[0]) + 0.59 * f32::from(c[1]) + 0.11 * f32::from(c[2]);
+        let mut last = -1.0;
+        for k in 0..=20 {
+            let l = luma(colormap(k as f32 / 20.0));
+            assert!(l > last, "not monotonic at {k}");
+            last = l;
+        }
+        assert_eq!(error_rgb(2.0), colormap(1.0));
+        assert_eq!(colormap(f32::NAN), colormap(0.0));
+    }
+
+    #[test]
+    fn heatmap_pixels_and_legend() {
+        let (w, h) = (300, 20);
+        let n = (w * h) as usize;
+        let reference = vec![0.5; n];
+        let method: Vec<f32> = (0..n).map(|i| if i % 2 == 0 { 0.5 } else { 0.0 }).collect();
+        let mut mask = vec![true; n];
+        mask[3] = false;
+        let img = render(&reference, &method, &mask, w, h);
+        assert_eq!(img.dimensions(), (w, h + LEGEND_HEIGHT));
+        assert_eq!(img.get_pixel(0, 0).0, colormap(0.0));
+        assert_eq!(img.get_pixel(1, 0).0, colormap(1.0));
+        assert_eq!(img.get_pixel(3, 0).0, MASKED_RGB);
+        // The legend holds the bar's colours and black label pixels.
+        let legend: Vec<[u8; 3]> = (0..w)
+            .flat_map(|x| (h..h + LEGEND_HEIGHT).map(move |y| (x, y)))
+            .map(|(x, y)| img.get_pixel(x, y).0)
+            .collect();
+        assert!(legend.contains(&[0, 0, 0]));
+        assert!(legend.iter().any(|c| *c == colormap(1.0)));
+        for c in "0123456789.+|dV ".chars() {
+            assert!(glyph(c).is_some(), "{c}");
+        }
+    }
+}

@@ -1,0 +1,159 @@
+//! `dbuffer compare`: every method and the ray-cast reference from the same view, measured
+//! against it (design.md §4) — the numbers and pictures that show where the D-buffer is right and
+//! where the alternatives are not.
+//!
+//! Which pixels count: those where the GPU hit a surface that faces the light (the CPU's view of
+//! the same pixels decides "faces the light", as in the accuracy tests).
+
+pub mod heatmap;
+pub mod report;
+
+use std::time::Instant;
+
+use crate::geometry::bvh::Bvh;
+use crate::geometry::metrics::{self, Metrics};
+use crate::geometry::{view, VtVariant};
+use crate::render::offline::Offline;
+use crate::render::{Frame, FrameRequest, Method, MethodParams, RenderError};
+use crate::scene::Scene;
+
+/// What to compare.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CompareRequest {
+    pub width: u32,
+    pub height: u32,
+    pub dbuffer_size: u32,
+    /// The V(t) variant of the D-buffer methods.
+    pub vt: VtVariant,
+    /// The knobs of every method; `reference_samples` is the reference's K.
+    pub params: MethodParams,
+}
+
+/// One method measured against the reference.
+#[derive(Debug)]
+pub struct MethodResult {
+    pub method: Method,
+    pub frame: Frame,
+    pub metrics: Metrics,
+    /// GPU milliseconds of the method's own passes (timestamp queries), if the adapter has them.
+    pub gpu_ms: Option<f64>,
+    /// CPU milliseconds of the method's own per-frame work: the geometry stage for the D-buffer
+    /// methods, the ray casting for the reference, nothing for the shadow-map methods.
+    pub cpu_ms: f64,
+    /// Wall milliseconds of the measured frame (readback included).
+    pub wall_ms: f64,
+}
+
+/// Every method against the reference.
+#[derive(Debug)]
+pub struct Comparison {
+    pub scene: String,
+    pub adapter: String,
+    pub request: CompareRequest,
+    /// The pixels that count.
+    pub mask: Vec<bool>,
+    /// The reference first, then every other method in [`Method::ALL`] order.
+    pub results: Vec<MethodResult>,
+    /// Reference shadow rays per second (all cores).
+    pub reference_rays_per_s: f64,
+}
+
+impl Comparison {
+    pub fn reference(&self) -> &MethodResult {
+        &self.results[0]
+    }
+}
+
+/// Render the reference and every method; `progress` hears what is being done.
+pub fn run(
+    offline: &mut Offline,
+    name: &str,
+    scene: &Scene,
+    request: &CompareRequest,
+    mut progress: impl FnMut(&str),
+) -> Result<Comparison, RenderError> {
+    request.params.validate().map_err(RenderError::Request)?;
+    let frame_request = |method| FrameRequest {
+        width: request.width,
+        height: request.height,
+        dbuffer_size: request.dbuffer_size,
+        method,
+        vt: request.vt,
+        params: request.params,
+        read_dbuffer: false,
+    };
+    let k = request.params.reference_samples;
+    progress(&format!(
+        "reference: {} rays per pixel over {}x{}",
+        k, request.width, request.height
+    ));
+    let (reference, ref_out) = offline.render(name, scene, &frame_request(Method::Reference))?;
+    let rays_ms = cpu(&ref_out.meta.cpu_ms, "reference_rays");
+    let hit_pixels = reference.position.iter().filter(|p| p[3] > 0.5).count();
+    let reference_rays_per_s = hit_pixels as f64 * f64::from(k) / (rays_ms.max(1e-9) * 1e-3);
+
+    let receivers = view::receivers(
+        scene,
+        &Bvh::build(scene.all_triangles()),
+        request.width,
+        request.height,
+    );
+    let mask: Vec<bool> = receivers
+        .iter()
+        .zip(&reference.position)
+        .map(|(r, p)| p[3] > 0.5 && r.is_some_and(|r| r.faces_light))
+        .collect();
+
+    let mut results = vec![MethodResult {
+        method: Method::Reference,
+        metrics: metrics::compare(&reference.visibility, &reference.visibility, &mask),
+        gpu_ms: gpu_total(&reference),
+        cpu_ms: rays_ms,
+        wall_ms: cpu(&ref_out.meta.cpu_ms, "frame_and_readback"),
+        frame: reference,
+    }];
+    for method in Method::ALL {
+        if method == Method::Reference {
+            continue;
+        }
+        progress(&format!("{method}: {}", method.description()));
+        let req = frame_request(method);
+        // The first frame of a pipeline includes shader compilation on some drivers: time the
+        // second.
+        offline.render(name, scene, &req)?;
+        let t = Instant::now();
+        let (frame, out) = offline.render(name, scene, &req)?;
+        let wall_ms = t.elapsed().as_secs_f64() * 1e3;
+        let cpu_ms = if matches!(method, Method::DBuffer | Method::DBufferCenter) {
+            cpu(&out.meta.cpu_ms, "geometry_volumes")
+        } else {
+            0.0
+        };
+        results.push(MethodResult {
+            method,
+            metrics: metrics::compare(&results[0].frame.visibility, &frame.visibility, &mask),
+            gpu_ms: gpu_total(&frame),
+            cpu_ms,
+            wall_ms,
+            frame,
+        });
+    }
+    Ok(Comparison {
+        scene: name.to_string(),
+        adapter: offline.ctx.adapter_description(),
+        request: *request,
+        mask,
+        results,
+        reference_rays_per_s,
+    })
+}
+
+fn cpu(list: &[(String, f64)], stage: &str) -> f64 {
+    list.iter()
+        .find(|(s, _)| s == stage)
+        .map_or(0.0, |(_, ms)| *ms)
+}
+
+fn gpu_total(frame: &Frame) -> Option<f64> {
+    (!frame.gpu_ms.is_empty()).then(|| frame.gpu_ms.iter().map(|(_, ms)| ms).sum())
+}

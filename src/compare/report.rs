@@ -1,0 +1,194 @@
+//! The files of `dbuffer compare`: per method its image, its visibility EXR and its error
+//! heatmap, then `report.md` and `report.json` with the metrics and timings (the same table is
+//! printed to stdout).
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::{heatmap, Comparison, MethodResult};
+use crate::fsutil::write_atomic;
+use crate::output;
+use crate::render::Method;
+
+pub const REPORT_MD: &str = "report.md";
+pub const REPORT_JSON: &str = "report.json";
+
+/// `report.json`.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Report {
+    pub scene: String,
+    pub adapter: String,
+    pub width: u32,
+    pub height: u32,
+    pub dbuffer_size: u32,
+    pub vt: String,
+    /// The reference's disk samples per pixel (K).
+    pub samples: u32,
+    pub reference_rays_per_s: f64,
+    /// Pixels that count (a surface facing the light).
+    pub pixels: usize,
+    pub methods: Vec<MethodRow>,
+}
+
+/// One method's row of the report.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct MethodRow {
+    pub method: String,
+    pub class_mismatch_pct: f64,
+    pub mae: f64,
+    pub penumbra_mae: f64,
+    pub p99: f64,
+    /// Pixels the reference calls penumbra.
+    pub penumbra_pixels: usize,
+    /// GPU ms of the method's passes (timestamp queries); null without them.
+    pub gpu_ms: Option<f64>,
+    /// CPU ms of the method's per-frame work (geometry, or ray casting for the reference).
+    pub cpu_ms: f64,
+    pub wall_ms: f64,
+    pub image: String,
+    pub visibility: String,
+    /// Null for the reference itself.
+    pub heatmap: Option<String>,
+}
+
+fn files(method: Method) -> (String, String, Option<String>) {
+    let n = method.name();
+    (
+        format!("{n}.png"),
+        format!("{n}-visibility.exr"),
+        (method != Method::Reference).then(|| format!("{n}-error.png")),
+    )
+}
+
+impl Report {
+    pub fn new(c: &Comparison) -> Report {
+        Report {
+            scene: c.scene.clone(),
+            adapter: c.adapter.clone(),
+            width: c.request.width,
+            height: c.request.height,
+            dbuffer_size: c.request.dbuffer_size,
+            vt: c.request.vt.name().to_string(),
+            samples: c.request.params.reference_samples,
+            reference_rays_per_s: c.reference_rays_per_s,
+            pixels: c.mask.iter().filter(|&&m| m).count(),
+            methods: c.results.iter().map(row).collect(),
+        }
+    }
+
+    /// The markdown report: a header naming the setup, then the table.
+    pub fn markdown(&self) -> String {
+        let mut s = format!(
+            "# `{}`: every method against the ray-cast reference\n\n\
+             {}×{} pixels ({} facing the light), reference K = {} disk samples per pixel \
+             ({:.1} M rays/s), D-buffer {}², V(t) {}. Adapter: {}.\n\n",
+            self.scene,
+            self.width,
+            self.height,
+            self.pixels,
+            self.samples,
+            self.reference_rays_per_s / 1e6,
+            self.dbuffer_size,
+            self.vt,
+            self.adapter
+        );
+        s.push_str(&self.table());
+        s.push_str(
+            "\nClass mismatch: pixels whose class (lit V ≥ 0.996, umbra V ≤ 0.004, penumbra \
+             otherwise) differs from the reference's. MAE and p99 of |V − V_ref| over the pixels \
+             that count; penumbra MAE over the reference's penumbra. GPU ms: the method's own \
+             passes; CPU ms: its per-frame CPU work (geometry for the D-buffer methods, ray \
+             casting for the reference).\n",
+        );
+        s
+    }
+
+    /// The table alone (also printed to stdout).
+    pub fn table(&self) -> String {
+        let mut s = String::from(
+            "| method | class mismatch % | MAE | penumbra MAE | p99 \\|ΔV\\| | GPU ms | CPU ms | heatmap |\n\
+             |---|---:|---:|---:|---:|---:|---:|---|\n",
+        );
+        for m in &self.methods {
+            let gpu = m.gpu_ms.map_or("n/a".to_string(), |g| format!("{g:.2}"));
+            let heat = m
+                .heatmap
+                .as_ref()
+                .map_or("—".to_string(), |h| format!("[{h}]({h})"));
+            s.push_str(&format!(
+                "| {} | {:.2} | {:.4} | {:.4} | {:.3} | {} | {:.2} | {} |\n",
+                m.method, m.class_mismatch_pct, m.mae, m.penumbra_mae, m.p99, gpu, m.cpu_ms, heat
+            ));
+        }
+        s
+    }
+}
+
+fn row(r: &MethodResult) -> MethodRow {
+    let (image, visibility, heatmap) = files(r.method);
+    MethodRow {
+        method: r.method.name().to_string(),
+        class_mismatch_pct: r.metrics.class_mismatch_pct,
+        mae: r.metrics.mae,
+        penumbra_mae: r.metrics.penumbra_mae,
+        p99: r.metrics.p99,
+        penumbra_pixels: r.metrics.penumbra_pixels,
+        gpu_ms: r.gpu_ms,
+        cpu_ms: r.cpu_ms,
+        wall_ms: r.wall_ms,
+        image,
+        visibility,
+        heatmap,
+    }
+}
+
+/// Write every file into `dir` (created if missing), each atomically; returns their paths.
+pub fn write(dir: &Path, c: &Comparison) -> io::Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir)?;
+    let report = Report::new(c);
+    let (w, h) = (c.request.width, c.request.height);
+    let reference = &c.reference().frame.visibility;
+    let mut written = Vec::new();
+    let mut put = |name: &str, bytes: Vec<u8>| -> io::Result<()> {
+        let path = dir.join(name);
+        write_atomic(&path, &bytes)?;
+        written.push(path);
+        Ok(())
+    };
+    let encode = |e: image::ImageError| io::Error::other(e.to_string());
+    for r in &c.results {
+        let (image, visibility, heat) = files(r.method);
+        let rgb: Vec<u8> = r
+            .frame
+            .color
+            .iter()
+            .flat_map(|c| [c[0], c[1], c[2]])
+            .collect();
+        put(&image, output::png_rgb8(w, h, &rgb).map_err(encode)?)?;
+        let exr = output::exr_rgba32f(
+            w,
+            h,
+            r.frame
+                .visibility
+                .iter()
+                .zip(&r.frame.position)
+                .map(|(&v, p)| [v, v, v, p[3]]),
+        )
+        .map_err(encode)?;
+        put(&visibility, exr)?;
+        if let Some(heat) = heat {
+            let img = heatmap::render(reference, &r.frame.visibility, &c.mask, w, h);
+            let (iw, ih) = img.dimensions();
+            put(
+                &heat,
+                output::png_rgb8(iw, ih, img.as_raw()).map_err(encode)?,
+            )?;
+        }
+    }
+    put(REPORT_MD, report.markdown().into_bytes())?;
+    let json = serde_json::to_string_pretty(&report).map_err(io::Error::other)?;
+    put(REPORT_JSON, json.into_bytes())?;
+    Ok(written)
+}

@@ -1,0 +1,130 @@
+//! Each comparison method against the ray-cast reference, on a scene where the light is small
+//! next to the caster (table1-960) and one where it is large (fig1-large-light): each must behave
+//! as its construction says, and the numbers are printed
+//! (`cargo test --release --test methods_accuracy -- --nocapture`).
+
+use dbuffer::geometry::bvh::Bvh;
+use dbuffer::geometry::metrics::{self, Metrics};
+use dbuffer::geometry::{view, VtVariant};
+use dbuffer::render::offline::Offline;
+use dbuffer::render::{Frame, FrameRequest, Method, MethodParams};
+use dbuffer::scene::{self, Scene};
+
+const SIZE: u32 = 96;
+
+struct Bench {
+    offline: Offline,
+    scene: Scene,
+    reference: Vec<f32>,
+    mask: Vec<bool>,
+}
+
+impl Bench {
+    fn new(name: &str) -> Bench {
+        let scene = scene::load(name).unwrap_or_else(|e| panic!("{e}"));
+        let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+        let reference = render(
+            &mut offline,
+            &scene,
+            Method::Reference,
+            MethodParams::default(),
+        );
+        let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), SIZE, SIZE);
+        let mask = receivers
+            .iter()
+            .zip(&reference.position)
+            .map(|(r, p)| p[3] > 0.5 && r.is_some_and(|r| r.faces_light))
+            .collect();
+        Bench {
+            offline,
+            scene,
+            reference: reference.visibility,
+            mask,
+        }
+    }
+
+    fn measure(&mut self, method: Method, params: MethodParams) -> (Frame, Metrics) {
+        let frame = render(&mut self.offline, &self.scene, method, params);
+        let m = metrics::compare(&self.reference, &frame.visibility, &self.mask);
+        println!(
+            "| {} | {method} | {:.2} | {:.4} | {:.4} | {:.3} |",
+            self.scene.name, m.class_mismatch_pct, m.mae, m.penumbra_mae, m.p99
+        );
+        (frame, m)
+    }
+}
+
+fn render(offline: &mut Offline, scene: &Scene, method: Method, params: MethodParams) -> Frame {
+    let request = FrameRequest {
+        width: SIZE,
+        height: SIZE,
+        dbuffer_size: 1024,
+        method,
+        vt: VtVariant::Exact,
+        params: MethodParams {
+            reference_samples: 256,
+            ..params
+        },
+        read_dbuffer: false,
+    };
+    offline
+        .render(&scene.name, scene, &request)
+        .unwrap_or_else(|e| panic!("{method}: {e}"))
+        .0
+}
+
+fn lights(n: u32) -> MethodParams {
+    MethodParams {
+        sampled_lights: n,
+        ..MethodParams::default()
+    }
+}
+
+#[test]
+fn every_method_behaves_as_built() {
+    println!("| scene | method | class mismatch % | MAE | penumbra MAE | p99 |");
+    for name in ["table1-960", "fig1-large-light"] {
+        let mut b = Bench::new(name);
+        let d = MethodParams::default();
+        let (hard, hard_m) = b.measure(Method::Hard, d);
+        let (_, dbuffer) = b.measure(Method::DBuffer, d);
+        let (_, center) = b.measure(Method::DBufferCenter, d);
+        let (_, pcss) = b.measure(Method::Pcss, d);
+        let (_, pcf) = b.measure(Method::Pcf, MethodParams { pcf_radius: 4, ..d });
+        let (pcf0, _) = b.measure(Method::Pcf, MethodParams { pcf_radius: 0, ..d });
+        let (_, few) = b.measure(Method::Sampled, lights(4));
+        let (_, many) = b.measure(Method::Sampled, lights(64));
+
+        // A hard shadow is all or nothing, and PCF with one tap is that same test.
+        assert!(hard.visibility.iter().all(|&v| v == 0.0 || v == 1.0));
+        assert_eq!(
+            pcf0.visibility, hard.visibility,
+            "{name}: PCF r = 0 is the hard test"
+        );
+        // Filtering and the penumbra estimates move toward the reference...
+        assert!(pcf.penumbra_mae < hard_m.penumbra_mae, "{name}: PCF");
+        assert!(
+            pcss.penumbra_mae < 0.5 * hard_m.penumbra_mae,
+            "{name}: PCSS"
+        );
+        assert!(
+            dbuffer.penumbra_mae < 0.5 * hard_m.penumbra_mae,
+            "{name}: D-buffer"
+        );
+        // ...and averaging more point lights converges on the area light.
+        assert!(many.penumbra_mae <= 0.03, "{name}: 64 lights {many:?}");
+        assert!(
+            few.penumbra_mae > many.penumbra_mae,
+            "{name}: 4 vs 64 lights"
+        );
+        // Silhouettes from the centre alone lose boundary correctness.
+        assert!(
+            center.class_mismatch_pct > dbuffer.class_mismatch_pct,
+            "{name}: centre {center:?} vs disk {dbuffer:?}"
+        );
+        if name == "fig1-large-light" {
+            // The light much larger than the caster: the centre silhouette is plainly wrong.
+            assert!(center.class_mismatch_pct > 2.0 * dbuffer.class_mismatch_pct);
+        }
+    }
+}

@@ -1,0 +1,192 @@
+//! The `reference` method, end to end through the render core (GPU positions, the oracle, the
+//! camera pass shading its V), against closed-form soft shadows: a straight edge parallel to the
+//! light, and a disk under the disk light.
+
+use std::f32::consts::PI;
+
+use dbuffer::geometry::VtVariant;
+use dbuffer::render::offline::Offline;
+use dbuffer::render::{Frame, FrameRequest, Method, MethodParams};
+use dbuffer::scene::{Camera, DiskLight, Mesh, Object, Scene};
+use glam::Vec3;
+
+const H: f32 = 4.0; // light height
+const R: f32 = 1.0; // light radius
+
+fn light() -> DiskLight {
+    DiskLight {
+        center: Vec3::new(0.0, H, 0.0),
+        normal: Vec3::NEG_Y,
+        radius: R,
+        intensity: 1.0,
+    }
+}
+
+/// A horizontal quad at height `y` over `[x0, x1] × [z0, z1]`.
+fn quad(y: f32, x0: f32, x1: f32, z0: f32, z1: f32) -> Mesh {
+    Mesh {
+        positions: vec![
+            Vec3::new(x0, y, z0),
+            Vec3::new(x1, y, z0),
+            Vec3::new(x1, y, z1),
+            Vec3::new(x0, y, z1),
+        ],
+        triangles: vec![[0, 2, 1], [0, 3, 2]],
+    }
+}
+
+/// A horizontal disk of radius `a` at height `y`, centred on the axis, as a 256-gon.
+fn disk(y: f32, a: f32) -> Mesh {
+    let n = 256;
+    let mut positions = vec![Vec3::new(0.0, y, 0.0)];
+    positions.extend((0..n).map(|k| {
+        let t = k as f32 / n as f32 * 2.0 * PI;
+        // Circumscribed polygon: the same area as the circle to first order.
+        let a = a / (PI / n as f32).cos().sqrt();
+        Vec3::new(a * t.cos(), y, a * t.sin())
+    }));
+    let triangles = (0..n as u32)
+        .map(|k| [0, 1 + (k + 1) % n as u32, 1 + k])
+        .collect();
+    Mesh {
+        positions,
+        triangles,
+    }
+}
+
+/// The ground, seen from a low camera below the caster (which stays out of view).
+fn scene(name: &str, caster: Mesh) -> Scene {
+    Scene {
+        name: name.into(),
+        camera: Camera {
+            eye: Vec3::new(0.0, 1.2, 5.0),
+            target: Vec3::new(0.0, 0.0, 0.0),
+            fov_y_deg: 50.0,
+        },
+        light: light(),
+        objects: vec![
+            Object {
+                name: "ground".into(),
+                mesh: quad(0.0, -20.0, 20.0, -20.0, 20.0),
+                casts_shadow: false,
+            },
+            Object {
+                name: "caster".into(),
+                mesh: caster,
+                casts_shadow: true,
+            },
+        ],
+    }
+}
+
+fn reference(scene: &Scene) -> Frame {
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let request = FrameRequest {
+        width: 64,
+        height: 64,
+        dbuffer_size: 256,
+        method: Method::Reference,
+        vt: VtVariant::Exact,
+        params: MethodParams {
+            reference_samples: 1024,
+            ..MethodParams::default()
+        },
+        read_dbuffer: false,
+    };
+    offline
+        .render(&scene.name, scene, &request)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .0
+}
+
+/// Fraction of the unit disk on the far side of the chord at signed distance `u` (in radii).
+fn segment_fraction(u: f32) -> f32 {
+    let u = u.clamp(-1.0, 1.0);
+    (u.acos() - u * (1.0 - u * u).sqrt()) / PI
+}
+
+/// Area of the intersection of two disks of radii `r1`, `r2` whose centres are `d` apart.
+fn lens_area(r1: f32, r2: f32, d: f32) -> f32 {
+    let (r1, r2, d) = (f64::from(r1), f64::from(r2), f64::from(d));
+    if d >= r1 + r2 {
+        return 0.0;
+    }
+    if d <= (r1 - r2).abs() {
+        return (std::f64::consts::PI * r1.min(r2).powi(2)) as f32;
+    }
+    let a1 = ((d * d + r1 * r1 - r2 * r2) / (2.0 * d * r1)).acos();
+    let a2 = ((d * d + r2 * r2 - r1 * r1) / (2.0 * d * r2)).acos();
+    let k = 0.5 * ((-d + r1 + r2) * (d + r1 - r2) * (d - r1 + r2) * (d + r1 + r2)).sqrt();
+    (r1 * r1 * a1 + r2 * r2 * a2 - k) as f32
+}
+
+/// Compare the frame's V with `exact(x)` over every pixel on the ground; returns (max, mean)
+/// error and how many pixels were in the penumbra.
+fn errors(frame: &Frame, exact: impl Fn(Vec3) -> f32) -> (f32, f32, usize) {
+    let (mut worst, mut sum, mut n, mut penumbra) = (0.0f32, 0.0f32, 0usize, 0usize);
+    for (p, &v) in frame.position.iter().zip(&frame.visibility) {
+        if p[3] < 0.5 || p[1].abs() > 1e-3 {
+            continue;
+        }
+        let e = exact(Vec3::new(p[0], p[1], p[2]));
+        worst = worst.max((v - e).abs());
+        sum += (v - e).abs();
+        n += 1;
+        penumbra += usize::from(e > 0.01 && e < 0.99);
+    }
+    assert!(n > 2000, "the view must show the ground ({n} pixels)");
+    (worst, sum / n as f32, penumbra)
+}
+
+#[test]
+fn straight_edge_parallel_to_the_light() {
+    // The occluder at height h = 2 covers x > 0: a ground point at x sees disk points with
+    // q.x ≤ x·(1 − H/h) = −x, a chord at −x/R; umbra for x ≥ R, lit for x ≤ −R.
+    let h = 2.0;
+    let frame = reference(&scene("edge", quad(h, 0.0, 40.0, -40.0, 40.0)));
+    let (worst, mean, penumbra) = errors(&frame, |x| {
+        let chord = x.x * (1.0 - H / h) / R;
+        1.0 - segment_fraction(chord)
+    });
+    println!("straight edge: max |ΔV| {worst:.4}, mean {mean:.5}, {penumbra} penumbra px");
+    assert!(
+        penumbra > 300,
+        "the view must cross the penumbra ({penumbra} px)"
+    );
+    // K = 1024 stratified samples: a chord crosses about √K cells, each off by at most 1/K.
+    assert!(worst <= 0.02, "max error {worst}");
+    assert!(mean <= 0.004, "mean error {mean}");
+}
+
+#[test]
+fn disk_under_the_disk_light() {
+    // An occluding disk of radius a at height h, seen from a ground point at distance ρ from the
+    // axis, covers a disk of radius a·H/h centred ρ·(H/h − 1) from the light's centre on the
+    // light's plane: V = 1 − lens area / πR².
+    let (h, a) = (2.0, 0.8);
+    let frame = reference(&scene("disk", disk(h, a)));
+    let (worst, mean, penumbra) = errors(&frame, |x| {
+        let rho = (x.x * x.x + x.z * x.z).sqrt();
+        let covered = lens_area(R, a * H / h, rho * (H / h - 1.0));
+        1.0 - covered / (PI * R * R)
+    });
+    println!("disk under disk: max |ΔV| {worst:.4}, mean {mean:.5}, {penumbra} penumbra px");
+    assert!(
+        penumbra > 300,
+        "the view must cross the penumbra ({penumbra} px)"
+    );
+    assert!(worst <= 0.02, "max error {worst}");
+    assert!(mean <= 0.004, "mean error {mean}");
+    // The umbra: radius a·H/h − R projected back, ρ(H/h − 1) ≤ aH/h − R → ρ ≤ 0.6 here.
+    let centre = frame
+        .position
+        .iter()
+        .zip(&frame.visibility)
+        .filter(|(p, _)| p[3] > 0.5 && p[1].abs() < 1e-3 && p[0].hypot(p[2]) < 0.5)
+        .map(|(_, v)| *v)
+        .fold(0.0f32, f32::max);
+    assert!(
+        centre == 0.0,
+        "inside the umbra V must be 0, found {centre}"
+    );
+}
