@@ -50,7 +50,7 @@ fn tiny_bench_writes_json_markdown_and_plot() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stderr}");
     assert!(
-        stderr.contains("table1-224 32² dbuffer"),
+        stderr.contains("table1-224 32²: 7 methods"),
         "progress on stderr: {stderr}"
     );
 

@@ -204,7 +204,7 @@ impl Config {
             .iter()
             .map(|&s| 0.03 + 1.0e-7 * f64::from(s) * f64::from(s))
             .sum::<f64>()
-            * 1.6;
+            * 2.2;
         let frames = (self.warmup + self.frames) as f64;
         let render = self.scenes.len() as f64 * self.cases.len() as f64 * frames * per_frame;
         let scaling: f64 = self
@@ -459,27 +459,33 @@ pub fn run(ctx: &GpuContext, config: &Config, progress: Progress) -> Result<Repo
         loaded.push(scene);
     }
 
-    let total = loaded.len() * config.sizes.len() * config.cases.len();
-    let mut runs = Vec::with_capacity(total);
+    let total = loaded.len() * config.sizes.len();
+    let mut runs = Vec::with_capacity(total * config.cases.len());
+    let mut done = 0;
     for scene in &loaded {
-        let mut session = Session::new(ctx, scene.clone());
+        // One session per method, so no method pays for another's targets or volumes.
+        let mut sessions: Vec<Session> = config
+            .cases
+            .iter()
+            .map(|_| Session::new(ctx, scene.clone()))
+            .collect();
         for &size in &config.sizes {
-            for case in &config.cases {
-                let elapsed = started.elapsed().as_secs_f64();
-                let eta = if runs.is_empty() {
-                    String::new()
-                } else {
-                    let left = elapsed / runs.len() as f64 * (total - runs.len()) as f64;
-                    format!(", ~{left:.0} s of frames left")
-                };
-                progress(&format!(
-                    "[{}/{total}] {} {size}² {}{eta}",
-                    runs.len() + 1,
-                    scene.name,
-                    case.label
-                ));
-                runs.push(time_case(ctx, &mut session, config, size, case));
-            }
+            let elapsed = started.elapsed().as_secs_f64();
+            let eta = if done == 0 {
+                String::new()
+            } else {
+                let left = elapsed / done as f64 * (total - done) as f64;
+                format!(", ~{left:.0} s of frames left")
+            };
+            progress(&format!(
+                "[{}/{total}] {} {size}²: {} methods, {} frames each, interleaved{eta}",
+                done + 1,
+                scene.name,
+                config.cases.len(),
+                config.warmup + config.frames,
+            ));
+            runs.extend(time_size(ctx, &mut sessions, config, size));
+            done += 1;
         }
     }
 
@@ -585,93 +591,114 @@ fn gpu_total(frame: &Frame) -> Option<f64> {
     (!frame.gpu_ms.is_empty()).then(|| frame.gpu_ms.iter().map(|(_, ms)| ms).sum())
 }
 
-/// Warm-up frames, then `config.frames` timed ones.
-fn time_case(
-    ctx: &GpuContext,
-    session: &mut Session,
-    config: &Config,
-    size: u32,
-    case: &Case,
-) -> Run {
-    let req = request(config, size, case);
-    let mut run = Run {
-        scene: session.scene().name.clone(),
-        size,
-        label: case.label.clone(),
-        method: case.method.name().to_string(),
-        timing: None,
-        error: None,
-    };
-    for _ in 0..config.warmup {
-        if let Err(e) = session.frame(ctx, &req) {
-            run.error = Some(e.to_string());
-            return run;
-        }
-    }
-    let mut wall = Vec::with_capacity(config.frames);
-    let mut totals = Vec::with_capacity(config.frames);
-    let mut passes: Vec<(String, Vec<f64>)> = Vec::new();
-    let mut hit_pixels = 0;
-    for _ in 0..config.frames {
-        let t = Instant::now();
-        let frame = match session.frame(ctx, &req) {
-            Ok(f) => f,
-            Err(e) => {
-                run.error = Some(e.to_string());
-                return run;
-            }
-        };
-        wall.push(ms_since(t));
-        if let Some(total) = gpu_total(&frame) {
-            totals.push(total);
-        }
+/// The frames of one method at one size, as they come in.
+#[derive(Default)]
+struct Samples {
+    wall: Vec<f64>,
+    totals: Vec<f64>,
+    passes: Vec<(String, Vec<f64>)>,
+    hit_pixels: usize,
+    rays: Vec<f64>,
+}
+
+impl Samples {
+    fn add(&mut self, frame: &Frame, wall_ms: f64) {
+        self.wall.push(wall_ms);
+        self.totals.extend(gpu_total(frame));
         for (pass, ms) in &frame.gpu_ms {
-            match passes.iter_mut().find(|(p, _)| p == pass) {
+            match self.passes.iter_mut().find(|(p, _)| p == pass) {
                 Some((_, v)) => v.push(*ms),
-                None => passes.push((pass.clone(), vec![*ms])),
+                None => self.passes.push((pass.clone(), vec![*ms])),
             }
         }
-        hit_pixels = frame.position.iter().filter(|p| p[3] > 0.5).count();
+        self.hit_pixels = frame.position.iter().filter(|p| p[3] > 0.5).count();
     }
-    let mut rays = Vec::new();
-    if case.cpu_side() {
+
+    fn timing(self, case: &Case) -> Timing {
+        let wall_ms = Stat::of(&self.wall).unwrap_or_default();
+        let gpu_total_ms = Stat::of(&self.totals);
+        let (frame_ms, frame_source) = match gpu_total_ms {
+            Some(g) if !case.cpu_side() => (g, FrameSource::GpuTimestamps),
+            _ => (wall_ms, FrameSource::FencedWall),
+        };
+        Timing {
+            fps: if frame_ms.median > 0.0 {
+                1e3 / frame_ms.median
+            } else {
+                0.0
+            },
+            frame_ms,
+            frame_source,
+            passes: self
+                .passes
+                .into_iter()
+                .filter_map(|(pass, v)| {
+                    Some(PassTime {
+                        pass,
+                        ms: Stat::of(&v)?,
+                    })
+                })
+                .collect(),
+            gpu_total_ms,
+            wall_ms,
+            hit_pixels: self.hit_pixels,
+            rays_ms: Stat::of(&self.rays),
+        }
+    }
+}
+
+/// Every method at one size: warm-up frames, then `config.frames` rounds of one frame per
+/// method, so a machine whose speed drifts (a shared CPU adapter) slows every method alike.
+/// `sessions[i]` renders `config.cases[i]`; a method that fails is dropped from the rounds and
+/// its row says why.
+fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: u32) -> Vec<Run> {
+    let requests: Vec<FrameRequest> = config
+        .cases
+        .iter()
+        .map(|case| request(config, size, case))
+        .collect();
+    let mut errors: Vec<Option<String>> = vec![None; config.cases.len()];
+    let mut samples: Vec<Samples> = config.cases.iter().map(|_| Samples::default()).collect();
+    for round in 0..config.warmup + config.frames {
+        for (i, session) in sessions.iter_mut().enumerate() {
+            if errors[i].is_some() {
+                continue;
+            }
+            let t = Instant::now();
+            match session.frame(ctx, &requests[i]) {
+                Ok(frame) if round >= config.warmup => samples[i].add(&frame, ms_since(t)),
+                Ok(_) => {}
+                Err(e) => errors[i] = Some(e.to_string()),
+            }
+        }
+    }
+    // The reference's ray casting alone: one more sample per pixel without a frame.
+    for (i, case) in config.cases.iter().enumerate() {
+        if !case.cpu_side() || errors[i].is_some() {
+            continue;
+        }
         for _ in 0..config.frames {
             let t = Instant::now();
-            if session.advance_reference(ctx, &req).is_err() {
+            if sessions[i].advance_reference(ctx, &requests[i]).is_err() {
                 break;
             }
-            rays.push(ms_since(t));
+            samples[i].rays.push(ms_since(t));
         }
     }
-    let wall_ms = Stat::of(&wall).unwrap_or_default();
-    let gpu_total_ms = Stat::of(&totals);
-    let (frame_ms, frame_source) = match gpu_total_ms {
-        Some(g) if !case.cpu_side() => (g, FrameSource::GpuTimestamps),
-        _ => (wall_ms, FrameSource::FencedWall),
-    };
-    run.timing = Some(Timing {
-        fps: if frame_ms.median > 0.0 {
-            1e3 / frame_ms.median
-        } else {
-            0.0
-        },
-        frame_ms,
-        frame_source,
-        passes: passes
-            .into_iter()
-            .filter_map(|(pass, v)| {
-                Some(PassTime {
-                    pass,
-                    ms: Stat::of(&v)?,
-                })
-            })
-            .collect(),
-        gpu_total_ms,
-        wall_ms,
-        hit_pixels,
-        rays_ms: Stat::of(&rays),
-    });
-    run
+    config
+        .cases
+        .iter()
+        .zip(sessions.iter())
+        .zip(samples.into_iter().zip(errors))
+        .map(|((case, session), (samples, error))| Run {
+            scene: session.scene().name.clone(),
+            size,
+            label: case.label.clone(),
+            method: case.method.name().to_string(),
+            timing: error.is_none().then(|| samples.timing(case)),
+            error,
+        })
+        .collect()
 }
 
 /// The D-buffer's steady frame with the geometry cached, then with the geometry invalidated before
