@@ -129,15 +129,17 @@ pub fn scaling_png(
                     .map(|&p| TriangleMarker::new(p, 5, orange.filled())),
             )
             .map_err(plot_err)?;
-        let gray = RGBColor(140, 140, 140);
+        let red = RGBColor(190, 40, 40);
         chart
-            .draw_series(LineSeries::new(
+            .draw_series(DashedLineSeries::new(
                 vec![(x0, 1.0), (x1, 1.0)],
-                gray.stroke_width(1),
+                8,
+                5,
+                red.stroke_width(1),
             ))
             .map_err(plot_err)?
             .label("1 ms")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], gray));
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red));
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperLeft)
