@@ -804,15 +804,17 @@ fn scaling_point(triangles: u32, runs: usize) -> ScalingPoint {
 
 /// Shadow rays per second of the reference: one ray per hit pixel per 1-spp step of
 /// `Session::advance_reference` (surfaces facing away from the light may cast none, so this is a
-/// lower bound), the best over the runs.
+/// lower bound), the median over the runs.
 fn reference_throughput(runs: &[Run]) -> Option<f64> {
-    runs.iter()
+    let rates: Vec<f64> = runs
+        .iter()
         .filter(|r| r.method == Method::Reference.name())
         .filter_map(|r| r.timing.as_ref())
         .filter_map(|t| Some((t.hit_pixels, t.rays_ms?.median)))
         .filter(|&(px, ms)| ms > 0.0 && px > 0)
         .map(|(px, ms)| px as f64 / (ms * 1e-3))
-        .max_by(f64::total_cmp)
+        .collect();
+    Stat::of(&rates).map(|s| s.median)
 }
 
 /// The targets, measured on the worst Table 1 scene at 1024² (or the largest size run).

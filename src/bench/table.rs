@@ -218,7 +218,7 @@ fn competition(out: &mut String, r: &Report) {
     if let Some(rps) = r.reference_rays_per_s {
         let _ = writeln!(
             out,
-            "Reference throughput: {:.1} M shadow rays/s (one ray per hit pixel per 1-spp step of `Session::advance_reference`, the ray casting alone, on the CPU).",
+            "Reference throughput: {:.1} M shadow rays/s (median over the runs; one ray per hit pixel per 1-spp step of `Session::advance_reference`, the ray casting alone, on the CPU).",
             rps / 1e6
         );
     }
