@@ -8,9 +8,11 @@
 //! - [`output`]: writing one render's files (PNG, EXR, JSON), all or nothing.
 //! - [`app`]: the lab window (eframe), around the same render core;
 //! - [`shader_source`]: WGSL sources from `shaders/` with their `// #include` lines expanded.
+//! - [`bench`]: `dbuffer bench` (Table 1, the competition, coherence, geometry scaling).
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod app;
+pub mod bench;
 pub mod compare;
 pub mod fsutil;
 pub mod geometry;

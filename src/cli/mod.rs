@@ -14,6 +14,7 @@ use dbuffer::scene;
 use glam::Vec3;
 use rayon::prelude::*;
 
+pub mod bench;
 mod compare;
 pub use compare::{compare, CompareArgs};
 

@@ -1,0 +1,968 @@
+//! `dbuffer bench`: seed 000's Table 1 reproduced (casters of 224, 960, 5760 and 1440 triangles at
+//! 300², 600² and 1024²), every other method of [`Method::ALL`] timed in the same run as a ratio
+//! to the D-buffer, the steady frame with the geometry cached and rebuilt every frame (seed 000
+//! §6.1), and the geometry stage from 1k to 1M caster triangles (design.md §5).
+//!
+//! Everything is measured through the same calls the lab makes: a [`Session`] per scene, one
+//! [`FrameRequest`] per method. Frames are timed after warm-up ones (the first includes the
+//! driver's shader compilation); each figure is the median (and minimum) of the steady frames.
+//! Nothing here asserts a time: the report says what was measured and on which adapter.
+
+pub mod plot;
+pub mod table;
+
+use std::time::Instant;
+
+use glam::{Affine3A, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::{PreparedCasters, VolumeParams, VtVariant};
+use crate::render::session::Session;
+use crate::render::{Frame, FrameRequest, GpuContext, Method, MethodParams};
+use crate::scene::{self, shapes, Camera, DiskLight, Object, Scene, SceneError};
+
+/// The Table 1 scenes of seed 000, in the paper's order.
+pub const TABLE1_SCENES: [&str; 4] = ["table1-224", "table1-960", "table1-5760", "table1-1440"];
+/// The Table 1 image sizes (square).
+pub const TABLE1_SIZES: [u32; 3] = [300, 600, 1024];
+/// Caster triangle counts of the geometry-scaling curve (spheres, 4·n² triangles).
+pub const SCALING_TRIANGLES: [u32; 6] = [1 << 10, 1 << 12, 1 << 14, 1 << 16, 1 << 18, 1 << 20];
+/// Image size the targets of the issue are stated at.
+pub const TARGET_SIZE: u32 = 1024;
+
+/// What can stop a bench run. A method that cannot render is not one of them: its rows say why.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    #[error("cannot load scene '{name}': {source}")]
+    Scene {
+        name: String,
+        #[source]
+        source: Box<SceneError>,
+    },
+    #[error("{0}")]
+    Config(String),
+    #[error("drawing the scaling plot failed: {0}")]
+    Plot(String),
+}
+
+/// One timed configuration of a method: the label it is reported under and its knobs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Case {
+    pub label: String,
+    pub method: Method,
+    pub params: MethodParams,
+}
+
+impl Case {
+    /// Every method of [`Method::ALL`], with the knobs the issue names: PCSS with 16 blocker and
+    /// 32 filter taps, 16 light samples, and the reference as a single 1-sample-per-pixel pass.
+    pub fn all() -> Vec<Case> {
+        Method::ALL.into_iter().map(Case::for_method).collect()
+    }
+
+    pub fn for_method(method: Method) -> Case {
+        let defaults = MethodParams::default();
+        let (label, params) = match method {
+            Method::Pcss => (
+                "pcss 16/32".to_string(),
+                MethodParams {
+                    pcss_blocker_taps: 16,
+                    pcss_filter_taps: 32,
+                    ..defaults
+                },
+            ),
+            Method::Sampled => (
+                "sampled 16".to_string(),
+                MethodParams {
+                    sampled_lights: 16,
+                    ..defaults
+                },
+            ),
+            // Each frame adds `reference_step` samples per pixel until `reference_samples`:
+            // with a long budget and a step of 1, every timed frame is one 1-spp pass.
+            Method::Reference => (
+                "reference 1 spp".to_string(),
+                MethodParams {
+                    reference_samples: crate::render::frame::MAX_REFERENCE_SAMPLES,
+                    reference_step: 1,
+                    ..defaults
+                },
+            ),
+            other => (other.name().to_string(), defaults),
+        };
+        Case {
+            label,
+            method,
+            params,
+        }
+    }
+
+    /// Whether the method's per-frame work is done on the CPU (so only wall time measures it).
+    pub fn cpu_side(&self) -> bool {
+        self.method == Method::Reference
+    }
+}
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct Config {
+    pub quick: bool,
+    pub scenes: Vec<String>,
+    pub sizes: Vec<u32>,
+    pub cases: Vec<Case>,
+    /// Frames rendered and thrown away before timing, per (scene, size, method).
+    pub warmup: usize,
+    /// Frames timed per (scene, size, method).
+    pub frames: usize,
+    /// The D-buffer (and every shadow map) is this many texels square.
+    pub dbuffer_size: u32,
+    /// Runs of the geometry stage per Table 1 scene.
+    pub geometry_runs: usize,
+    /// Caster triangle counts of the scaling curve; empty for none.
+    pub scaling: Vec<u32>,
+    /// Runs of the geometry stage per scaling point.
+    pub scaling_runs: usize,
+    /// Time the steady frame with the geometry cached and rebuilt every frame.
+    pub coherence: bool,
+}
+
+impl Config {
+    /// The full run: 3 warm-up and 15 timed frames, scaling up to 1M triangles.
+    pub fn full() -> Config {
+        Config {
+            quick: false,
+            scenes: TABLE1_SCENES.iter().map(|s| s.to_string()).collect(),
+            sizes: TABLE1_SIZES.to_vec(),
+            cases: Case::all(),
+            warmup: 3,
+            frames: 15,
+            dbuffer_size: 1024,
+            geometry_runs: 31,
+            scaling: SCALING_TRIANGLES.to_vec(),
+            scaling_runs: 7,
+            coherence: true,
+        }
+    }
+
+    /// Every row of the full run with fewer frames, scaling up to 256k triangles: under two
+    /// minutes on a 2-core CPU adapter.
+    pub fn quick() -> Config {
+        Config {
+            quick: true,
+            warmup: 1,
+            frames: 3,
+            geometry_runs: 11,
+            scaling: SCALING_TRIANGLES[..5].to_vec(),
+            scaling_runs: 3,
+            ..Config::full()
+        }
+    }
+
+    pub fn validate(&self) -> Result<(), BenchError> {
+        let bad = |m: String| Err(BenchError::Config(m));
+        if self.scenes.is_empty() {
+            return bad("no scene to bench".into());
+        }
+        if self.sizes.is_empty() {
+            return bad("no image size to bench".into());
+        }
+        if let Some(s) = self.sizes.iter().find(|s| !(8..=8192).contains(*s)) {
+            return bad(format!("image size {s}: expected 8 to 8192 pixels"));
+        }
+        if !(1..=8192).contains(&self.dbuffer_size) {
+            return bad(format!(
+                "D-buffer size {}: expected 1 to 8192 texels",
+                self.dbuffer_size
+            ));
+        }
+        if self.frames == 0 || self.frames > 10_000 {
+            return bad(format!("{} timed frames: expected 1 to 10000", self.frames));
+        }
+        if self.warmup > 1000 {
+            return bad(format!(
+                "{} warm-up frames: expected 0 to 1000",
+                self.warmup
+            ));
+        }
+        if let Some(t) = self.scaling.iter().find(|t| !(64..=4_000_000).contains(*t)) {
+            return bad(format!(
+                "scaling point of {t} triangles: expected 64 to 4000000"
+            ));
+        }
+        for case in &self.cases {
+            case.params
+                .validate()
+                .map_err(|e| BenchError::Config(format!("{}: {e}", case.label)))?;
+        }
+        Ok(())
+    }
+
+    /// A rough run time in seconds on a 2-core CPU adapter (lavapipe), for the progress line.
+    pub fn estimate_s(&self) -> f64 {
+        let per_frame: f64 = self
+            .sizes
+            .iter()
+            .map(|&s| 0.03 + 1.0e-7 * f64::from(s) * f64::from(s))
+            .sum::<f64>()
+            * 2.2;
+        let frames = (self.warmup + self.frames) as f64;
+        let render = self.scenes.len() as f64 * self.cases.len() as f64 * frames * per_frame;
+        let scaling: f64 = self
+            .scaling
+            .iter()
+            .map(|&t| f64::from(t) * (0.3e-6 + 0.03e-6 * self.scaling_runs as f64))
+            .sum();
+        render + scaling + 2.0 * self.scenes.len() as f64
+    }
+}
+
+/// Median and minimum of a set of timings, in milliseconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Stat {
+    pub median: f64,
+    pub min: f64,
+}
+
+impl Stat {
+    /// `None` for no samples.
+    pub fn of(samples: &[f64]) -> Option<Stat> {
+        let mut v: Vec<f64> = samples.iter().copied().filter(|x| x.is_finite()).collect();
+        if v.is_empty() {
+            return None;
+        }
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        let median = if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        };
+        Some(Stat { median, min: v[0] })
+    }
+}
+
+/// Where a frame's figure comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrameSource {
+    /// The sum of the passes' GPU timestamp queries.
+    GpuTimestamps,
+    /// Wall time of the whole frame, fenced by the readback (the adapter has no timestamp
+    /// queries, or the method works on the CPU).
+    FencedWall,
+}
+
+/// One pass's GPU time.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PassTime {
+    pub pass: String,
+    pub ms: Stat,
+}
+
+/// The steady frames of one (scene, size, method).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Timing {
+    /// The figure ratios and fps are taken from, and where it comes from.
+    pub frame_ms: Stat,
+    pub frame_source: FrameSource,
+    pub fps: f64,
+    /// GPU ms per pass (timestamp queries); empty without them.
+    pub passes: Vec<PassTime>,
+    /// Sum of the passes, per frame.
+    pub gpu_total_ms: Option<Stat>,
+    /// `Session::frame` wall time: encoding, the GPU, the readback of the camera targets.
+    pub wall_ms: Stat,
+    /// Pixels of the image that hit a surface.
+    pub hit_pixels: usize,
+    /// The reference only: one more sample per pixel without rendering a frame
+    /// (`Session::advance_reference`), i.e. the ray casting alone.
+    #[serde(default)]
+    pub rays_ms: Option<Stat>,
+}
+
+impl Timing {
+    pub fn pass(&self, name: &str) -> Option<Stat> {
+        self.passes.iter().find(|p| p.pass == name).map(|p| p.ms)
+    }
+
+    /// The frame figure measured the way `source` says (wall time is always there).
+    pub fn frame_by(&self, source: FrameSource) -> Option<Stat> {
+        match source {
+            FrameSource::GpuTimestamps => self.gpu_total_ms,
+            FrameSource::FencedWall => Some(self.wall_ms),
+        }
+    }
+}
+
+/// One (scene, size, method): its timings, or why the method did not render.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Run {
+    pub scene: String,
+    pub size: u32,
+    /// The case's label, e.g. "pcss 16/32".
+    pub label: String,
+    /// The method's command-line name.
+    pub method: String,
+    pub timing: Option<Timing>,
+    pub error: Option<String>,
+}
+
+/// A Table 1 scene and its geometry stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SceneInfo {
+    pub name: String,
+    pub caster_triangles: usize,
+    /// Welding and adjacency, once per mesh.
+    pub prepare_ms: f64,
+    /// Classes, silhouettes and volumes for the scene's light (per light move).
+    pub geometry_ms: Stat,
+    pub umbra_triangles: usize,
+    pub penumbra_triangles: usize,
+}
+
+/// The steady frame with the geometry cached against rebuilt every frame (seed 000 §6.1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Coherence {
+    pub scene: String,
+    pub size: u32,
+    /// How "rebuilt" was forced.
+    pub rebuild_by: String,
+    pub cached_wall_ms: Stat,
+    pub rebuilt_wall_ms: Stat,
+    pub cached_gpu_ms: Option<Stat>,
+    pub rebuilt_gpu_ms: Option<Stat>,
+    /// The geometry stage inside the rebuilt frames (`Session::geometry_ms`).
+    pub rebuilt_geometry_ms: Option<Stat>,
+    /// Geometry builds during the timed rebuilt frames (one per frame when it worked).
+    pub rebuilds: u64,
+    /// Timed frames of each kind (cached and rebuilt alternate).
+    pub frames: usize,
+}
+
+/// One point of the geometry-scaling curve.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScalingPoint {
+    pub triangles: usize,
+    /// Welding and adjacency (once per mesh).
+    pub prepare_ms: f64,
+    /// Classes, silhouettes and volumes (per light move).
+    pub build_ms: Stat,
+    pub volume_triangles: usize,
+}
+
+/// A target of the issue, measured.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Target {
+    pub name: String,
+    /// The measured ratio or time; `None` where it could not be measured.
+    pub measured: Option<f64>,
+    /// Pass when `measured <= limit` (or `< limit` when `strict`).
+    pub limit: f64,
+    pub strict: bool,
+    pub unit: String,
+    /// Where the figure comes from (the worst scene, the size).
+    pub detail: String,
+}
+
+impl Target {
+    pub fn pass(&self) -> Option<bool> {
+        self.measured.map(|m| {
+            if self.strict {
+                m < self.limit
+            } else {
+                m <= self.limit
+            }
+        })
+    }
+}
+
+/// The whole run, as written to `bench.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// The adapter's name, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
+    pub adapter: String,
+    pub backend: String,
+    pub device_type: String,
+    pub timestamps: bool,
+    /// The CPU model and core count.
+    pub host: String,
+    pub quick: bool,
+    pub warmup: usize,
+    pub frames: usize,
+    pub dbuffer_size: u32,
+    /// Seconds since the Unix epoch when the run ended.
+    pub unix_time: u64,
+    pub seconds: f64,
+    pub scenes: Vec<SceneInfo>,
+    pub runs: Vec<Run>,
+    pub coherence: Option<Coherence>,
+    pub scaling: Vec<ScalingPoint>,
+    /// Shadow rays per second of the 1-spp reference frames (their whole wall time).
+    pub reference_rays_per_s: Option<f64>,
+    pub targets: Vec<Target>,
+}
+
+impl Report {
+    pub fn run(&self, scene: &str, size: u32, method: Method) -> Option<&Run> {
+        self.runs
+            .iter()
+            .find(|r| r.scene == scene && r.size == size && r.method == method.name())
+    }
+
+    pub fn timing(&self, scene: &str, size: u32, method: Method) -> Option<&Timing> {
+        self.run(scene, size, method)?.timing.as_ref()
+    }
+
+    /// `method`'s frame over the D-buffer's, the same scene and size, measured alike.
+    pub fn ratio_to_dbuffer(&self, scene: &str, size: u32, method: Method) -> Option<f64> {
+        let m = self.timing(scene, size, method)?;
+        let d = self.timing(scene, size, Method::DBuffer)?;
+        let base = d.frame_by(m.frame_source)?.median;
+        (base > 0.0).then(|| m.frame_ms.median / base)
+    }
+
+    pub fn sizes(&self) -> Vec<u32> {
+        let mut sizes: Vec<u32> = self.runs.iter().map(|r| r.size).collect();
+        sizes.sort_unstable();
+        sizes.dedup();
+        sizes
+    }
+
+    /// The case labels in the order they ran.
+    pub fn labels(&self) -> Vec<(String, String)> {
+        let mut out: Vec<(String, String)> = Vec::new();
+        for r in &self.runs {
+            if !out.iter().any(|(l, _)| *l == r.label) {
+                out.push((r.label.clone(), r.method.clone()));
+            }
+        }
+        out
+    }
+}
+
+/// What the run reports as it goes (for a progress line on stderr).
+pub type Progress<'a> = &'a mut dyn FnMut(&str);
+
+/// Run the bench on `ctx`.
+pub fn run(ctx: &GpuContext, config: &Config, progress: Progress) -> Result<Report, BenchError> {
+    config.validate()?;
+    let started = Instant::now();
+    let mut scenes = Vec::new();
+    let mut loaded = Vec::new();
+    for name in &config.scenes {
+        let scene = scene::load(name).map_err(|source| BenchError::Scene {
+            name: name.clone(),
+            source: Box::new(source),
+        })?;
+        progress(&format!("geometry  {name}"));
+        scenes.push(scene_info(&scene, config.geometry_runs));
+        loaded.push(scene);
+    }
+
+    let total = loaded.len() * config.sizes.len();
+    let mut runs = Vec::with_capacity(total * config.cases.len());
+    let mut done = 0;
+    for scene in &loaded {
+        // One session per method, so no method pays for another's targets or volumes.
+        let mut sessions: Vec<Session> = config
+            .cases
+            .iter()
+            .map(|_| Session::new(ctx, scene.clone()))
+            .collect();
+        for &size in &config.sizes {
+            let elapsed = started.elapsed().as_secs_f64();
+            let eta = if done == 0 {
+                String::new()
+            } else {
+                let left = elapsed / done as f64 * (total - done) as f64;
+                format!(", ~{left:.0} s of frames left")
+            };
+            progress(&format!(
+                "[{}/{total}] {} {size}²: {} methods, {} frames each, interleaved{eta}",
+                done + 1,
+                scene.name,
+                config.cases.len(),
+                config.warmup + config.frames,
+            ));
+            runs.extend(time_size(ctx, &mut sessions, config, size));
+            done += 1;
+        }
+    }
+
+    let coherence = if config.coherence {
+        let name = config
+            .scenes
+            .iter()
+            .position(|s| s == "table1-5760")
+            .unwrap_or(config.scenes.len() - 1);
+        let size = config
+            .sizes
+            .iter()
+            .copied()
+            .max()
+            .unwrap_or(TABLE1_SIZES[1]);
+        let scene = &loaded[name.min(loaded.len() - 1)];
+        progress(&format!(
+            "coherence {} {size}²: geometry cached, then rebuilt every frame",
+            scene.name
+        ));
+        Some(coherence(ctx, scene, config, size))
+    } else {
+        None
+    };
+
+    let mut scaling = Vec::new();
+    for &t in &config.scaling {
+        progress(&format!("scaling   geometry of a {t}-triangle sphere"));
+        scaling.push(scaling_point(t, config.scaling_runs));
+    }
+
+    let reference_rays_per_s = reference_throughput(&runs);
+    let mut report = Report {
+        adapter: ctx.adapter.name.clone(),
+        backend: format!("{:?}", ctx.adapter.backend),
+        device_type: format!("{:?}", ctx.adapter.device_type),
+        timestamps: ctx.timestamps,
+        host: host_description(),
+        quick: config.quick,
+        warmup: config.warmup,
+        frames: config.frames,
+        dbuffer_size: config.dbuffer_size,
+        unix_time: std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_secs())
+            .unwrap_or(0),
+        seconds: 0.0,
+        scenes,
+        runs,
+        coherence,
+        scaling,
+        reference_rays_per_s,
+        targets: Vec::new(),
+    };
+    report.targets = targets(&report);
+    report.seconds = started.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// The scene's caster count and its geometry stage: prepared once, built `runs` times.
+fn scene_info(scene: &Scene, runs: usize) -> SceneInfo {
+    let t = Instant::now();
+    let prepared = PreparedCasters::new(scene);
+    let prepare_ms = ms_since(t);
+    let params = VolumeParams::for_scene(scene);
+    let mut samples = Vec::with_capacity(runs);
+    let mut last = None;
+    for _ in 0..runs.max(1) {
+        let t = Instant::now();
+        let g = prepared.build(&scene.light, &params);
+        samples.push(ms_since(t));
+        last = Some(std::hint::black_box(g));
+    }
+    let stats = last.map(|g| g.stats).unwrap_or_default();
+    SceneInfo {
+        name: scene.name.clone(),
+        caster_triangles: scene.caster_triangle_count(),
+        prepare_ms,
+        geometry_ms: Stat::of(&samples).unwrap_or_default(),
+        umbra_triangles: stats.umbra_triangles,
+        penumbra_triangles: stats.penumbra_triangles,
+    }
+}
+
+fn request(config: &Config, size: u32, case: &Case) -> FrameRequest {
+    FrameRequest {
+        width: size,
+        height: size,
+        dbuffer_size: config.dbuffer_size,
+        method: case.method,
+        vt: VtVariant::Smoothstep,
+        params: case.params,
+        read_dbuffer: false,
+    }
+}
+
+/// Sum of a frame's GPU passes, or `None` without timestamps.
+fn gpu_total(frame: &Frame) -> Option<f64> {
+    (!frame.gpu_ms.is_empty()).then(|| frame.gpu_ms.iter().map(|(_, ms)| ms).sum())
+}
+
+/// The frames of one method at one size, as they come in.
+#[derive(Default)]
+struct Samples {
+    wall: Vec<f64>,
+    totals: Vec<f64>,
+    passes: Vec<(String, Vec<f64>)>,
+    hit_pixels: usize,
+    rays: Vec<f64>,
+}
+
+impl Samples {
+    fn add(&mut self, frame: &Frame, wall_ms: f64) {
+        self.wall.push(wall_ms);
+        self.totals.extend(gpu_total(frame));
+        for (pass, ms) in &frame.gpu_ms {
+            match self.passes.iter_mut().find(|(p, _)| p == pass) {
+                Some((_, v)) => v.push(*ms),
+                None => self.passes.push((pass.clone(), vec![*ms])),
+            }
+        }
+        self.hit_pixels = frame.position.iter().filter(|p| p[3] > 0.5).count();
+    }
+
+    fn timing(self, case: &Case) -> Timing {
+        let wall_ms = Stat::of(&self.wall).unwrap_or_default();
+        let gpu_total_ms = Stat::of(&self.totals);
+        let (frame_ms, frame_source) = match gpu_total_ms {
+            Some(g) if !case.cpu_side() => (g, FrameSource::GpuTimestamps),
+            _ => (wall_ms, FrameSource::FencedWall),
+        };
+        Timing {
+            fps: if frame_ms.median > 0.0 {
+                1e3 / frame_ms.median
+            } else {
+                0.0
+            },
+            frame_ms,
+            frame_source,
+            passes: self
+                .passes
+                .into_iter()
+                .filter_map(|(pass, v)| {
+                    Some(PassTime {
+                        pass,
+                        ms: Stat::of(&v)?,
+                    })
+                })
+                .collect(),
+            gpu_total_ms,
+            wall_ms,
+            hit_pixels: self.hit_pixels,
+            rays_ms: Stat::of(&self.rays),
+        }
+    }
+}
+
+/// Every method at one size: warm-up frames, then `config.frames` rounds of one frame per
+/// method, so a machine whose speed drifts (a shared CPU adapter) slows every method alike.
+/// `sessions[i]` renders `config.cases[i]`; a method that fails is dropped from the rounds and
+/// its row says why.
+fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: u32) -> Vec<Run> {
+    let requests: Vec<FrameRequest> = config
+        .cases
+        .iter()
+        .map(|case| request(config, size, case))
+        .collect();
+    let mut errors: Vec<Option<String>> = vec![None; config.cases.len()];
+    let mut samples: Vec<Samples> = config.cases.iter().map(|_| Samples::default()).collect();
+    for round in 0..config.warmup + config.frames {
+        for (i, session) in sessions.iter_mut().enumerate() {
+            if errors[i].is_some() {
+                continue;
+            }
+            let t = Instant::now();
+            match session.frame(ctx, &requests[i]) {
+                Ok(frame) if round >= config.warmup => samples[i].add(&frame, ms_since(t)),
+                Ok(_) => {}
+                Err(e) => errors[i] = Some(e.to_string()),
+            }
+        }
+    }
+    // The reference's ray casting alone: one more sample per pixel without a frame.
+    for (i, case) in config.cases.iter().enumerate() {
+        if !case.cpu_side() || errors[i].is_some() {
+            continue;
+        }
+        for _ in 0..config.frames {
+            let t = Instant::now();
+            if sessions[i].advance_reference(ctx, &requests[i]).is_err() {
+                break;
+            }
+            samples[i].rays.push(ms_since(t));
+        }
+    }
+    config
+        .cases
+        .iter()
+        .zip(sessions.iter())
+        .zip(samples.into_iter().zip(errors))
+        .map(|((case, session), (samples, error))| Run {
+            scene: session.scene().name.clone(),
+            size,
+            label: case.label.clone(),
+            method: case.method.name().to_string(),
+            timing: error.is_none().then(|| samples.timing(case)),
+            error,
+        })
+        .collect()
+}
+
+/// The D-buffer's steady frame with the geometry cached, then with the geometry invalidated before
+/// every frame (`Session::invalidate_geometry`: what a light dragged every frame costs).
+fn coherence(ctx: &GpuContext, scene: &Scene, config: &Config, size: u32) -> Coherence {
+    let mut session = Session::new(ctx, scene.clone());
+    let req = request(config, size, &Case::for_method(Method::DBuffer));
+    let frames = config.frames.max(3);
+    // Cached and rebuilt frames alternate, so both see the same machine (a shared CPU adapter
+    // drifts more over a run than the geometry stage costs).
+    let (mut cached_wall, mut cached_gpu) = (Vec::new(), Vec::new());
+    let (mut rebuilt_wall, mut rebuilt_gpu, mut geometry) = (Vec::new(), Vec::new(), Vec::new());
+    let mut rebuilds = 0;
+    for i in 0..2 * (config.warmup + frames) {
+        let rebuild = i % 2 == 1;
+        let before = session.geometry_builds();
+        if rebuild {
+            session.invalidate_geometry();
+        }
+        let t = Instant::now();
+        let Ok(frame) = session.frame(ctx, &req) else {
+            continue;
+        };
+        let ms = ms_since(t);
+        let built = session.geometry_builds() - before;
+        if i < 2 * config.warmup {
+            continue;
+        }
+        let gpu = gpu_total(&frame);
+        if rebuild {
+            rebuilds += built;
+            rebuilt_wall.push(ms);
+            rebuilt_gpu.extend(gpu);
+            geometry.push(session.geometry_ms());
+        } else {
+            cached_wall.push(ms);
+            cached_gpu.extend(gpu);
+        }
+    }
+    Coherence {
+        scene: scene.name.clone(),
+        size,
+        rebuild_by: "Session::invalidate_geometry() before every frame".into(),
+        cached_wall_ms: Stat::of(&cached_wall).unwrap_or_default(),
+        rebuilt_wall_ms: Stat::of(&rebuilt_wall).unwrap_or_default(),
+        cached_gpu_ms: Stat::of(&cached_gpu),
+        rebuilt_gpu_ms: Stat::of(&rebuilt_gpu),
+        rebuilt_geometry_ms: Stat::of(&geometry),
+        rebuilds,
+        frames,
+    }
+}
+
+/// A UV sphere of about `triangles` triangles (4·n², n = √(t/4) rounded) under a tilted light,
+/// alone in a scene.
+pub fn scaling_scene(triangles: u32) -> Scene {
+    let n = ((f64::from(triangles) / 4.0).sqrt().round() as u32).max(2);
+    let mesh = shapes::sphere(2 * n, n + 1)
+        .transformed(&Affine3A::from_translation(Vec3::new(0.0, 1.5, 0.0)));
+    Scene {
+        name: format!("sphere-{}", mesh.triangles.len()),
+        camera: Camera {
+            eye: Vec3::new(0.0, 3.0, 6.0),
+            target: Vec3::new(0.0, 0.5, 0.0),
+            fov_y_deg: 45.0,
+        },
+        light: DiskLight {
+            center: Vec3::new(0.3, 4.0, -0.2),
+            normal: Vec3::new(0.1, -1.0, 0.05).normalize(),
+            radius: 0.6,
+            intensity: 1.0,
+        },
+        objects: vec![Object {
+            name: "sphere".into(),
+            mesh,
+            casts_shadow: true,
+        }],
+    }
+}
+
+fn scaling_point(triangles: u32, runs: usize) -> ScalingPoint {
+    let scene = scaling_scene(triangles);
+    let t = Instant::now();
+    let prepared = PreparedCasters::new(&scene);
+    let prepare_ms = ms_since(t);
+    let params = VolumeParams::for_scene(&scene);
+    let mut samples = Vec::new();
+    let mut volume_triangles = 0;
+    for _ in 0..runs.max(1) {
+        let t = Instant::now();
+        let g = prepared.build(&scene.light, &params);
+        samples.push(ms_since(t));
+        volume_triangles = g.stats.umbra_triangles + g.stats.penumbra_triangles;
+        drop(std::hint::black_box(g));
+    }
+    ScalingPoint {
+        triangles: scene.caster_triangle_count(),
+        prepare_ms,
+        build_ms: Stat::of(&samples).unwrap_or_default(),
+        volume_triangles,
+    }
+}
+
+/// Shadow rays per second of the reference: one ray per hit pixel per 1-spp step of
+/// `Session::advance_reference` (surfaces facing away from the light may cast none, so this is a
+/// lower bound), the median over the runs.
+fn reference_throughput(runs: &[Run]) -> Option<f64> {
+    let rates: Vec<f64> = runs
+        .iter()
+        .filter(|r| r.method == Method::Reference.name())
+        .filter_map(|r| r.timing.as_ref())
+        .filter_map(|t| Some((t.hit_pixels, t.rays_ms?.median)))
+        .filter(|&(px, ms)| ms > 0.0 && px > 0)
+        .map(|(px, ms)| px as f64 / (ms * 1e-3))
+        .collect();
+    Stat::of(&rates).map(|s| s.median)
+}
+
+/// The issue's targets, measured on the worst Table 1 scene at 1024² (or the largest size run).
+pub fn targets(report: &Report) -> Vec<Target> {
+    let size = if report.sizes().contains(&TARGET_SIZE) {
+        TARGET_SIZE
+    } else {
+        report.sizes().last().copied().unwrap_or(TARGET_SIZE)
+    };
+    let worst = |f: &dyn Fn(&str) -> Option<f64>| -> (Option<f64>, String) {
+        let mut best: Option<(f64, &str)> = None;
+        let mut all = Vec::new();
+        let mut missing = Vec::new();
+        for s in &report.scenes {
+            match f(&s.name) {
+                Some(v) => {
+                    all.push(v);
+                    if best.is_none_or(|(b, _)| v > b) {
+                        best = Some((v, &s.name));
+                    }
+                }
+                None => missing.push(s.name.as_str()),
+            }
+        }
+        let median = Stat::of(&all).map_or(f64::NAN, |s| s.median);
+        match best {
+            Some((v, name)) => {
+                let mut detail =
+                    format!("worst scene {name} at {size}² (median over scenes {median:.2})");
+                if !missing.is_empty() {
+                    detail += &format!("; not measured on {}", missing.join(", "));
+                }
+                (Some(v), detail)
+            }
+            None => (None, format!("not measured at {size}²")),
+        }
+    };
+    let frame = worst(&|s| {
+        let d = report.timing(s, size, Method::DBuffer)?;
+        let h = report.timing(s, size, Method::Hard)?;
+        let base = h.frame_by(d.frame_source)?.median;
+        (base > 0.0).then(|| d.frame_ms.median / base)
+    });
+    let camera = worst(&|s| {
+        let d = report
+            .timing(s, size, Method::DBuffer)?
+            .pass("camera_pass")?;
+        let p = report.timing(s, size, Method::Pcss)?.pass("camera_pass")?;
+        (p.median > 0.0).then(|| d.median / p.median)
+    });
+    let geometry = report
+        .scenes
+        .iter()
+        .find(|s| s.caster_triangles == 5760)
+        .map(|s| (s.geometry_ms.median, format!("{} (CPU)", s.name)));
+    vec![
+        Target {
+            name: "D-buffer frame / hard-shadow frame".into(),
+            measured: frame.0,
+            limit: 1.5,
+            strict: false,
+            unit: "×".into(),
+            detail: frame.1,
+        },
+        Target {
+            name: "D-buffer camera pass / PCSS camera pass".into(),
+            measured: camera.0,
+            limit: 1.0,
+            strict: true,
+            unit: "×".into(),
+            detail: camera.1,
+        },
+        Target {
+            name: "geometry of the 5760-triangle caster".into(),
+            measured: geometry.as_ref().map(|g| g.0),
+            limit: 1.0,
+            strict: true,
+            unit: "ms".into(),
+            detail: geometry.map_or_else(|| "table1-5760 not run".into(), |g| g.1),
+        },
+    ]
+}
+
+/// "AMD EPYC 7B13, 2 cores" from /proc/cpuinfo where there is one.
+fn host_description() -> String {
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, m)| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    format!("{model}, {cores} cores")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stat_median_and_min() {
+        let s = Stat::of(&[3.0, 1.0, 2.0]).unwrap();
+        assert_eq!((s.median, s.min), (2.0, 1.0));
+        let s = Stat::of(&[4.0, 1.0, 2.0, 3.0]).unwrap();
+        assert_eq!((s.median, s.min), (2.5, 1.0));
+        assert!(Stat::of(&[]).is_none());
+        assert!(Stat::of(&[f64::NAN]).is_none());
+    }
+
+    #[test]
+    fn every_method_has_a_case() {
+        let cases = Case::all();
+        for m in Method::ALL {
+            assert!(cases.iter().any(|c| c.method == m), "{m} has no case");
+        }
+        for c in &cases {
+            assert!(c.params.validate().is_ok(), "{}", c.label);
+        }
+        let r = Case::for_method(Method::Reference);
+        assert_eq!(r.params.reference_step, 1);
+        assert!(r.cpu_side());
+    }
+
+    #[test]
+    fn scaling_scene_sizes() {
+        for t in SCALING_TRIANGLES {
+            let s = scaling_scene(t);
+            assert_eq!(s.caster_triangle_count(), t as usize);
+        }
+    }
+
+    #[test]
+    fn configs_validate() {
+        assert!(Config::full().validate().is_ok());
+        assert!(Config::quick().validate().is_ok());
+        let bad = Config {
+            frames: 0,
+            ..Config::quick()
+        };
+        assert!(bad.validate().is_err());
+        let bad = Config {
+            sizes: vec![4],
+            ..Config::quick()
+        };
+        assert!(bad.validate().is_err());
+        assert!(Config::quick().estimate_s() < Config::full().estimate_s());
+    }
+}

@@ -1,0 +1,108 @@
+//! `dbuffer bench`: runs [`dbuffer::bench`], prints the markdown tables and writes `bench.json`,
+//! `bench.md` and `geometry-scaling.png` into the output folder.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use dbuffer::bench::{self, Config};
+use dbuffer::fsutil::write_atomic;
+use dbuffer::render::GpuContext;
+
+/// The arguments of `dbuffer bench`, as typed.
+pub struct BenchArgs<'a> {
+    pub quick: bool,
+    pub out: &'a Path,
+    pub frames: Option<usize>,
+    pub warmup: Option<usize>,
+    pub scenes: Option<&'a str>,
+    pub sizes: Option<&'a str>,
+    pub max_triangles: Option<u32>,
+}
+
+/// The run the flags ask for: `--quick` or the full one, then the overrides.
+pub fn config(args: &BenchArgs) -> Result<Config> {
+    let mut config = if args.quick {
+        Config::quick()
+    } else {
+        Config::full()
+    };
+    if let Some(n) = args.frames {
+        if n == 0 {
+            bail!("--frames expects at least 1 timed frame");
+        }
+        config.frames = n;
+    }
+    if let Some(n) = args.warmup {
+        config.warmup = n;
+    }
+    if let Some(list) = args.scenes {
+        config.scenes = list
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect();
+        if config.scenes.is_empty() {
+            bail!("--scenes expects a comma-separated list of scene names, e.g. table1-224,table1-960");
+        }
+    }
+    if let Some(list) = args.sizes {
+        config.sizes = list
+            .split(',')
+            .map(|s| {
+                s.trim().parse::<u32>().map_err(|_| {
+                    anyhow::anyhow!(
+                        "--sizes expects comma-separated square image sizes in pixels, e.g. 300,600,1024; found '{s}'"
+                    )
+                })
+            })
+            .collect::<Result<_>>()?;
+    }
+    if let Some(max) = args.max_triangles {
+        config.scaling.retain(|&t| t <= max);
+        if config.scaling.is_empty() {
+            config.scaling.push(max);
+        }
+    }
+    config.validate()?;
+    Ok(config)
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let config = config(args)?;
+    let ctx = GpuContext::headless()?;
+    eprintln!(
+        "bench on {}: {} scenes × {} sizes × {} methods, {} + {} frames each; about {:.0} s",
+        ctx.adapter_description(),
+        config.scenes.len(),
+        config.sizes.len(),
+        config.cases.len(),
+        config.warmup,
+        config.frames,
+        config.estimate_s()
+    );
+    let mut progress = |line: &str| eprintln!("bench  {line}");
+    let report = bench::run(&ctx, &config, &mut progress)?;
+    let markdown = bench::table::markdown(&report);
+
+    std::fs::create_dir_all(args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let json = serde_json::to_vec_pretty(&report).context("encoding bench.json")?;
+    let mut written: Vec<PathBuf> = Vec::new();
+    let mut write = |name: &str, bytes: &[u8]| -> Result<()> {
+        let path = args.out.join(name);
+        write_atomic(&path, bytes).with_context(|| format!("cannot write {}", path.display()))?;
+        written.push(path);
+        Ok(())
+    };
+    write("bench.json", &json)?;
+    write("bench.md", markdown.as_bytes())?;
+    if !report.scaling.is_empty() {
+        let png = bench::plot::scaling_png(&report.scaling, 900, 600)?;
+        write("geometry-scaling.png", &png)?;
+    }
+    println!("{markdown}");
+    for path in written {
+        eprintln!("wrote  {}", path.display());
+    }
+    Ok(())
+}
