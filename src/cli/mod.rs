@@ -186,10 +186,6 @@ fn progress_line(what: &'static str) -> Box<dyn FnMut(usize, usize)> {
     })
 }
 
-pub fn not_yet(what: &str, issue: u32) -> Result<()> {
-    bail!("{what} is not yet available (it lands with issue #{issue}); try `dbuffer inspect SCENE`")
-}
-
 pub fn inspect(
     name: &str,
     samples: Option<usize>,
