@@ -1,9 +1,14 @@
 //! Files: open a scene or an OBJ (dialog, path field, built-ins, recent files), save the scene
 //! (temporary file, then rename), export a PNG of the viewport as shown (overlays included).
 //! Every failure goes to the status line; the lab keeps running on what it had.
+//!
+//! Dialogs come from the desktop (rfd: the XDG portal, else zenity). Where there is neither — a
+//! bare X server, a container — the lab says so instead of doing nothing: files open from the
+//! Scene path field, and Save as / Export write a new file in the working directory.
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 use eframe::egui;
 
@@ -46,6 +51,57 @@ pub fn crop(image: &egui::ColorImage, rect: egui::Rect, pixels_per_point: f32) -
     egui::ColorImage::new([x1 - x0, y1 - y0], pixels)
 }
 
+/// What a file dialog gave.
+enum Picked {
+    Path(PathBuf),
+    Cancelled,
+    /// No dialog could be shown.
+    NoDialog,
+}
+
+/// Whether a dialog can be shown at all: rfd needs a D-Bus session (for the XDG portal) or
+/// `zenity` on the PATH.
+fn dialog_possible() -> bool {
+    let bus = std::env::var_os("DBUS_SESSION_BUS_ADDRESS").is_some();
+    let zenity = std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join("zenity").is_file()));
+    bus || zenity
+}
+
+/// Run a dialog. One that returns nothing faster than a person can cancel never appeared.
+fn pick(run: impl FnOnce() -> Option<PathBuf>) -> Picked {
+    if !dialog_possible() {
+        return Picked::NoDialog;
+    }
+    let start = Instant::now();
+    match run() {
+        Some(path) => Picked::Path(path),
+        None if start.elapsed() < Duration::from_millis(150) => Picked::NoDialog,
+        None => Picked::Cancelled,
+    }
+}
+
+/// `dir/name.ext`, or `dir/name-2.ext`, `-3`… — the first that does not exist, so a fallback
+/// save never replaces a file the user did not choose.
+pub fn unused_path(dir: &Path, name: &str, ext: &str) -> PathBuf {
+    let first = dir.join(format!("{name}.{ext}"));
+    if !first.exists() {
+        return first;
+    }
+    (2..)
+        .map(|i| dir.join(format!("{name}-{i}.{ext}")))
+        .find(|p| !p.exists())
+        .unwrap_or(first)
+}
+
+/// Where Save as / Export write when there is no dialog.
+fn fallback_path(name: &str, ext: &str) -> PathBuf {
+    let dir = std::env::current_dir().unwrap_or_else(|_| PathBuf::from("."));
+    unused_path(&dir, name, ext)
+}
+
+const NO_DIALOG: &str = "no file dialog here (it needs xdg-desktop-portal or zenity)";
+
 fn with_extension(path: PathBuf, ext: &str) -> PathBuf {
     if path.extension().is_some() {
         path
@@ -62,8 +118,13 @@ impl LabApp {
         if let Some(dir) = self.doc.path.as_deref().and_then(Path::parent) {
             dialog = dialog.set_directory(dir);
         }
-        if let Some(path) = dialog.pick_file() {
-            self.open_scene(&path.display().to_string());
+        match pick(|| dialog.pick_file()) {
+            Picked::Path(path) => self.open_scene(&path.display().to_string()),
+            Picked::Cancelled => {}
+            Picked::NoDialog => self.set_status(
+                format!("{NO_DIALOG}: type a scene or OBJ path in Scene path"),
+                Level::Warning,
+            ),
         }
     }
 
@@ -76,13 +137,20 @@ impl LabApp {
 
     pub(super) fn save_as_dialog(&mut self) {
         let name = format!("{}.toml", self.doc.name);
-        if let Some(path) = rfd::FileDialog::new()
-            .set_title("Save the scene")
-            .add_filter("scene", &["toml"])
-            .set_file_name(name)
-            .save_file()
-        {
-            self.save_to(&with_extension(path, "toml"));
+        let picked = pick(|| {
+            rfd::FileDialog::new()
+                .set_title("Save the scene")
+                .add_filter("scene", &["toml"])
+                .set_file_name(name)
+                .save_file()
+        });
+        match picked {
+            Picked::Path(path) => self.save_to(&with_extension(path, "toml")),
+            Picked::Cancelled => {}
+            Picked::NoDialog => {
+                let name = self.doc.name.clone();
+                self.save_to(&fallback_path(&name, "toml"));
+            }
         }
     }
 
@@ -101,14 +169,18 @@ impl LabApp {
         let Some(rect) = self.viewport.rect else {
             return;
         };
-        let name = format!("{}-{}.png", self.doc.name, self.settings.method);
-        if let Some(path) = rfd::FileDialog::new()
-            .set_title("Export the viewport as PNG")
-            .add_filter("PNG image", &["png"])
-            .set_file_name(name)
-            .save_file()
-        {
-            self.export_to(ctx, with_extension(path, "png"), rect);
+        let name = format!("{}-{}", self.doc.name, self.settings.method);
+        let picked = pick(|| {
+            rfd::FileDialog::new()
+                .set_title("Export the viewport as PNG")
+                .add_filter("PNG image", &["png"])
+                .set_file_name(format!("{name}.png"))
+                .save_file()
+        });
+        match picked {
+            Picked::Path(path) => self.export_to(ctx, with_extension(path, "png"), rect),
+            Picked::Cancelled => {}
+            Picked::NoDialog => self.export_to(ctx, fallback_path(&name, "png"), rect),
         }
     }
 
@@ -162,6 +234,20 @@ mod tests {
         assert_eq!(c.pixels[1], egui::Color32::RED);
         let outside = egui::Rect::from_min_max(egui::pos2(10.0, 10.0), egui::pos2(20.0, 20.0));
         assert_eq!(crop(&image, outside, 1.0).size, [0, 0]);
+    }
+
+    #[test]
+    fn fallback_paths_never_name_an_existing_file() {
+        let dir = std::env::temp_dir().join(format!("dbuffer-unused-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let first = unused_path(&dir, "scene", "toml");
+        assert_eq!(first, dir.join("scene.toml"));
+        std::fs::write(&first, "x").unwrap();
+        let second = unused_path(&dir, "scene", "toml");
+        assert_eq!(second, dir.join("scene-2.toml"));
+        std::fs::write(&second, "x").unwrap();
+        assert_eq!(unused_path(&dir, "scene", "toml"), dir.join("scene-3.toml"));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -31,6 +31,7 @@ impl LabApp {
     pub(super) fn inspector_panel(&mut self, ui: &mut egui::Ui) {
         egui::Panel::right("inspector")
             .default_size(230.0)
+            .min_size(230.0)
             .max_size(300.0)
             .resizable(true)
             .show(ui, |ui| {
@@ -147,8 +148,9 @@ impl LabApp {
             Some(v) => format!("{v:.1} ms"),
             None => "—".into(),
         };
-        rows.push(("render (CPU wall)".into(), ms(s.median_wall_ms(false))));
-        rows.push(("  with geometry".into(), ms(s.median_wall_ms(true))));
+        // Median CPU wall time of a render, apart for renders that rebuilt the geometry.
+        rows.push(("render".into(), ms(s.median_wall_ms(false))));
+        rows.push(("  + new geometry".into(), ms(s.median_wall_ms(true))));
         rows.push(("CPU geometry".into(), ms(s.median_geometry_ms())));
         let gpu = s.median_gpu_ms();
         if gpu.is_empty() {
@@ -202,7 +204,7 @@ impl LabApp {
                     ui.end_row();
                 }
             });
-        ui.label(RichText::new("render ms (white) · frame ms (green)").small());
+        ui.label(RichText::new("render ms (white) · frame CPU ms (green)").small());
         if hide {
             return;
         }
@@ -219,7 +221,7 @@ impl LabApp {
                     Color32::WHITE,
                 ),
                 (
-                    s.frame_dt.iter().map(|dt| dt * 1000.0).collect(),
+                    s.frame_cpu_ms.iter().copied().collect(),
                     Color32::from_rgb(120, 220, 120),
                 ),
             ],

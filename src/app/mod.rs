@@ -243,10 +243,19 @@ impl LabApp {
                     None => self.set_status(self.opened_message(), Level::Info),
                 }
             }
-            Err(e) => self.set_status(
-                format!("cannot open {name_or_path}: {e} (kept {})", self.doc.name),
-                Level::Error,
-            ),
+            Err(e) => {
+                // Scene file errors already name their file.
+                let e = e.to_string();
+                let what = if e.contains(name_or_path) {
+                    e
+                } else {
+                    format!("{name_or_path}: {e}")
+                };
+                self.set_status(
+                    format!("cannot open {what} (kept {})", self.doc.name),
+                    Level::Error,
+                )
+            }
         }
     }
 
@@ -343,9 +352,9 @@ fn context_of(rs: &egui_wgpu::RenderState) -> GpuContext {
 }
 
 impl eframe::App for LabApp {
-    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
-        self.stats.ui_frame(&ctx);
+        self.stats.ui_frame(&ctx, frame.info().cpu_usage);
         self.shortcuts(&ctx);
         self.menu_bar(ui);
         self.status_bar(ui);

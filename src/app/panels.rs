@@ -108,8 +108,16 @@ impl LabApp {
                     Level::Warning => Color32::from_rgb(230, 190, 60),
                     Level::Error => Color32::from_rgb(255, 110, 100),
                 };
-                ui.label(RichText::new(text).color(color))
-                    .on_hover_text("the last message");
+                // One line, so a long message (a TOML error draws a caret diagram) never
+                // shrinks the viewport, which would restart the reference; all of it on hover.
+                let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+                let first = lines.next().unwrap_or_default();
+                let line = match lines.next_back() {
+                    Some(last) => format!("{first} … {last}"),
+                    None => first.to_string(),
+                };
+                ui.add(egui::Label::new(RichText::new(line).color(color)).truncate())
+                    .on_hover_text(text);
                 if let Some(core) = self.core.as_ref() {
                     let warnings = &core.geometry().warnings;
                     if !warnings.is_empty() {
@@ -120,7 +128,7 @@ impl LabApp {
                         .on_hover_text(warnings.join("\n"));
                     }
                     if let Some((done, total)) = core.reference_progress() {
-                        if done < total {
+                        if done < total && self.settings.needs_reference() {
                             ui.add(
                                 egui::ProgressBar::new(done as f32 / total.max(1) as f32)
                                     .desired_width(160.0)
@@ -136,6 +144,7 @@ impl LabApp {
     pub(super) fn controls_panel(&mut self, ui: &mut egui::Ui) {
         egui::Panel::left("controls")
             .default_size(250.0)
+            .min_size(200.0)
             .resizable(true)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {

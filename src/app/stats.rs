@@ -1,5 +1,6 @@
 //! Timings the lab shows: per render, the render core's wall time (with or without a geometry
-//! rebuild) and GPU time per pass from timestamp queries; per window frame, the frame rate.
+//! rebuild) and GPU time per pass from timestamp queries; per window frame, the CPU time it took
+//! and the frame rate.
 
 use std::collections::VecDeque;
 
@@ -18,15 +19,22 @@ pub struct RenderTiming {
 
 #[derive(Default)]
 pub struct Stats {
-    /// Window frame intervals, seconds.
+    /// Window frame intervals, seconds (idle gaps included: the lab draws only on change).
     pub frame_dt: VecDeque<f32>,
+    /// CPU milliseconds of each window frame (eframe's measure: the app's update and its
+    /// render), which unlike the interval leaves out the idle time between frames.
+    pub frame_cpu_ms: VecDeque<f32>,
     pub renders: VecDeque<RenderTiming>,
     pub renders_total: u64,
     last_frame: Option<f64>,
 }
 
 impl Stats {
-    pub fn ui_frame(&mut self, ctx: &egui::Context) {
+    /// Called at the start of every window frame with eframe's CPU time of the previous one.
+    pub fn ui_frame(&mut self, ctx: &egui::Context, previous_cpu_s: Option<f32>) {
+        if let Some(s) = previous_cpu_s.filter(|s| s.is_finite() && *s >= 0.0) {
+            push(&mut self.frame_cpu_ms, s * 1000.0);
+        }
         let now = ctx.input(|i| i.time);
         if let Some(last) = self.last_frame {
             let dt = (now - last) as f32;
@@ -141,6 +149,16 @@ mod tests {
             s.render(1.0, None, &[]);
         }
         assert_eq!(s.renders.len(), KEEP);
+    }
+
+    #[test]
+    fn frame_cpu_time_leaves_out_idle_gaps_and_bad_readings() {
+        let ctx = egui::Context::default();
+        let mut s = Stats::default();
+        for cpu in [None, Some(0.004), Some(f32::NAN), Some(-1.0), Some(0.25)] {
+            s.ui_frame(&ctx, cpu);
+        }
+        assert_eq!(s.frame_cpu_ms, [4.0, 250.0]);
     }
 
     #[test]

@@ -257,7 +257,7 @@ impl LabApp {
         {
             shown.reference = progress;
         }
-        if core.converging() && (shows_reference || self.settings.view == View::Error) {
+        if core.converging() && self.settings.needs_reference() {
             ctx.request_repaint();
         }
         if errors.is_empty() {
