@@ -4,25 +4,16 @@
 //! refused with a one-line reason and nothing written. No timing is asserted.
 
 use std::path::PathBuf;
-use std::process::Command;
 
 use dbuffer::bench::{FrameSource, Report};
 use dbuffer::render::Method;
 
-fn dbuffer() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_dbuffer"));
-    c.env(
-        "WGPU_BACKEND",
-        std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()),
-    );
-    c.env("NODEVICE_SELECT", "1");
-    c
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::dbuffer;
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("dbuffer-bench-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    cli::temp_dir("bench-cli", name)
 }
 
 #[test]

@@ -2,25 +2,15 @@
 //! exits non-zero with a one-line reason and leaves no half-written folder.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use dbuffer::output::{self, read_exr_rgba};
 
-fn dbuffer() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_dbuffer"));
-    c.env(
-        "WGPU_BACKEND",
-        std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()),
-    );
-    c.env("NODEVICE_SELECT", "1");
-    c
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::dbuffer;
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("dbuffer-render-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    cli::temp_dir("render-cli", name)
 }
 
 #[test]

@@ -111,16 +111,7 @@ impl LabApp {
                 rows.push((format!("reference V{samples}"), value(reference)));
             }
         }
-        egui::Grid::new("pixel-grid")
-            .num_columns(2)
-            .max_col_width(140.0)
-            .show(ui, |ui| {
-                for (k, v) in rows {
-                    ui.label(k);
-                    ui.label(RichText::new(v).monospace());
-                    ui.end_row();
-                }
-            });
+        rows_grid(ui, "pixel-grid", rows);
     }
 
     fn stats_section(&self, ui: &mut egui::Ui) {
@@ -194,16 +185,7 @@ impl LabApp {
             ));
             rows.push(("geometry builds".into(), core.geometry_builds().to_string()));
         }
-        egui::Grid::new("stats-grid")
-            .num_columns(2)
-            .max_col_width(140.0)
-            .show(ui, |ui| {
-                for (k, v) in rows {
-                    ui.label(k);
-                    ui.label(RichText::new(v).monospace());
-                    ui.end_row();
-                }
-            });
+        rows_grid(ui, "stats-grid", rows);
         ui.label(RichText::new("render ms (white) · frame CPU ms (green)").small());
         if hide {
             return;
@@ -262,4 +244,18 @@ fn plot(ui: &egui::Ui, rect: Rect, series: &[(Vec<f32>, Color32)]) {
         egui::FontId::proportional(10.0),
         Color32::GRAY,
     );
+}
+
+/// Label / monospace value rows, two columns.
+fn rows_grid(ui: &mut egui::Ui, id: &str, rows: Vec<(String, String)>) {
+    egui::Grid::new(id)
+        .num_columns(2)
+        .max_col_width(140.0)
+        .show(ui, |ui| {
+            for (k, v) in rows {
+                ui.label(k);
+                ui.label(RichText::new(v).monospace());
+                ui.end_row();
+            }
+        });
 }
