@@ -147,10 +147,7 @@ impl LabApp {
         match picked {
             Picked::Path(path) => self.save_to(&with_extension(path, "toml")),
             Picked::Cancelled => {}
-            Picked::NoDialog => {
-                let name = self.doc.name.clone();
-                self.save_to(&fallback_path(&name, "toml"));
-            }
+            Picked::NoDialog => self.save_to(&fallback_path(&self.doc.name, "toml")),
         }
     }
 

@@ -100,12 +100,16 @@ impl Settings {
         self.split_method.parse().unwrap_or(Method::Reference)
     }
 
+    /// Whether the reference is one of the methods on screen (either side of a split).
+    pub fn shows_reference(&self) -> bool {
+        self.method() == Method::Reference
+            || (self.split && self.split_method() == Method::Reference)
+    }
+
     /// Whether what is shown needs the reference: it is a shown method, or the error view
     /// measures against it. Only then does it converge (and the status bar show its progress).
     pub fn needs_reference(&self) -> bool {
-        self.method() == Method::Reference
-            || (self.split && self.split_method() == Method::Reference)
-            || self.view == View::Error
+        self.shows_reference() || self.view == View::Error
     }
 
     pub fn vt(&self) -> VtVariant {

@@ -230,8 +230,7 @@ impl LabApp {
             }
         }
         // The error view needs the reference even when neither side shows it.
-        let shows_reference = methods.contains(&Some(Method::Reference));
-        if self.settings.view == View::Error && !shows_reference {
+        if self.settings.view == View::Error && !self.settings.shows_reference() {
             let request = FrameRequest {
                 method: Method::Reference,
                 ..base
