@@ -7,11 +7,14 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 
+/// The lab in a test window. Values come back from the GPU a frame or more later (a probe, the
+/// reference's samples), and the window repaints until they have: on lavapipe that can take a
+/// few dozen quick test frames, hence the generous step limit.
 fn lab(scene: Option<&str>) -> Harness<'static, LabApp> {
     let scene = scene.map(str::to_string);
     Harness::builder()
         .with_size(egui::vec2(900.0, 640.0))
-        .with_max_steps(24)
+        .with_max_steps(500)
         .with_render_cursor(false)
         .wgpu()
         .build_eframe(move |cc| {

@@ -243,7 +243,8 @@ impl LightMapsData {
             return None;
         }
         let i = (y * self.size + x) as usize;
-        let mut out = [[0.0f32; 4]; 3];
+        // As textureLoad reads a texture with fewer channels: missing G and B are 0, A is 1.
+        let mut out = [[0.0, 0.0, 0.0, 1.0f32]; 3];
         for (slot, &d) in out.iter_mut().zip(&self.slots) {
             let (n, values) = self.data.get(d)?;
             for (c, v) in slot.iter_mut().take(*n).enumerate() {
