@@ -40,33 +40,40 @@ fn main() -> anyhow::Result<()> {
     );
     for name in names {
         let scene = scene::load(name)?;
-        let mut session = Session::new(&ctx, scene);
-        for &method in &methods {
-            let request = FrameRequest {
-                width: size,
-                height: size,
-                dbuffer_size: 1024,
-                method,
-                vt: VtVariant::Smoothstep,
-                ..FrameRequest::default()
-            };
-            let mut passes: Vec<(String, Vec<f64>)> = Vec::new();
-            for i in 0..frames + 2 {
-                session.invalidate_light_maps();
-                let frame = session.frame(&ctx, &request)?;
+        // One session per method, frames interleaved method by method so a machine whose speed
+        // drifts slows every method alike.
+        let mut sessions: Vec<Session> = methods
+            .iter()
+            .map(|_| Session::new(&ctx, scene.clone()))
+            .collect();
+        let mut passes: Vec<Vec<(String, Vec<f64>)>> = vec![Vec::new(); methods.len()];
+        for i in 0..frames + 2 {
+            for (k, &method) in methods.iter().enumerate() {
+                let request = FrameRequest {
+                    width: size,
+                    height: size,
+                    dbuffer_size: 1024,
+                    method,
+                    vt: VtVariant::Smoothstep,
+                    ..FrameRequest::default()
+                };
+                sessions[k].invalidate_light_maps();
+                let frame = sessions[k].frame(&ctx, &request)?;
                 if i < 2 {
                     continue;
                 }
                 for (pass, ms) in frame.gpu_ms {
-                    match passes.iter_mut().find(|(p, _)| *p == pass) {
+                    match passes[k].iter_mut().find(|(p, _)| *p == pass) {
                         Some((_, v)) => v.push(ms),
-                        None => passes.push((pass, vec![ms])),
+                        None => passes[k].push((pass, vec![ms])),
                     }
                 }
             }
-            let cells: Vec<String> = passes
-                .into_iter()
-                .map(|(p, v)| format!("{p} {:.2}", median(v)))
+        }
+        for (k, method) in methods.iter().enumerate() {
+            let cells: Vec<String> = passes[k]
+                .iter()
+                .map(|(p, v)| format!("{p} {:.2}", median(v.clone())))
                 .collect();
             println!("{name:<14} {method:<15} {}", cells.join("  "));
         }

@@ -235,3 +235,56 @@ fn dbuffer_center_builds_its_own_volumes_and_invalidation_forces_a_rebuild() {
     session.frame(&ctx, &request(Method::DBUFFER)).unwrap();
     assert_eq!(session.geometry_builds(Method::DBUFFER).0, 2);
 }
+
+/// The D-buffer's volume channels are cleared only where volumes were or will be drawn: after
+/// the light moves (the shadow shrinks, moves, grows) a frame must equal a fresh session's, the
+/// D-buffer itself included.
+#[test]
+fn a_moved_light_leaves_nothing_of_the_old_d_buffer() {
+    let ctx = ctx();
+    for name in ["table1-960", "overlap"] {
+        let scene = scene::load(name).unwrap_or_else(|e| panic!("{e}"));
+        let light = scene.light;
+        let mut session = Session::new(&ctx, scene.clone());
+        let request = FrameRequest {
+            width: 64,
+            height: 64,
+            dbuffer_size: 128,
+            read_dbuffer: true,
+            ..FrameRequest::default()
+        };
+        session
+            .frame(&ctx, &request)
+            .unwrap_or_else(|e| panic!("{e}"));
+        for (k, offset) in [
+            Vec3::new(0.8, 0.0, 0.0),
+            Vec3::new(-0.6, 1.0, 0.3),
+            Vec3::new(0.0, -0.5, 0.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let mut moved = light;
+            moved.center += offset;
+            session.set_light(moved);
+            let kept = session
+                .frame(&ctx, &request)
+                .unwrap_or_else(|e| panic!("{e}"));
+            let mut fresh_scene = scene.clone();
+            fresh_scene.light = moved;
+            let fresh = Session::new(&ctx, fresh_scene)
+                .frame(&ctx, &request)
+                .unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(kept.visibility, fresh.visibility, "{name}, move {k}: V");
+            let (a, b) = (kept.maps.expect("maps"), fresh.maps.expect("maps"));
+            for slot in 0..3 {
+                for c in 0..2 {
+                    assert!(
+                        a.raw(slot, c) == b.raw(slot, c),
+                        "{name}, move {k}: light map {slot}.{c} differs from a fresh one"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -6,6 +6,8 @@
 //            with the depth test Greater)
 //   |cx_pv|  the nearest penumbra entry (faces whose normal points toward c), drawn over the
 //            surfaces' depth: an entry behind the nearest surface is never looked up
+// The targets are cleared only inside the rectangles the volumes can cover (vs_clear, fs_clear):
+// everywhere else they still hold "no crossing" from before.
 //   |cx_s|   eq. (2) from the fragment that won, kept per volume (the .y of the volume targets)
 // Distances are true Euclidean |p - c| per fragment, not interpolated vertex distances.
 // #include shared/light.wgsl
@@ -20,19 +22,20 @@ const KIND_SILHOUETTE_FACE_B: u32 = 2u;
 struct VolumeIn {
     @location(0) position: vec3<f32>,
     @location(1) kind: u32,
-    // The silhouette edge and the rim point the triangle was extruded from.
-    @location(2) edge_a: vec3<f32>,
-    @location(3) edge_b: vec3<f32>,
-    @location(4) extrusion: vec3<f32>,
+    // The edge point's height below the light's plane is base + num / den, num and den affine
+    // over the triangle (render::methods::dbuffer::volume_vertices says why).
+    @location(2) base: f32,
+    @location(3) num: f32,
+    @location(4) den: f32,
 };
 
 struct VolumeOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) @interpolate(flat) kind: u32,
-    @location(2) @interpolate(flat) edge_a: vec3<f32>,
-    @location(3) @interpolate(flat) edge_b: vec3<f32>,
-    @location(4) @interpolate(flat) extrusion: vec3<f32>,
+    @location(2) @interpolate(flat) base: f32,
+    @location(3) num: f32,
+    @location(4) den: f32,
 };
 
 @vertex
@@ -41,50 +44,46 @@ fn vs_volume(v: VolumeIn) -> VolumeOut {
     out.clip = light.view_proj * vec4<f32>(v.position, 1.0);
     out.world = v.position;
     out.kind = v.kind;
-    out.edge_a = v.edge_a;
-    out.edge_b = v.edge_b;
-    out.extrusion = v.extrusion;
+    out.base = v.base;
+    out.num = v.num;
+    out.den = v.den;
     return out;
-}
-
-// The point of the line a-b closest to the line p-q (a when parallel or a = b); the CPU twin is
-// geometry::volumes::closest_point_on_line.
-fn closest_point_on_line(a: vec3<f32>, b: vec3<f32>, p: vec3<f32>, q: vec3<f32>) -> vec3<f32> {
-    let d1 = b - a;
-    let d2 = q - p;
-    let w0 = a - p;
-    let aa = dot(d1, d1);
-    let bb = dot(d1, d2);
-    let cc = dot(d2, d2);
-    let dd = dot(d1, w0);
-    let ee = dot(d2, w0);
-    let den = aa * cc - bb * bb;
-    if !(den > 1e-12 * aa * cc) {
-        return a;
-    }
-    return a + d1 * ((bb * ee - cc * dd) / den);
 }
 
 // |cx_s| (eq. 2 as the brief defines it in words): the distance along the ray from c to the plane
 // through the silhouette edge parallel to the disk, at the edge point this fragment was extruded
 // from. A silhouette face is its own edge. Twin: VolumeVertex::edge_plane_distance.
-fn edge_plane_distance(f: VolumeOut, d: f32) -> f32 {
+fn edge_plane_distance(f: VolumeOut, to_fragment: vec3<f32>, d: f32) -> f32 {
     if f.kind == KIND_SILHOUETTE_FACE_A || f.kind == KIND_SILHOUETTE_FACE_B {
         return d;
     }
-    let along = dot(f.world - light.center, light.normal) / d;
+    let along = dot(to_fragment, light.normal) / d;
     if !(along > 0.0) {
         return 3.0e38;
     }
-    let e = closest_point_on_line(f.edge_a, f.edge_b, f.extrusion, f.world);
-    return dot(e - light.center, light.normal) / along;
+    return (f.base + f.num / f.den) / along;
 }
 
 // Umbra exits and penumbra entries alike: the pipelines' culling keeps only the faces that count.
 @fragment
 fn fs_volume(f: VolumeOut) -> @location(0) vec4<f32> {
-    let d = distance(f.world, light.center);
-    return vec4<f32>(d, edge_plane_distance(f, d), 0.0, 0.0);
+    let to_fragment = f.world - light.center;
+    let d = length(to_fragment);
+    return vec4<f32>(d, edge_plane_distance(f, to_fragment, d), 0.0, 0.0);
+}
+
+// ---- Clearing a rectangle: "no crossing" (0) and, for the umbra, depth 1 ----
+
+@vertex
+fn vs_clear(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let x = f32((i << 1u) & 2u) * 2.0 - 1.0;
+    let y = f32(i & 2u) * 2.0 - 1.0;
+    return vec4<f32>(x, y, 1.0, 1.0);
+}
+
+@fragment
+fn fs_clear() -> @location(0) vec4<f32> {
+    return vec4<f32>(0.0);
 }
 
 // ---- Merge: the farthest of the casters' nearest umbra exits ----

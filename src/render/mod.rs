@@ -30,8 +30,15 @@ pub use session::Session;
 /// The expanded source of an embedded shader. The embedded set is fixed at compile time and
 /// `tests/shaders.rs` expands and validates every file of it, so a failure here is a build defect;
 /// it still yields WGSL (an empty module) rather than a panic, and pipeline creation then reports it.
+///
+/// For shader work, `DBUFFER_SHADER_DIR=shaders` reads them from that folder instead, so an edit
+/// needs no rebuild (the validation errors then come from pipeline creation).
 pub(crate) fn shader(name: &str) -> String {
-    crate::shader_source::load(name).unwrap_or_else(|e| format!("// {e}\n"))
+    let loaded = match std::env::var_os("DBUFFER_SHADER_DIR") {
+        Some(dir) => crate::shader_source::from_dir(std::path::Path::new(&dir), name),
+        None => crate::shader_source::load(name),
+    };
+    loaded.unwrap_or_else(|e| format!("// {e}\n"))
 }
 
 /// A shader module from an embedded shader, labelled with its name.
@@ -314,17 +321,19 @@ impl SurfaceVertex {
     }
 }
 
-/// GPU vertex of a shadow volume: position, kind, and the silhouette edge and rim point it was
-/// extruded from (for eq. 2 per fragment). Which way a ray crosses the triangle is its winding,
-/// which the pipelines' culling reads.
+/// GPU vertex of a shadow volume: position, kind, and what `|cx_s|` needs — the height below the
+/// light's plane of the edge point the fragment was extruded from, as `base + num / den` with
+/// `num` and `den` affine over the triangle (so interpolating them is exact; see
+/// `render::methods::dbuffer::volume_vertices`). Which way a ray crosses the triangle is its
+/// winding, which the pipelines' culling reads.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct VolumeVertex {
     pub position: [f32; 3],
     pub kind: u32,
-    pub edge_a: [f32; 3],
-    pub edge_b: [f32; 3],
-    pub extrusion: [f32; 3],
+    pub base: f32,
+    pub num: f32,
+    pub den: f32,
 }
 
 impl VolumeVertex {
@@ -340,18 +349,18 @@ impl VolumeVertex {
             shader_location: 1,
         },
         wgpu::VertexAttribute {
-            format: wgpu::VertexFormat::Float32x3,
+            format: wgpu::VertexFormat::Float32,
             offset: 16,
             shader_location: 2,
         },
         wgpu::VertexAttribute {
-            format: wgpu::VertexFormat::Float32x3,
-            offset: 28,
+            format: wgpu::VertexFormat::Float32,
+            offset: 20,
             shader_location: 3,
         },
         wgpu::VertexAttribute {
-            format: wgpu::VertexFormat::Float32x3,
-            offset: 40,
+            format: wgpu::VertexFormat::Float32,
+            offset: 24,
             shader_location: 4,
         },
     ];
@@ -366,4 +375,4 @@ impl VolumeVertex {
 }
 
 const _: () = assert!(std::mem::size_of::<SurfaceVertex>() == 16);
-const _: () = assert!(std::mem::size_of::<VolumeVertex>() == 52);
+const _: () = assert!(std::mem::size_of::<VolumeVertex>() == 28);

@@ -19,7 +19,7 @@ use super::{
 use crate::geometry::light_view::LightView;
 use crate::geometry::{CasterGeometry, SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::VertexChunks;
-use crate::render::passes::dbuffer_volumes::{CasterVolumes, DBufferVolumes};
+use crate::render::passes::dbuffer_volumes::{disjoint_groups, CasterVolumes, DBufferVolumes};
 use crate::render::passes::shadow_map::{lookup_entries, LightUniforms, ShadowUniforms};
 use crate::render::timer::Recorder;
 use crate::render::{
@@ -88,6 +88,8 @@ pub struct DBuffer {
     geometry_ms: f64,
     casters: Vec<CasterVolumes>,
     penumbra: VertexChunks,
+    /// Where the penumbra entries can be in the light view's image.
+    penumbra_rect: [f32; 4],
     volumes: DBufferVolumes,
     /// The revision, size and shadow map generation the volume channels hold.
     made_for: Option<(u64, u32, u64)>,
@@ -120,6 +122,7 @@ impl DBuffer {
             geometry_ms: 0.0,
             casters: Vec::new(),
             penumbra: VertexChunks::empty(),
+            penumbra_rect: [0.0, 0.0, 1.0, 1.0],
             volumes: DBufferVolumes::new(ctx),
             made_for: None,
             view_proj: glam::Mat4::IDENTITY,
@@ -145,22 +148,59 @@ impl DBuffer {
         self.geometry_ms = t.elapsed().as_secs_f64() * 1e3;
         self.builds += 1;
         let device = &inputs.ctx.device;
+        let light = inputs.scene.light;
+        // The farthest any surface lies below the light's plane (a little beyond).
+        let (lo, hi) = inputs.surfaces.bounds;
+        let reach = (0..8)
+            .map(|k| {
+                let corner = Vec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                );
+                light.height_of(corner)
+            })
+            .fold(0.0f32, f32::max);
+        let reach = if reach.is_finite() {
+            reach * 1.01 + 1e-3
+        } else {
+            f32::MAX
+        };
         let mut penumbra = Vec::new();
-        self.casters = geometry
+        let umbrae: Vec<Vec<VolumeVertex>> = geometry
             .casters
             .iter()
             .map(|g| {
-                let (umbra, pen) = volume_vertices(g);
-                penumbra.extend(pen);
+                let (umbra, pen) = volume_vertices(g, &light);
+                penumbra.extend(end_at(&pen, &light, reach));
+                umbra
+            })
+            .collect();
+        let rects: Vec<[f32; 4]> = umbrae
+            .iter()
+            .map(|u| light_view_rect(inputs.light_view, u.iter().map(|v| Vec3::from(v.position))))
+            .collect();
+        // Umbrae drawn straight into the target (no merge over casters) may end at the reach too.
+        let merged = disjoint_groups(&rects).len() > 1;
+        self.casters = umbrae
+            .into_iter()
+            .zip(rects)
+            .map(|(umbra, rect)| {
+                let umbra = if merged {
+                    umbra
+                } else {
+                    end_at(&umbra, &light, reach)
+                };
                 CasterVolumes {
-                    rect: light_view_rect(
-                        inputs.light_view,
-                        umbra.iter().map(|v| Vec3::from(v.position)),
-                    ),
+                    rect,
                     umbra: VertexChunks::new(device, "DBuffer::umbra", &umbra),
                 }
             })
             .collect();
+        self.penumbra_rect = light_view_rect(
+            inputs.light_view,
+            penumbra.iter().map(|v| Vec3::from(v.position)),
+        );
         self.penumbra = VertexChunks::new(device, "DBuffer::penumbra", &penumbra);
         self.geometry = Some((geometry, inputs.revision));
         self.made_for = None;
@@ -181,17 +221,24 @@ impl MethodState for DBuffer {
         };
         let key = (inputs.revision, map.size, map.generation);
         if self.made_for != Some(key) {
+            let Some(depth) = shared.shadow_map.depth_for_drawing(inputs, rec) else {
+                return Err(RenderError::Gpu("the shadow map was not made".into()));
+            };
             self.volumes.record(
                 inputs.ctx,
                 rec,
                 &LightUniforms::new(&inputs.scene.light, inputs.light_view),
-                &map.depth.texture,
+                depth,
                 &self.casters,
                 &self.penumbra,
+                self.penumbra_rect,
             );
             self.made_for = Some(key);
             self.view_proj = inputs.light_view.view_projection();
         }
+        let Some(map) = shared.shadow_map.targets() else {
+            return Err(RenderError::Gpu("the shadow map was not made".into()));
+        };
         let uniforms = ShadowUniforms::new(inputs.light_view, map.size, [0.0; 4]);
         inputs
             .ctx
@@ -260,26 +307,105 @@ impl MethodState for DBuffer {
     }
 }
 
-/// The caster's volume triangles as GPU vertices, umbra and penumbra apart, each vertex carrying
-/// its triangle's attributes (its winding says which way a ray crosses it).
-pub fn volume_vertices(g: &CasterGeometry) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
+/// The caster's volume triangles as GPU vertices, umbra and penumbra apart (their winding says
+/// which way a ray crosses them).
+///
+/// `|cx_s|` (eq. 2 in words) needs the height `h` below the light's plane of the edge point `e`
+/// a fragment `q` was extruded from: `e` is where the line from the extrusion point `p` through
+/// `q` meets the edge (the twin finds it as the closest point of the two lines). On the quad's
+/// plane `q = p + μ(e − p)`; for any `w` across the edge, `μ = (q − p)·w / (a − p)·w` is affine in
+/// `q`, so `h = (p − c)·n + ((q − p)·n) ((a − p)·w) / ((q − p)·w)` is `base + num/den` with `num`
+/// and `den` affine over the triangle: their vertex values interpolate exactly, and the fragment
+/// shader does one division instead of solving for `e`. A fan (its edge is its apex) and an edge
+/// its extrusion point lies on have a constant `h`.
+pub fn volume_vertices(
+    g: &CasterGeometry,
+    light: &crate::scene::DiskLight,
+) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
+    let (c, n) = (light.center, light.normal);
     let (mut umbra, mut penumbra) = (Vec::new(), Vec::new());
     for i in 0..g.volumes.triangle_count() {
         let (corners, attrs) = g.volumes.triangle(i);
+        let [a, b] = attrs.edge;
+        let p = attrs.extrusion;
+        let along = (b - a).normalize_or_zero();
+        let w = (p - a) - along * (p - a).dot(along);
+        let ratio = w.length_squared() > 1e-12 * (p - a).length_squared().max(1e-30);
         let out = if attrs.kind.is_umbra() {
             &mut umbra
         } else {
             &mut penumbra
         };
-        out.extend(corners.map(|p| VolumeVertex {
-            position: p.to_array(),
-            kind: attrs.kind.code(),
-            edge_a: attrs.edge[0].to_array(),
-            edge_b: attrs.edge[1].to_array(),
-            extrusion: attrs.extrusion.to_array(),
+        out.extend(corners.map(|q| {
+            let (base, num, den) = if ratio {
+                let k = (a - p).dot(w);
+                ((p - c).dot(n), (q - p).dot(n) * k, (q - p).dot(w))
+            } else {
+                ((a - c).dot(n), 0.0, 1.0)
+            };
+            VolumeVertex {
+                position: q.to_array(),
+                kind: attrs.kind.code(),
+                base,
+                num,
+                den,
+            }
         }));
     }
     (umbra, penumbra)
+}
+
+/// The parts of volume triangles whose height below the light's plane is at most `reach`.
+///
+/// Along a ray from `c` the height grows with the distance, so a volume crossing beyond the
+/// greatest height of any surface lies behind every receiver on its ray: a penumbra entry there
+/// is never looked up (only points visible from `c` read that channel), and an umbra exit there
+/// reads as "no exit", which is what a receiver in front of it must get anyway. The extruded
+/// quads would otherwise run on to the far plane, and most of their fragments would be
+/// rasterised only to die behind the ground. (Not for umbrae merged over casters: there a
+/// caster's missing exit would let another caster's win.)
+pub fn end_at(
+    volume: &[VolumeVertex],
+    light: &crate::scene::DiskLight,
+    reach: f32,
+) -> Vec<VolumeVertex> {
+    let height = |v: &VolumeVertex| light.height_of(Vec3::from(v.position)) - reach;
+    let mut out = Vec::with_capacity(volume.len());
+    for t in volume.chunks_exact(3) {
+        let h = [height(&t[0]), height(&t[1]), height(&t[2])];
+        if h.iter().all(|&x| x <= 0.0) {
+            out.extend_from_slice(t);
+            continue;
+        }
+        if h.iter().all(|&x| x > 0.0) {
+            continue;
+        }
+        // Walk the edges, keeping inside corners and the crossings (Sutherland–Hodgman, one
+        // plane); num and den are affine, so they interpolate exactly.
+        let mut poly: Vec<VolumeVertex> = Vec::with_capacity(4);
+        for k in 0..3 {
+            let (p, q) = (t[k], t[(k + 1) % 3]);
+            let (hp, hq) = (h[k], h[(k + 1) % 3]);
+            if hp <= 0.0 {
+                poly.push(p);
+            }
+            if (hp <= 0.0) != (hq <= 0.0) {
+                let s = hp / (hp - hq);
+                let lerp = |a: f32, b: f32| a + (b - a) * s;
+                let (pp, qp) = (Vec3::from(p.position), Vec3::from(q.position));
+                poly.push(VolumeVertex {
+                    position: (pp + (qp - pp) * s).to_array(),
+                    num: lerp(p.num, q.num),
+                    den: lerp(p.den, q.den),
+                    ..t[0]
+                });
+            }
+        }
+        for k in 1..poly.len().saturating_sub(1) {
+            out.extend([poly[0], poly[k], poly[k + 1]]);
+        }
+    }
+    out
 }
 
 /// The part `[x0, y0, x1, y1]` of the light view's image (`[0, 1]²`, y down) that triangles
@@ -309,4 +435,55 @@ fn light_view_rect(view: &LightView, points: impl Iterator<Item = Vec3>) -> [f32
         rect[2].clamp(0.0, 1.0),
         rect[3].clamp(0.0, 1.0),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(points: [[f32; 3]; 3]) -> Vec<VolumeVertex> {
+        points
+            .iter()
+            .map(|p| VolumeVertex {
+                position: *p,
+                kind: 3,
+                base: 0.5,
+                // Affine in position: num = x + 2y, den = 1 + z.
+                num: p[0] + 2.0 * p[1],
+                den: 1.0 + p[2],
+            })
+            .collect()
+    }
+
+    #[test]
+    fn ending_volumes_keeps_the_part_in_reach_with_exact_attributes_and_winding() {
+        let light = crate::scene::DiskLight {
+            center: Vec3::new(0.0, 4.0, 0.0),
+            normal: Vec3::NEG_Y,
+            radius: 0.5,
+            intensity: 1.0,
+        };
+        // Heights below the light: 4 - y. A triangle from y = 3 (height 1) down to y = -1 (5).
+        let t = tri([[0.0, 3.0, 0.0], [2.0, -1.0, 0.0], [0.0, -1.0, 2.0]]);
+        assert_eq!(end_at(&t, &light, 10.0), t, "all in reach");
+        assert!(end_at(&t, &light, 0.5).is_empty(), "all beyond");
+        let kept = end_at(&t, &light, 3.0);
+        assert_eq!(kept.len(), 3, "one corner in reach: one triangle");
+        let normal = |v: &[VolumeVertex]| {
+            let p = |i: usize| Vec3::from(v[i].position);
+            (p(1) - p(0)).cross(p(2) - p(0))
+        };
+        for k in kept.chunks_exact(3) {
+            assert!(normal(k).dot(normal(&t)) > 0.0, "winding kept");
+            for v in k {
+                let [x, y, z] = v.position;
+                assert!(4.0 - y <= 3.0 + 1e-5, "{y}");
+                assert!((v.num - (x + 2.0 * y)).abs() < 1e-5 && (v.den - (1.0 + z)).abs() < 1e-5);
+                assert_eq!((v.kind, v.base), (3, 0.5));
+            }
+        }
+        // Two corners in reach: a quad, two triangles.
+        let t2 = tri([[0.0, 3.0, 0.0], [2.0, 3.0, 0.0], [0.0, -1.0, 2.0]]);
+        assert_eq!(end_at(&t2, &light, 3.0).len(), 6);
+    }
 }

@@ -30,6 +30,10 @@ pub struct DBufferVolumesPass {
     penumbra: wgpu::RenderPipeline,
     umbra: wgpu::RenderPipeline,
     merge: wgpu::RenderPipeline,
+    /// "No crossing" over a rectangle, leaving the depth (the penumbra's: the surfaces') alone.
+    clear_color: wgpu::RenderPipeline,
+    /// "No crossing" and depth 1 over a rectangle (the umbra's).
+    clear_both: wgpu::RenderPipeline,
     light_layout: wgpu::BindGroupLayout,
     merge_layout: wgpu::BindGroupLayout,
 }
@@ -117,10 +121,36 @@ impl DBufferVolumesPass {
                     ),
                 },
             );
+            let clear = |label, write: bool| {
+                render_pipeline(
+                    device,
+                    &PipelineSpec {
+                        label,
+                        module: &module,
+                        layout: &layout,
+                        vs: "vs_clear",
+                        fs: Some("fs_clear"),
+                        buffers: &[],
+                        targets: &[opaque(VOLUME_FORMAT)],
+                        cull: None,
+                        depth: Some(wgpu::DepthStencilState {
+                            format: DEPTH_FORMAT,
+                            depth_write_enabled: Some(write),
+                            depth_compare: Some(wgpu::CompareFunction::Always),
+                            stencil: wgpu::StencilState::default(),
+                            bias: wgpu::DepthBiasState::default(),
+                        }),
+                    },
+                )
+            };
+            let clear_color = clear("DBufferVolumesPass::clear_color", false);
+            let clear_both = clear("DBufferVolumesPass::clear_both", true);
             DBufferVolumesPass {
                 penumbra,
                 umbra,
                 merge,
+                clear_color,
+                clear_both,
                 light_layout,
                 merge_layout,
             }
@@ -145,6 +175,9 @@ pub struct VolumeTargets {
     /// Only when umbrae overlap: each group's nearest exits, and the merge's depth.
     scratch: Option<(Texture, Texture, wgpu::BindGroup)>,
     pub generation: u64,
+    /// The texels the last frame's umbra and penumbra drew in (outside them the targets hold
+    /// "no crossing"), and whether the targets are new (not yet cleared at all).
+    drawn: Option<([u32; 4], [u32; 4])>,
 }
 
 /// A session's D-buffer volume channels.
@@ -155,40 +188,43 @@ pub struct DBufferVolumes {
     targets: Option<VolumeTargets>,
 }
 
-/// Groups of casters whose umbra rectangles do not overlap (greedy, in order).
-fn disjoint_groups(casters: &[CasterVolumes]) -> Vec<(Vec<usize>, [f32; 4])> {
+/// Groups of casters whose umbra rectangles do not overlap (greedy, in order), with the
+/// rectangle each group covers; casters whose rectangle is empty belong to none.
+pub fn disjoint_groups(rects: &[[f32; 4]]) -> Vec<(Vec<usize>, [f32; 4])> {
     let overlap =
         |a: [f32; 4], b: [f32; 4]| a[0] < b[2] && b[0] < a[2] && a[1] < b[3] && b[1] < a[3];
     let mut groups: Vec<(Vec<usize>, Vec<[f32; 4]>)> = Vec::new();
-    for (i, c) in casters.iter().enumerate() {
-        if c.umbra.is_empty() {
+    for (i, &rect) in rects.iter().enumerate() {
+        if !(rect[0] < rect[2] && rect[1] < rect[3]) {
             continue;
         }
         match groups
             .iter_mut()
-            .find(|(_, rects)| rects.iter().all(|r| !overlap(*r, c.rect)))
+            .find(|(_, rs)| rs.iter().all(|r| !overlap(*r, rect)))
         {
             Some(g) => {
                 g.0.push(i);
-                g.1.push(c.rect);
+                g.1.push(rect);
             }
-            None => groups.push((vec![i], vec![c.rect])),
+            None => groups.push((vec![i], vec![rect])),
         }
     }
     groups
         .into_iter()
-        .map(|(members, rects)| {
-            let hull = rects.iter().fold([1.0f32, 1.0, 0.0, 0.0], |h, r| {
-                [
-                    h[0].min(r[0]),
-                    h[1].min(r[1]),
-                    h[2].max(r[2]),
-                    h[3].max(r[3]),
-                ]
-            });
-            (members, hull)
-        })
+        .map(|(members, rs)| (members, union_all(&rs)))
         .collect()
+}
+
+/// The bounding rectangle of `rects`.
+fn union_all(rects: &[[f32; 4]]) -> [f32; 4] {
+    rects.iter().fold([1.0f32, 1.0, 0.0, 0.0], |h, r| {
+        [
+            h[0].min(r[0]),
+            h[1].min(r[1]),
+            h[2].max(r[2]),
+            h[3].max(r[3]),
+        ]
+    })
 }
 
 impl DBufferVolumes {
@@ -237,10 +273,11 @@ impl DBufferVolumes {
                     "VolumeTargets::depth",
                     (size, size),
                     DEPTH_FORMAT,
-                    U::RENDER_ATTACHMENT | U::COPY_DST,
+                    U::RENDER_ATTACHMENT,
                 ),
                 scratch: None,
                 generation: next_generation(),
+                drawn: None,
             });
         }
         if let Some(t) = self
@@ -271,38 +308,72 @@ impl DBufferVolumes {
         }
     }
 
-    /// Record the volume channels for `light` at `size`² texels, over the shadow map's `depth`
-    /// (drawn for the same light view just before).
+    /// Record the volume channels for `light`, the penumbra over `surface_depth` (the shadow
+    /// map's depth, drawn for the same light view just before; this pass draws into it).
+    /// `penumbra_rect` bounds the penumbra's triangles in the light view's image.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
         ctx: &GpuContext,
         rec: &mut Recorder<'_>,
         light: &LightUniforms,
-        shadow_depth: &wgpu::Texture,
+        surface_depth: &Texture,
         casters: &[CasterVolumes],
         penumbra: &VertexChunks,
+        penumbra_rect: [f32; 4],
     ) {
-        let size = shadow_depth.width();
-        let groups = disjoint_groups(casters);
+        let size = surface_depth.texture.width();
+        let rects: Vec<[f32; 4]> = casters.iter().map(|c| c.rect).collect();
+        let groups = disjoint_groups(&rects);
         self.ensure_targets(&ctx.device, size, groups.len() > 1);
-        let Some(t) = &self.targets else { return };
+        let Some(t) = self.targets.as_mut() else {
+            return;
+        };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(light));
         let span = rec.span("dbuffer_volumes");
-        let no_volume = wgpu::Color::TRANSPARENT;
+        let pass = &self.pass;
+        let bind_group = &self.bind_group;
+        // Clear what the last frame drew in and what this one draws in; the rest already holds
+        // "no crossing". New targets are cleared whole.
+        let umbra_now = scissor(union_all(&rects), size);
+        let penumbra_now = scissor(penumbra_rect, size);
+        let drawn = t.drawn.replace((umbra_now, penumbra_now));
+        let load = |fresh: bool| {
+            if fresh {
+                wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+            } else {
+                wgpu::LoadOp::Load
+            }
+        };
+        let keep_color = |view, fresh: bool| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: load(fresh),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let clear_rect = |p: &mut wgpu::RenderPass<'_>, pipeline, r: [u32; 4]| {
+            if r[0] < r[2] && r[1] < r[3] {
+                p.set_scissor_rect(r[0], r[1], r[2] - r[0], r[3] - r[1]);
+                p.set_pipeline(pipeline);
+                p.set_bind_group(0, bind_group, &[]);
+                p.draw(0..3, 0..1);
+                p.set_scissor_rect(0, 0, size, size);
+            }
+        };
 
         // |cx_pv|: the nearest entry in front of the nearest surface.
-        rec.encoder.copy_texture_to_texture(
-            shadow_depth.as_image_copy(),
-            t.depth.texture.as_image_copy(),
-            shadow_depth.size(),
-        );
         {
-            let mut pass = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("DBufferVolumes::penumbra"),
-                color_attachments: &[cleared(&t.penumbra.view, no_volume)],
+                color_attachments: &[keep_color(&t.penumbra.view, drawn.is_none())],
                 depth_stencil_attachment: depth_attachment(
-                    &t.depth.view,
+                    &surface_depth.view,
                     wgpu::LoadOp::Load,
                     false,
                 ),
@@ -310,9 +381,12 @@ impl DBufferVolumes {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.pass.penumbra);
-            pass.set_bind_group(0, &self.bind_group, &[]);
-            penumbra.draw(&mut pass);
+            if let Some((_, before)) = drawn {
+                clear_rect(&mut p, &pass.clear_color, bounding(before, penumbra_now));
+            }
+            p.set_pipeline(&pass.penumbra);
+            p.set_bind_group(0, bind_group, &[]);
+            penumbra.draw(&mut p);
         }
 
         // |cx_uv|: each caster's nearest exit, the farthest over casters.
@@ -323,7 +397,7 @@ impl DBufferVolumes {
                     // The merged target starts empty (0: no exit) with depth 0 for "farthest wins".
                     rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                         label: Some("DBufferVolumes::umbra_clear"),
-                        color_attachments: &[cleared(&t.umbra.view, no_volume)],
+                        color_attachments: &[cleared(&t.umbra.view, wgpu::Color::TRANSPARENT)],
                         depth_stencil_attachment: depth_attachment(
                             &merge_depth.view,
                             wgpu::LoadOp::Clear(0.0),
@@ -337,9 +411,9 @@ impl DBufferVolumes {
                 let last = groups.len() - 1;
                 for (g, (members, rect)) in groups.iter().enumerate() {
                     {
-                        let mut pass = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                             label: Some("DBufferVolumes::umbra_group"),
-                            color_attachments: &[cleared(&scratch.view, no_volume)],
+                            color_attachments: &[cleared(&scratch.view, wgpu::Color::TRANSPARENT)],
                             depth_stencil_attachment: depth_attachment(
                                 &t.depth.view,
                                 wgpu::LoadOp::Clear(1.0),
@@ -349,23 +423,15 @@ impl DBufferVolumes {
                             occlusion_query_set: None,
                             multiview_mask: None,
                         });
-                        pass.set_pipeline(&self.pass.umbra);
-                        pass.set_bind_group(0, &self.bind_group, &[]);
+                        p.set_pipeline(&pass.umbra);
+                        p.set_bind_group(0, bind_group, &[]);
                         for &i in members {
-                            casters[i].umbra.draw(&mut pass);
+                            casters[i].umbra.draw(&mut p);
                         }
                     }
-                    let mut pass = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                         label: Some("DBufferVolumes::umbra_merge"),
-                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                            view: &t.umbra.view,
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: wgpu::Operations {
-                                load: wgpu::LoadOp::Load,
-                                store: wgpu::StoreOp::Store,
-                            },
-                        })],
+                        color_attachments: &[keep_color(&t.umbra.view, false)],
                         depth_stencil_attachment: depth_attachment(
                             &merge_depth.view,
                             wgpu::LoadOp::Load,
@@ -375,49 +441,73 @@ impl DBufferVolumes {
                         occlusion_query_set: None,
                         multiview_mask: None,
                     });
-                    let (x0, y0, x1, y1) = scissor(*rect, size);
-                    pass.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
-                    pass.set_pipeline(&self.pass.merge);
-                    pass.set_bind_group(0, &self.bind_group, &[]);
-                    pass.set_bind_group(1, merge_group, &[]);
-                    pass.draw(0..3, 0..1);
+                    let [x0, y0, x1, y1] = scissor(*rect, size);
+                    p.set_scissor_rect(x0, y0, (x1 - x0).max(1), (y1 - y0).max(1));
+                    p.set_pipeline(&pass.merge);
+                    p.set_bind_group(0, bind_group, &[]);
+                    p.set_bind_group(1, merge_group, &[]);
+                    p.draw(0..3, 0..1);
                 }
+                // The whole target was cleared: next time clear what these drew in.
+                t.drawn = Some(([0, 0, size, size], penumbra_now));
             }
             _ => {
                 // One group: every exit straight into the target, nearest wins.
-                let mut pass = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                let fresh = drawn.is_none();
+                let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("DBufferVolumes::umbra"),
-                    color_attachments: &[cleared(&t.umbra.view, no_volume)],
+                    color_attachments: &[keep_color(&t.umbra.view, fresh)],
                     depth_stencil_attachment: depth_attachment(
                         &t.depth.view,
-                        wgpu::LoadOp::Clear(1.0),
-                        false,
+                        if fresh {
+                            wgpu::LoadOp::Clear(1.0)
+                        } else {
+                            wgpu::LoadOp::Load
+                        },
+                        true,
                     ),
                     timestamp_writes: span.writes(rec.timer, false, true),
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                pass.set_pipeline(&self.pass.umbra);
-                pass.set_bind_group(0, &self.bind_group, &[]);
+                if let Some((before, _)) = drawn {
+                    clear_rect(&mut p, &pass.clear_both, bounding(before, umbra_now));
+                }
+                p.set_pipeline(&pass.umbra);
+                p.set_bind_group(0, bind_group, &[]);
                 for c in casters {
-                    c.umbra.draw(&mut pass);
+                    c.umbra.draw(&mut p);
                 }
             }
         }
     }
 }
 
-/// A rectangle of `[0, 1]²` as whole texels of a `size`² target, one texel of margin.
-fn scissor(rect: [f32; 4], size: u32) -> (u32, u32, u32, u32) {
+/// The bounding box of two texel rectangles `[x0, y0, x1, y1]` (an empty one adds nothing).
+fn bounding(a: [u32; 4], b: [u32; 4]) -> [u32; 4] {
+    let empty = |r: [u32; 4]| r[0] >= r[2] || r[1] >= r[3];
+    match (empty(a), empty(b)) {
+        (true, _) => b,
+        (_, true) => a,
+        _ => [
+            a[0].min(b[0]),
+            a[1].min(b[1]),
+            a[2].max(b[2]),
+            a[3].max(b[3]),
+        ],
+    }
+}
+
+/// A rectangle of `[0, 1]²` as whole texels `[x0, y0, x1, y1]` of a `size`² target, one texel
+/// of margin; empty (`x0 == x1`) for an empty rectangle.
+fn scissor(rect: [f32; 4], size: u32) -> [u32; 4] {
+    if !(rect[0] < rect[2] && rect[1] < rect[3]) {
+        return [0; 4];
+    }
     let n = size as f32;
     let lo = |v: f32| ((v * n).floor() - 1.0).clamp(0.0, n) as u32;
     let hi = |v: f32| ((v * n).ceil() + 1.0).clamp(0.0, n) as u32;
-    let (x0, y0) = (lo(rect[0]), lo(rect[1]));
-    let (x1, y1) = (
-        hi(rect[2]).max(x0 + 1).min(size),
-        hi(rect[3]).max(y0 + 1).min(size),
-    );
-    (x0.min(size - 1), y0.min(size - 1), x1, y1)
+    [lo(rect[0]), lo(rect[1]), hi(rect[2]), hi(rect[3])]
 }
 
 #[cfg(test)]
@@ -426,9 +516,29 @@ mod tests {
 
     #[test]
     fn scissor_covers_the_rect_with_a_margin_and_stays_inside() {
-        assert_eq!(scissor([0.0, 0.0, 1.0, 1.0], 100), (0, 0, 100, 100));
-        assert_eq!(scissor([0.25, 0.5, 0.5, 0.75], 100), (24, 49, 51, 76));
-        let (x0, y0, x1, y1) = scissor([0.999, 0.999, 1.0, 1.0], 10);
-        assert!(x0 < x1 && y0 < y1 && x1 <= 10 && y1 <= 10);
+        assert_eq!(scissor([0.0, 0.0, 1.0, 1.0], 100), [0, 0, 100, 100]);
+        assert_eq!(scissor([0.25, 0.5, 0.5, 0.75], 100), [24, 49, 51, 76]);
+        assert_eq!(scissor([0.5, 0.5, 0.5, 0.9], 100), [0; 4], "empty");
+        let r = scissor([0.999, 0.999, 1.0, 1.0], 10);
+        assert!(r[0] < r[2] && r[1] < r[3] && r[2] <= 10 && r[3] <= 10);
+        assert_eq!(bounding([0; 4], [1, 2, 3, 4]), [1, 2, 3, 4]);
+        assert_eq!(bounding([0, 5, 2, 6], [1, 2, 3, 4]), [0, 2, 3, 6]);
+    }
+
+    #[test]
+    fn casters_whose_umbrae_do_not_overlap_share_a_group() {
+        let groups = disjoint_groups(&[
+            [0.0, 0.0, 0.4, 0.4],
+            [0.5, 0.5, 0.9, 0.9],
+            [0.3, 0.3, 0.6, 0.6],
+            [0.2, 0.2, 0.2, 0.2],
+        ]);
+        let members: Vec<Vec<usize>> = groups.iter().map(|g| g.0.clone()).collect();
+        assert_eq!(
+            members,
+            [vec![0, 1], vec![2]],
+            "the empty one belongs to none"
+        );
+        assert_eq!(groups[0].1, [0.0, 0.0, 0.9, 0.9]);
     }
 }

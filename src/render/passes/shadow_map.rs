@@ -103,6 +103,8 @@ pub struct ShadowMap {
     bind_group: wgpu::BindGroup,
     targets: Option<ShadowMapTargets>,
     made_for: Option<u64>,
+    /// The depth no longer holds the surfaces' alone (the D-buffer's penumbra pass drew into it).
+    depth_used: bool,
     /// The light view it was last made with.
     view_proj: glam::Mat4,
 }
@@ -131,6 +133,7 @@ impl ShadowMap {
             bind_group,
             targets: None,
             made_for: None,
+            depth_used: false,
             view_proj: glam::Mat4::IDENTITY,
         }
     }
@@ -182,7 +185,7 @@ impl ShadowMap {
                     "ShadowMapTargets::depth",
                     (size, size),
                     DEPTH_FORMAT,
-                    U::RENDER_ATTACHMENT | U::COPY_SRC,
+                    U::RENDER_ATTACHMENT,
                 ),
                 generation: next_generation(),
             });
@@ -216,6 +219,22 @@ impl ShadowMap {
         inputs.surfaces.draw(&mut pass);
         drop(pass);
         self.made_for = Some(inputs.revision);
+        self.depth_used = false;
+    }
+
+    /// The map's depth as the surfaces left it, for a pass that draws into it next (the map is
+    /// made again first if an earlier such pass used it up).
+    pub fn depth_for_drawing(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        rec: &mut Recorder<'_>,
+    ) -> Option<&Texture> {
+        if self.depth_used {
+            self.made_for = None;
+        }
+        self.update(inputs, rec);
+        self.depth_used = true;
+        self.targets.as_ref().map(|t| &t.depth)
     }
 }
 
