@@ -52,7 +52,10 @@ fn main() -> anyhow::Result<()> {
                 let request = FrameRequest {
                     width: size,
                     height: size,
-                    dbuffer_size: 1024,
+                    dbuffer_size: std::env::var("DS")
+                        .ok()
+                        .and_then(|v| v.parse().ok())
+                        .unwrap_or(1024),
                     method,
                     vt: VtVariant::Smoothstep,
                     ..FrameRequest::default()

@@ -64,12 +64,33 @@ fn edge_plane_distance(f: VolumeOut, to_fragment: vec3<f32>, d: f32) -> f32 {
     return (f.base + f.num / f.den) / along;
 }
 
-// Umbra exits and penumbra entries alike: the pipelines' culling keeps only the faces that count.
-@fragment
-fn fs_volume(f: VolumeOut) -> @location(0) vec4<f32> {
+// (|p - c|, |cx_s|) of a volume fragment.
+fn crossing(f: VolumeOut) -> vec4<f32> {
     let to_fragment = f.world - light.center;
     let d = length(to_fragment);
     return vec4<f32>(d, edge_plane_distance(f, to_fragment, d), 0.0, 0.0);
+}
+
+// Umbra exits and penumbra entries alike: the pipelines' culling keeps only the faces that count.
+@fragment
+fn fs_volume(f: VolumeOut) -> @location(0) vec4<f32> {
+    return crossing(f);
+}
+
+// Both channels in one render pass: penumbra (0) and umbra (1) targets, the pipeline's write
+// masks keep the one it draws.
+struct Both {
+    @location(0) penumbra: vec4<f32>,
+    @location(1) umbra: vec4<f32>,
+};
+
+@fragment
+fn fs_volume_both(f: VolumeOut) -> Both {
+    let v = crossing(f);
+    var out: Both;
+    out.penumbra = v;
+    out.umbra = v;
+    return out;
 }
 
 // ---- Clearing a rectangle: "no crossing" (0) and, for the umbra, depth 1 ----
@@ -82,8 +103,11 @@ fn vs_clear(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
 }
 
 @fragment
-fn fs_clear() -> @location(0) vec4<f32> {
-    return vec4<f32>(0.0);
+fn fs_clear() -> Both {
+    var out: Both;
+    out.penumbra = vec4<f32>(0.0);
+    out.umbra = vec4<f32>(0.0);
+    return out;
 }
 
 // ---- Merge: the farthest of the casters' nearest umbra exits ----

@@ -19,16 +19,14 @@ struct CameraUniforms {
     // The unit normal n_c, toward the emitting side.
     light_normal: vec3<f32>,
     light_intensity: f32,
-    // VT_* below: which V(t) the D-buffer methods apply.
-    vt_variant: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 };
 
 @group(0) @binding(0) var<uniform> camera: CameraUniforms;
 
-// V(t) variants, as geometry::VtVariant::code().
+// V(t) variants, as geometry::VtVariant::code(). Which one a pipeline applies is fixed when it
+// is made (a pipeline per variant): a CPU rasteriser runs every path of a branch, so a switch on
+// a uniform would cost every variant's arithmetic on every pixel.
+override VT_VARIANT: u32 = 0u;
 const VT_SMOOTHSTEP: u32 = 0u;
 const VT_SQRT: u32 = 1u;
 const VT_EXACT: u32 = 2u;
@@ -57,12 +55,16 @@ fn disk_segment_fraction(h_in: f32) -> f32 {
 
 fn v_of_t(t_in: f32) -> f32 {
     let t = clamp(t_in, 0.0, 1.0);
-    switch camera.vt_variant {
-        case VT_SQRT: { return sqrt(t); }
-        case VT_EXACT: { return disk_segment_fraction(1.0 - 2.0 * t); }
-        case VT_LINEAR: { return t; }
-        default: { return t * t * (3.0 - 2.0 * t); }
+    if VT_VARIANT == VT_SQRT {
+        return sqrt(t);
     }
+    if VT_VARIANT == VT_EXACT {
+        return disk_segment_fraction(1.0 - 2.0 * t);
+    }
+    if VT_VARIANT == VT_LINEAR {
+        return t;
+    }
+    return t * t * (3.0 - 2.0 * t);
 }
 
 // V given for a method that is not the D-buffer: t = V, the branch by the class of V.

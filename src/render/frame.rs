@@ -132,11 +132,11 @@ pub fn record_frame(
     } = parts;
     let (ctx, scene) = (inputs.ctx, inputs.scene);
     method.prepare(&inputs, shared, rec)?;
-    let Some(bindings) = method.camera() else {
+    let Some(bindings) = method.camera(&ctx.device, request.vt) else {
         return Err(RenderError::Gpu("the method has no camera pipeline".into()));
     };
     let view_proj = camera::view_projection(scene, surfaces.bounds, request.width, request.height);
-    let uniforms = CameraUniforms::new(scene, view_proj, request.vt);
+    let uniforms = CameraUniforms::new(scene, view_proj);
     let FrameTargets {
         camera: camera_targets,
         rendered,

@@ -17,6 +17,7 @@ use super::{
     MethodState, SharedMaps,
 };
 use crate::geometry::light_view::LightView;
+use crate::geometry::VtVariant;
 use crate::geometry::{CasterGeometry, SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::dbuffer_volumes::{disjoint_groups, CasterVolumes, DBufferVolumes};
@@ -167,7 +168,7 @@ impl DBuffer {
             f32::MAX
         };
         let mut penumbra = Vec::new();
-        let umbrae: Vec<Vec<VolumeVertex>> = geometry
+        let mut umbrae: Vec<Vec<VolumeVertex>> = geometry
             .casters
             .iter()
             .map(|g| {
@@ -176,6 +177,11 @@ impl DBuffer {
                 umbra
             })
             .collect();
+        // Nearest first: the depth test then turns the farther crossings away before shading.
+        for u in &mut umbrae {
+            sort_near_first(u, light.center);
+        }
+        sort_near_first(&mut penumbra, light.center);
         let rects: Vec<[f32; 4]> = umbrae
             .iter()
             .map(|u| light_view_rect(inputs.light_view, u.iter().map(|v| Vec3::from(v.position))))
@@ -273,9 +279,9 @@ impl MethodState for DBuffer {
         Ok(())
     }
 
-    fn camera(&self) -> Option<CameraBindings<'_>> {
+    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
         self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: &self.pipeline.pipeline,
+            pipeline: self.pipeline.pipeline(device, vt),
             bind_group: g,
         })
     }
@@ -406,6 +412,19 @@ pub fn end_at(
         }
     }
     out
+}
+
+/// Reorder the triangles of `volume` by the distance of their centroid from `c`, nearest first.
+fn sort_near_first(volume: &mut Vec<VolumeVertex>, c: Vec3) {
+    let mut tris: Vec<[VolumeVertex; 3]> =
+        volume.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+    let key = |t: &[VolumeVertex; 3]| {
+        let centroid = t.iter().map(|v| Vec3::from(v.position)).sum::<Vec3>() / 3.0;
+        (centroid - c).length_squared()
+    };
+    tris.sort_by(|a, b| key(a).total_cmp(&key(b)));
+    volume.clear();
+    volume.extend(tris.into_iter().flatten());
 }
 
 /// The part `[x0, y0, x1, y1]` of the light view's image (`[0, 1]²`, y down) that triangles

@@ -19,7 +19,7 @@ pub mod sampled;
 use std::cell::OnceCell;
 use std::fmt;
 use std::str::FromStr;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use glam::Mat4;
 
@@ -335,29 +335,41 @@ pub enum Empty {
     NonPositive,
 }
 
-/// A method's camera pipeline and the layout of its group 1, built once per device.
+/// A method's camera pipelines (one per V(t) variant, made on first use) and the layout of its
+/// group 1, built once per device.
 pub struct MethodPipeline {
-    pub pipeline: wgpu::RenderPipeline,
+    shader: &'static str,
+    module: wgpu::ShaderModule,
     pub layout: wgpu::BindGroupLayout,
+    pipelines: [OnceLock<wgpu::RenderPipeline>; 4],
+    camera: Arc<super::passes::camera::CameraPass>,
 }
 
 impl MethodPipeline {
-    /// The pipeline of `shader` (`methods/NAME.wgsl`) whose group 1 has `entries`.
+    /// The pipelines of `shader` (`methods/NAME.wgsl`) whose group 1 has `entries`.
     pub fn get(
         ctx: &GpuContext,
         shader: &'static str,
         entries: &[wgpu::BindGroupLayoutEntry],
     ) -> Arc<MethodPipeline> {
-        ctx.shared_named(shader, |device| {
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        ctx.shared_named(shader, |device| MethodPipeline {
+            shader,
+            module: super::shader_module(device, shader),
+            layout: device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(shader),
                 entries,
-            });
-            let camera = super::passes::camera::CameraPass::get(ctx);
-            MethodPipeline {
-                pipeline: camera.method_pipeline(device, shader, &layout),
-                layout,
-            }
+            }),
+            pipelines: Default::default(),
+            camera: super::passes::camera::CameraPass::get(ctx),
+        })
+    }
+
+    /// The pipeline for V(t) variant `vt`.
+    pub fn pipeline(&self, device: &wgpu::Device, vt: VtVariant) -> &wgpu::RenderPipeline {
+        let slot = &self.pipelines[(vt.code() as usize).min(3)];
+        slot.get_or_init(|| {
+            self.camera
+                .method_pipeline(device, self.shader, &self.module, &self.layout, vt)
         })
     }
 }
@@ -385,8 +397,9 @@ pub trait MethodState: Send {
         rec: &mut Recorder<'_>,
     ) -> Result<(), RenderError>;
 
-    /// Its camera pipeline and bind group; `None` before the first [`MethodState::prepare`].
-    fn camera(&self) -> Option<CameraBindings<'_>>;
+    /// Its camera pipeline for V(t) variant `vt` and its bind group; `None` before the first
+    /// [`MethodState::prepare`].
+    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>>;
 
     /// Its light-space maps, if it has any.
     fn light_maps<'a>(&'a self, _shared: &'a SharedMaps) -> Option<LightMaps<'a>> {

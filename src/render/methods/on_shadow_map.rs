@@ -6,6 +6,7 @@
 use std::sync::Arc;
 
 use super::{CameraBindings, FrameInputs, LightMaps, MethodPipeline, MethodState, SharedMaps};
+use crate::geometry::VtVariant;
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
 use crate::render::timer::Recorder;
 use crate::render::{
@@ -100,9 +101,9 @@ impl MethodState for OnShadowMap {
         Ok(())
     }
 
-    fn camera(&self) -> Option<CameraBindings<'_>> {
+    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
         self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: &self.pipeline.pipeline,
+            pipeline: self.pipeline.pipeline(device, vt),
             bind_group: g,
         })
     }

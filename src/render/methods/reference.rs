@@ -8,6 +8,7 @@ use std::sync::Arc;
 use super::{
     CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec, MethodState, SharedMaps,
 };
+use crate::geometry::VtVariant;
 use crate::render::timer::Recorder;
 use crate::render::{texture_entry, view_entry, GpuContext, RenderError};
 
@@ -83,9 +84,9 @@ impl MethodState for Reference {
         Ok(())
     }
 
-    fn camera(&self) -> Option<CameraBindings<'_>> {
+    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
         self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: &self.pipeline.pipeline,
+            pipeline: self.pipeline.pipeline(device, vt),
             bind_group: g,
         })
     }

@@ -7,6 +7,7 @@ use std::sync::Arc;
 use super::{
     CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec, MethodState, SharedMaps,
 };
+use crate::geometry::VtVariant;
 use crate::render::passes::sample_maps::{sample_lights, SampleMaps, MAX_LIGHTS};
 use crate::render::passes::shadow_map::{BIAS_CONSTANT, BIAS_SLOPE};
 use crate::render::timer::Recorder;
@@ -105,9 +106,9 @@ impl MethodState for Sampled {
         Ok(())
     }
 
-    fn camera(&self) -> Option<CameraBindings<'_>> {
+    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
         self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: &self.pipeline.pipeline,
+            pipeline: self.pipeline.pipeline(device, vt),
             bind_group: g,
         })
     }

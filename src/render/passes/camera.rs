@@ -18,8 +18,8 @@ use crate::render::gpu_scene::GpuScene;
 use crate::render::methods::CameraBindings;
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, cleared, opaque, pipeline_layout, render_pipeline, shader_module, uniform_buffer,
-    uniform_entry, GpuContext, PipelineSpec, SurfaceVertex, Texture,
+    buffer_entry, cleared, opaque, pipeline_layout, uniform_buffer, uniform_entry, GpuContext,
+    SurfaceVertex, Texture,
 };
 use crate::scene::Scene;
 
@@ -43,13 +43,9 @@ pub struct CameraUniforms {
     pub light_radius: f32,
     pub light_normal: [f32; 3],
     pub light_intensity: f32,
-    pub vt_variant: u32,
-    pub _pad0: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<CameraUniforms>() == 128);
+const _: () = assert!(std::mem::size_of::<CameraUniforms>() == 112);
 
 /// The camera's world → clip transform for a `width`×`height` image of `scene` (whose surfaces
 /// span `bounds`): reversed depth, planes that hold the whole scene.
@@ -61,7 +57,7 @@ pub fn view_projection(scene: &Scene, bounds: (Vec3, Vec3), width: u32, height: 
 }
 
 impl CameraUniforms {
-    pub fn new(scene: &Scene, view_proj: Mat4, vt: VtVariant) -> CameraUniforms {
+    pub fn new(scene: &Scene, view_proj: Mat4) -> CameraUniforms {
         let light = scene.light;
         CameraUniforms {
             view_proj: view_proj.to_cols_array_2d(),
@@ -71,10 +67,6 @@ impl CameraUniforms {
             light_radius: light.radius,
             light_normal: light.normal.to_array(),
             light_intensity: light.intensity,
-            vt_variant: vt.code(),
-            _pad0: 0,
-            _pad1: 0,
-            _pad2: 0,
         }
     }
 }
@@ -113,40 +105,55 @@ impl CameraPass {
         })
     }
 
-    /// A method's camera pipeline: `shader` (`methods/NAME.wgsl`, which includes
-    /// `shared/camera.wgsl`), with the method's own bindings as group 1.
+    /// A method's camera pipeline for V(t) variant `vt`: `module` (from `methods/NAME.wgsl`,
+    /// which includes `shared/camera.wgsl`), with the method's own bindings as group 1.
     pub fn method_pipeline(
         &self,
         device: &wgpu::Device,
-        shader: &str,
+        label: &str,
+        module: &wgpu::ShaderModule,
         method_layout: &wgpu::BindGroupLayout,
+        vt: VtVariant,
     ) -> wgpu::RenderPipeline {
-        let module = shader_module(device, shader);
-        render_pipeline(
+        let layout = pipeline_layout(
             device,
-            &PipelineSpec {
-                label: shader,
-                module: &module,
-                layout: &pipeline_layout(
-                    device,
-                    "CameraPass::pipeline_layout",
-                    &[&self.layout, method_layout],
-                ),
-                vs: "vs_main",
-                fs: Some("fs_main"),
+            "CameraPass::pipeline_layout",
+            &[&self.layout, method_layout],
+        );
+        let constants = [("VT_VARIANT", f64::from(vt.code()))];
+        let options = wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            ..Default::default()
+        };
+        let targets = [opaque(COLOR_FORMAT), opaque(DATA_FORMAT)];
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_main"),
+                compilation_options: options.clone(),
                 buffers: &[Some(SurfaceVertex::layout())],
-                targets: &[opaque(COLOR_FORMAT), opaque(DATA_FORMAT)],
-                // Surfaces are two-sided (open meshes, the ground seen from below).
-                cull: None,
-                depth: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Greater),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
             },
-        )
+            // Surfaces are two-sided (open meshes, the ground seen from below).
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Greater),
+                stencil: wgpu::StencilState::default(),
+                bias: wgpu::DepthBiasState::default(),
+            }),
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some("fs_main"),
+                compilation_options: options,
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
     }
 }
 

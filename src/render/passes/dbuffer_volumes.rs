@@ -27,13 +27,16 @@ pub const VOLUME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 /// The pipelines, built once per device.
 pub struct DBufferVolumesPass {
+    /// Penumbra entries and umbra exits in one pass with both targets.
     penumbra: wgpu::RenderPipeline,
     umbra: wgpu::RenderPipeline,
+    /// Umbra exits of one group of casters into the scratch target (umbrae merged over casters).
+    umbra_alone: wgpu::RenderPipeline,
     merge: wgpu::RenderPipeline,
-    /// "No crossing" over a rectangle, leaving the depth (the penumbra's: the surfaces') alone.
-    clear_color: wgpu::RenderPipeline,
-    /// "No crossing" and depth 1 over a rectangle (the umbra's).
-    clear_both: wgpu::RenderPipeline,
+    /// "No crossing" over a rectangle of the penumbra target, the depth (the surfaces') left.
+    clear_penumbra: wgpu::RenderPipeline,
+    /// "No crossing" over a rectangle of the umbra target, and depth 1.
+    clear_umbra: wgpu::RenderPipeline,
     light_layout: wgpu::BindGroupLayout,
     merge_layout: wgpu::BindGroupLayout,
 }
@@ -70,7 +73,24 @@ impl DBufferVolumesPass {
                 "DBufferVolumesPass::merge_layout",
                 &[&light_layout, &merge_layout],
             );
-            let volume = |label, cull, bias| {
+            // One pass draws both channels: the penumbra target first, the umbra one second,
+            // each pipeline writing one of them.
+            let mask = |m| {
+                Some(wgpu::ColorTargetState {
+                    format: VOLUME_FORMAT,
+                    blend: None,
+                    write_mask: m,
+                })
+            };
+            let only_penumbra = [
+                mask(wgpu::ColorWrites::ALL),
+                mask(wgpu::ColorWrites::empty()),
+            ];
+            let only_umbra = [
+                mask(wgpu::ColorWrites::empty()),
+                mask(wgpu::ColorWrites::ALL),
+            ];
+            let volume = |label, fs, targets: &[Option<wgpu::ColorTargetState>], cull, bias| {
                 render_pipeline(
                     device,
                     &PipelineSpec {
@@ -78,9 +98,9 @@ impl DBufferVolumesPass {
                         module: &module,
                         layout: &layout,
                         vs: "vs_volume",
-                        fs: Some("fs_volume"),
+                        fs: Some(fs),
                         buffers: &[Some(VolumeVertex::layout())],
-                        targets: &[opaque(VOLUME_FORMAT)],
+                        targets,
                         cull: Some(cull),
                         depth: depth_state(wgpu::CompareFunction::Less, bias),
                     },
@@ -88,19 +108,31 @@ impl DBufferVolumesPass {
             };
             // Umbra faces are wound with their normal away from c, penumbra faces toward it; the
             // light view is right-handed, so a face turned toward c is counter-clockwise (front).
+            // An entry a texel's slope behind the surface still counts (texel-sized rounding of
+            // the surface's depth must not hide an entry just in front of it).
+            let entry_bias = wgpu::DepthBiasState {
+                constant: 0,
+                slope_scale: -1.0,
+                clamp: 0.0,
+            };
             let penumbra = volume(
                 "DBufferVolumesPass::penumbra",
+                "fs_volume_both",
+                &only_penumbra,
                 wgpu::Face::Back,
-                // An entry a texel's slope behind the surface still counts (texel-sized rounding
-                // of the surface's depth must not hide an entry just in front of it).
-                wgpu::DepthBiasState {
-                    constant: 0,
-                    slope_scale: -1.0,
-                    clamp: 0.0,
-                },
+                entry_bias,
             );
             let umbra = volume(
                 "DBufferVolumesPass::umbra",
+                "fs_volume_both",
+                &only_umbra,
+                wgpu::Face::Front,
+                wgpu::DepthBiasState::default(),
+            );
+            let umbra_alone = volume(
+                "DBufferVolumesPass::umbra_alone",
+                "fs_volume",
+                &[opaque(VOLUME_FORMAT)],
                 wgpu::Face::Front,
                 wgpu::DepthBiasState::default(),
             );
@@ -121,7 +153,7 @@ impl DBufferVolumesPass {
                     ),
                 },
             );
-            let clear = |label, write: bool| {
+            let clear = |label, targets: &[Option<wgpu::ColorTargetState>], write: bool| {
                 render_pipeline(
                     device,
                     &PipelineSpec {
@@ -131,7 +163,7 @@ impl DBufferVolumesPass {
                         vs: "vs_clear",
                         fs: Some("fs_clear"),
                         buffers: &[],
-                        targets: &[opaque(VOLUME_FORMAT)],
+                        targets,
                         cull: None,
                         depth: Some(wgpu::DepthStencilState {
                             format: DEPTH_FORMAT,
@@ -143,14 +175,17 @@ impl DBufferVolumesPass {
                     },
                 )
             };
-            let clear_color = clear("DBufferVolumesPass::clear_color", false);
-            let clear_both = clear("DBufferVolumesPass::clear_both", true);
+            // The penumbra's rectangle leaves the depth (the surfaces') alone; the umbra's sets it
+            // to 1 for the exits' "nearest wins".
+            let clear_penumbra = clear("DBufferVolumesPass::clear_penumbra", &only_penumbra, false);
+            let clear_umbra = clear("DBufferVolumesPass::clear_umbra", &only_umbra, true);
             DBufferVolumesPass {
                 penumbra,
                 umbra,
+                umbra_alone,
                 merge,
-                clear_color,
-                clear_both,
+                clear_penumbra,
+                clear_umbra,
                 light_layout,
                 merge_layout,
             }
@@ -367,118 +402,106 @@ impl DBufferVolumes {
             }
         };
 
-        // |cx_pv|: the nearest entry in front of the nearest surface.
+        let merged = groups.len() > 1;
+        let fresh = drawn.is_none();
+        // One pass on the surfaces' depth. |cx_pv|: the nearest entry in front of the nearest
+        // surface. Then, where umbrae are drawn straight in, the depth is reset to 1 over their
+        // rectangle and |cx_uv| takes each texel's nearest exit.
         {
             let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("DBufferVolumes::penumbra"),
-                color_attachments: &[keep_color(&t.penumbra.view, drawn.is_none())],
+                label: Some("DBufferVolumes::channels"),
+                color_attachments: &[
+                    keep_color(&t.penumbra.view, fresh),
+                    keep_color(&t.umbra.view, fresh || merged),
+                ],
                 depth_stencil_attachment: depth_attachment(
                     &surface_depth.view,
                     wgpu::LoadOp::Load,
                     false,
                 ),
-                timestamp_writes: span.writes(rec.timer, true, false),
+                timestamp_writes: span.writes(rec.timer, true, !merged),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
             if let Some((_, before)) = drawn {
-                clear_rect(&mut p, &pass.clear_color, bounding(before, penumbra_now));
+                clear_rect(&mut p, &pass.clear_penumbra, bounding(before, penumbra_now));
             }
             p.set_pipeline(&pass.penumbra);
             p.set_bind_group(0, bind_group, &[]);
             penumbra.draw(&mut p);
-        }
-
-        // |cx_uv|: each caster's nearest exit, the farthest over casters.
-        match (groups.as_slice(), &t.scratch) {
-            ([_, _, ..], Some((scratch, merge_depth, merge_group))) => {
-                // Overlapping umbrae: group by group through the scratch target.
-                {
-                    // The merged target starts empty (0: no exit) with depth 0 for "farthest wins".
-                    rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                        label: Some("DBufferVolumes::umbra_clear"),
-                        color_attachments: &[cleared(&t.umbra.view, wgpu::Color::TRANSPARENT)],
-                        depth_stencil_attachment: depth_attachment(
-                            &merge_depth.view,
-                            wgpu::LoadOp::Clear(0.0),
-                            true,
-                        ),
-                        timestamp_writes: None,
-                        occlusion_query_set: None,
-                        multiview_mask: None,
-                    });
-                }
-                let last = groups.len() - 1;
-                for (g, (members, rect)) in groups.iter().enumerate() {
-                    {
-                        let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                            label: Some("DBufferVolumes::umbra_group"),
-                            color_attachments: &[cleared(&scratch.view, wgpu::Color::TRANSPARENT)],
-                            depth_stencil_attachment: depth_attachment(
-                                &t.depth.view,
-                                wgpu::LoadOp::Clear(1.0),
-                                false,
-                            ),
-                            timestamp_writes: None,
-                            occlusion_query_set: None,
-                            multiview_mask: None,
-                        });
-                        p.set_pipeline(&pass.umbra);
-                        p.set_bind_group(0, bind_group, &[]);
-                        for &i in members {
-                            casters[i].umbra.draw(&mut p);
-                        }
-                    }
-                    let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                        label: Some("DBufferVolumes::umbra_merge"),
-                        color_attachments: &[keep_color(&t.umbra.view, false)],
-                        depth_stencil_attachment: depth_attachment(
-                            &merge_depth.view,
-                            wgpu::LoadOp::Load,
-                            true,
-                        ),
-                        timestamp_writes: span.writes(rec.timer, false, g == last),
-                        occlusion_query_set: None,
-                        multiview_mask: None,
-                    });
-                    let [x0, y0, x1, y1] = scissor(*rect, size);
-                    p.set_scissor_rect(x0, y0, (x1 - x0).max(1), (y1 - y0).max(1));
-                    p.set_pipeline(&pass.merge);
-                    p.set_bind_group(0, bind_group, &[]);
-                    p.set_bind_group(1, merge_group, &[]);
-                    p.draw(0..3, 0..1);
-                }
-                // The whole target was cleared: next time clear what these drew in.
-                t.drawn = Some(([0, 0, size, size], penumbra_now));
-            }
-            _ => {
-                // One group: every exit straight into the target, nearest wins.
-                let fresh = drawn.is_none();
-                let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("DBufferVolumes::umbra"),
-                    color_attachments: &[keep_color(&t.umbra.view, fresh)],
-                    depth_stencil_attachment: depth_attachment(
-                        &t.depth.view,
-                        if fresh {
-                            wgpu::LoadOp::Clear(1.0)
-                        } else {
-                            wgpu::LoadOp::Load
-                        },
-                        true,
-                    ),
-                    timestamp_writes: span.writes(rec.timer, false, true),
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                if let Some((before, _)) = drawn {
-                    clear_rect(&mut p, &pass.clear_both, bounding(before, umbra_now));
-                }
+            if !merged {
+                // From here on the depth is the exits': it starts at 1 over their rectangle (and
+                // over the last frame's, whose exits are cleared with it).
+                let before = drawn.map_or([0; 4], |(b, _)| b);
+                clear_rect(&mut p, &pass.clear_umbra, bounding(before, umbra_now));
                 p.set_pipeline(&pass.umbra);
                 p.set_bind_group(0, bind_group, &[]);
                 for c in casters {
                     c.umbra.draw(&mut p);
                 }
             }
+        }
+        if let ([_, _, ..], Some((scratch, merge_depth, merge_group))) =
+            (groups.as_slice(), &t.scratch)
+        {
+            // Overlapping umbrae: group by group through the scratch target into the umbra
+            // target (cleared whole by the pass above), farthest wins by the merge's depth.
+            {
+                rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("DBufferVolumes::merge_depth"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: depth_attachment(
+                        &merge_depth.view,
+                        wgpu::LoadOp::Clear(0.0),
+                        true,
+                    ),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+            }
+            let last = groups.len() - 1;
+            for (g, (members, rect)) in groups.iter().enumerate() {
+                {
+                    let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        label: Some("DBufferVolumes::umbra_group"),
+                        color_attachments: &[cleared(&scratch.view, wgpu::Color::TRANSPARENT)],
+                        depth_stencil_attachment: depth_attachment(
+                            &t.depth.view,
+                            wgpu::LoadOp::Clear(1.0),
+                            false,
+                        ),
+                        timestamp_writes: None,
+                        occlusion_query_set: None,
+                        multiview_mask: None,
+                    });
+                    p.set_pipeline(&pass.umbra_alone);
+                    p.set_bind_group(0, bind_group, &[]);
+                    for &i in members {
+                        casters[i].umbra.draw(&mut p);
+                    }
+                }
+                let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("DBufferVolumes::umbra_merge"),
+                    color_attachments: &[keep_color(&t.umbra.view, false)],
+                    depth_stencil_attachment: depth_attachment(
+                        &merge_depth.view,
+                        wgpu::LoadOp::Load,
+                        true,
+                    ),
+                    timestamp_writes: span.writes(rec.timer, false, g == last),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                let [x0, y0, x1, y1] = scissor(*rect, size);
+                p.set_scissor_rect(x0, y0, (x1 - x0).max(1), (y1 - y0).max(1));
+                p.set_pipeline(&pass.merge);
+                p.set_bind_group(0, bind_group, &[]);
+                p.set_bind_group(1, merge_group, &[]);
+                p.draw(0..3, 0..1);
+            }
+            // The whole umbra target was cleared: next time clear what these drew in.
+            t.drawn = Some(([0, 0, size, size], penumbra_now));
         }
     }
 }
