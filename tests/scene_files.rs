@@ -129,7 +129,8 @@ fn a_scene_without_camera_is_framed_on_the_casters_and_the_light() {
         );
         assert!(inside(corner), "caster corner {corner} outside {cam:?}");
     }
-    assert!(inside(s.light.center), "the light is in view");
+    // And the middle of the shadow below the caster (the light is straight above it).
+    assert!(inside(glam::Vec3::new(2.0, 0.0, -1.0)), "the shadow is in view");
     // Looking down at the scene from the front.
     assert!(cam.eye.y > cam.target.y && cam.eye.z > cam.target.z, "{cam:?}");
     // Not absurdly far: the caster box fills a good part of the view.

@@ -387,6 +387,33 @@ mod tests {
         }
     }
 
+    /// A scene without `[camera]` (here a glTF model) shows the framed view and saves without
+    /// a camera unless the view was moved.
+    #[test]
+    fn a_camera_less_scene_saves_a_camera_only_when_moved() {
+        let fox = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models/Fox.glb");
+        let (mut doc, scene) = SceneDoc::open(fox.to_str().unwrap()).unwrap();
+        assert!(doc.file.camera.is_none());
+        assert_eq!(scene.objects.len(), 2);
+        assert_eq!(doc.camera(), scene.camera);
+        let dir = std::env::temp_dir().join(format!("dbuffer-doc-cam-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("fox.toml");
+        let framed = doc.camera();
+        doc.save(&path, &framed).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(!text.contains("[camera]"), "{text}");
+        let moved = Camera {
+            eye: framed.eye + Vec3::new(1.0, 0.0, 0.0),
+            ..framed
+        };
+        doc.save(&path, &moved).unwrap();
+        let (again, scene) = SceneDoc::open(path.to_str().unwrap()).unwrap();
+        assert!(again.file.camera.is_some());
+        assert!((scene.camera.eye - moved.eye).length() < 1e-5);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn save_is_readable_and_keeps_edits() {
         let dir = std::env::temp_dir().join(format!("dbuffer-doc-{}", std::process::id()));

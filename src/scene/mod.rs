@@ -81,41 +81,60 @@ impl Camera {
 }
 
 /// The view a scene gets when it has no camera of its own (a scene file without `[camera]`, a
-/// bare `.obj` or glTF model): 45° vertical field of view, looking from the front and above
-/// (from the direction (0, 0.5, 1), 26.6° down) at the centre of the box around the casters
-/// (every object if none casts) and the light's disk, just far enough that the whole box fits a
-/// square view with a 10 % margin (a wider image shows more on the sides).
+/// bare `.obj` or glTF model): 45° vertical field of view, looking from the front right and
+/// above (from the direction (0.6, 0.7, 1), 31° down) at the casters (every object if none
+/// casts) and at the shadow they cast from the light's centre onto the plane they stand on
+/// (each corner of their bounding box projected from the light, at most 4× as far as the light
+/// is above it), just far enough that all of it fits a square view with a 10 % margin (a wider
+/// image shows more on the sides). The light itself is left out of the frame: it is drawn
+/// nowhere in a render, and taking it in would leave half the picture to the sky.
 pub fn framed_camera(light: &DiskLight, objects: &[Object]) -> Camera {
     const FOV_Y_DEG: f32 = 45.0;
-    let r = light.radius.max(0.0);
-    let mut lo = light.center - Vec3::splat(r);
-    let mut hi = light.center + Vec3::splat(r);
-    let casters: Vec<&Object> = if objects.iter().any(|o| o.casts_shadow) {
-        objects.iter().filter(|o| o.casts_shadow).collect()
-    } else {
-        objects.iter().collect()
+    let any_caster = objects.iter().any(|o| o.casts_shadow);
+    let bounds = objects
+        .iter()
+        .filter(|o| o.casts_shadow || !any_caster)
+        .filter_map(|o| o.mesh.bounds())
+        .reduce(|(lo, hi), (a, b)| (lo.min(a), hi.max(b)));
+    let (mut lo, mut hi) = match bounds {
+        Some(b) => b,
+        None => {
+            let r = Vec3::splat(light.radius.max(0.5));
+            (light.center - r, light.center + r)
+        }
     };
-    for o in casters {
-        if let Some((a, b)) = o.mesh.bounds() {
-            lo = lo.min(a);
-            hi = hi.max(b);
+    let corners = |lo: Vec3, hi: Vec3| {
+        (0..8).map(move |i| {
+            Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            )
+        })
+    };
+    // The shadow of the box on the plane y = lo.y, seen from the light's centre.
+    let c = light.center;
+    let floor = lo.y;
+    if bounds.is_some() && c.y > floor {
+        for p in corners(lo, hi).collect::<Vec<_>>() {
+            if c.y - p.y > 1e-4 {
+                let t = ((c.y - floor) / (c.y - p.y)).min(4.0);
+                let q = c + (p - c) * t;
+                lo = lo.min(q);
+                hi = hi.max(q);
+            }
         }
     }
     let target = (lo + hi) * 0.5;
-    let back = Vec3::new(0.0, 0.5, 1.0).normalize();
+    let back = Vec3::new(0.6, 0.7, 1.0).normalize();
     let forward = -back;
     let right = forward.cross(Vec3::Y).normalize();
     let up = right.cross(forward);
     let tan = (0.5 * FOV_Y_DEG).to_radians().tan() / 1.1;
     // The eye at `target + back·d`: a corner q (relative to the target) is at depth d + q·forward
     // and must have |q·up| and |q·right| within tan·depth, and lie in front of the eye.
-    let mut distance: f32 = 1.0;
-    for i in 0..8 {
-        let corner = Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        );
+    let mut distance: f32 = 0.5;
+    for corner in corners(lo, hi) {
         let q = corner - target;
         let along = q.dot(forward);
         let side = q.dot(up).abs().max(q.dot(right).abs());
