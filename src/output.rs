@@ -404,7 +404,9 @@ impl Staged {
             return Err(OutputError::TargetIsDirectory { path: target });
         }
         let Some(temp) = &self.temp else {
-            return Err(io_err(&target, "write")(io::Error::other("already committed")));
+            return Err(io_err(&target, "write")(io::Error::other(
+                "already committed",
+            )));
         };
         let result = (|| {
             let mut f = File::create(temp.join(name))?;
@@ -709,7 +711,11 @@ fn install(
             }
         });
         if let Err(e) = moved {
-            let action = if installing { "move into place" } else { "remove" };
+            let action = if installing {
+                "move into place"
+            } else {
+                "remove"
+            };
             let cause = io_err(&target, action)(e);
             // Undo steps 0..i, last first.
             let mut undo = Ok(());
@@ -889,17 +895,32 @@ mod tests {
     #[test]
     fn staged_files_are_all_or_nothing() {
         let dir = temp_dir("staged");
-        for name in ["frame-0000.png", "frame-0001.png", "frame-0002.png", "notes.txt"] {
+        for name in [
+            "frame-0000.png",
+            "frame-0001.png",
+            "frame-0002.png",
+            "notes.txt",
+        ] {
             fs::write(dir.join(name), b"old").unwrap();
         }
         let before = snapshot(&dir);
         let mut staged = Staged::new(&dir).unwrap();
         staged.add("frame-0000.png", b"new0").unwrap();
         staged.add("frame-0001.png", b"new1").unwrap();
-        assert!(staged.add("frame-0001.png", b"again").is_err(), "a name twice");
-        assert!(staged.add("../escape.png", b"x").is_err(), "a path, not a name");
+        assert!(
+            staged.add("frame-0001.png", b"again").is_err(),
+            "a name twice"
+        );
+        assert!(
+            staged.add("../escape.png", b"x").is_err(),
+            "a path, not a name"
+        );
         staged.remove_on_commit("frame-0002.png");
-        assert_eq!(snapshot(&dir).len(), before.len() + 1, "only the hidden folder is new");
+        assert_eq!(
+            snapshot(&dir).len(),
+            before.len() + 1,
+            "only the hidden folder is new"
+        );
         drop(staged);
         assert_eq!(snapshot(&dir), before, "dropped without commit: untouched");
 
@@ -913,7 +934,10 @@ mod tests {
         assert_eq!(paths.len(), 3);
         let after = snapshot(&dir);
         let names: Vec<&str> = after.iter().map(|(n, _)| n.as_str()).collect();
-        assert_eq!(names, ["frame-0000.png", "frame-0001.png", "loop.png", "notes.txt"]);
+        assert_eq!(
+            names,
+            ["frame-0000.png", "frame-0001.png", "loop.png", "notes.txt"]
+        );
         assert_eq!(fs::read(dir.join("frame-0001.png")).unwrap(), b"new1");
 
         // A failing removal of a stale file undoes the installs (the generic install with a

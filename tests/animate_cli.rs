@@ -67,11 +67,21 @@ fn animate_writes_the_frames_and_a_looping_apng() {
     let dir = temp_dir("light");
     let (_, stderr) = run_ok(
         dbuffer()
-            .args(["animate", "fig7-concave", "--frames", "6", "--size", "64x48"])
+            .args([
+                "animate",
+                "fig7-concave",
+                "--frames",
+                "6",
+                "--size",
+                "64x48",
+            ])
             .args(["--dbuffer-size", "256", "--out"])
             .arg(&dir),
     );
-    assert!(stderr.contains("wrote") && stderr.contains("6 frames"), "{stderr}");
+    assert!(
+        stderr.contains("wrote") && stderr.contains("6 frames"),
+        "{stderr}"
+    );
     for k in 0..6 {
         let frame = dir.join(format!("frame-{k:04}.png"));
         let img = image::open(&frame).expect("a frame");
@@ -82,7 +92,11 @@ fn animate_writes_the_frames_and_a_looping_apng() {
     // The light moves: the shadow on the ground moves with it.
     let f0 = rgb(&dir.join("frame-0000.png"));
     let f3 = rgb(&dir.join("frame-0003.png"));
-    assert!(differing(&f0, &f3) > 40, "{} pixels differ", differing(&f0, &f3));
+    assert!(
+        differing(&f0, &f3) > 40,
+        "{} pixels differ",
+        differing(&f0, &f3)
+    );
     // Nothing else is left in the folder (no temporary folder).
     let names: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
@@ -93,12 +107,22 @@ fn animate_writes_the_frames_and_a_looping_apng() {
     // A shorter run into the same folder replaces the animation and drops the extra frames.
     run_ok(
         dbuffer()
-            .args(["animate", "fig7-concave", "--frames", "3", "--size", "32x24"])
+            .args([
+                "animate",
+                "fig7-concave",
+                "--frames",
+                "3",
+                "--size",
+                "32x24",
+            ])
             .args(["--dbuffer-size", "128", "--orbit", "camera", "--out"])
             .arg(&dir),
     );
     assert!(dir.join("frame-0002.png").is_file());
-    assert!(!dir.join("frame-0003.png").exists(), "stale frames are removed");
+    assert!(
+        !dir.join("frame-0003.png").exists(),
+        "stale frames are removed"
+    );
     assert_eq!(apng_frames(&dir.join("animation.png")), (3, 32, 24));
     // The camera moves: the whole view changes.
     let c0 = rgb(&dir.join("frame-0000.png"));
@@ -111,12 +135,18 @@ fn animate_writes_the_frames_and_a_looping_apng() {
 fn animate_refuses_bad_flags_with_a_reason_and_writes_nothing() {
     let dir = temp_dir("bad");
     for (args, needle) in [
-        (vec!["--orbit", "sun"], "--orbit expects light or camera, found 'sun'"),
+        (
+            vec!["--orbit", "sun"],
+            "--orbit expects light or camera, found 'sun'",
+        ),
         (vec!["--frames", "0"], "--frames expects 1 to 3600, found 0"),
         (vec!["--frames", "100000"], "--frames expects 1 to 3600"),
         (vec!["--fps", "0"], "--fps expects 1 to 60"),
         (vec!["--size", "0x10"], "--size expects WxH"),
-        (vec!["--frames", "3000", "--size", "1024x1024"], "the limit is"),
+        (
+            vec!["--frames", "3000", "--size", "1024x1024"],
+            "the limit is",
+        ),
         (vec!["--method", "magic"], "magic"),
         (vec!["--vt", "cubic"], "cubic"),
         (vec!["--dbuffer-size", "0"], "--dbuffer-size"),
@@ -129,7 +159,10 @@ fn animate_refuses_bad_flags_with_a_reason_and_writes_nothing() {
             .expect("the binary runs");
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{args:?} should fail");
-        assert!(stderr.contains(needle), "{args:?}: expected '{needle}' in: {stderr}");
+        assert!(
+            stderr.contains(needle),
+            "{args:?}: expected '{needle}' in: {stderr}"
+        );
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert!(!dir.exists(), "{args:?} left a folder");
     }
@@ -146,7 +179,15 @@ fn animate_refuses_bad_flags_with_a_reason_and_writes_nothing() {
     let file = temp_dir("a-file");
     std::fs::write(&file, b"keep").unwrap();
     let out = dbuffer()
-        .args(["animate", "fig7-concave", "--frames", "2", "--size", "16x16", "--out"])
+        .args([
+            "animate",
+            "fig7-concave",
+            "--frames",
+            "2",
+            "--size",
+            "16x16",
+            "--out",
+        ])
         .arg(&file)
         .output()
         .expect("runs");
@@ -185,7 +226,9 @@ fn a_gltf_model_through_render_inspect_and_compare() {
     let (stdout, _) = run_ok(dbuffer().arg("inspect").arg(&fox));
     assert!(stdout.contains("scene     Fox"), "{stdout}");
     assert!(
-        stdout.lines().any(|l| l.starts_with("Fox ") && l.contains(&casters.to_string())),
+        stdout
+            .lines()
+            .any(|l| l.starts_with("Fox ") && l.contains(&casters.to_string())),
         "{stdout}"
     );
 
@@ -194,7 +237,16 @@ fn a_gltf_model_through_render_inspect_and_compare() {
         dbuffer()
             .arg("compare")
             .arg(&fox)
-            .args(["--size", "32x24", "--samples", "8", "--lights", "2", "--dbuffer-size", "128"])
+            .args([
+                "--size",
+                "32x24",
+                "--samples",
+                "8",
+                "--lights",
+                "2",
+                "--dbuffer-size",
+                "128",
+            ])
             .arg("--out")
             .arg(&dir),
     );
@@ -254,11 +306,19 @@ fn a_scene_file_without_camera_renders_the_framed_view() {
     // Framed: the cube is in the middle of the picture, the ground all around it.
     let classes = rgb(&out_dir.join("classes.png"));
     let at = |x: usize, y: usize| &classes[(y * 48 + x) * 3..(y * 48 + x) * 3 + 3];
-    assert_ne!(at(24, 24), dbuffer::output::NOT_HIT_RGB, "the centre sees the cube");
+    assert_ne!(
+        at(24, 24),
+        dbuffer::output::NOT_HIT_RGB,
+        "the centre sees the cube"
+    );
     let hit = classes
         .chunks(3)
         .filter(|p| p != &dbuffer::output::NOT_HIT_RGB)
         .count();
-    assert!(hit > 48 * 48 / 2, "{hit} of {} pixels hit a surface", 48 * 48);
+    assert!(
+        hit > 48 * 48 / 2,
+        "{hit} of {} pixels hit a surface",
+        48 * 48
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

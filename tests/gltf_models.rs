@@ -26,11 +26,11 @@ fn temp_dir(tag: &str) -> PathBuf {
 /// A GLB file: header, JSON chunk (space-padded), BIN chunk (zero-padded) if any.
 fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
     let mut j = serde_json::to_vec(json).unwrap();
-    while j.len() % 4 != 0 {
+    while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
     let mut b = bin.to_vec();
-    while b.len() % 4 != 0 {
+    while !b.len().is_multiple_of(4) {
         b.push(0);
     }
     let total = 12 + 8 + j.len() + if b.is_empty() { 0 } else { 8 + b.len() };
@@ -50,7 +50,12 @@ fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
 }
 
 /// The unit tetrahedron (0,0,0), (1,0,0), (0,1,0), (0,0,1), wound outward.
-const TET: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+const TET: [[f32; 3]; 4] = [
+    [0.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+];
 const TET_FACES: [[u32; 3]; 4] = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
 
 fn f32_bytes(v: &[[f32; 3]]) -> Vec<u8> {
@@ -85,7 +90,8 @@ fn tet_doc(index_type: Option<u32>, nodes: Value, roots: Value) -> (Value, Vec<u
         Some(ty) => {
             let idx = index_bytes(&TET_FACES, ty);
             views.push(json!({"buffer": 0, "byteOffset": pos_len, "byteLength": idx.len()}));
-            accessors.push(json!({"bufferView": 1, "componentType": ty, "count": 12, "type": "SCALAR"}));
+            accessors
+                .push(json!({"bufferView": 1, "componentType": ty, "count": 12, "type": "SCALAR"}));
             primitive["indices"] = json!(1);
             bin.extend(idx);
         }
@@ -183,14 +189,25 @@ fn a_matrix_node_and_a_mirror_keep_triangles_outward() {
     let (doc, bin) = tet_doc(Some(5125), nodes, json!([0]));
     let m = parse_glb(&doc, &bin).unwrap();
     let got = sorted_positions(&m);
-    assert!(got.iter().any(|&g| close(g, Vec3::new(-1.0, 5.0, 0.0))), "{got:?}");
-    assert!(volume6(&m) > 0.99, "a mirrored node must flip the winding back: {}", volume6(&m));
+    assert!(
+        got.iter().any(|&g| close(g, Vec3::new(-1.0, 5.0, 0.0))),
+        "{got:?}"
+    );
+    assert!(
+        volume6(&m) > 0.99,
+        "a mirrored node must flip the winding back: {}",
+        volume6(&m)
+    );
 }
 
 #[test]
 fn every_index_type_and_no_indices_give_the_same_mesh() {
     let nodes = json!([{"mesh": 0}]);
-    let reference = parse_glb(&tet_doc(Some(5125), nodes.clone(), json!([0])).0, &tet_doc(Some(5125), nodes.clone(), json!([0])).1).unwrap();
+    let reference = parse_glb(
+        &tet_doc(Some(5125), nodes.clone(), json!([0])).0,
+        &tet_doc(Some(5125), nodes.clone(), json!([0])).1,
+    )
+    .unwrap();
     for ty in [Some(5121), Some(5123), None] {
         let (doc, bin) = tet_doc(ty, nodes.clone(), json!([0]));
         let m = parse_glb(&doc, &bin).unwrap();
@@ -212,7 +229,10 @@ fn a_mesh_used_by_two_nodes_is_there_twice() {
     let m = parse_glb(&doc, &bin).unwrap();
     assert_eq!(m.mesh.triangles.len(), 8);
     let (lo, hi) = m.mesh.bounds().unwrap();
-    assert!(close(lo, Vec3::ZERO) && close(hi, Vec3::new(1.0, 1.0, 6.0)), "{lo} {hi}");
+    assert!(
+        close(lo, Vec3::ZERO) && close(hi, Vec3::new(1.0, 1.0, 6.0)),
+        "{lo} {hi}"
+    );
 }
 
 #[test]
@@ -225,13 +245,21 @@ fn the_default_scene_is_used_else_the_first() {
     assert!(m.mesh.bounds().unwrap().0.y > 9.0, "scene 1 is the default");
     doc.as_object_mut().unwrap().remove("scene");
     let m = parse_glb(&doc, &bin).unwrap();
-    assert!(m.mesh.bounds().unwrap().0.y < 1.0, "without `scene`, the first");
+    assert!(
+        m.mesh.bounds().unwrap().0.y < 1.0,
+        "without `scene`, the first"
+    );
 }
 
 #[test]
 fn strips_become_triangles_and_lines_are_skipped_with_a_warning() {
     // A unit square as a strip of 4 vertices (2 triangles), and a line primitive.
-    let quad: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, -1.0]];
+    let quad: [[f32; 3]; 4] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 0.0, -1.0],
+        [1.0, 0.0, -1.0],
+    ];
     let bin = f32_bytes(&quad);
     let doc = json!({
         "asset": {"version": "2.0"},
@@ -256,7 +284,10 @@ fn strips_become_triangles_and_lines_are_skipped_with_a_warning() {
 
     let mut lines_only = doc.clone();
     lines_only["meshes"][0]["primitives"] = json!([{"attributes": {"POSITION": 0}, "mode": 1}]);
-    assert_has(&err_glb(&lines_only, &bin), &["t.glb", "contains no triangles", "1 point or line"]);
+    assert_has(
+        &err_glb(&lines_only, &bin),
+        &["t.glb", "contains no triangles", "1 point or line"],
+    );
 }
 
 #[test]
@@ -278,7 +309,11 @@ fn a_spot_light_on_a_node_gives_position_and_direction() {
     let m = parse_glb(&doc, &bin).unwrap();
     let l = m.light.expect("the spot light");
     assert_eq!(l.kind, "spot");
-    assert!(close(l.position, Vec3::new(1.0, 5.0, 0.0)), "{}", l.position);
+    assert!(
+        close(l.position, Vec3::new(1.0, 5.0, 0.0)),
+        "{}",
+        l.position
+    );
     assert!(close(l.direction, Vec3::NEG_Y), "{}", l.direction);
 
     // A point light points down whatever its node's rotation; a directional one is not used.
@@ -291,7 +326,11 @@ fn a_spot_light_on_a_node_gives_position_and_direction() {
     assert_eq!(l.kind, "point");
     assert!(close(l.position, Vec3::new(1.0, 5.0, 0.0)));
     assert!(close(l.direction, Vec3::NEG_Y));
-    assert!(m.warnings.iter().any(|w| w.contains("directional")), "{:?}", m.warnings);
+    assert!(
+        m.warnings.iter().any(|w| w.contains("directional")),
+        "{:?}",
+        m.warnings
+    );
 }
 
 #[test]
@@ -318,9 +357,17 @@ fn a_model_as_scene_stands_on_the_ground_under_its_own_light() {
     assert!(lo.y.abs() < 1e-5 && ((hi - lo).max_element() - 1.5).abs() < 1e-4);
     // The model (10 m) became 1.5 m: ×0.15, centred on x and z (its centre was 5, 5).
     let light = scene.light;
-    assert!(close(light.center, Vec3::new(-0.75, 6.0, -0.75)), "{}", light.center);
+    assert!(
+        close(light.center, Vec3::new(-0.75, 6.0, -0.75)),
+        "{}",
+        light.center
+    );
     // −Z turned by −120° about X: (0, −sin 120°, cos 120°)·(−1)... = (0, −0.866, 0.5).
-    assert!(close(light.normal, Vec3::new(0.0, -0.866_025_4, 0.5)), "{}", light.normal);
+    assert!(
+        close(light.normal, Vec3::new(0.0, -0.866_025_4, 0.5)),
+        "{}",
+        light.normal
+    );
     assert!(light.radius > 0.0 && light.radius <= 0.5);
     // No light in the file: the default light over the model.
     let (doc, bin) = tet_doc(Some(5123), json!([{"mesh": 0}]), json!([0]));
@@ -330,7 +377,11 @@ fn a_model_as_scene_stands_on_the_ground_under_its_own_light() {
     assert!(close(scene.light.center, Vec3::new(0.0, 4.0, 0.0)));
     assert!(close(scene.light.normal, Vec3::NEG_Y));
     // Framed: the camera looks at the model and the light from above the ground.
-    assert!(scene.camera.eye.y > 1.0 && scene.camera.eye.z > 1.0, "{:?}", scene.camera);
+    assert!(
+        scene.camera.eye.y > 1.0 && scene.camera.eye.z > 1.0,
+        "{:?}",
+        scene.camera
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -341,7 +392,11 @@ fn gltf_with_a_bin_file_a_data_uri_and_in_a_scene_file() {
     std::fs::create_dir_all(dir.join("models")).unwrap();
     std::fs::write(dir.join("models").join("tet mesh.bin"), &bin).unwrap();
     doc["buffers"][0]["uri"] = json!("tet%20mesh.bin");
-    std::fs::write(dir.join("models/tet.gltf"), serde_json::to_vec(&doc).unwrap()).unwrap();
+    std::fs::write(
+        dir.join("models/tet.gltf"),
+        serde_json::to_vec(&doc).unwrap(),
+    )
+    .unwrap();
     let m = load_gltf(&dir.join("models/tet.gltf")).unwrap();
     assert_eq!(m.mesh.triangles.len(), 4);
 
@@ -400,15 +455,24 @@ fn truncated_and_wrong_magic_glb() {
     // A header length under the minimum does not underflow.
     let mut short = good.clone();
     short[8..12].copy_from_slice(&4u32.to_le_bytes());
-    assert_has(&parse_gltf(&short, "s.glb", None).unwrap_err().to_string(), &["s.glb", "too short"]);
+    assert_has(
+        &parse_gltf(&short, "s.glb", None).unwrap_err().to_string(),
+        &["s.glb", "too short"],
+    );
     // A JSON chunk that claims more than there is.
     let mut long = good.clone();
     long[12..16].copy_from_slice(&1_000_000u32.to_le_bytes());
-    assert_has(&parse_gltf(&long, "l.glb", None).unwrap_err().to_string(), &["l.glb", "truncated", "1000000"]);
+    assert_has(
+        &parse_gltf(&long, "l.glb", None).unwrap_err().to_string(),
+        &["l.glb", "truncated", "1000000"],
+    );
     // Version 1.
     let mut v1 = good;
     v1[4..8].copy_from_slice(&1u32.to_le_bytes());
-    assert_has(&parse_gltf(&v1, "v.glb", None).unwrap_err().to_string(), &["v.glb", "version 1"]);
+    assert_has(
+        &parse_gltf(&v1, "v.glb", None).unwrap_err().to_string(),
+        &["v.glb", "version 1"],
+    );
 }
 
 #[test]
@@ -418,20 +482,38 @@ fn accessors_out_of_range_or_of_the_wrong_type() {
     // More positions than the view holds.
     let mut d = doc.clone();
     d["accessors"][0]["count"] = json!(5);
-    assert_has(&err_glb(&d, &bin), &["t.glb", "accessor 0", "POSITION of mesh 0, primitive 0", "out of range", "5 items"]);
+    assert_has(
+        &err_glb(&d, &bin),
+        &[
+            "t.glb",
+            "accessor 0",
+            "POSITION of mesh 0, primitive 0",
+            "out of range",
+            "5 items",
+        ],
+    );
     // An offset past the view.
     let mut d = doc.clone();
     d["accessors"][1]["byteOffset"] = json!(2);
-    assert_has(&err_glb(&d, &bin), &["accessor 1", "indices of mesh 0", "out of range"]);
+    assert_has(
+        &err_glb(&d, &bin),
+        &["accessor 1", "indices of mesh 0", "out of range"],
+    );
     // A view past its buffer's bytes.
     let mut d = doc.clone();
     d["bufferViews"][1]["byteLength"] = json!(400);
     d["accessors"][1]["count"] = json!(12);
-    assert_has(&err_glb(&d, &bin), &["buffer view 1 is out of range", "buffer 0"]);
+    assert_has(
+        &err_glb(&d, &bin),
+        &["buffer view 1 is out of range", "buffer 0"],
+    );
     // A buffer that says more than the BIN chunk has.
     let mut d = doc.clone();
     d["buffers"][0]["byteLength"] = json!(4000);
-    assert_has(&err_glb(&d, &bin), &["buffer 0 says 4000 bytes", "BIN chunk"]);
+    assert_has(
+        &err_glb(&d, &bin),
+        &["buffer 0 says 4000 bytes", "BIN chunk"],
+    );
     // Positions that are not FLOAT VEC3.
     let mut d = doc.clone();
     d["accessors"][0]["componentType"] = json!(5123);
@@ -445,7 +527,10 @@ fn accessors_out_of_range_or_of_the_wrong_type() {
     let mut d = doc.clone();
     d["bufferViews"][0]["byteStride"] = json!(4);
     let msg = err_glb(&d, &bin);
-    assert!(msg.contains("byteStride") || msg.contains("invalid glTF"), "{msg}");
+    assert!(
+        msg.contains("byteStride") || msg.contains("invalid glTF"),
+        "{msg}"
+    );
     // Sparse accessors.
     let mut d = doc.clone();
     d["accessors"][0]["sparse"] = json!({"count": 1,
@@ -460,7 +545,15 @@ fn an_index_past_the_vertices_is_refused() {
     // The 5th index (item 4) becomes 9.
     let at = 48 + 4 * 2;
     bin[at..at + 2].copy_from_slice(&9u16.to_le_bytes());
-    assert_has(&err_glb(&doc, &bin), &["t.glb", "accessor 1", "index 9 at item 4 is out of range", "4 vertices"]);
+    assert_has(
+        &err_glb(&doc, &bin),
+        &[
+            "t.glb",
+            "accessor 1",
+            "index 9 at item 4 is out of range",
+            "4 vertices",
+        ],
+    );
 }
 
 #[test]
@@ -468,10 +561,16 @@ fn huge_counts_are_refused_before_allocating() {
     let (doc, bin) = tet_doc(Some(5125), json!([{"mesh": 0}]), json!([0]));
     let mut d = doc.clone();
     d["accessors"][0]["count"] = json!(4_000_000_000u64);
-    assert_has(&err_glb(&d, &bin), &["accessor 0", "out of range", "4000000000 items"]);
+    assert_has(
+        &err_glb(&d, &bin),
+        &["accessor 0", "out of range", "4000000000 items"],
+    );
     let mut d = doc.clone();
     d["accessors"][1]["count"] = json!(3 * (MAX_TRIANGLES as u64 + 1));
-    assert_has(&err_glb(&d, &bin), &["accessor 1", "16777216 triangles", "limit"]);
+    assert_has(
+        &err_glb(&d, &bin),
+        &["accessor 1", "16777216 triangles", "limit"],
+    );
     let mut d = doc.clone();
     d["accessors"][1]["count"] = json!(u64::MAX / 2);
     let msg = err_glb(&d, &bin);
@@ -488,20 +587,44 @@ fn buffer_files_missing_outside_or_not_files() {
     let (mut doc, _) = tet_doc(Some(5123), json!([{"mesh": 0}]), json!([0]));
     std::fs::create_dir_all(dir.join("folder.bin")).unwrap();
     for (uri, parts) in [
-        ("missing.bin", vec!["m.gltf", "buffer 0", "missing.bin", "cannot read"]),
-        ("../outside.bin", vec!["m.gltf", "buffer 0", "inside the model's folder"]),
-        ("/etc/passwd", vec!["m.gltf", "buffer 0", "inside the model's folder"]),
-        ("file:///etc/passwd", vec!["m.gltf", "buffer 0", "inside the model's folder"]),
-        ("folder.bin", vec!["m.gltf", "buffer 0", "folder.bin", "not a regular file"]),
-        ("data:application/octet-stream,raw", vec!["m.gltf", "buffer 0", "base64"]),
-        ("data:application/octet-stream;base64,!!!!", vec!["m.gltf", "buffer 0", "not valid base64"]),
+        (
+            "missing.bin",
+            vec!["m.gltf", "buffer 0", "missing.bin", "cannot read"],
+        ),
+        (
+            "../outside.bin",
+            vec!["m.gltf", "buffer 0", "inside the model's folder"],
+        ),
+        (
+            "/etc/passwd",
+            vec!["m.gltf", "buffer 0", "inside the model's folder"],
+        ),
+        (
+            "file:///etc/passwd",
+            vec!["m.gltf", "buffer 0", "inside the model's folder"],
+        ),
+        (
+            "folder.bin",
+            vec!["m.gltf", "buffer 0", "folder.bin", "not a regular file"],
+        ),
+        (
+            "data:application/octet-stream,raw",
+            vec!["m.gltf", "buffer 0", "base64"],
+        ),
+        (
+            "data:application/octet-stream;base64,!!!!",
+            vec!["m.gltf", "buffer 0", "not valid base64"],
+        ),
     ] {
         doc["buffers"][0]["uri"] = json!(uri);
         let path = dir.join("m.gltf");
         std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
         let msg = load_gltf(&path).unwrap_err().to_string();
         assert_has(&msg, &parts);
-        assert!(msg.contains(&dir.join("m.gltf").display().to_string()), "{msg}");
+        assert!(
+            msg.contains(&dir.join("m.gltf").display().to_string()),
+            "{msg}"
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -511,8 +634,13 @@ fn a_model_file_that_is_a_directory_or_missing() {
     let dir = temp_dir("notfile");
     let folder = dir.join("folder.glb");
     std::fs::create_dir_all(&folder).unwrap();
-    assert_has(&load_gltf(&folder).unwrap_err().to_string(), &["folder.glb", "not a regular file"]);
-    let msg = load(dir.join("nothing.glb").to_str().unwrap()).unwrap_err().to_string();
+    assert_has(
+        &load_gltf(&folder).unwrap_err().to_string(),
+        &["folder.glb", "not a regular file"],
+    );
+    let msg = load(dir.join("nothing.glb").to_str().unwrap())
+        .unwrap_err()
+        .to_string();
     assert_has(&msg, &["nothing.glb", "cannot read"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -542,7 +670,10 @@ fn no_triangles_bad_json_and_bad_graphs() {
     // An index that points nowhere (the gltf crate's validation).
     let mut d = doc.clone();
     d["nodes"][0]["mesh"] = json!(7);
-    assert_has(&err_glb(&d, &same), &["t.glb", "invalid glTF", "nodes[0].mesh"]);
+    assert_has(
+        &err_glb(&d, &same),
+        &["t.glb", "invalid glTF", "nodes[0].mesh"],
+    );
     // Not JSON; the text is not quoted back.
     let msg = parse_gltf(b"{\"asset\": SECRET-TOKEN}", "bad.gltf", None)
         .unwrap_err()
@@ -572,11 +703,18 @@ fn the_fox_in_assets_loads() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models/Fox.glb");
     let m = load_gltf(&path).unwrap();
     // 1728 corners, 576 triangles in the file (non-indexed), welded.
-    assert!(m.mesh.triangles.len() > 500 && m.mesh.triangles.len() <= 576, "{}", m.mesh.triangles.len());
+    assert!(
+        m.mesh.triangles.len() > 500 && m.mesh.triangles.len() <= 576,
+        "{}",
+        m.mesh.triangles.len()
+    );
     assert!(m.mesh.positions.len() < 1728, "corners are welded");
     let (lo, hi) = m.mesh.bounds().unwrap();
     // The accessor's own min/max: y from −0.12 to 78.9, z from −88.1 to 66.6.
-    assert!((hi.y - 78.907).abs() < 0.01 && (lo.z + 88.095).abs() < 0.01, "{lo} {hi}");
+    assert!(
+        (hi.y - 78.907).abs() < 0.01 && (lo.z + 88.095).abs() < 0.01,
+        "{lo} {hi}"
+    );
     let scene = load(path.to_str().unwrap()).unwrap();
     assert_eq!(scene.name, "Fox");
     assert_eq!(scene.caster_triangle_count(), m.mesh.triangles.len());

@@ -108,7 +108,8 @@ fn missing_required_key() {
 /// A file without `[camera]` loads, sees the casters and the light, and saves without one.
 #[test]
 fn a_scene_without_camera_is_framed_on_the_casters_and_the_light() {
-    let body = format!("{LIGHT}\n{GROUND}\n[[object]]\nmesh = \"sphere:16x8\"\ntranslate = [2, 1, -1]\n");
+    let body =
+        format!("{LIGHT}\n{GROUND}\n[[object]]\nmesh = \"sphere:16x8\"\ntranslate = [2, 1, -1]\n");
     let f = SceneFile::parse(&body, "nocam.toml").unwrap();
     assert!(f.camera.is_none());
     assert!(!f.to_toml().contains("[camera]"), "{}", f.to_toml());
@@ -130,9 +131,15 @@ fn a_scene_without_camera_is_framed_on_the_casters_and_the_light() {
         assert!(inside(corner), "caster corner {corner} outside {cam:?}");
     }
     // And the middle of the shadow below the caster (the light is straight above it).
-    assert!(inside(glam::Vec3::new(2.0, 0.0, -1.0)), "the shadow is in view");
+    assert!(
+        inside(glam::Vec3::new(2.0, 0.0, -1.0)),
+        "the shadow is in view"
+    );
     // Looking down at the scene from the front.
-    assert!(cam.eye.y > cam.target.y && cam.eye.z > cam.target.z, "{cam:?}");
+    assert!(
+        cam.eye.y > cam.target.y && cam.eye.z > cam.target.z,
+        "{cam:?}"
+    );
     // Not absurdly far: the caster box fills a good part of the view.
     let d = (cam.eye - cam.target).length();
     assert!(d < 20.0, "{d}");
@@ -141,7 +148,10 @@ fn a_scene_without_camera_is_framed_on_the_casters_and_the_light() {
         "[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov_y_deg = {}\n{body}",
         cam.eye.x, cam.eye.y, cam.eye.z, cam.target.x, cam.target.y, cam.target.z, cam.fov_y_deg
     );
-    let again = SceneFile::parse(&with, "cam.toml").unwrap().build(Path::new("."), "cam.toml").unwrap();
+    let again = SceneFile::parse(&with, "cam.toml")
+        .unwrap()
+        .build(Path::new("."), "cam.toml")
+        .unwrap();
     assert_eq!(again.camera, cam);
 }
 
@@ -151,7 +161,11 @@ fn a_scene_without_camera_is_framed_on_the_casters_and_the_light() {
 fn a_bare_obj_and_a_camera_less_file_get_the_same_view() {
     let dir = temp_dir("samecam");
     let obj = dir.join("tet.obj");
-    std::fs::write(&obj, format!("{TRI}v 0 1 0\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n")).unwrap();
+    std::fs::write(
+        &obj,
+        format!("{TRI}v 0 1 0\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n"),
+    )
+    .unwrap();
     let bare = load(&obj.display().to_string()).unwrap();
     let (file, _) = load_file(&obj.display().to_string()).unwrap();
     assert!(file.camera.is_none());

@@ -75,13 +75,13 @@ impl std::str::FromStr for Orbit {
 pub fn animate(args: &AnimateArgs) -> Result<()> {
     let (width, height) = parse_size(args.size)?;
     if !(1..=MAX_FRAMES).contains(&args.frames) {
-        bail!(
-            "--frames expects 1 to {MAX_FRAMES}, found {}",
-            args.frames
-        );
+        bail!("--frames expects 1 to {MAX_FRAMES}, found {}", args.frames);
     }
     if !(1..=60).contains(&args.fps) {
-        bail!("--fps expects 1 to 60 frames per second, found {}", args.fps);
+        bail!(
+            "--fps expects 1 to 60 frames per second, found {}",
+            args.fps
+        );
     }
     let total = u64::from(width) * u64::from(height) * args.frames as u64;
     if total > MAX_TOTAL_PIXELS {
@@ -122,9 +122,7 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
         .set_animated(args.frames as u32, 0)
         .and_then(|()| encoder.set_frame_delay(1, args.fps as u16))
         .context("setting up the APNG encoder")?;
-    let mut writer = encoder
-        .write_header()
-        .context("writing the APNG header")?;
+    let mut writer = encoder.write_header().context("writing the APNG header")?;
 
     let mut offline = Offline::new()?;
     let progress = Progress::new("animate", args.frames as u64, "frames");
@@ -316,7 +314,8 @@ mod tests {
             assert!((l.center.y - poses.light.center.y).abs() < 1e-5);
             assert!((axis_dist(l.center) - axis_dist(poses.light.center)).abs() < 1e-4);
             // The normal keeps its angle to the direction toward the axis.
-            let inward = |c: Vec3| Vec3::new(centre.x - c.x, 0.0, centre.z - c.z).normalize_or_zero();
+            let inward =
+                |c: Vec3| Vec3::new(centre.x - c.x, 0.0, centre.z - c.z).normalize_or_zero();
             let a0 = poses.light.normal.dot(inward(poses.light.center));
             assert!((l.normal.dot(inward(l.center)) - a0).abs() < 1e-4);
             assert!((l.normal.y - poses.light.normal.y).abs() < 1e-5);
@@ -351,7 +350,13 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("dbuffer-stale-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        for name in ["frame-0000.png", "frame-0003.png", "frame-0012.png", "frame-x.png", "keep.png"] {
+        for name in [
+            "frame-0000.png",
+            "frame-0003.png",
+            "frame-0012.png",
+            "frame-x.png",
+            "keep.png",
+        ] {
             std::fs::write(dir.join(name), b"x").unwrap();
         }
         let mut stale = stale_frames(&dir, 4);

@@ -63,11 +63,10 @@ impl Progress {
         match &p.bar {
             Some(bar) => bar.set_position(done),
             None => {
-                let quarter = if p.total == 0 {
-                    4
-                } else {
-                    (done.min(p.total) * 4 / p.total).min(4)
-                };
+                let quarter = (done.min(p.total) * 4)
+                    .checked_div(p.total)
+                    .unwrap_or(4)
+                    .min(4);
                 let before = p.quarters.fetch_max(quarter, Ordering::Relaxed);
                 if quarter > before && quarter < 4 {
                     let s = p.start.elapsed().as_secs_f64();
@@ -114,9 +113,8 @@ impl Progress {
 pub fn reference_samples() -> Box<dyn FnMut(usize, usize)> {
     let mut job: Option<Progress> = None;
     Box::new(move |done, total| {
-        let p = job.get_or_insert_with(|| {
-            Progress::new("reference", total as u64, "samples per pixel")
-        });
+        let p = job
+            .get_or_insert_with(|| Progress::new("reference", total as u64, "samples per pixel"));
         p.set(done as u64);
         if done >= total {
             p.finish();

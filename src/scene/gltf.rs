@@ -343,18 +343,20 @@ impl Buffers<'_> {
 
     fn read_uri(&self, index: usize, uri: &str) -> Result<Vec<u8>, String> {
         if let Some(rest) = uri.strip_prefix("data:") {
-            let (_, data) = rest
-                .split_once(";base64,")
-                .ok_or_else(|| format!("buffer {index}: a data: URI must be base64 (`;base64,`)"))?;
+            let (_, data) = rest.split_once(";base64,").ok_or_else(|| {
+                format!("buffer {index}: a data: URI must be base64 (`;base64,`)")
+            })?;
             return decode_base64(data.as_bytes())
                 .ok_or_else(|| format!("buffer {index}: the data: URI is not valid base64"));
         }
         let relative = percent_decode(uri)
             .ok_or_else(|| format!("buffer {index}: the uri is not valid percent-encoded UTF-8"))?;
         let rel = Path::new(&relative);
-        let has_scheme = relative
-            .split_once(':')
-            .is_some_and(|(s, _)| !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c)));
+        let has_scheme = relative.split_once(':').is_some_and(|(s, _)| {
+            !s.is_empty()
+                && s.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c))
+        });
         let mut depth = 0i32;
         let mut escapes = false;
         for c in rel.components() {
@@ -452,10 +454,8 @@ fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfMo
     let mut light = None;
     // Depth-first over the node forest, without recursion; each node at most once.
     let mut seen = vec![false; doc.nodes().len()];
-    let mut stack: Vec<(::gltf::Node, Mat4, usize)> = scene
-        .nodes()
-        .map(|n| (n, Mat4::IDENTITY, 0))
-        .collect();
+    let mut stack: Vec<(::gltf::Node, Mat4, usize)> =
+        scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
     stack.reverse();
     while let Some((node, parent, depth)) = stack.pop() {
         let i = node.index();
@@ -831,10 +831,7 @@ mod tests {
             assemble(Mode::TriangleFan, &[0, 1, 2, 3]),
             vec![[0, 1, 2], [0, 2, 3]]
         );
-        assert_eq!(
-            assemble(Mode::Triangles, &[0, 1, 2, 3]),
-            vec![[0, 1, 2]]
-        );
+        assert_eq!(assemble(Mode::Triangles, &[0, 1, 2, 3]), vec![[0, 1, 2]]);
     }
 
     #[test]
@@ -843,7 +840,10 @@ mod tests {
         let mut h = b"glTF".to_vec();
         h.extend(2u32.to_le_bytes());
         h.extend(4u32.to_le_bytes());
-        assert!(split_glb(&h).unwrap_err().contains("too short"), "a length under 12 must not underflow");
+        assert!(
+            split_glb(&h).unwrap_err().contains("too short"),
+            "a length under 12 must not underflow"
+        );
         let mut h = b"glTF".to_vec();
         h.extend(1u32.to_le_bytes());
         h.extend(12u32.to_le_bytes());
