@@ -437,12 +437,15 @@ fn percent_decode(text: &str) -> Option<String> {
     String::from_utf8(out).ok()
 }
 
-/// One mesh primitive in the model's scene: where it is and what it is called in errors.
-struct Instance {
-    mesh: usize,
-    primitive: usize,
+/// A mesh placed in the model's scene by its node.
+struct Instance<'a> {
+    mesh: ::gltf::Mesh<'a>,
     world: Mat4,
 }
+
+/// Most positions placed over all instances (each instance of a primitive places all of its
+/// positions): three per triangle of the budget.
+const MAX_PLACED_VERTICES: usize = 3 * MAX_TRIANGLES;
 
 fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfModel, String> {
     let scene = doc
@@ -479,13 +482,7 @@ fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfMo
             ));
         }
         if let Some(mesh) = node.mesh() {
-            for primitive in mesh.primitives() {
-                instances.push(Instance {
-                    mesh: mesh.index(),
-                    primitive: primitive.index(),
-                    world,
-                });
-            }
+            instances.push(Instance { mesh, world });
         }
         if let Some(l) = node.light() {
             use ::gltf::khr_lights_punctual::Kind;
@@ -532,63 +529,73 @@ fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfMo
     let mut positions: Vec<Vec3> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
+    // Each primitive's positions and triangles, read once however many nodes use it.
+    let mut read: HashMap<(usize, usize), (Vec<Vec3>, Vec<[u32; 3]>)> = HashMap::new();
+    let (mut assembled, mut placed) = (0usize, 0usize);
     let mut skipped = 0usize;
     let mut primitives = 0usize;
     for inst in &instances {
-        let Some(mesh) = doc.meshes().nth(inst.mesh) else {
-            continue;
-        };
-        let Some(primitive) = mesh.primitives().nth(inst.primitive) else {
-            continue;
-        };
-        let what = format!("mesh {}, primitive {}", inst.mesh, inst.primitive);
-        use ::gltf::mesh::Mode;
-        let mode = primitive.mode();
-        if matches!(
-            mode,
-            Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
-        ) {
-            skipped += 1;
-            continue;
-        }
-        primitives += 1;
-        let position = primitive
-            .get(&::gltf::Semantic::Positions)
-            .ok_or_else(|| format!("{what} has no POSITION attribute"))?;
-        let local = read_positions(&position, &format!("POSITION of {what}"), buffers)?;
-        let corners = match primitive.indices() {
-            Some(acc) => read_indices(&acc, &format!("indices of {what}"), buffers, local.len())?,
-            None => (0..local.len() as u32).collect(),
-        };
-        let tris = assemble(mode, &corners);
-        let budget = MAX_TRIANGLES.saturating_sub(triangles.len());
-        if tris.len() > budget {
-            return Err(format!(
-                "has more than {MAX_TRIANGLES} triangles (the limit for one model) by {what}"
-            ));
-        }
-        let flip = Mat4::determinant(&inst.world) < 0.0;
-        let mut remap = Vec::with_capacity(local.len());
-        for p in &local {
-            let p = inst.world.transform_point3(*p);
-            if !p.is_finite() {
+        for primitive in inst.mesh.primitives() {
+            let what = format!("mesh {}, primitive {}", inst.mesh.index(), primitive.index());
+            use ::gltf::mesh::Mode;
+            let mode = primitive.mode();
+            if matches!(
+                mode,
+                Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
+            ) {
+                skipped += 1;
+                continue;
+            }
+            primitives += 1;
+            let key = (inst.mesh.index(), primitive.index());
+            if !read.contains_key(&key) {
+                let position = primitive
+                    .get(&::gltf::Semantic::Positions)
+                    .ok_or_else(|| format!("{what} has no POSITION attribute"))?;
+                let local = read_positions(&position, &format!("POSITION of {what}"), buffers)?;
+                let corners = match primitive.indices() {
+                    Some(acc) => {
+                        read_indices(&acc, &format!("indices of {what}"), buffers, local.len())?
+                    }
+                    None => (0..local.len() as u32).collect(),
+                };
+                let tris = assemble(mode, &corners);
+                read.insert(key, (local, tris));
+            }
+            let Some((local, tris)) = read.get(&key) else {
+                continue;
+            };
+            assembled += tris.len();
+            placed += local.len();
+            if assembled > MAX_TRIANGLES || placed > MAX_PLACED_VERTICES {
                 return Err(format!(
-                    "{what}: a position is not finite once placed by its node"
+                    "has more than {MAX_TRIANGLES} triangles or {MAX_PLACED_VERTICES} vertices \
+                     over its node instances (the limit for one model), reached at {what}"
                 ));
             }
-            let p = Vec3::new(p.x + 0.0, p.y + 0.0, p.z + 0.0);
-            let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
-            let next = positions.len() as u32;
-            let id = *welded.entry(key).or_insert_with(|| {
-                positions.push(p);
-                next
-            });
-            remap.push(id);
-        }
-        for [a, b, c] in tris {
-            let (a, b, c) = (remap[a as usize], remap[b as usize], remap[c as usize]);
-            if a != b && b != c && a != c {
-                triangles.push(if flip { [a, c, b] } else { [a, b, c] });
+            let flip = Mat4::determinant(&inst.world) < 0.0;
+            let mut remap = Vec::with_capacity(local.len());
+            for p in local {
+                let p = inst.world.transform_point3(*p);
+                if !p.is_finite() {
+                    return Err(format!(
+                        "{what}: a position is not finite once placed by its node"
+                    ));
+                }
+                let p = Vec3::new(p.x + 0.0, p.y + 0.0, p.z + 0.0);
+                let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+                let next = positions.len() as u32;
+                let id = *welded.entry(key).or_insert_with(|| {
+                    positions.push(p);
+                    next
+                });
+                remap.push(id);
+            }
+            for &[a, b, c] in tris {
+                let (a, b, c) = (remap[a as usize], remap[b as usize], remap[c as usize]);
+                if a != b && b != c && a != c {
+                    triangles.push(if flip { [a, c, b] } else { [a, b, c] });
+                }
             }
         }
     }
