@@ -127,8 +127,8 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
     let mut offline = Offline::new()?;
     let progress = Progress::new("animate", args.frames as u64, "frames");
     progress.stage(&format!(
-        "{} {orbit:?} orbit, {width}x{height}, {method}",
-        scene.name
+        "{}, the {} orbiting, {width}x{height}, {method}",
+        scene.name, args.orbit
     ));
     let mut warned: Vec<String> = Vec::new();
     for k in 0..args.frames {

@@ -34,7 +34,7 @@ impl Progress {
         let bar = std::io::stderr().is_terminal().then(|| {
             let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
             let style = ProgressStyle::with_template(
-                "{prefix:>9} [{bar:32}] {pos}/{len} {msg:.dim} {elapsed}, ETA {eta}",
+                "{prefix:>9} [{bar:30}] {pos}/{len} {elapsed}, ETA {eta} {wide_msg:.dim}",
             )
             .unwrap_or_else(|_| ProgressStyle::default_bar())
             .progress_chars("=> ");

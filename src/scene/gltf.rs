@@ -536,7 +536,11 @@ fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfMo
     let mut primitives = 0usize;
     for inst in &instances {
         for primitive in inst.mesh.primitives() {
-            let what = format!("mesh {}, primitive {}", inst.mesh.index(), primitive.index());
+            let what = format!(
+                "mesh {}, primitive {}",
+                inst.mesh.index(),
+                primitive.index()
+            );
             use ::gltf::mesh::Mode;
             let mode = primitive.mode();
             if matches!(
