@@ -28,6 +28,7 @@
 //! `m.glb: accessor 2 (indices of mesh 0, primitive 0): 36 items of 2 bytes from byte 0 need 72
 //! bytes, but buffer view 1 has 48`. File content is never quoted.
 
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::io::Read;
 use std::path::{Component, Path, PathBuf};
@@ -443,6 +444,9 @@ struct Instance<'a> {
     world: Mat4,
 }
 
+/// A primitive's positions and triangles (indices into them), as read from its accessors.
+type Primitive = (Vec<Vec3>, Vec<[u32; 3]>);
+
 /// Most positions placed over all instances (each instance of a primitive places all of its
 /// positions): three per triangle of the budget.
 const MAX_PLACED_VERTICES: usize = 3 * MAX_TRIANGLES;
@@ -530,7 +534,7 @@ fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfMo
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
     // Each primitive's positions and triangles, read once however many nodes use it.
-    let mut read: HashMap<(usize, usize), (Vec<Vec3>, Vec<[u32; 3]>)> = HashMap::new();
+    let mut read: HashMap<(usize, usize), Primitive> = HashMap::new();
     let (mut assembled, mut placed) = (0usize, 0usize);
     let mut skipped = 0usize;
     let mut primitives = 0usize;
@@ -551,23 +555,22 @@ fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfMo
                 continue;
             }
             primitives += 1;
-            let key = (inst.mesh.index(), primitive.index());
-            if !read.contains_key(&key) {
-                let position = primitive
-                    .get(&::gltf::Semantic::Positions)
-                    .ok_or_else(|| format!("{what} has no POSITION attribute"))?;
-                let local = read_positions(&position, &format!("POSITION of {what}"), buffers)?;
-                let corners = match primitive.indices() {
-                    Some(acc) => {
-                        read_indices(&acc, &format!("indices of {what}"), buffers, local.len())?
-                    }
-                    None => (0..local.len() as u32).collect(),
-                };
-                let tris = assemble(mode, &corners);
-                read.insert(key, (local, tris));
-            }
-            let Some((local, tris)) = read.get(&key) else {
-                continue;
+            let (local, tris) = match read.entry((inst.mesh.index(), primitive.index())) {
+                Entry::Occupied(e) => &*e.into_mut(),
+                Entry::Vacant(e) => {
+                    let position = primitive
+                        .get(&::gltf::Semantic::Positions)
+                        .ok_or_else(|| format!("{what} has no POSITION attribute"))?;
+                    let local = read_positions(&position, &format!("POSITION of {what}"), buffers)?;
+                    let corners = match primitive.indices() {
+                        Some(acc) => {
+                            read_indices(&acc, &format!("indices of {what}"), buffers, local.len())?
+                        }
+                        None => (0..local.len() as u32).collect(),
+                    };
+                    let tris = assemble(mode, &corners);
+                    &*e.insert((local, tris))
+                }
             };
             assembled += tris.len();
             placed += local.len();
