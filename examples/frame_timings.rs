@@ -1,14 +1,11 @@
-//! Steady-state frame timings of the render core (the first frames include the driver's shader
-//! compilation): geometry rebuilt, and GPU ms per pass from timestamp queries, medians over
-//! frames. The seed for `dbuffer bench`.
+//! Per-pass GPU timings of the render core for a few methods, with the light-space passes made
+//! again every frame (medians after two warm-up frames): the quick loop for tuning a pass, where
+//! `dbuffer bench` is the whole report.
 //!
-//!     cargo run --release --example frame_timings -- table1-224 table1-960 table1-5760 --size 600 --frames 12
+//!     cargo run --release --example frame_timings -- table1-960 table1-5760 --size 1024 --frames 8 --methods dbuffer,hard
 
-use std::time::Instant;
-
-use dbuffer::geometry::{PreparedCasters, VolumeParams, VtVariant};
-use dbuffer::render::session::Session;
-use dbuffer::render::{FrameRequest, GpuContext, Method};
+use dbuffer::geometry::VtVariant;
+use dbuffer::render::{FrameRequest, GpuContext, Method, Session};
 use dbuffer::scene;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -18,17 +15,18 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let value = |flag: &str, default: u32| -> anyhow::Result<u32> {
-        match args.iter().position(|a| a == flag) {
-            Some(i) => Ok(args
-                .get(i + 1)
-                .ok_or_else(|| anyhow::anyhow!("{flag} needs a value"))?
-                .parse()?),
-            None => Ok(default),
-        }
+    let value = |flag: &str| {
+        args.iter()
+            .position(|a| a == flag)
+            .and_then(|i| args.get(i + 1))
     };
-    let size = value("--size", 600)?;
-    let frames = value("--frames", 12)?.max(3);
+    let size: u32 = value("--size").map_or(Ok(600), |v| v.parse())?;
+    let frames: usize = value("--frames").map_or(Ok(8), |v| v.parse())?;
+    let methods: Vec<Method> = value("--methods")
+        .map_or("dbuffer,hard", |v| v.as_str())
+        .split(',')
+        .map(|m| m.parse().map_err(anyhow::Error::msg))
+        .collect::<anyhow::Result<_>>()?;
     let names: Vec<&String> = args
         .iter()
         .enumerate()
@@ -37,57 +35,41 @@ fn main() -> anyhow::Result<()> {
         .collect();
     let ctx = GpuContext::headless()?;
     println!(
-        "adapter {}; {size}x{size}, D-buffer 1024², median of {frames} frames after 2 warm-up",
+        "adapter {}; {size}², D-buffer 1024², median of {frames} frames after 2 warm-up",
         ctx.adapter_description()
     );
-    println!("| scene | caster tris | geometry ms (CPU) | light pass ms (GPU) | camera pass ms (GPU) | frame ms (wall, with readback) |");
-    println!("|---|---|---|---|---|---|");
     for name in names {
         let scene = scene::load(name)?;
-        let prepared = PreparedCasters::new(&scene);
-        let params = VolumeParams::for_scene(&scene);
-        let geometry_ms = median(
-            (0..frames)
-                .map(|_| {
-                    let t = Instant::now();
-                    let g = prepared.build(&scene.light, &params);
-                    std::hint::black_box(g);
-                    t.elapsed().as_secs_f64() * 1e3
-                })
-                .collect(),
-        );
-        let tris = scene.caster_triangle_count();
         let mut session = Session::new(&ctx, scene);
-        let request = FrameRequest {
-            width: size,
-            height: size,
-            dbuffer_size: 1024,
-            method: Method::DBuffer,
-            vt: VtVariant::Smoothstep,
-            ..FrameRequest::default()
-        };
-        let (mut light, mut camera, mut wall) = (Vec::new(), Vec::new(), Vec::new());
-        for i in 0..frames + 2 {
-            let t = Instant::now();
-            let frame = session.frame(&ctx, &request)?;
-            let ms = t.elapsed().as_secs_f64() * 1e3;
-            if i >= 2 {
-                wall.push(ms);
+        for &method in &methods {
+            let request = FrameRequest {
+                width: size,
+                height: size,
+                dbuffer_size: 1024,
+                method,
+                vt: VtVariant::Smoothstep,
+                ..FrameRequest::default()
+            };
+            let mut passes: Vec<(String, Vec<f64>)> = Vec::new();
+            for i in 0..frames + 2 {
+                session.invalidate_light_maps();
+                let frame = session.frame(&ctx, &request)?;
+                if i < 2 {
+                    continue;
+                }
                 for (pass, ms) in frame.gpu_ms {
-                    match pass.as_str() {
-                        "light_pass" => light.push(ms),
-                        "camera_pass" => camera.push(ms),
-                        _ => {}
+                    match passes.iter_mut().find(|(p, _)| *p == pass) {
+                        Some((_, v)) => v.push(ms),
+                        None => passes.push((pass, vec![ms])),
                     }
                 }
             }
+            let cells: Vec<String> = passes
+                .into_iter()
+                .map(|(p, v)| format!("{p} {:.2}", median(v)))
+                .collect();
+            println!("{name:<14} {method:<15} {}", cells.join("  "));
         }
-        println!(
-            "| `{name}` | {tris} | {geometry_ms:.3} | {:.1} | {:.1} | {:.1} |",
-            median(light),
-            median(camera),
-            median(wall)
-        );
     }
     Ok(())
 }

@@ -36,6 +36,8 @@ use image::{ExtendedColorType, ImageDecoder, ImageEncoder};
 use serde::ser::{SerializeMap, Serializer};
 
 use crate::geometry::metrics::ShadowClass;
+use crate::render::passes::shadow_map::NO_SURFACE;
+use crate::render::Frame;
 
 /// The shaded image.
 pub const IMAGE_PNG: &str = "image.png";
@@ -118,6 +120,112 @@ pub struct RenderOutputs {
     pub s_p: Vec<f32>,
     /// Everything for meta.json (see below).
     pub meta: RenderMeta,
+}
+
+impl RenderOutputs {
+    /// A frame read back from the render core, as the files hold it: colour back to linear,
+    /// shadow classes by the thresholds of design.md §4, the D-buffer's "no surface" as `+inf`.
+    /// A frame without its D-buffer gets an empty one (0×0).
+    pub fn from_frame(frame: &Frame, meta: RenderMeta) -> RenderOutputs {
+        let hit: Vec<bool> = (0..frame.position.len()).map(|i| frame.hit(i)).collect();
+        let class = frame
+            .visibility
+            .iter()
+            .zip(&hit)
+            .map(|(&v, &h)| match (h, ShadowClass::of(f64::from(v))) {
+                (false, _) | (true, ShadowClass::Lit) => 0,
+                (true, ShadowClass::Penumbra) => 1,
+                (true, ShadowClass::Umbra) => 2,
+            })
+            .collect();
+        let maps = frame.maps.as_ref();
+        let raw =
+            |slot: usize, component: usize| maps.map_or_else(Vec::new, |m| m.raw(slot, component));
+        RenderOutputs {
+            width: frame.width,
+            height: frame.height,
+            color: frame
+                .color
+                .iter()
+                .map(|c| {
+                    [
+                        srgb8_to_linear(c[0]),
+                        srgb8_to_linear(c[1]),
+                        srgb8_to_linear(c[2]),
+                    ]
+                })
+                .collect(),
+            visibility: frame.visibility.clone(),
+            hit,
+            position: frame.position.iter().map(|p| [p[0], p[1], p[2]]).collect(),
+            class,
+            dbuffer_size: maps.map_or(0, |m| m.size),
+            d_o: raw(0, 0)
+                .into_iter()
+                .map(|d| {
+                    if f64::from(d) >= NO_SURFACE * 0.5 {
+                        f32::INFINITY
+                    } else {
+                        d
+                    }
+                })
+                .collect(),
+            d_u: raw(1, 0),
+            d_p: raw(2, 0),
+            s_u: raw(1, 1),
+            s_p: raw(2, 1),
+            meta,
+        }
+    }
+}
+
+/// `meta.json` of a frame rendered offline: the request, the adapter, the timings, the geometry
+/// stage's counts and warnings (and whether the D-buffer's frustum had to cut a penumbra).
+pub fn render_meta(
+    name: &str,
+    scene: &crate::scene::Scene,
+    request: &crate::render::FrameRequest,
+    ctx: &crate::render::GpuContext,
+    frame: &Frame,
+    report: &crate::render::offline::FrameReport,
+) -> RenderMeta {
+    let mut warnings = report.warnings.clone();
+    if report.clipped {
+        warnings.push(format!(
+            "the casters' penumbrae reach beyond {}° from the D-buffer's axis; shadows there are cut",
+            crate::geometry::light_view::MAX_HALF_ANGLE_DEG
+        ));
+    }
+    let g = report.geometry;
+    RenderMeta {
+        scene: name.to_string(),
+        method: request.method.name().to_string(),
+        variant: request.vt.name().to_string(),
+        width: frame.width,
+        height: frame.height,
+        dbuffer_size: frame.maps.as_ref().map_or(0, |m| m.size),
+        adapter: ctx.adapter.name.clone(),
+        backend: format!("{:?}", ctx.adapter.backend),
+        cpu_ms: report.cpu_ms.clone(),
+        gpu_ms: frame.gpu_ms.clone(),
+        triangles: scene.objects.iter().map(|o| o.mesh.triangles.len()).sum(),
+        caster_triangles: scene.caster_triangle_count(),
+        umbra_silhouette_edges: g.umbra_edges,
+        penumbra_silhouette_edges: g.penumbra_edges,
+        umbra_volume_triangles: g.umbra_triangles,
+        penumbra_volume_triangles: g.penumbra_triangles,
+        warnings,
+    }
+}
+
+/// The sRGB transfer function, inverted: [`linear_to_srgb8`] takes it back to the same byte.
+pub fn srgb8_to_linear(c: u8) -> f32 {
+    let c = f32::from(c) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// What `meta.json` holds. The two timing lists are written as JSON objects in their order,
@@ -779,6 +887,13 @@ pub fn read_exr_rgba(path: &Path) -> Result<(u32, u32, Vec<[f32; 4]>), OutputErr
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn srgb_round_trips_through_the_writer() {
+        for c in 0..=255u8 {
+            assert_eq!(linear_to_srgb8(srgb8_to_linear(c)), c);
+        }
+    }
 
     fn temp_dir(tag: &str) -> PathBuf {
         static NEXT: AtomicU64 = AtomicU64::new(0);

@@ -123,7 +123,7 @@ pub fn expand_named(
     expand_with(name, main, &mut |n| Ok(lookup(n).map(Cow::Borrowed)))
 }
 
-/// Read `dir/name` (e.g. `dir` = `shaders/`, `name` = `fullscreen.wgsl`) and expand its includes
+/// Read `dir/name` (e.g. `dir` = `shaders/`, `name` = `passes/view.wgsl`) and expand its includes
 /// from files under `dir`.
 pub fn from_dir(dir: &Path, name: &str) -> Result<String, ShaderSourceError> {
     from_dir_mapped(dir, name).map(|e| e.source)
@@ -149,32 +149,80 @@ pub fn from_dir_mapped(dir: &Path, name: &str) -> Result<Expanded, ShaderSourceE
 /// time.
 pub const EMBEDDED: &[(&str, &str)] = &[
     (
-        "camera_pass.wgsl",
-        include_str!("../shaders/camera_pass.wgsl"),
+        "methods/dbuffer.wgsl",
+        include_str!("../shaders/methods/dbuffer.wgsl"),
     ),
     (
-        "light_pass.wgsl",
-        include_str!("../shaders/light_pass.wgsl"),
+        "methods/hard.wgsl",
+        include_str!("../shaders/methods/hard.wgsl"),
     ),
     (
-        "fullscreen.wgsl",
-        include_str!("../shaders/fullscreen.wgsl"),
+        "methods/pcf.wgsl",
+        include_str!("../shaders/methods/pcf.wgsl"),
     ),
     (
-        "sample_maps.wgsl",
-        include_str!("../shaders/sample_maps.wgsl"),
+        "methods/pcss.wgsl",
+        include_str!("../shaders/methods/pcss.wgsl"),
+    ),
+    (
+        "methods/reference.wgsl",
+        include_str!("../shaders/methods/reference.wgsl"),
+    ),
+    (
+        "methods/sampled.wgsl",
+        include_str!("../shaders/methods/sampled.wgsl"),
+    ),
+    (
+        "passes/dbuffer_volumes.wgsl",
+        include_str!("../shaders/passes/dbuffer_volumes.wgsl"),
+    ),
+    (
+        "passes/floor.wgsl",
+        include_str!("../shaders/passes/floor.wgsl"),
+    ),
+    (
+        "passes/probe.wgsl",
+        include_str!("../shaders/passes/probe.wgsl"),
+    ),
+    (
+        "passes/sample_maps.wgsl",
+        include_str!("../shaders/passes/sample_maps.wgsl"),
+    ),
+    (
+        "passes/shadow_map.wgsl",
+        include_str!("../shaders/passes/shadow_map.wgsl"),
+    ),
+    (
+        "passes/view.wgsl",
+        include_str!("../shaders/passes/view.wgsl"),
+    ),
+    (
+        "shared/camera.wgsl",
+        include_str!("../shaders/shared/camera.wgsl"),
+    ),
+    (
+        "shared/fullscreen_vs.wgsl",
+        include_str!("../shaders/shared/fullscreen_vs.wgsl"),
+    ),
+    (
+        "shared/light.wgsl",
+        include_str!("../shaders/shared/light.wgsl"),
     ),
     (
         "shared/sample_lights.wgsl",
         include_str!("../shaders/shared/sample_lights.wgsl"),
     ),
     (
+        "shared/shadow_lookup.wgsl",
+        include_str!("../shaders/shared/shadow_lookup.wgsl"),
+    ),
+    (
         "shared/surface.wgsl",
         include_str!("../shaders/shared/surface.wgsl"),
     ),
     (
-        "shared/fullscreen_vs.wgsl",
-        include_str!("../shaders/shared/fullscreen_vs.wgsl"),
+        "shared/view_inputs.wgsl",
+        include_str!("../shaders/shared/view_inputs.wgsl"),
     ),
 ];
 
@@ -183,7 +231,7 @@ pub fn embedded(name: &str) -> Option<&'static str> {
     EMBEDDED.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
 }
 
-/// The top-level shader `name` (e.g. `fullscreen.wgsl`) from the embedded copies, includes
+/// The top-level shader `name` (e.g. `passes/view.wgsl`) from the embedded copies, includes
 /// expanded.
 pub fn load(name: &str) -> Result<String, ShaderSourceError> {
     load_mapped(name).map(|e| e.source)
@@ -439,8 +487,11 @@ mod tests {
 
     #[test]
     fn embedded_shaders_load() {
-        let src = load("fullscreen.wgsl").expect("embedded shader expands");
-        assert!(src.contains("fn vs_main"), "{src}");
+        let src = load("passes/view.wgsl").expect("embedded shader expands");
+        assert!(
+            src.contains("fn vs_main") && src.contains("fn fs_main"),
+            "{src}"
+        );
         assert!(matches!(
             load("nope.wgsl"),
             Err(ShaderSourceError::NotFound { .. })

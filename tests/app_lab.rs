@@ -27,15 +27,36 @@ fn lab(scene: Option<&str>) -> Harness<'static, LabApp> {
             app.settings.dbuffer_size = 256;
             app.settings.render_scale = 0.5;
             app.settings.reference_samples = 16;
-            app.settings.reference_step = 8;
             app
         })
 }
 
+/// The frame the viewport shows, read back whole (`split`: its right side).
+fn shown_frame(h: &mut Harness<'_, LabApp>, split: bool) -> dbuffer::render::Frame {
+    h.state_mut().read_shown(split).expect("a frame")
+}
+
 /// V of the shown frame at a pixel.
-fn v_at(h: &Harness<'_, LabApp>, x: u32, y: u32) -> f32 {
-    let f = &h.state().shown().expect("a frame").frame;
+fn v_at(h: &mut Harness<'_, LabApp>, x: u32, y: u32) -> f32 {
+    let f = shown_frame(h, false);
     f.visibility[(y * f.width + x) as usize]
+}
+
+/// Step the window until the reference worker has finished (it casts its rays on its own
+/// thread, in real time).
+fn until_reference_done(h: &mut Harness<'_, LabApp>) {
+    for _ in 0..600 {
+        h.step();
+        let done = h.state().core().is_some_and(|c| {
+            !c.worker.busy() && c.session.reference_progress().is_some_and(|(d, t)| d == t)
+        });
+        if done {
+            h.run();
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    panic!("the reference did not finish");
 }
 
 fn click(h: &mut Harness<'_, LabApp>, label: &str) {
@@ -50,12 +71,13 @@ fn starts_on_the_default_scene_with_soft_shadows() {
     let app = h.state();
     assert_eq!(app.scene_name(), dbuffer::app::DEFAULT_SCENE);
     assert_ne!(app.status().1, Level::Error, "{}", app.status().0);
-    let f = &app.shown().expect("the first frame is shown").frame;
+    assert!(app.shown().is_some(), "the first frame is shown");
     let rect = app.viewport_rect().expect("a viewport");
+    let f = shown_frame(&mut h, false);
     // Rendered at the resolution setting (half the viewport's pixels).
     assert_eq!(f.width, (rect.width() * 0.5).round() as u32);
     let lit: Vec<f32> = (0..f.visibility.len())
-        .filter(|&i| f.position[i][3] > 0.5)
+        .filter(|&i| f.hit(i))
         .map(|i| f.visibility[i])
         .collect();
     let dark = lit.iter().filter(|v| **v < 0.05).count();
@@ -71,20 +93,23 @@ fn starts_on_the_default_scene_with_soft_shadows() {
 fn every_method_and_variant_switches_and_shows_at_once() {
     let mut h = lab(None);
     h.run();
-    for m in Method::ALL {
+    for &m in Method::all() {
         click(&mut h, m.name());
+        if m.is_reference() {
+            until_reference_done(&mut h);
+        }
         let app = h.state();
         assert_eq!(app.settings.method(), m);
         let shown = app.shown().expect("a frame").method;
         assert_eq!(shown, m, "status: {:?}", app.status());
         assert_ne!(app.status().1, Level::Error, "{m}: {:?}", app.status());
     }
-    click(&mut h, Method::DBuffer.name());
+    click(&mut h, Method::DBUFFER.name());
     let mut images = Vec::new();
     for vt in dbuffer::geometry::VtVariant::ALL {
         click(&mut h, vt.name());
         assert_eq!(h.state().settings.vt(), vt);
-        images.push(h.state().shown().expect("frame").frame.visibility.clone());
+        images.push(shown_frame(&mut h, false).visibility);
     }
     // smoothstep, sqrt, exact and linear give four different V images.
     for i in 0..images.len() {
@@ -148,15 +173,16 @@ fn split_view_shows_two_methods() {
     let mut h = lab(None);
     h.run();
     click(&mut h, "Split view");
+    until_reference_done(&mut h);
     let app = h.state();
     assert!(app.settings.split);
     let left = app.shown().expect("left").method;
     let right = app.shown_split().expect("right").method;
-    assert_eq!((left, right), (Method::DBuffer, Method::Reference));
-    // The reference on the right has converged (K = 16, 8 per frame) and differs from the method.
+    assert_eq!((left, right), (Method::DBUFFER, Method::REFERENCE));
+    // The reference on the right has converged (K = 16) and differs from the method.
     assert_ne!(
-        app.shown().expect("left").frame.visibility,
-        app.shown_split().expect("right").frame.visibility
+        shown_frame(&mut h, false).visibility,
+        shown_frame(&mut h, true).visibility
     );
     h.run();
     assert!(h.state().settings.split, "still split after more frames");
@@ -192,13 +218,13 @@ fn dragging_the_light_moves_the_shadow() {
     let rect = h.state().viewport_rect().expect("viewport");
     assert!(rect.contains(at), "{at:?} outside {rect:?}");
     // The darkest pixel (deepest umbra) before the move.
-    let f = &h.state().shown().expect("frame").frame;
+    let f = shown_frame(&mut h, false);
     let (x, y) = (0..f.visibility.len())
-        .filter(|&i| f.position[i][3] > 0.5)
+        .filter(|&i| f.hit(i))
         .min_by(|&a, &b| f.visibility[a].total_cmp(&f.visibility[b]))
         .map(|i| (i as u32 % f.width, i as u32 / f.width))
         .expect("a surface");
-    let before = v_at(&h, x, y);
+    let before = v_at(&mut h, x, y);
     assert!(before < 0.05, "{before}");
 
     h.drag_at(at);
@@ -211,14 +237,17 @@ fn dragging_the_light_moves_the_shadow() {
     h.run();
     let moved = h.state().scene().expect("scene").light.center;
     assert!((moved - start).length() > 0.5, "light {start} → {moved}");
-    let after = v_at(&h, x, y);
+    let after = v_at(&mut h, x, y);
     assert!(after > before + 0.5, "V at ({x}, {y}): {before} → {after}");
+    // While dragging, only the probes' bytes came back: never a frame.
+    let (_, most) = h.state().read_bytes().expect("frames were submitted");
+    assert!(most <= 4096, "{most} bytes read back in one frame");
 
     // One drag, one undo step.
     h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
     h.run();
     assert_eq!(h.state().scene().expect("scene").light.center, start);
-    assert!((v_at(&h, x, y) - before).abs() < 1e-6);
+    assert!((v_at(&mut h, x, y) - before).abs() < 1e-6);
 }
 
 #[test]
@@ -250,4 +279,47 @@ fn a_malformed_scene_is_reported_and_the_scene_kept() {
     assert!(app.shown().is_some());
     assert!(app.frames_rendered() >= frames);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_window_keeps_making_frames_while_the_reference_converges() {
+    let mut h = lab(None);
+    h.state_mut().settings.reference_samples = 4096;
+    h.run();
+    click(&mut h, "reference");
+    // Window frames between reference steps: the rays are cast on the worker thread, not in the
+    // frame, so the window runs on while a step is under way.
+    let start = std::time::Instant::now();
+    let steps = |h: &Harness<'_, LabApp>| h.state().core().expect("a core").worker.steps();
+    let mut between = Vec::new();
+    let mut last = (steps(&h), h.state().window_frames());
+    let mut changes = 0;
+    while between.len() < 3 && start.elapsed() < std::time::Duration::from_secs(120) {
+        h.step();
+        std::thread::sleep(std::time::Duration::from_millis(5));
+        let now = (steps(&h), h.state().window_frames());
+        if now.0 != last.0 {
+            changes += 1;
+            // The first interval started mid-step: count whole ones only.
+            if changes > 1 {
+                between.push(now.1 - last.1);
+            }
+            last = now;
+        }
+    }
+    assert!(
+        between.len() >= 3,
+        "the reference took {changes} steps in two minutes"
+    );
+    assert!(
+        between.iter().all(|&f| f >= 2),
+        "window frames between reference steps: {between:?}"
+    );
+    let app = h.state();
+    let (done, total) = app
+        .core()
+        .and_then(|c| c.session.reference_progress())
+        .expect("the reference is on the GPU");
+    assert!(done > 0 && done < total, "{done}/{total}: still converging");
+    assert!(app.window_frames() > 10);
 }

@@ -40,16 +40,14 @@ fn tiny_bench_writes_json_markdown_and_plot() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stderr}");
-    assert!(
-        stderr.contains("table1-224 32²: 7 methods"),
-        "progress on stderr: {stderr}"
-    );
+    let methods = format!("table1-224 32²: {} methods", Method::all().len());
+    assert!(stderr.contains(&methods), "progress on stderr: {stderr}");
 
     let json = std::fs::read(dir.join("bench.json")).expect("bench.json written");
     let report: Report = serde_json::from_slice(&json).expect("bench.json parses as a Report");
     assert!(!report.adapter.trim().is_empty(), "adapter named");
     assert_eq!(report.frames, 1);
-    for m in Method::ALL {
+    for &m in Method::all() {
         let run = report
             .run("table1-224", 32, m)
             .unwrap_or_else(|| panic!("no row for {m}"));
@@ -58,7 +56,7 @@ fn tiny_bench_writes_json_markdown_and_plot() {
             "{m}: exactly one of timing and error"
         );
     }
-    for m in [Method::DBuffer, Method::Hard] {
+    for m in [Method::DBUFFER, Method::HARD] {
         let t = report.timing("table1-224", 32, m).expect("renders");
         assert!(
             t.frame_ms.median > 0.0 && t.wall_ms.median > 0.0,
@@ -66,7 +64,8 @@ fn tiny_bench_writes_json_markdown_and_plot() {
         );
         assert!(t.hit_pixels > 0 && t.hit_pixels <= 32 * 32);
         if report.timestamps {
-            assert!(t.pass("light_pass").is_some() && t.pass("camera_pass").is_some());
+            assert!(t.pass("shadow_map").is_some() && t.pass("camera_pass").is_some());
+            assert!(t.light_ms.is_some());
         }
     }
     assert_eq!(report.scenes.len(), 1);
@@ -78,9 +77,15 @@ fn tiny_bench_writes_json_markdown_and_plot() {
         c.rebuilds as usize, c.frames,
         "one geometry build per rebuilt frame"
     );
-    assert_eq!(report.targets.len(), 3);
+    assert_eq!(report.targets.len(), 8);
+    let display = report.display.first().expect("the display path measured");
+    assert_eq!((display.scene.as_str(), display.size), ("table1-224", 32));
+    assert!(display.lab_still.wall_ms.median > 0.0 && display.readback.wall_ms.median > 0.0);
+    if report.timestamps {
+        assert!(display.floor_gpu_ms.is_some());
+    }
     let reference = report
-        .timing("table1-224", 32, Method::Reference)
+        .timing("table1-224", 32, Method::REFERENCE)
         .expect("the reference renders");
     assert_eq!(
         reference.frame_source,
@@ -95,13 +100,14 @@ fn tiny_bench_writes_json_markdown_and_plot() {
         "| scene | caster tris | size | geometry ms (CPU) | light pass ms (GPU) | camera pass ms (GPU) | frame ms | fps |",
         "| method | 32² |",
         "| `table1-224` | 224 | 32² |",
+        "### The lab's display path",
         "### Frame coherence",
         "### Geometry scaling",
         "### Targets",
     ] {
         assert!(md.contains(column), "bench.md lacks {column:?}:\n{md}");
     }
-    for m in Method::ALL {
+    for &m in Method::all() {
         let label = dbuffer::bench::Case::for_method(m).label;
         assert!(
             md.contains(&format!("| {label} |")),

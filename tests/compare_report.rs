@@ -5,8 +5,9 @@ use dbuffer::compare::{self, heatmap, report, CompareRequest};
 use dbuffer::geometry::bvh::Bvh;
 use dbuffer::geometry::{metrics, view, VtVariant};
 use dbuffer::output::read_exr_rgba;
+use dbuffer::render::methods::reference::SAMPLES;
 use dbuffer::render::offline::Offline;
-use dbuffer::render::{Method, MethodParams};
+use dbuffer::render::{Knobs, Method};
 use dbuffer::scene;
 
 const W: u32 = 72;
@@ -22,20 +23,21 @@ fn the_report_matches_the_written_files() {
         height: H,
         dbuffer_size: 512,
         vt: VtVariant::Exact,
-        params: MethodParams {
-            reference_samples: 128,
-            ..MethodParams::default()
-        },
+        knobs: Knobs::default().with(&SAMPLES, 128),
     };
     let mut heard = Vec::new();
     let comparison = compare::run(&mut offline, name, &scene, &request, |what| {
         heard.push(what.to_string())
     })
     .unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(heard.len(), Method::ALL.len(), "one progress line a method");
+    assert_eq!(
+        heard.len(),
+        Method::all().len(),
+        "one progress line a method"
+    );
     let dir = std::env::temp_dir().join(format!("dbuffer-compare-test-{}", std::process::id()));
     let written = report::write(&dir, &comparison).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(written.len(), 3 * Method::ALL.len() - 1 + 2);
+    assert_eq!(written.len(), 3 * Method::all().len() - 1 + 2);
 
     let text = std::fs::read_to_string(dir.join(report::REPORT_JSON)).unwrap();
     let r: report::Report = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}"));
@@ -44,7 +46,7 @@ fn the_report_matches_the_written_files() {
     assert!(r.reference_rays_per_s > 0.0);
     let methods: Vec<&str> = r.methods.iter().map(|m| m.method.as_str()).collect();
     assert_eq!(methods[0], "reference");
-    for m in Method::ALL {
+    for m in Method::all() {
         assert!(methods.contains(&m.name()), "{m} missing from the report");
     }
     let md = std::fs::read_to_string(dir.join(report::REPORT_MD)).unwrap();

@@ -6,8 +6,9 @@
 use dbuffer::geometry::bvh::Bvh;
 use dbuffer::geometry::metrics::{self, Metrics};
 use dbuffer::geometry::{view, VtVariant};
+use dbuffer::render::methods::{pcf, reference::SAMPLES, sampled};
 use dbuffer::render::offline::Offline;
-use dbuffer::render::{Frame, FrameRequest, Method, MethodParams};
+use dbuffer::render::{Frame, FrameRequest, Knobs, Method};
 use dbuffer::scene::{self, Scene};
 
 const SIZE: u32 = 96;
@@ -23,12 +24,7 @@ impl Bench {
     fn new(name: &str) -> Bench {
         let scene = scene::load(name).unwrap_or_else(|e| panic!("{e}"));
         let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
-        let reference = render(
-            &mut offline,
-            &scene,
-            Method::Reference,
-            MethodParams::default(),
-        );
+        let reference = render(&mut offline, &scene, Method::REFERENCE, Knobs::default());
         let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), SIZE, SIZE);
         let mask = receivers
             .iter()
@@ -43,8 +39,8 @@ impl Bench {
         }
     }
 
-    fn measure(&mut self, method: Method, params: MethodParams) -> (Frame, Metrics) {
-        let frame = render(&mut self.offline, &self.scene, method, params);
+    fn measure(&mut self, method: Method, knobs: Knobs) -> (Frame, Metrics) {
+        let frame = render(&mut self.offline, &self.scene, method, knobs);
         let m = metrics::compare(&self.reference, &frame.visibility, &self.mask);
         println!(
             "| {} | {method} | {:.2} | {:.4} | {:.4} | {:.3} |",
@@ -54,30 +50,24 @@ impl Bench {
     }
 }
 
-fn render(offline: &mut Offline, scene: &Scene, method: Method, params: MethodParams) -> Frame {
+fn render(offline: &mut Offline, scene: &Scene, method: Method, knobs: Knobs) -> Frame {
     let request = FrameRequest {
         width: SIZE,
         height: SIZE,
         dbuffer_size: 1024,
         method,
         vt: VtVariant::Exact,
-        params: MethodParams {
-            reference_samples: 256,
-            ..params
-        },
+        knobs: knobs.with(&SAMPLES, 256),
         read_dbuffer: false,
     };
     offline
-        .render(&scene.name, scene, &request)
+        .render(scene, &request)
         .unwrap_or_else(|e| panic!("{method}: {e}"))
         .0
 }
 
-fn lights(n: u32) -> MethodParams {
-    MethodParams {
-        sampled_lights: n,
-        ..MethodParams::default()
-    }
+fn lights(n: u32) -> Knobs {
+    Knobs::default().with(&sampled::LIGHTS, n)
 }
 
 #[test]
@@ -85,15 +75,15 @@ fn every_method_behaves_as_built() {
     println!("| scene | method | class mismatch % | MAE | penumbra MAE | p99 |");
     for name in ["table1-960", "fig1-large-light"] {
         let mut b = Bench::new(name);
-        let d = MethodParams::default();
-        let (hard, hard_m) = b.measure(Method::Hard, d);
-        let (_, dbuffer) = b.measure(Method::DBuffer, d);
-        let (_, center) = b.measure(Method::DBufferCenter, d);
-        let (_, pcss) = b.measure(Method::Pcss, d);
-        let (_, pcf) = b.measure(Method::Pcf, MethodParams { pcf_radius: 4, ..d });
-        let (pcf0, _) = b.measure(Method::Pcf, MethodParams { pcf_radius: 0, ..d });
-        let (_, few) = b.measure(Method::Sampled, lights(4));
-        let (_, many) = b.measure(Method::Sampled, lights(64));
+        let d = Knobs::default();
+        let (hard, hard_m) = b.measure(Method::HARD, d);
+        let (_, dbuffer) = b.measure(Method::DBUFFER, d);
+        let (_, center) = b.measure(Method::DBUFFER_CENTER, d);
+        let (_, pcss) = b.measure("pcss".parse::<Method>().unwrap(), d);
+        let (_, pcf) = b.measure("pcf".parse::<Method>().unwrap(), d.with(&pcf::RADIUS, 4));
+        let (pcf0, _) = b.measure("pcf".parse::<Method>().unwrap(), d.with(&pcf::RADIUS, 0));
+        let (_, few) = b.measure("sampled".parse::<Method>().unwrap(), lights(4));
+        let (_, many) = b.measure("sampled".parse::<Method>().unwrap(), lights(64));
 
         // A hard shadow is all or nothing, and PCF with one tap is that same test.
         assert!(hard.visibility.iter().all(|&v| v == 0.0 || v == 1.0));

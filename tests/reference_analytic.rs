@@ -1,12 +1,13 @@
-//! The `reference` method, end to end through the render core (GPU positions, the oracle, the
+//! The `reference` method, end to end through the render core (the pixels' points, the oracle, the
 //! camera pass shading its V), against closed-form soft shadows: a straight edge parallel to the
 //! light, and a disk under the disk light.
 
 use std::f32::consts::PI;
 
 use dbuffer::geometry::VtVariant;
+use dbuffer::render::methods::reference::SAMPLES;
 use dbuffer::render::offline::Offline;
-use dbuffer::render::{Frame, FrameRequest, Method, MethodParams};
+use dbuffer::render::{Frame, FrameRequest, Knobs, Method};
 use dbuffer::scene::{Camera, DiskLight, Mesh, Object, Scene};
 use glam::Vec3;
 
@@ -85,16 +86,13 @@ fn reference(scene: &Scene) -> Frame {
         width: 64,
         height: 64,
         dbuffer_size: 256,
-        method: Method::Reference,
+        method: Method::REFERENCE,
         vt: VtVariant::Exact,
-        params: MethodParams {
-            reference_samples: 1024,
-            ..MethodParams::default()
-        },
+        knobs: Knobs::default().with(&SAMPLES, 1024),
         read_dbuffer: false,
     };
     offline
-        .render(&scene.name, scene, &request)
+        .render(scene, &request)
         .unwrap_or_else(|e| panic!("{e}"))
         .0
 }

@@ -20,12 +20,12 @@ fn measure(offline: &mut Offline, name: &str) -> Metrics {
         width: SIZE,
         height: SIZE,
         dbuffer_size: 1024,
-        method: Method::DBuffer,
+        method: Method::DBUFFER,
         vt: VtVariant::Exact,
         ..FrameRequest::default()
     };
     let (frame, _) = offline
-        .render(name, &scene, &request)
+        .render(&scene, &request)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     // Which pixels see a surface facing the light: the CPU's view of the same pixels.
     let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), SIZE, SIZE);

@@ -37,7 +37,7 @@ fn compare_writes_the_report_and_prints_the_table() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    for method in dbuffer::render::Method::ALL {
+    for method in dbuffer::render::Method::all() {
         assert!(
             stdout.contains(&format!("| {method} |")),
             "{method} row: {stdout}"
@@ -52,7 +52,7 @@ fn compare_writes_the_report_and_prints_the_table() {
 
 #[test]
 fn every_method_renders_from_the_command_line() {
-    for method in dbuffer::render::Method::ALL {
+    for method in dbuffer::render::Method::all() {
         let dir = temp_dir(&format!("method-{method}"));
         let out = dbuffer()
             .args(["render", "table1-224", "--size", "40x32", "--samples", "8"])

@@ -5,11 +5,8 @@
 //! channels up per texel and the twin per exact ray.
 
 use dbuffer::geometry::light_view::LightView;
-use dbuffer::geometry::{
-    Branch, DBufferTwin, PreparedCasters, SceneGeometry, VolumeParams, VtVariant,
-};
-use dbuffer::render::gpu_scene::GpuScene;
-use dbuffer::render::{Frame, FrameRenderer, FrameRequest, GpuContext, Method};
+use dbuffer::geometry::{Branch, DBufferTwin, SceneGeometry, VtVariant};
+use dbuffer::render::{Frame, FrameRequest, GpuContext, Method, Session};
 use dbuffer::scene::{self, Scene};
 use glam::Vec3;
 
@@ -25,35 +22,37 @@ fn context() -> GpuContext {
     }
 }
 
+/// A frame of `method` with the geometry the D-buffer was drawn from (the paper's, for a method
+/// that builds none) and the light view.
 fn render(
     ctx: &GpuContext,
-    renderer: &mut FrameRenderer,
     name: &str,
     method: Method,
 ) -> (Scene, SceneGeometry, LightView, Frame) {
     let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let geometry =
-        PreparedCasters::new(&scene).build(&scene.light, &VolumeParams::for_scene(&scene));
-    let gpu = GpuScene::new(&ctx.device, &scene, &geometry);
-    let view = LightView::fit(&scene);
+    let mut session = Session::new(ctx, scene.clone());
     let request = FrameRequest {
         width: SIZE,
         height: SIZE,
         dbuffer_size: DBUFFER,
         method,
         vt: VtVariant::Exact,
+        read_dbuffer: true,
         ..FrameRequest::default()
     };
-    let frame = renderer
-        .render(ctx, &scene, &gpu, &view, &request)
+    let frame = session
+        .frame(ctx, &request)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
-    (scene, geometry, view, frame)
+    let geometry = session
+        .geometry(Method::DBUFFER)
+        .expect("the D-buffer was made")
+        .clone();
+    (scene, geometry, *session.light_view(), frame)
 }
 
 #[test]
 fn gpu_agrees_with_the_cpu_twin() {
     let ctx = context();
-    let mut renderer = FrameRenderer::new(&ctx);
     println!("adapter: {}", ctx.adapter_description());
     for name in [
         "table1-224",
@@ -63,7 +62,7 @@ fn gpu_agrees_with_the_cpu_twin() {
         "acute-corner",
         "fig8c-complex",
     ] {
-        let (scene, geometry, view, frame) = render(&ctx, &mut renderer, name, Method::DBuffer);
+        let (scene, geometry, view, frame) = render(&ctx, name, Method::DBUFFER);
         let twin = DBufferTwin::new(&scene, &geometry.casters);
         // The twin knows no receiver normal: compare where the surface faces the light (the
         // pixels every metric uses); a surface turned away from the light must read V = 0.
@@ -135,8 +134,7 @@ fn gpu_agrees_with_the_cpu_twin() {
 #[test]
 fn hard_shadow_is_the_centre_test_alone() {
     let ctx = context();
-    let mut renderer = FrameRenderer::new(&ctx);
-    let (scene, geometry, _, frame) = render(&ctx, &mut renderer, "table1-960", Method::Hard);
+    let (scene, geometry, _, frame) = render(&ctx, "table1-960", Method::HARD);
     let twin = DBufferTwin::new(&scene, &geometry.casters);
     let (mut agree, mut n) = (0, 0);
     for (&v, p) in frame.visibility.iter().zip(&frame.position) {

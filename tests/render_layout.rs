@@ -1,13 +1,17 @@
-//! Every GPU struct has the layout its WGSL declaration has (naga's reflection), so the two cannot
-//! drift apart silently.
+//! Every GPU struct has the layout its WGSL declaration has, and every code both sides use (V(t)
+//! variants, branches, views, colour maps, probe layout) has the same value on both sides
+//! (naga's reflection), so the two cannot drift apart silently.
 
 #[path = "support/wgsl_layout.rs"]
 mod wgsl_layout;
 
-use dbuffer::render::{
-    CameraUniforms, LightUniforms, MethodUniforms, SampleLight, SampleLights, SurfaceVertex,
-    VolumeVertex,
-};
+use dbuffer::geometry::{Branch, VtVariant};
+use dbuffer::render::passes::camera::CameraUniforms;
+use dbuffer::render::passes::probe::{FIT_GRID, PIXEL_FLOATS};
+use dbuffer::render::passes::sample_maps::{SampleLight, SampleLights, MAX_LIGHTS};
+use dbuffer::render::passes::shadow_map::{LightUniforms, ShadowUniforms};
+use dbuffer::render::passes::view::{ColorMap, View, ViewUniforms, NO_FALLBACK};
+use dbuffer::render::{SurfaceVertex, VolumeVertex};
 use dbuffer::shader_source;
 
 fn source(name: &str) -> String {
@@ -16,43 +20,158 @@ fn source(name: &str) -> String {
 
 #[test]
 fn uniforms_match_their_wgsl() {
-    let light = source("light_pass.wgsl");
-    assert_wgsl_layout!(
-        LightUniforms,
-        &light,
-        "LightUniforms",
-        view_proj,
-        center,
-        normal,
-        depth_scale
-    );
-    let camera = source("camera_pass.wgsl");
-    assert_wgsl_layout!(
-        CameraUniforms,
-        &camera,
-        "CameraUniforms",
-        view_proj,
-        light_view_proj,
-        eye,
-        light_center,
-        light_normal,
-        bias,
-        mode
-    );
-    assert_wgsl_layout!(
-        MethodUniforms,
-        &camera,
-        "MethodUniforms",
-        params,
-        pcss,
-        inv_light_view_proj,
-        poisson
-    );
-    // The sampled method's lights, read by its own pass and by the camera pass.
-    for shader in [camera.as_str(), &source("sample_maps.wgsl")] {
-        assert_wgsl_layout!(SampleLight, shader, "SampleLight", view_proj, point);
-        assert_wgsl_layout!(SampleLights, shader, "SampleLights", lights);
+    for shader in ["passes/shadow_map.wgsl", "passes/dbuffer_volumes.wgsl"] {
+        assert_wgsl_layout!(
+            LightUniforms,
+            &source(shader),
+            "LightUniforms",
+            view_proj,
+            center,
+            inv_far,
+            normal,
+            _pad
+        );
     }
+    // Every method's shader includes the camera pass's half; the map methods the lookup.
+    for method in dbuffer::render::Method::all() {
+        let shader = source(&format!(
+            "methods/{}.wgsl",
+            method.name().split('-').next().unwrap_or("")
+        ));
+        assert_wgsl_layout!(
+            CameraUniforms,
+            &shader,
+            "CameraUniforms",
+            view_proj,
+            eye,
+            ambient,
+            light_center,
+            light_radius,
+            light_normal,
+            light_intensity,
+            vt_variant,
+            _pad0,
+            _pad1,
+            _pad2
+        );
+    }
+    for shader in ["hard", "pcf", "pcss", "dbuffer"] {
+        assert_wgsl_layout!(
+            ShadowUniforms,
+            &source(&format!("methods/{shader}.wgsl")),
+            "ShadowUniforms",
+            light_view_proj,
+            inv_light_view_proj,
+            size,
+            texel_slope,
+            bias_constant,
+            bias_slope,
+            knobs
+        );
+    }
+    for shader in [
+        source("methods/sampled.wgsl"),
+        source("passes/sample_maps.wgsl"),
+    ] {
+        assert_wgsl_layout!(SampleLight, &shader, "SampleLight", view_proj, point, _pad);
+        assert_wgsl_layout!(
+            SampleLights,
+            &shader,
+            "SampleLights",
+            lights,
+            count,
+            size,
+            texel_slope,
+            bias_constant,
+            bias_slope,
+            _pad0,
+            _pad1,
+            _pad2
+        );
+    }
+    for shader in [source("passes/view.wgsl"), source("passes/probe.wgsl")] {
+        assert_wgsl_layout!(
+            ViewUniforms,
+            &shader,
+            "ViewUniforms",
+            kind,
+            channel_mask,
+            colormap,
+            has_reference,
+            black,
+            white,
+            map_size,
+            channel_count,
+            channels,
+            inv_view_proj,
+            map_view_proj,
+            probe
+        );
+    }
+}
+
+#[test]
+fn codes_match_their_wgsl() {
+    let camera = source("methods/hard.wgsl");
+    let mut pairs: Vec<(&str, f64)> = VtVariant::ALL
+        .iter()
+        .map(|v| {
+            let name = match v {
+                VtVariant::Smoothstep => "VT_SMOOTHSTEP",
+                VtVariant::Sqrt => "VT_SQRT",
+                VtVariant::Exact => "VT_EXACT",
+                VtVariant::Linear => "VT_LINEAR",
+            };
+            (name, f64::from(v.code()))
+        })
+        .collect();
+    for (name, b) in [
+        ("BRANCH_UMBRA", Branch::Umbra),
+        ("BRANCH_PENUMBRA_HIDDEN", Branch::PenumbraHidden),
+        ("BRANCH_PENUMBRA_VISIBLE", Branch::PenumbraVisible),
+        ("BRANCH_LIT", Branch::Lit),
+    ] {
+        pairs.push((name, f64::from(b.code())));
+    }
+    pairs.push((
+        "CLASS_EPSILON",
+        dbuffer::geometry::metrics::CLASS_EPS as f32 as f64,
+    ));
+    wgsl_layout::assert_consts(&camera, "shared/camera.wgsl", &pairs);
+
+    let view = source("passes/view.wgsl");
+    let mut pairs: Vec<(&str, f64)> = View::ALL
+        .iter()
+        .map(|v| {
+            let name = match v {
+                View::Final => "VIEW_FINAL",
+                View::Visibility => "VIEW_VISIBILITY",
+                View::T => "VIEW_T",
+                View::Classes => "VIEW_CLASSES",
+                View::Error => "VIEW_ERROR",
+                View::DBuffer => "VIEW_LIGHT_MAPS",
+            };
+            (name, f64::from(v.code()))
+        })
+        .collect();
+    for m in ColorMap::ALL {
+        let name = match m {
+            ColorMap::Gray => "COLORMAP_GRAY",
+            ColorMap::Heat => "COLORMAP_HEAT",
+            ColorMap::Turbo => "COLORMAP_TURBO",
+        };
+        pairs.push((name, f64::from(m.code())));
+    }
+    pairs.push(("NO_FALLBACK", f64::from(NO_FALLBACK)));
+    wgsl_layout::assert_consts(&view, "shared/view_inputs.wgsl", &pairs);
+    wgsl_layout::assert_consts(
+        &source("passes/probe.wgsl"),
+        "passes/probe.wgsl",
+        &[("PIXEL_FLOATS", PIXEL_FLOATS as f64)],
+    );
+    // The fit's grid fits in one dispatch's output buffer (FIT_GRID² floats).
+    assert!(FIT_GRID * FIT_GRID <= 4096);
+    assert_eq!(MAX_LIGHTS, 64, "SampleLights holds array<SampleLight, 64>");
 }
 
 /// Vertex inputs are not laid out by WGSL; the attribute offsets in Rust must match the Rust
@@ -68,8 +187,7 @@ fn vertex_attributes_match_the_structs() {
         surface,
         vec![
             (0, offset_of!(SurfaceVertex, position) as u64),
-            (1, offset_of!(SurfaceVertex, normal) as u64),
-            (2, offset_of!(SurfaceVertex, albedo) as u64),
+            (1, offset_of!(SurfaceVertex, albedo) as u64),
         ]
     );
     let volume: Vec<(u32, u64)> = VolumeVertex::ATTRIBUTES
@@ -81,24 +199,30 @@ fn vertex_attributes_match_the_structs() {
         vec![
             (0, offset_of!(VolumeVertex, position) as u64),
             (1, offset_of!(VolumeVertex, kind) as u64),
-            (2, offset_of!(VolumeVertex, normal) as u64),
-            (3, offset_of!(VolumeVertex, edge_a) as u64),
-            (4, offset_of!(VolumeVertex, edge_b) as u64),
-            (5, offset_of!(VolumeVertex, extrusion) as u64),
+            (2, offset_of!(VolumeVertex, edge_a) as u64),
+            (3, offset_of!(VolumeVertex, edge_b) as u64),
+            (4, offset_of!(VolumeVertex, extrusion) as u64),
         ]
     );
-    // The WGSL inputs use those locations with the matching types (SurfaceIn comes from
-    // shared/surface.wgsl, which both passes include).
-    let light = source("light_pass.wgsl");
-    assert!(source("camera_pass.wgsl").contains("@location(2) albedo: f32"));
+    // The WGSL inputs use those locations with the matching types.
+    let surface_in = source("passes/shadow_map.wgsl");
+    for decl in [
+        "@location(0) position: vec3<f32>",
+        "@location(1) albedo: f32",
+    ] {
+        assert!(surface_in.contains(decl), "SurfaceIn lacks `{decl}`");
+    }
+    let volumes = source("passes/dbuffer_volumes.wgsl");
     for decl in [
         "@location(0) position: vec3<f32>",
         "@location(1) kind: u32",
-        "@location(2) normal: vec3<f32>",
-        "@location(5) extrusion: vec3<f32>",
-        "@location(1) normal: vec3<f32>",
-        "@location(2) albedo: f32",
+        "@location(2) edge_a: vec3<f32>",
+        "@location(3) edge_b: vec3<f32>",
+        "@location(4) extrusion: vec3<f32>",
     ] {
-        assert!(light.contains(decl), "light_pass.wgsl lacks `{decl}`");
+        assert!(
+            volumes.contains(decl),
+            "dbuffer_volumes.wgsl lacks `{decl}`"
+        );
     }
 }

@@ -1,44 +1,78 @@
-//! Geometry runs again only when the light or a caster changed; the passes run every frame.
+//! A session redoes light-space work only when the light or a caster changed: the geometry and
+//! the D-buffer survive any number of camera moves; the camera pass runs every frame.
 
 use dbuffer::geometry::VtVariant;
-use dbuffer::render::session::Session;
-use dbuffer::render::{FrameRequest, GpuContext, Method, MethodParams};
+use dbuffer::render::methods::reference::SAMPLES;
+use dbuffer::render::{FrameRequest, GpuContext, Knobs, Method, Session};
 use dbuffer::scene;
 use glam::Vec3;
 
+fn ctx() -> GpuContext {
+    GpuContext::headless().unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn gpu_passes(frame: &dbuffer::render::Frame) -> Vec<&str> {
+    frame.gpu_ms.iter().map(|(p, _)| p.as_str()).collect()
+}
+
 #[test]
-fn geometry_is_rebuilt_only_when_something_moved() {
-    let ctx = GpuContext::headless().unwrap_or_else(|e| panic!("{e}"));
+fn geometry_and_light_pass_run_only_when_something_moved() {
+    let ctx = ctx();
     let scene = scene::load("table1-224").unwrap_or_else(|e| panic!("{e}"));
-    let light = scene.light;
+    let (light, camera) = (scene.light, scene.camera);
     let mut session = Session::new(&ctx, scene);
     let request = FrameRequest {
         width: 64,
         height: 64,
         dbuffer_size: 256,
-        method: Method::DBuffer,
+        method: Method::DBUFFER,
         vt: VtVariant::Smoothstep,
         ..FrameRequest::default()
     };
     let first = session
         .frame(&ctx, &request)
         .unwrap_or_else(|e| panic!("{e}"));
+    if ctx.timestamps {
+        assert_eq!(
+            gpu_passes(&first),
+            ["shadow_map", "dbuffer_volumes", "camera_pass"]
+        );
+    }
+    // The camera moves: only the camera pass runs again.
+    let mut cam = camera;
+    cam.eye.x += 0.3;
+    session.set_camera(cam);
     let second = session
         .frame(&ctx, &request)
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
-        session.geometry_builds(),
+        session.geometry_builds(Method::DBUFFER).0,
         1,
-        "two frames of a still scene: one geometry build"
+        "one geometry build"
     );
-    assert_eq!(first.visibility, second.visibility);
+    if ctx.timestamps {
+        assert_eq!(
+            gpu_passes(&second),
+            ["camera_pass"],
+            "the D-buffer was kept"
+        );
+    }
+    assert_ne!(first.visibility, second.visibility, "the view moved");
+    session.set_camera(camera);
+    let third = session
+        .frame(&ctx, &request)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        first.visibility, third.visibility,
+        "the same view, the same frame"
+    );
 
     session.set_light(light);
     session
         .frame(&ctx, &request)
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
-        session.geometry_builds(),
+        session.geometry_builds(Method::DBUFFER).0,
         1,
         "setting the same light is no change"
     );
@@ -46,21 +80,27 @@ fn geometry_is_rebuilt_only_when_something_moved() {
     let mut moved = light;
     moved.center += Vec3::new(1.0, 0.0, 0.0);
     session.set_light(moved);
-    let third = session
+    let fourth = session
         .frame(&ctx, &request)
         .unwrap_or_else(|e| panic!("{e}"));
     session
         .frame(&ctx, &request)
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
-        session.geometry_builds(),
+        session.geometry_builds(Method::DBUFFER).0,
         2,
         "one rebuild after the light moved"
     );
+    if ctx.timestamps {
+        assert_eq!(
+            gpu_passes(&fourth),
+            ["shadow_map", "dbuffer_volumes", "camera_pass"]
+        );
+    }
     let changed = first
         .visibility
         .iter()
-        .zip(&third.visibility)
+        .zip(&fourth.visibility)
         .filter(|(a, b)| (*a - *b).abs() > 0.1)
         .count();
     assert!(
@@ -70,8 +110,44 @@ fn geometry_is_rebuilt_only_when_something_moved() {
 }
 
 #[test]
-fn the_reference_converges_over_frames_and_restarts_when_the_view_changes() {
-    let ctx = GpuContext::headless().unwrap_or_else(|e| panic!("{e}"));
+fn the_shadow_map_is_shared_and_methods_without_volumes_build_none() {
+    let ctx = ctx();
+    let scene = scene::load("table1-224").unwrap_or_else(|e| panic!("{e}"));
+    let mut session = Session::new(&ctx, scene);
+    let request = |method| FrameRequest {
+        width: 48,
+        height: 48,
+        dbuffer_size: 256,
+        method,
+        ..FrameRequest::default()
+    };
+    let hard = session.frame(&ctx, &request(Method::HARD)).unwrap();
+    let pcf = session
+        .frame(&ctx, &request("pcf".parse().unwrap()))
+        .unwrap();
+    assert!(session.geometry(Method::HARD).is_none());
+    assert_eq!(
+        session.geometry_builds(Method::DBUFFER).0,
+        0,
+        "no volumes for shadow maps"
+    );
+    if ctx.timestamps {
+        assert_eq!(gpu_passes(&hard), ["shadow_map", "camera_pass"]);
+        assert_eq!(
+            gpu_passes(&pcf),
+            ["camera_pass"],
+            "the map is made once per light"
+        );
+    }
+    let dbuffer = session.frame(&ctx, &request(Method::DBUFFER)).unwrap();
+    if ctx.timestamps {
+        assert_eq!(gpu_passes(&dbuffer), ["dbuffer_volumes", "camera_pass"]);
+    }
+}
+
+#[test]
+fn the_reference_converges_and_restarts_when_the_view_changes() {
+    let ctx = ctx();
     let scene = scene::load("fig7-concave").unwrap_or_else(|e| panic!("{e}"));
     let (light, camera) = (scene.light, scene.camera);
     let mut session = Session::new(&ctx, scene);
@@ -79,29 +155,29 @@ fn the_reference_converges_over_frames_and_restarts_when_the_view_changes() {
         width: 48,
         height: 48,
         dbuffer_size: 256,
-        method: Method::Reference,
-        params: MethodParams {
-            reference_samples: 16,
-            reference_step: 4,
-            ..MethodParams::default()
-        },
+        method: Method::REFERENCE,
+        knobs: Knobs::default().with(&SAMPLES, 16),
         ..FrameRequest::default()
     };
     assert_eq!(session.reference_progress(), None);
-    assert!(!session.converging());
+    assert!(
+        session.frame(&ctx, &request).is_err(),
+        "no reference has been computed for this view"
+    );
     let mut frames = Vec::new();
     for k in 1..=4u32 {
+        let progress = session.advance_reference(&ctx, &request, 4).unwrap();
+        assert_eq!(progress, (4 * k, 16));
+        assert_eq!(session.converging(), k < 4);
         frames.push(
             session
                 .frame(&ctx, &request)
                 .unwrap_or_else(|e| panic!("{e}")),
         );
-        assert_eq!(session.reference_progress(), Some((4 * k, 16)));
-        assert_eq!(session.converging(), k < 4);
     }
-    // Complete: the frame shows exactly the reference V, and more frames change nothing.
+    // Complete: the frame shows exactly the reference V.
     let done = session
-        .reference_visibility()
+        .reference_visibility(&request)
         .expect("a reference")
         .to_vec();
     assert_eq!(frames[3].visibility, done);
@@ -109,32 +185,28 @@ fn the_reference_converges_over_frames_and_restarts_when_the_view_changes() {
         frames[0].visibility, done,
         "4 of 16 samples is not the whole answer"
     );
-    let again = session
-        .frame(&ctx, &request)
-        .unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(again.visibility, done);
-    assert_eq!(session.reference_progress(), Some((16, 16)));
 
-    // Moving the light or the camera starts it over.
+    // Moving the light or the camera starts it over, and the old one is not shaded.
     let mut moved = light;
     moved.center.x += 0.5;
     session.set_light(moved);
-    session
-        .frame(&ctx, &request)
-        .unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(session.reference_progress(), Some((4, 16)));
+    assert!(session.frame(&ctx, &request).is_err(), "a stale reference");
+    assert_eq!(
+        session.advance_reference(&ctx, &request, 4).unwrap(),
+        (4, 16)
+    );
     let mut cam = camera;
     cam.eye.x += 0.5;
     session.set_camera(cam);
-    session
-        .advance_reference(&ctx, &request)
-        .unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(session.reference_progress(), Some((4, 16)));
+    assert_eq!(
+        session.advance_reference(&ctx, &request, 4).unwrap(),
+        (4, 16)
+    );
 }
 
 #[test]
 fn dbuffer_center_builds_its_own_volumes_and_invalidation_forces_a_rebuild() {
-    let ctx = GpuContext::headless().unwrap_or_else(|e| panic!("{e}"));
+    let ctx = ctx();
     let scene = scene::load("fig1-large-light").unwrap_or_else(|e| panic!("{e}"));
     let mut session = Session::new(&ctx, scene);
     let request = |method| FrameRequest {
@@ -144,31 +216,22 @@ fn dbuffer_center_builds_its_own_volumes_and_invalidation_forces_a_rebuild() {
         method,
         ..FrameRequest::default()
     };
-    let disk = session.frame(&ctx, &request(Method::DBuffer)).unwrap();
-    let disk_stats = session.geometry().stats;
-    assert_eq!(session.geometry_builds(), 1);
+    let disk = session.frame(&ctx, &request(Method::DBUFFER)).unwrap();
+    let disk_stats = session.geometry(Method::DBUFFER).unwrap().stats;
     let centre = session
-        .frame(&ctx, &request(Method::DBufferCenter))
+        .frame(&ctx, &request(Method::DBUFFER_CENTER))
         .unwrap();
-    assert_eq!(
-        session.geometry_builds(),
-        2,
-        "the centre's volumes are built"
-    );
+    assert_eq!(session.geometry_builds(Method::DBUFFER_CENTER).0, 1);
     // From the centre alone no face is a silhouette face.
-    let s = session.geometry().stats;
+    let s = session.geometry(Method::DBUFFER_CENTER).unwrap().stats;
     assert_eq!(s.silhouette_a + s.silhouette_b, 0);
     assert!(disk_stats.silhouette_a + disk_stats.silhouette_b > 0);
     assert_ne!(disk.visibility, centre.visibility);
-    // Methods without volumes leave them as they are.
-    session.frame(&ctx, &request(Method::Pcss)).unwrap();
-    assert_eq!(session.geometry_builds(), 2);
-    session.invalidate_geometry();
-    session
-        .frame(&ctx, &request(Method::DBufferCenter))
-        .unwrap();
-    assert_eq!(session.geometry_builds(), 3);
-    let back = session.frame(&ctx, &request(Method::DBuffer)).unwrap();
-    assert_eq!(session.geometry_builds(), 4);
+    // Switching back needs no rebuild: each method keeps its own.
+    let back = session.frame(&ctx, &request(Method::DBUFFER)).unwrap();
+    assert_eq!(session.geometry_builds(Method::DBUFFER).0, 1);
     assert_eq!(back.visibility, disk.visibility);
+    session.invalidate_geometry();
+    session.frame(&ctx, &request(Method::DBUFFER)).unwrap();
+    assert_eq!(session.geometry_builds(Method::DBUFFER).0, 2);
 }

@@ -19,12 +19,12 @@ fn every_built_in_matches_its_snapshot() {
             width: 128,
             height: 128,
             dbuffer_size: 512,
-            method: Method::DBuffer,
+            method: Method::DBUFFER,
             vt: VtVariant::Smoothstep,
             ..FrameRequest::default()
         };
         let (frame, _) = offline
-            .render(name, &scene, &request)
+            .render(&scene, &request)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let rgba: Vec<u8> = frame.color.iter().flatten().copied().collect();
         snapshot::check_snapshot(&format!("render-{name}"), 128, 128, &rgba);
@@ -39,12 +39,12 @@ fn hard_method_matches_its_snapshot() {
         width: 128,
         height: 128,
         dbuffer_size: 512,
-        method: Method::Hard,
+        method: Method::HARD,
         vt: VtVariant::Smoothstep,
         ..FrameRequest::default()
     };
     let (frame, _) = offline
-        .render("fig8c-complex", &scene, &request)
+        .render(&scene, &request)
         .unwrap_or_else(|e| panic!("{e}"));
     let rgba: Vec<u8> = frame.color.iter().flatten().copied().collect();
     snapshot::check_snapshot("render-hard-fig8c-complex", 128, 128, &rgba);
@@ -56,20 +56,18 @@ fn hard_method_matches_its_snapshot() {
 fn every_method_matches_its_snapshot() {
     let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
     let scene = scene::load("fig7-concave").unwrap_or_else(|e| panic!("{e}"));
-    for method in Method::ALL {
+    for &method in Method::all() {
         let request = FrameRequest {
             width: 96,
             height: 96,
             dbuffer_size: 512,
             method,
-            params: dbuffer::render::MethodParams {
-                reference_samples: 64,
-                ..Default::default()
-            },
+            knobs: dbuffer::render::Knobs::default()
+                .with(&dbuffer::render::methods::reference::SAMPLES, 64),
             ..FrameRequest::default()
         };
         let (frame, _) = offline
-            .render("fig7-concave", &scene, &request)
+            .render(&scene, &request)
             .unwrap_or_else(|e| panic!("{method}: {e}"));
         let rgba: Vec<u8> = frame.color.iter().flatten().copied().collect();
         snapshot::check_snapshot(&format!("method-{method}-fig7-concave"), 96, 96, &rgba);

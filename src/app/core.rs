@@ -1,84 +1,147 @@
-//! The render core as the lab holds it: a [`Session`] on eframe's own wgpu device. Every pixel
-//! the lab shows comes from here, through the same calls `dbuffer render` makes.
+//! The render core as the lab holds it: a [`Session`] on eframe's own wgpu device, the targets of
+//! the two views (either side of a split) that stay on the GPU and are shown as they are, and the
+//! reference's worker thread. Every pixel the lab shows is a frame of the same core `dbuffer
+//! render` uses; only the probes' few hundred bytes come back per frame.
 
-use crate::geometry::light_view::LightView;
-use crate::geometry::SceneGeometry;
-use crate::render::session::Session;
-use crate::render::{Frame, FrameRequest, GpuContext, RenderError};
-use crate::scene::{Camera, DiskLight, Mesh, Scene};
+use eframe::egui;
+use eframe::egui_wgpu;
+
+use crate::render::passes::probe::ProbeResult;
+use crate::render::reference::ReferenceWorker;
+use crate::render::session::{FrameJob, Session};
+use crate::render::{Frame, FrameTargets, GpuContext, Method, RenderError};
+use crate::scene::Scene;
+
+/// One shown view: its targets on the GPU and the egui texture that shows its display.
+pub struct Slot {
+    pub targets: FrameTargets,
+    /// The egui texture showing the display, and the display generation it was registered for.
+    pub texture: Option<(egui::TextureId, u64)>,
+}
+
+impl Slot {
+    fn new() -> Slot {
+        Slot {
+            targets: FrameTargets::new(),
+            texture: None,
+        }
+    }
+
+    /// The size of what the slot's display shows, once it has one.
+    pub fn display_size(&self) -> Option<(u32, u32)> {
+        let d = self.targets.view.as_ref()?.display()?;
+        Some((d.width, d.height))
+    }
+}
 
 pub struct Core {
     pub ctx: GpuContext,
-    session: Session,
+    pub session: Session,
+    pub worker: ReferenceWorker,
+    /// The main view and the right-hand side of a split.
+    pub slots: [Slot; 2],
+    /// The reference snapshot handed to the GPU last: (done, total).
+    pub reference_serial: u64,
 }
 
 impl Core {
     /// Wrap eframe's device (or the test harness's) and start a session on `scene`.
     pub fn new(ctx: GpuContext, scene: Scene) -> Core {
         let session = Session::new(&ctx, scene);
-        Core { ctx, session }
+        Core {
+            ctx,
+            session,
+            worker: ReferenceWorker::new(),
+            slots: [Slot::new(), Slot::new()],
+            reference_serial: 0,
+        }
     }
 
     /// Look at another scene.
     pub fn replace_scene(&mut self, scene: Scene) {
         self.session = Session::new(&self.ctx, scene);
+        for slot in &mut self.slots {
+            slot.targets.rendered = None;
+        }
     }
 
     pub fn scene(&self) -> &Scene {
         self.session.scene()
     }
 
-    pub fn geometry(&self) -> &SceneGeometry {
-        self.session.geometry()
+    /// Hand the GPU the reference's newest samples, if the worker has any. Returns whether it
+    /// did.
+    pub fn take_reference(&mut self) -> Result<bool, RenderError> {
+        let Some(s) = self.worker.take() else {
+            return Ok(false);
+        };
+        self.session
+            .set_reference(&self.ctx, s.key, &s.visibility, (s.done, s.total))?;
+        self.reference_serial += 1;
+        Ok(true)
     }
 
-    pub fn geometry_builds(&self) -> u64 {
-        self.session.geometry_builds()
+    /// Record and submit the jobs; returns the bytes they read back.
+    pub fn submit(&mut self, jobs: &mut [FrameJob<'_>]) -> Result<u64, RenderError> {
+        self.session.submit(&self.ctx, jobs)
     }
 
-    pub fn set_light(&mut self, light: DiskLight) {
-        self.session.set_light(light);
+    /// Show each slot's display through an egui texture (registered once, again when the display
+    /// was made again).
+    pub fn register_textures(&mut self, render_state: &egui_wgpu::RenderState) {
+        for slot in &mut self.slots {
+            let Some(display) = slot.targets.view.as_ref().and_then(|v| v.display()) else {
+                continue;
+            };
+            match slot.texture {
+                Some((_, g)) if g == display.generation => {}
+                Some((id, _)) => {
+                    render_state
+                        .renderer
+                        .write()
+                        .update_egui_texture_from_wgpu_texture(
+                            &render_state.device,
+                            &display.texture.view,
+                            wgpu::FilterMode::Nearest,
+                            id,
+                        );
+                    slot.texture = Some((id, display.generation));
+                }
+                None => {
+                    let id = render_state.renderer.write().register_native_texture(
+                        &render_state.device,
+                        &display.texture.view,
+                        wgpu::FilterMode::Nearest,
+                    );
+                    slot.texture = Some((id, display.generation));
+                }
+            }
+        }
     }
 
-    pub fn set_object_mesh(&mut self, index: usize, mesh: Mesh) {
-        self.session.set_object_mesh(&self.ctx, index, mesh);
+    /// Probe answers that have arrived, per slot.
+    pub fn probe_results(&mut self) -> [Vec<ProbeResult>; 2] {
+        let ctx = &self.ctx;
+        let [a, b] = &mut self.slots;
+        [a, b].map(|slot| {
+            slot.targets
+                .probe
+                .as_mut()
+                .map(|p| p.poll(ctx))
+                .unwrap_or_default()
+        })
     }
 
-    pub fn set_camera(&mut self, camera: Camera) {
-        self.session.set_camera(camera);
-    }
-
-    /// The D-buffer's view from the light centre (maps world points to texels).
-    pub fn light_view(&self) -> &LightView {
-        self.session.light_view()
-    }
-
-    /// CPU milliseconds of the last geometry build.
-    pub fn geometry_ms(&self) -> f64 {
-        self.session.geometry_ms()
-    }
-
-    pub fn frame(&mut self, request: &FrameRequest) -> Result<Frame, RenderError> {
-        self.session.frame(&self.ctx, request)
-    }
-
-    /// Reference samples per pixel done and asked for, once a reference has been started.
-    pub fn reference_progress(&self) -> Option<(u32, u32)> {
-        self.session.reference_progress()
-    }
-
-    /// The accumulated reference V of the last size it was advanced for (row-major).
-    pub fn reference_visibility(&self) -> Option<&[f32]> {
-        self.session.reference_visibility()
-    }
-
-    /// Add reference samples without showing the reference (for the error view).
-    pub fn advance_reference(&mut self, request: &FrameRequest) -> Result<(), RenderError> {
-        self.session.advance_reference(&self.ctx, request)
-    }
-
-    /// The reference is still adding samples.
-    pub fn converging(&self) -> bool {
-        self.session.converging()
+    /// Read a slot's frame back whole, with `maps_of`'s light-space maps: for tests and
+    /// exports, never per frame.
+    pub fn read_slot(
+        &mut self,
+        slot: usize,
+        maps_of: Option<Method>,
+    ) -> Result<Frame, RenderError> {
+        let Some(s) = self.slots.get(slot) else {
+            return Err(RenderError::Request(format!("no view {slot}")));
+        };
+        self.session.read(&self.ctx, &s.targets, maps_of)
     }
 }

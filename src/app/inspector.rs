@@ -1,26 +1,42 @@
-//! The right panel: the pixel inspector (the exact values under the cursor, read from the frame's
-//! arrays, whatever the display mapping) and the stats (timings, frame rate, counts).
+//! The right panel: the pixel inspector (the exact values under the cursor, read back from the
+//! GPU by the probe — a hundred bytes, a frame later — whatever the display mapping) and the
+//! stats (timings, frame rate, bytes read back, counts).
 
 use eframe::egui::{self, Color32, Pos2, Rect, RichText, Sense, Stroke, Vec2};
-use glam::Vec3;
 
-use super::viewport::Shown;
-use super::views::{self, View, CHANNELS};
 use super::LabApp;
-use crate::render::Method;
+use crate::render::passes::probe::PixelValues;
+use crate::render::passes::view::View;
+use crate::render::passes::view_twin::branch_name;
 
-/// The D-buffer texel a world point falls in, as the camera pass finds it.
-pub fn texel_of(shown: &Shown, p: Vec3) -> Option<(u32, u32)> {
-    let clip = shown.light_view.view_projection() * p.extend(1.0);
-    if clip.w <= 0.0 {
-        return None;
+/// The values under the cursor, as the probe brought them back, per slot.
+#[derive(Default)]
+pub struct Inspector {
+    values: [Option<Probed>; 2],
+}
+
+struct Probed {
+    x: u32,
+    y: u32,
+    view: View,
+    values: Vec<f32>,
+}
+
+impl Inspector {
+    /// A probe answer for `slot` at (`x`, `y`) of `view` arrived.
+    pub fn arrived(&mut self, slot: usize, x: u32, y: u32, view: View, values: Vec<f32>) {
+        if let Some(v) = self.values.get_mut(slot) {
+            *v = Some(Probed { x, y, view, values });
+        }
     }
-    let n = shown.frame.dbuffer_size as f32;
-    let (x, y) = (clip.x / clip.w, clip.y / clip.w);
-    let (u, v) = (x * 0.5 + 0.5, 0.5 - y * 0.5);
-    let tx = (u * n).floor().clamp(0.0, n - 1.0);
-    let ty = (v * n).floor().clamp(0.0, n - 1.0);
-    (tx.is_finite() && ty.is_finite()).then_some((tx as u32, ty as u32))
+
+    /// The decoded values at (`x`, `y`) of `slot` in `view`, if they have arrived.
+    pub fn at(&self, slot: usize, x: u32, y: u32, view: View) -> Option<PixelValues> {
+        let p = self.values.get(slot)?.as_ref()?;
+        (p.x == x && p.y == y && p.view == view)
+            .then(|| PixelValues::decode(&p.values))
+            .flatten()
+    }
 }
 
 fn value(v: Option<f32>) -> String {
@@ -45,73 +61,79 @@ impl LabApp {
             });
     }
 
-    fn pixel_section(&self, ui: &mut egui::Ui) {
+    /// The inspector's rows for the pixel under the cursor, once the probe brought them.
+    pub fn pixel_rows(&self) -> Vec<(String, String)> {
         let Some(hover) = self.viewport.hover else {
+            return Vec::new();
+        };
+        let slot = usize::from(hover.split);
+        let Some(shown) = self.viewport.shown[slot].as_ref() else {
+            return Vec::new();
+        };
+        let view = self.settings.view;
+        let mut rows: Vec<(String, String)> = vec![("method".into(), shown.method.name().into())];
+        let what = if view == View::DBuffer {
+            "texel"
+        } else {
+            "pixel"
+        };
+        rows.push((what.into(), format!("{}, {}", hover.x, hover.y)));
+        let Some(p) = self.inspector.at(slot, hover.x, hover.y, view) else {
+            rows.push(("values".into(), "reading…".into()));
+            return rows;
+        };
+        let channels = self
+            .core
+            .as_ref()
+            .and_then(|c| c.session.light_maps(shown.method))
+            .map(|m| m.channels)
+            .unwrap_or_default();
+        let map_rows = |rows: &mut Vec<(String, String)>| {
+            if let Some(((tx, ty), texel)) = p.texel {
+                if view != View::DBuffer {
+                    rows.push(("light-map texel".into(), format!("{tx}, {ty}")));
+                }
+                for c in channels {
+                    rows.push((c.name.into(), value(c.value(&texel))));
+                }
+            }
+        };
+        if view == View::DBuffer {
+            map_rows(&mut rows);
+            return rows;
+        }
+        let Some(x) = p.position else {
+            rows.push(("surface".into(), "none".into()));
+            return rows;
+        };
+        rows.push((
+            "position".into(),
+            format!("{:.3}, {:.3}, {:.3}", x.x, x.y, x.z),
+        ));
+        rows.push((
+            "|cx|".into(),
+            format!("{:.5}", (x - shown.light.center).length()),
+        ));
+        map_rows(&mut rows);
+        rows.push(("branch".into(), branch_name(p.branch).into()));
+        rows.push(("t".into(), value(Some(p.t))));
+        rows.push(("V".into(), value(Some(p.visibility))));
+        if !shown.method.is_reference() {
+            let samples = shown
+                .reference
+                .map(|(done, total)| format!(" (K {done}/{total})"))
+                .unwrap_or_default();
+            rows.push((format!("reference V{samples}"), value(p.reference)));
+        }
+        rows
+    }
+
+    fn pixel_section(&self, ui: &mut egui::Ui) {
+        if self.viewport.hover.is_none() {
             ui.label(RichText::new("hover the viewport").small());
             return;
-        };
-        let shown = if hover.split {
-            self.viewport.split.as_ref()
-        } else {
-            self.viewport.main.as_ref()
-        };
-        let Some(shown) = shown else { return };
-        let f = &shown.frame;
-        let mut rows: Vec<(String, String)> = Vec::new();
-        rows.push(("method".into(), shown.method.name().into()));
-        if self.settings.view == View::DBuffer {
-            rows.push(("texel".into(), format!("{}, {}", hover.x, hover.y)));
-            if let Some(t) = views::texel(f, hover.x, hover.y) {
-                for (c, name) in CHANNELS.iter().enumerate().take(3) {
-                    rows.push(((*name).into(), value(t.channel(c))));
-                }
-                rows.push(("|cx_s| umbra".into(), value(t.s_umbra)));
-                rows.push(("|cx_s| penumbra".into(), value(t.s_penumbra)));
-            }
-        } else {
-            let i = (hover.y * f.width + hover.x) as usize;
-            rows.push(("pixel".into(), format!("{}, {}", hover.x, hover.y)));
-            let Some(p) = f.position.get(i) else { return };
-            if p[3] < 0.5 {
-                rows.push(("surface".into(), "none".into()));
-            } else {
-                let x = Vec3::new(p[0], p[1], p[2]);
-                rows.push((
-                    "position".into(),
-                    format!("{:.3}, {:.3}, {:.3}", x.x, x.y, x.z),
-                ));
-                rows.push((
-                    "|cx|".into(),
-                    format!("{:.5}", (x - shown.light.center).length()),
-                ));
-                if let Some(t) = texel_of(shown, x).and_then(|(tx, ty)| views::texel(f, tx, ty)) {
-                    for (c, name) in CHANNELS.iter().enumerate().take(3) {
-                        rows.push(((*name).into(), value(t.channel(c))));
-                    }
-                    rows.push(("|cx_s| umbra".into(), value(t.s_umbra)));
-                    rows.push(("|cx_s| penumbra".into(), value(t.s_penumbra)));
-                }
-                let branch = f.branch.get(i).copied().unwrap_or(0);
-                rows.push(("branch".into(), views::branch_name(branch).into()));
-                rows.push(("t".into(), value(f.t.get(i).copied())));
-                rows.push(("V".into(), value(f.visibility.get(i).copied())));
-                let reference = if shown.method == Method::Reference {
-                    None
-                } else {
-                    self.core
-                        .as_ref()
-                        .and_then(|c| c.reference_visibility())
-                        .filter(|r| r.len() == f.visibility.len())
-                        .and_then(|r| r.get(i).copied())
-                };
-                let samples = shown
-                    .reference
-                    .map(|(done, total)| format!(" (K {done}/{total})"))
-                    .unwrap_or_default();
-                rows.push((format!("reference V{samples}"), value(reference)));
-            }
         }
-        rows_grid(ui, "pixel-grid", rows);
+        rows_grid(ui, "pixel-grid", self.pixel_rows());
     }
 
     fn stats_section(&self, ui: &mut egui::Ui) {
@@ -124,13 +146,11 @@ impl LabApp {
             }
             rows.push(("adapter".into(), name));
         }
-        if let Some(main) = &self.viewport.main {
+        if let Some(main) = &self.viewport.shown[0] {
+            let r = &main.request;
             rows.push((
                 "frame".into(),
-                format!(
-                    "{}×{}, D-buffer {}²",
-                    main.frame.width, main.frame.height, main.frame.dbuffer_size
-                ),
+                format!("{}×{}, D-buffer {}²", r.width, r.height, r.dbuffer_size),
             ));
         }
         let hide = self.deterministic;
@@ -139,8 +159,9 @@ impl LabApp {
             Some(v) => format!("{v:.1} ms"),
             None => "—".into(),
         };
-        // Median CPU wall time of a render, apart for renders that rebuilt the geometry.
-        rows.push(("render".into(), ms(s.median_wall_ms(false))));
+        // Median CPU time to record and submit a render, apart for renders that rebuilt the
+        // geometry.
+        rows.push(("render (CPU)".into(), ms(s.median_wall_ms(false))));
         rows.push(("  + new geometry".into(), ms(s.median_wall_ms(true))));
         rows.push(("CPU geometry".into(), ms(s.median_geometry_ms())));
         let gpu = s.median_gpu_ms();
@@ -163,10 +184,23 @@ impl LabApp {
                 None => "—".into(),
             },
         ));
+        rows.push((
+            "read back".into(),
+            match s.read_bytes() {
+                Some(_) if hide => "(hidden)".into(),
+                Some((last, most)) => format!("{last} B/frame (max {most})"),
+                None => "—".into(),
+            },
+        ));
         rows.push(("renders".into(), s.renders_total.to_string()));
         if let Some(core) = self.core.as_ref() {
             let scene = core.scene();
-            let g = &core.geometry().stats;
+            let method = self.settings.method();
+            let g = core
+                .session
+                .geometry(method)
+                .map(|g| g.stats)
+                .unwrap_or_default();
             let total: usize = scene.objects.iter().map(|o| o.mesh.triangles.len()).sum();
             rows.push((
                 "triangles".into(),
@@ -183,10 +217,13 @@ impl LabApp {
                     g.umbra_triangles, g.penumbra_triangles
                 ),
             ));
-            rows.push(("geometry builds".into(), core.geometry_builds().to_string()));
+            rows.push((
+                "geometry builds".into(),
+                core.session.geometry_builds(method).0.to_string(),
+            ));
         }
         rows_grid(ui, "stats-grid", rows);
-        ui.label(RichText::new("render ms (white) · frame CPU ms (green)").small());
+        ui.label(RichText::new("render CPU ms (white) · frame CPU ms (green)").small());
         if hide {
             return;
         }

@@ -1,13 +1,14 @@
 //! The lab: an eframe window around the render core. `dbuffer` opens it on the default scene,
 //! `dbuffer gui SCENE` on a scene file or built-in name. It renders nothing itself: every image
-//! is a [`crate::render::Frame`] from the same [`crate::render::session::Session`] calls
-//! `dbuffer render` makes, on eframe's own wgpu device, shown as a texture.
+//! is a frame of the same [`crate::render::Session`] `dbuffer render` uses, on eframe's own
+//! wgpu device, left on the GPU and shown as a texture the render core's view pass draws; only
+//! the few values a person reads (the pixel under the cursor) come back.
 //!
 //! One file per part: [`settings`] (what persists), [`doc`] (the scene being edited, undo),
-//! [`core`] (the render core as the lab holds it), [`camera`] (controls and the one projection
-//! overlays and picking use), [`views`] (frame arrays → pixels), [`viewport`] (render, show,
-//! interact), [`overlays`], [`panels`] (the controls), [`inspector`] (pixel values, stats),
-//! [`files`] (open, save, export).
+//! [`core`] (the render core as the lab holds it: session, targets, reference worker),
+//! [`camera`] (controls and the one projection overlays and picking use), [`viewport`] (render,
+//! show, interact), [`overlays`], [`panels`] (the controls), [`inspector`] (pixel values),
+//! [`stats`], [`files`] (open, save, export).
 
 pub mod camera;
 pub mod core;
@@ -20,7 +21,6 @@ pub mod settings;
 mod smoke;
 mod stats;
 mod viewport;
-pub mod views;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -33,8 +33,8 @@ use self::doc::{Edit, History, SceneDoc};
 pub use self::settings::{Overlays, Settings, DEFAULT_SCENE};
 use self::stats::Stats;
 pub use self::viewport::Shown;
-pub use self::views::View;
 use crate::geometry::bvh::Bvh;
+pub use crate::render::passes::view::View;
 use crate::render::GpuContext;
 use crate::scene::Camera;
 
@@ -84,11 +84,11 @@ pub struct LabApp {
     status: (String, Level),
     render_error: Option<String>,
     viewport: viewport::ViewportState,
+    inspector: inspector::Inspector,
     stats: Stats,
     open_text: String,
     smoke: Option<smoke::Smoke>,
     export: Option<files::PendingExport>,
-    overlay_cache: overlays::OverlayCache,
     /// What the overlays could not draw in full, for the legend.
     overlay_notes: Vec<String>,
     deterministic: bool,
@@ -145,11 +145,11 @@ impl LabApp {
             status,
             render_error: None,
             viewport: viewport::ViewportState::default(),
+            inspector: inspector::Inspector::default(),
             stats: Stats::default(),
             open_text: String::new(),
             smoke: options.smoke_screenshot.map(smoke::Smoke::new),
             export: None,
-            overlay_cache: overlays::OverlayCache::default(),
             overlay_notes: Vec::new(),
             deterministic: options.deterministic,
         };
@@ -173,14 +173,29 @@ impl LabApp {
         self.core.as_ref().map(|c| c.scene())
     }
 
-    /// The frame the viewport shows (left side of a split).
+    /// What the viewport shows (left side of a split).
     pub fn shown(&self) -> Option<&Shown> {
-        self.viewport.main.as_ref()
+        self.viewport.shown[0].as_ref()
     }
 
     /// The right side of a split view.
     pub fn shown_split(&self) -> Option<&Shown> {
-        self.viewport.split.as_ref()
+        self.viewport.shown[1].as_ref()
+    }
+
+    /// Read the frame the viewport shows (`split`: its right side) back whole, with the shown
+    /// method's light-space maps. For tests and exports: the lab itself never reads a frame.
+    pub fn read_shown(&mut self, split: bool) -> Option<crate::render::Frame> {
+        let method = self.viewport.shown[usize::from(split)].as_ref()?.method;
+        self.core
+            .as_mut()?
+            .read_slot(usize::from(split), Some(method))
+            .ok()
+    }
+
+    /// The render core (tests look at its session and reference worker).
+    pub fn core(&self) -> Option<&core::Core> {
+        self.core.as_ref()
     }
 
     /// Where the viewport was last drawn, in points.
@@ -193,6 +208,17 @@ impl LabApp {
         self.stats.renders_total
     }
 
+    /// How many window frames have run.
+    pub fn window_frames(&self) -> u64 {
+        self.stats.window_frames
+    }
+
+    /// Bytes read back from the GPU by the last window frame that submitted work, and the most
+    /// over the last few seconds of them.
+    pub fn read_bytes(&self) -> Option<(u64, u64)> {
+        self.stats.read_bytes()
+    }
+
     pub fn adapter(&self) -> Option<String> {
         self.core.as_ref().map(|c| c.ctx.adapter_description())
     }
@@ -202,10 +228,7 @@ impl LabApp {
     }
 
     fn opened_message(&self) -> String {
-        let warnings = self
-            .core
-            .as_ref()
-            .map_or(0, |c| c.geometry().warnings.len());
+        let warnings = self.scene_warnings().len();
         if warnings > 0 {
             format!("opened {} ({warnings} warnings)", self.doc.label)
         } else {
@@ -231,11 +254,7 @@ impl LabApp {
                 if !SceneDoc::is_builtin(name_or_path) {
                     self.settings.push_recent(name_or_path);
                 }
-                let warnings = self
-                    .core
-                    .as_ref()
-                    .map(|c| c.geometry().warnings.clone())
-                    .unwrap_or_default();
+                let warnings = self.scene_warnings();
                 match warnings.first() {
                     Some(w) => {
                         self.set_status(format!("opened {}: {w}", self.doc.label), Level::Warning)
@@ -259,6 +278,18 @@ impl LabApp {
         }
     }
 
+    /// What the geometry stage warned about (the shown method's, or the paper's, geometry).
+    pub fn scene_warnings(&self) -> Vec<String> {
+        let Some(core) = self.core.as_ref() else {
+            return Vec::new();
+        };
+        core.session
+            .geometry(self.settings.method())
+            .or_else(|| core.session.geometry(crate::render::Method::DBUFFER))
+            .map(|g| g.warnings.clone())
+            .unwrap_or_default()
+    }
+
     /// Change the scene through `change` (one undo step per gesture).
     fn edit_scene(&mut self, change: impl FnOnce(&mut Edit)) {
         let before = self.doc.edit();
@@ -280,11 +311,11 @@ impl LabApp {
         }
         if let Some(core) = self.core.as_mut() {
             if light {
-                core.set_light(self.doc.light());
+                core.session.set_light(self.doc.light());
             }
             for &i in &moved {
                 if let Some(mesh) = self.doc.world_mesh(i) {
-                    core.set_object_mesh(i, mesh);
+                    core.session.set_object_mesh(&core.ctx, i, mesh);
                 }
             }
         }
@@ -360,7 +391,7 @@ impl eframe::App for LabApp {
         self.status_bar(ui);
         self.controls_panel(ui);
         self.inspector_panel(ui);
-        egui::CentralPanel::no_frame().show(ui, |ui| self.viewport_ui(ui));
+        egui::CentralPanel::no_frame().show(ui, |ui| self.viewport_ui(ui, frame));
         if !ctx.input(|i| i.pointer.any_down()) {
             self.history.close();
         }
@@ -385,12 +416,8 @@ pub fn run(options: LabOptions) -> anyhow::Result<()> {
         device_descriptor: Arc::new(|adapter: &egui_wgpu::wgpu::Adapter| {
             egui_wgpu::wgpu::DeviceDescriptor {
                 label: Some("dbuffer::lab device"),
-                required_features: adapter.features() & egui_wgpu::wgpu::Features::TIMESTAMP_QUERY,
-                required_limits: egui_wgpu::wgpu::Limits {
-                    max_texture_dimension_2d: 8192,
-                    ..egui_wgpu::wgpu::Limits::default()
-                }
-                .using_resolution(adapter.limits()),
+                required_features: crate::render::context::wanted_features(adapter.features()),
+                required_limits: crate::render::context::wanted_limits(&adapter.limits()),
                 ..Default::default()
             }
         }),

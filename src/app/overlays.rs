@@ -9,9 +9,10 @@ use glam::Vec3;
 
 use super::camera::Projector;
 use super::viewport::HIGHLIGHT;
-use super::views::{self, View};
 use super::{LabApp, Selection};
-use crate::geometry::{CasterMesh, FaceClass, VolumeMesh};
+use crate::geometry::{FaceClass, VolumeMesh};
+use crate::render::passes::view::View;
+use crate::render::passes::view_twin::BRANCH_COLORS;
 use crate::render::Method;
 
 /// At most this many lines per volume overlay and triangles of class faces: volumes of big
@@ -91,13 +92,6 @@ fn volume_edges(v: &VolumeMesh, umbra: bool, out: &mut Vec<[Vec3; 2]>, cap: usiz
     total
 }
 
-/// Caster meshes with welded faces, kept while the scene does not change.
-#[derive(Default)]
-pub struct OverlayCache {
-    revision: Option<u64>,
-    casters: Vec<CasterMesh>,
-}
-
 impl LabApp {
     pub(super) fn draw_overlays(&mut self, painter: &Painter, rect: Rect) {
         let Some(core) = self.core.as_ref() else {
@@ -106,24 +100,38 @@ impl LabApp {
         let painter = painter.with_clip_rect(rect);
         let projector = Projector::new(&self.camera, rect);
         let scene = core.scene();
-        let geometry = core.geometry();
         let overlays = self.settings.overlays;
         self.overlay_notes.clear();
+        // The shown method's geometry stage, or the paper's if it builds none.
+        let shown = self.settings.method();
+        let geometry = core
+            .session
+            .geometry(shown)
+            .or_else(|| core.session.geometry(Method::DBUFFER));
+        let wants_geometry = overlays.classes
+            || overlays.umbra_volume
+            || overlays.penumbra_volume
+            || overlays.silhouettes;
+        let empty = crate::geometry::SceneGeometry::default();
+        let geometry = match geometry {
+            Some(g) => g,
+            None => {
+                if wants_geometry {
+                    self.overlay_notes.push(format!(
+                        "{shown} builds no volumes: switch to a D-buffer method"
+                    ));
+                }
+                &empty
+            }
+        };
 
         if overlays.classes {
-            if self.overlay_cache.revision != Some(self.revision) {
-                self.overlay_cache.casters = scene
-                    .casters()
-                    .map(|o| CasterMesh::new(&o.name, &o.mesh))
-                    .collect();
-                self.overlay_cache.revision = Some(self.revision);
-            }
+            // The casters as the session welded them for the geometry stage.
+            let casters = &core.session.prepared().meshes;
             let mut mesh = egui::Mesh::default();
             let mut drawn = 0;
             let total: usize = geometry.casters.iter().map(|c| c.classes.len()).sum();
-            'casters: for (caster, prepared) in
-                geometry.casters.iter().zip(&self.overlay_cache.casters)
-            {
+            'casters: for (caster, prepared) in geometry.casters.iter().zip(casters) {
                 for (face, class) in prepared.faces.iter().zip(&caster.classes) {
                     if drawn >= MAX_FACES {
                         break 'casters;
@@ -264,8 +272,8 @@ impl LabApp {
         let mut bar = None;
         match view {
             View::Classes => {
-                for (c, name) in views::BRANCH_COLORS {
-                    rows.push((Some(c), name.to_string()));
+                for ([r, g, b, _], name) in BRANCH_COLORS {
+                    rows.push((Some(Color32::from_rgb(r, g, b)), name.to_string()));
                 }
             }
             View::Visibility | View::T | View::Error | View::DBuffer => {
@@ -276,8 +284,8 @@ impl LabApp {
                     View::Visibility => "V".to_string(),
                     View::T => "t".to_string(),
                     View::Error => {
-                        let reference = self.viewport.main.as_ref().and_then(|s| {
-                            if s.method == Method::Reference {
+                        let reference = self.viewport.shown[0].as_ref().and_then(|s| {
+                            if s.method.is_reference() {
                                 Some(format!(
                                     "K = {} (the shown reference)",
                                     self.settings.reference_samples
@@ -293,11 +301,19 @@ impl LabApp {
                         )
                     }
                     _ => {
-                        let names: Vec<&str> = (0..4)
-                            .filter(|&c| self.settings.channels[c])
-                            .map(|c| views::CHANNELS[c])
+                        let channels = self
+                            .core
+                            .as_ref()
+                            .and_then(|c| c.session.light_maps(self.settings.method()))
+                            .map(|m| m.channels)
+                            .unwrap_or_default();
+                        let names: Vec<&str> = channels
+                            .iter()
+                            .enumerate()
+                            .filter(|(c, _)| self.settings.channels.get(*c) == Some(&true))
+                            .map(|(_, ch)| ch.name)
                             .collect();
-                        format!("D-buffer {} (m from the light centre)", names.join(" "))
+                        format!("light maps {} (m from the light centre)", names.join(" "))
                     }
                 };
                 rows.push((None, what));
@@ -363,7 +379,10 @@ impl LabApp {
                         Pos2::new(x1, bar_rect.bottom()),
                     ),
                     0.0,
-                    m.map.color((k as f32 + 0.5) / steps as f32),
+                    {
+                        let [r, g, b, _] = m.map.color((k as f32 + 0.5) / steps as f32);
+                        Color32::from_rgb(r, g, b)
+                    },
                 );
             }
             painter.text(

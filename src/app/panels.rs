@@ -4,9 +4,9 @@
 use eframe::egui::{self, Color32, DragValue, RichText, Slider};
 
 use super::doc::{normal_from, tilt_azimuth};
-use super::views::{ColorMap, View, CHANNELS};
 use super::{LabApp, Level, Selection};
 use crate::geometry::VtVariant;
+use crate::render::passes::view::{ColorMap, View};
 use crate::render::Method;
 use crate::scene::builtin;
 use crate::scene::file::Scale;
@@ -118,16 +118,26 @@ impl LabApp {
                 };
                 ui.add(egui::Label::new(RichText::new(line).color(color)).truncate())
                     .on_hover_text(text);
+                let warnings = self.scene_warnings();
+                if !warnings.is_empty() {
+                    ui.label(
+                        RichText::new(format!("⚠ {} geometry warnings", warnings.len()))
+                            .color(Color32::from_rgb(230, 190, 60)),
+                    )
+                    .on_hover_text(warnings.join("\n"));
+                }
                 if let Some(core) = self.core.as_ref() {
-                    let warnings = &core.geometry().warnings;
-                    if !warnings.is_empty() {
-                        ui.label(
-                            RichText::new(format!("⚠ {} geometry warnings", warnings.len()))
-                                .color(Color32::from_rgb(230, 190, 60)),
-                        )
-                        .on_hover_text(warnings.join("\n"));
-                    }
-                    if let Some((done, total)) = core.reference_progress() {
+                    let current = self
+                        .viewport
+                        .shown
+                        .iter()
+                        .flatten()
+                        .next()
+                        .map(|s| core.session.reference_key(&s.request));
+                    let progress = core.worker.progress().filter(|(k, _, _)| {
+                        Some(*k).map(|k| k.samples) == current.map(|c| c.samples)
+                    });
+                    if let Some((_, done, total)) = progress {
                         if done < total && self.settings.needs_reference() {
                             ui.add(
                                 egui::ProgressBar::new(done as f32 / total.max(1) as f32)
@@ -206,7 +216,7 @@ impl LabApp {
         ui.heading("Method");
         let current = self.settings.method();
         ui.horizontal_wrapped(|ui| {
-            for m in Method::ALL {
+            for &m in Method::all() {
                 if ui
                     .selectable_label(current == m, m.name())
                     .on_hover_text(m.description())
@@ -231,7 +241,7 @@ impl LabApp {
             egui::ComboBox::from_id_salt("split-method")
                 .selected_text(format!("right: {}", split.name()))
                 .show_ui(ui, |ui| {
-                    for m in Method::ALL {
+                    for &m in Method::all() {
                         if ui.selectable_label(split == m, m.name()).clicked() {
                             self.settings.split_method = m.name().into();
                         }
@@ -256,13 +266,21 @@ impl LabApp {
                 }
             }
         });
+        // The shown method's light-space channels (the D-buffer's by default).
+        let channels = self
+            .core
+            .as_ref()
+            .and_then(|c| c.session.light_maps(self.settings.method()))
+            .map(|m| m.channels)
+            .unwrap_or(crate::render::methods::dbuffer::CHANNELS);
+        let names: Vec<&'static str> = channels.iter().map(|c| c.name).take(4).collect();
         ui.horizontal_wrapped(|ui| {
-            for (c, name) in CHANNELS.iter().enumerate() {
+            for (c, name) in names.iter().enumerate() {
                 let only = current == View::DBuffer
                     && self.settings.channels == std::array::from_fn(|k| k == c);
                 if ui
                     .selectable_label(only, *name)
-                    .on_hover_text("this D-buffer channel alone")
+                    .on_hover_text("this light-space channel alone")
                     .clicked()
                 {
                     self.settings.view = View::DBuffer;
@@ -273,9 +291,9 @@ impl LabApp {
         if current == View::DBuffer {
             ui.horizontal(|ui| {
                 ui.label("Channels");
-                for (c, letter) in ["R", "G", "B", "A"].iter().enumerate() {
+                for (c, letter) in ["R", "G", "B", "A"].iter().enumerate().take(names.len()) {
                     ui.checkbox(&mut self.settings.channels[c], *letter)
-                        .on_hover_text(format!("{} (several: R, G, B composite)", CHANNELS[c]));
+                        .on_hover_text(format!("{} (several: R, G, B composite)", names[c]));
                 }
             });
         }
@@ -448,19 +466,42 @@ impl LabApp {
                 .text("Resolution")
                 .custom_formatter(|v, _| format!("{:.0} %", v * 100.0)),
         );
-        let max = crate::render::frame::MAX_REFERENCE_SAMPLES;
+        let max = crate::render::methods::reference::MAX_SAMPLES;
         ui.horizontal(|ui| {
             let l = ui.label("Reference K");
             ui.add(DragValue::new(&mut self.settings.reference_samples).range(1..=max))
                 .labelled_by(l.id)
                 .on_hover_text("disk samples per pixel of the reference");
-            let l = ui.label("per frame");
-            ui.add(
-                DragValue::new(&mut self.settings.reference_step)
-                    .range(1..=self.settings.reference_samples.max(1)),
-            )
-            .labelled_by(l.id);
         });
+        // The knobs of the shown methods, from their modules.
+        let mut shown = vec![self.settings.method()];
+        if self.settings.split {
+            shown.push(self.settings.split_method());
+        }
+        for knob in shown.iter().flat_map(|m| m.knobs()) {
+            if knob.name == crate::render::methods::reference::SAMPLES.name {
+                continue;
+            }
+            let mut value = self
+                .settings
+                .knobs
+                .iter()
+                .find(|(n, _)| n == knob.name)
+                .map_or(knob.default, |(_, v)| *v);
+            let changed = ui
+                .horizontal(|ui| {
+                    let l = ui.label(knob.name);
+                    ui.add(DragValue::new(&mut value).range(knob.min..=knob.max))
+                        .labelled_by(l.id)
+                        .on_hover_text(knob.help)
+                        .changed()
+                })
+                .inner;
+            if changed {
+                self.settings.knobs.retain(|(n, _)| n != knob.name);
+                self.settings.knobs.push((knob.name.to_string(), value));
+            }
+        }
     }
 }
 

@@ -4,8 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::views::{Mapping, View};
 use crate::geometry::VtVariant;
+use crate::render::passes::view::{Mapping, View};
 use crate::render::Method;
 
 /// The scene `dbuffer` opens with no arguments.
@@ -37,9 +37,10 @@ pub struct Settings {
     pub dbuffer_size: u32,
     /// Render at this fraction of the viewport's physical pixels (speed on slow adapters).
     pub render_scale: f32,
-    /// Reference samples per pixel (K) and how many each frame adds.
+    /// Reference samples per pixel (K).
     pub reference_samples: u32,
-    pub reference_step: u32,
+    /// The methods' knobs the user set (the others keep their defaults).
+    pub knobs: Vec<(String, u32)>,
     pub recent: Vec<String>,
 }
 
@@ -69,8 +70,8 @@ impl Default for Overlays {
 impl Default for Settings {
     fn default() -> Self {
         Self {
-            method: Method::DBuffer.name().into(),
-            split_method: Method::Reference.name().into(),
+            method: Method::DBUFFER.name().into(),
+            split_method: Method::REFERENCE.name().into(),
             split: false,
             split_at: 0.5,
             vt: VtVariant::Smoothstep.name().into(),
@@ -84,7 +85,7 @@ impl Default for Settings {
             dbuffer_size: 1024,
             render_scale: 1.0,
             reference_samples: 256,
-            reference_step: 8,
+            knobs: Vec::new(),
             recent: Vec::new(),
         }
     }
@@ -97,13 +98,12 @@ impl Settings {
     }
 
     pub fn split_method(&self) -> Method {
-        self.split_method.parse().unwrap_or(Method::Reference)
+        self.split_method.parse().unwrap_or(Method::REFERENCE)
     }
 
     /// Whether the reference is one of the methods on screen (either side of a split).
     pub fn shows_reference(&self) -> bool {
-        self.method() == Method::Reference
-            || (self.split && self.split_method() == Method::Reference)
+        self.method().is_reference() || (self.split && self.split_method().is_reference())
     }
 
     /// Whether what is shown needs the reference: it is a shown method, or the error view
@@ -155,8 +155,14 @@ impl Settings {
         }
         self.reference_samples = self
             .reference_samples
-            .clamp(1, crate::render::frame::MAX_REFERENCE_SAMPLES);
-        self.reference_step = self.reference_step.clamp(1, self.reference_samples);
+            .clamp(1, crate::render::methods::reference::MAX_SAMPLES);
+        // Knobs this build does not know, or out of their range, are dropped.
+        let knobs = crate::render::methods::all_knobs();
+        self.knobs.retain(|(name, v)| {
+            knobs
+                .iter()
+                .any(|k| k.name == name && (k.min..=k.max).contains(v))
+        });
         self.recent.truncate(MAX_RECENT);
     }
 }
@@ -187,7 +193,7 @@ mod tests {
             ..Settings::default()
         };
         s.sanitize();
-        assert_eq!(s.method(), Method::DBuffer);
+        assert_eq!(s.method(), Method::DBUFFER);
         assert_eq!(s.vt(), VtVariant::Smoothstep);
         assert_eq!(s.render_scale, 1.0);
         assert_eq!(s.dbuffer_size, 64);

@@ -1,6 +1,6 @@
-//! Timings the lab shows: per render, the render core's wall time (with or without a geometry
-//! rebuild) and GPU time per pass from timestamp queries; per window frame, the CPU time it took
-//! and the frame rate.
+//! Timings the lab shows: per render, the CPU time to record and submit it (with or without a
+//! geometry rebuild) and GPU time per pass from timestamp queries (a frame later); per window
+//! frame, the CPU time it took, the frame rate, and the bytes read back from the GPU.
 
 use std::collections::VecDeque;
 
@@ -11,10 +11,10 @@ const KEEP: usize = 240;
 
 #[derive(Clone, Debug, Default)]
 pub struct RenderTiming {
+    /// CPU wall milliseconds of recording and submitting the frame (the GPU runs on).
     pub wall_ms: f64,
     /// CPU milliseconds of the geometry stage, when this render rebuilt it.
     pub geometry_ms: Option<f64>,
-    pub gpu_ms: Vec<(String, f64)>,
 }
 
 #[derive(Default)]
@@ -25,13 +25,20 @@ pub struct Stats {
     /// render), which unlike the interval leaves out the idle time between frames.
     pub frame_cpu_ms: VecDeque<f32>,
     pub renders: VecDeque<RenderTiming>,
+    /// GPU milliseconds per pass of the frames whose timings came back.
+    pub gpu: VecDeque<Vec<(String, f64)>>,
+    /// Bytes read back from the GPU, per window frame that submitted work.
+    pub read_bytes: VecDeque<u64>,
     pub renders_total: u64,
+    /// Window frames run.
+    pub window_frames: u64,
     last_frame: Option<f64>,
 }
 
 impl Stats {
     /// Called at the start of every window frame with eframe's CPU time of the previous one.
     pub fn ui_frame(&mut self, ctx: &egui::Context, previous_cpu_s: Option<f32>) {
+        self.window_frames += 1;
         if let Some(s) = previous_cpu_s.filter(|s| s.is_finite() && *s >= 0.0) {
             push(&mut self.frame_cpu_ms, s * 1000.0);
         }
@@ -45,16 +52,33 @@ impl Stats {
         self.last_frame = Some(now);
     }
 
-    pub fn render(&mut self, wall_ms: f64, geometry_ms: Option<f64>, gpu_ms: &[(String, f64)]) {
-        self.renders_total += 1;
-        push(
-            &mut self.renders,
-            RenderTiming {
-                wall_ms,
-                geometry_ms,
-                gpu_ms: gpu_ms.to_vec(),
-            },
-        );
+    /// A window frame submitted `renders` new frames (and maybe only views or probes), in
+    /// `wall_ms` of CPU, rebuilding the geometry in `geometry_ms`, reading back `bytes`.
+    pub fn submitted(
+        &mut self,
+        renders: usize,
+        wall_ms: f64,
+        geometry_ms: Option<f64>,
+        bytes: u64,
+    ) {
+        if renders > 0 {
+            self.renders_total += renders as u64;
+            push(
+                &mut self.renders,
+                RenderTiming {
+                    wall_ms,
+                    geometry_ms,
+                },
+            );
+        }
+        if renders > 0 || bytes > 0 {
+            push(&mut self.read_bytes, bytes);
+        }
+    }
+
+    /// Pass timings that came back from the GPU.
+    pub fn gpu(&mut self, passes: Vec<(String, f64)>) {
+        push(&mut self.gpu, passes);
     }
 
     /// Median render wall time of the renders with (`true`) or without a geometry rebuild.
@@ -73,27 +97,28 @@ impl Stats {
         median(self.renders.iter().filter_map(|r| r.geometry_ms).collect())
     }
 
-    /// Median GPU milliseconds per pass over the kept renders, in pass order.
+    /// Median GPU milliseconds per pass over the kept frames, in the order they last came.
     pub fn median_gpu_ms(&self) -> Vec<(String, f64)> {
-        let Some(last) = self.renders.back() else {
+        let Some(last) = self.gpu.back() else {
             return Vec::new();
         };
-        last.gpu_ms
-            .iter()
+        last.iter()
             .filter_map(|(pass, _)| {
                 let values = self
-                    .renders
+                    .gpu
                     .iter()
-                    .flat_map(|r| {
-                        r.gpu_ms
-                            .iter()
-                            .filter(|(p, _)| p == pass)
-                            .map(|(_, ms)| *ms)
-                    })
+                    .flat_map(|r| r.iter().filter(|(p, _)| p == pass).map(|(_, ms)| *ms))
                     .collect();
                 median(values).map(|m| (pass.clone(), m))
             })
             .collect()
+    }
+
+    /// Bytes read back by the last window frame that submitted work, and the most over the
+    /// kept ones.
+    pub fn read_bytes(&self) -> Option<(u64, u64)> {
+        let last = *self.read_bytes.back()?;
+        Some((last, self.read_bytes.iter().copied().max().unwrap_or(last)))
     }
 
     /// Window frames per second over the last second of frames.
@@ -136,17 +161,24 @@ mod tests {
     #[test]
     fn medians_split_by_geometry_rebuilds() {
         let mut s = Stats::default();
-        s.render(10.0, Some(7.0), &[("light_pass".into(), 1.0)]);
+        s.submitted(1, 10.0, Some(7.0), 64);
         for ms in [2.0, 3.0, 4.0] {
-            s.render(ms, None, &[("light_pass".into(), ms / 2.0)]);
+            s.submitted(1, ms, None, 32);
+            s.gpu(vec![("shadow_map".into(), ms / 2.0)]);
         }
+        s.submitted(0, 0.0, None, 0);
         assert_eq!(s.median_wall_ms(true), Some(10.0));
         assert_eq!(s.median_geometry_ms(), Some(7.0));
         assert_eq!(s.median_wall_ms(false), Some(3.0));
-        assert_eq!(s.median_gpu_ms(), vec![("light_pass".to_string(), 1.5)]);
+        assert_eq!(s.median_gpu_ms(), vec![("shadow_map".to_string(), 1.5)]);
         assert_eq!(s.renders_total, 4);
+        assert_eq!(
+            s.read_bytes(),
+            Some((32, 64)),
+            "idle frames are not counted"
+        );
         for _ in 0..KEEP {
-            s.render(1.0, None, &[]);
+            s.submitted(1, 1.0, None, 0);
         }
         assert_eq!(s.renders.len(), KEEP);
     }

@@ -1,22 +1,22 @@
-//! The central panel: asks the render core for a frame when something changed (camera, light,
-//! an object, method, V(t), size) or while the reference converges, turns it into the chosen
-//! view, shows it (two methods split by a draggable divider if asked), and turns mouse input into
-//! camera moves, selection and scene edits.
+//! The central panel: records a frame when something changed (camera, light, an object, method,
+//! V(t), size, the reference's samples) into targets that stay on the GPU, draws the chosen view
+//! of it on the GPU into the texture the viewport shows (two methods split by a draggable divider
+//! if asked), probes the few values a person reads (the pixel under the cursor, the samples of an
+//! auto-fitted range), and turns mouse input into camera moves, selection and scene edits.
 
-use std::time::Instant;
-
-use eframe::egui::{
-    self, Color32, ColorImage, Pos2, Rect, Sense, TextureHandle, TextureOptions, Vec2,
-};
+use eframe::egui::{self, Color32, Pos2, Rect, Sense, Vec2};
 use glam::Vec3;
 
 use super::camera::{self, Projector};
 use super::doc::f3;
-use super::views::{self, Mapping, View};
 use super::{LabApp, Level, Selection};
 use crate::geometry::bvh::Bvh;
-use crate::geometry::light_view::LightView;
-use crate::render::{Frame, FrameRequest, Method, MethodParams};
+use crate::render::methods::reference::SAMPLES;
+use crate::render::passes::probe::ProbeRequest;
+use crate::render::passes::view::{Mapping, View, ViewParams};
+use crate::render::passes::view_twin::NO_DATA;
+use crate::render::session::FrameJob;
+use crate::render::{FrameRequest, Knobs, Method};
 use crate::scene::Camera;
 
 /// Everything that decides a frame's pixels.
@@ -25,33 +25,31 @@ struct RenderKey {
     request: FrameRequest,
     camera: Camera,
     revision: u64,
+    /// The reference snapshot the frame shades (the reference method only).
+    reference: u64,
 }
 
 /// Everything that decides how a frame is shown.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct DisplayKey {
-    serial: u64,
-    view: View,
-    channels: [bool; 4],
-    mapping: Option<Mapping>,
-    reference: Option<(u32, u32)>,
+struct ViewKey {
+    params: ViewParams,
+    /// The reference snapshot it compares with (the error view only).
+    reference: u64,
 }
 
-/// A frame from the render core and the texture that shows it.
+/// What a slot shows.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Shown {
-    pub frame: Frame,
     pub method: Method,
-    /// The D-buffer's light view for this frame (maps world points to texels).
-    pub light_view: LightView,
+    pub request: FrameRequest,
     /// The light the frame was rendered with.
     pub light: crate::scene::DiskLight,
-    /// Reference samples (done, total) when the frame was rendered, if a reference was running.
+    /// Reference samples (done, total) on the GPU when the frame was shown, if any.
     pub reference: Option<(u32, u32)>,
-    serial: u64,
-    texture: Option<TextureHandle>,
-    display: Option<DisplayKey>,
-    /// Why the current view cannot be drawn from this frame (e.g. no reference yet).
-    pub view_note: Option<String>,
+    /// Why the view cannot be drawn as asked (e.g. no reference yet).
+    pub note: Option<String>,
+    /// Bumped for every new frame the slot shows.
+    pub serial: u64,
 }
 
 /// What the mouse is doing in the viewport.
@@ -79,13 +77,16 @@ pub struct Hover {
 
 #[derive(Default)]
 pub struct ViewportState {
-    pub main: Option<Shown>,
-    pub split: Option<Shown>,
+    pub shown: [Option<Shown>; 2],
     pub rect: Option<Rect>,
     pub drag: Option<Drag>,
     pub hover: Option<Hover>,
     keys: [Option<RenderKey>; 2],
-    reference_key: Option<RenderKey>,
+    views: [Option<ViewKey>; 2],
+    /// The frame and view the last fit probe of each slot was for.
+    fitted: [Option<(RenderKey, View, [bool; 4])>; 2],
+    /// The pixel probed last, per slot, and the frame serial it was probed on.
+    probed: [Option<(u32, u32, u64, View)>; 2],
     serial: u64,
 }
 
@@ -93,13 +94,15 @@ pub struct ViewportState {
 pub const HIGHLIGHT: Color32 = Color32::from_rgb(255, 220, 60);
 
 impl LabApp {
-    pub(super) fn viewport_ui(&mut self, ui: &mut egui::Ui) {
+    pub(super) fn viewport_ui(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) {
         let ctx = ui.ctx().clone();
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
         response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "viewport"));
         self.viewport.rect = Some(rect);
-        ui.painter().rect_filled(rect, 0.0, views::NO_DATA);
+        let [r, g, b, _] = NO_DATA;
+        ui.painter()
+            .rect_filled(rect, 0.0, Color32::from_rgb(r, g, b));
         let ppp = ctx.pixels_per_point();
         let scale = self.settings.render_scale;
         let w = (rect.width() * ppp * scale).round().max(0.0) as u32;
@@ -109,11 +112,10 @@ impl LabApp {
             return;
         }
         self.interact(&ctx, &response, rect);
-        self.render_if_needed(&ctx, w, h);
-        self.update_textures(&ctx);
         let image_rect = self.image_rect(rect);
-        self.paint_frames(ui, image_rect);
         self.hover(&response, image_rect);
+        self.render_if_needed(&ctx, frame, w, h);
+        self.paint_frames(ui, image_rect);
         if self.settings.view != View::DBuffer {
             self.draw_overlays(ui.painter(), image_rect);
         }
@@ -130,7 +132,7 @@ impl LabApp {
     }
 
     /// Where the image goes inside the viewport: all of it, or a centred square for the
-    /// D-buffer (which is square).
+    /// light-space view (which is square).
     fn image_rect(&self, rect: Rect) -> Rect {
         if self.settings.view == View::DBuffer {
             let side = rect.width().min(rect.height());
@@ -144,120 +146,242 @@ impl LabApp {
         if let Some(e) = &self.render_error {
             return Some(e.clone());
         }
-        self.viewport
-            .main
-            .as_ref()
-            .and_then(|s| s.view_note.clone())
+        self.viewport.shown[0].as_ref().and_then(|s| s.note.clone())
     }
 
-    fn base_request(&self, width: u32, height: u32) -> FrameRequest {
+    pub(super) fn base_request(&self, width: u32, height: u32) -> FrameRequest {
+        let mut knobs = Knobs::default();
+        for (name, value) in &self.settings.knobs {
+            let _ = knobs.set(name, *value);
+        }
         FrameRequest {
             width,
             height,
             dbuffer_size: self.settings.dbuffer_size,
             method: self.settings.method(),
             vt: self.settings.vt(),
-            params: MethodParams {
-                reference_samples: self.settings.reference_samples,
-                reference_step: self
-                    .settings
-                    .reference_step
-                    .min(self.settings.reference_samples),
-                ..MethodParams::default()
-            },
-            read_dbuffer: true,
+            knobs: knobs.with(&SAMPLES, self.settings.reference_samples),
+            read_dbuffer: false,
         }
     }
 
-    fn render_if_needed(&mut self, ctx: &egui::Context, width: u32, height: u32) {
+    fn view_params(&self) -> ViewParams {
+        let view = self.settings.view;
+        ViewParams {
+            view,
+            channels: self.settings.channels,
+            mapping: self
+                .settings
+                .mapping(view)
+                .copied()
+                .unwrap_or_else(Mapping::unit),
+        }
+    }
+
+    fn render_if_needed(
+        &mut self,
+        ctx: &egui::Context,
+        frame: &eframe::Frame,
+        width: u32,
+        height: u32,
+    ) {
         let base = self.base_request(width, height);
-        let Some(core) = self.core.as_mut() else {
-            return;
-        };
-        core.set_camera(self.camera);
+        let params = self.view_params();
         let methods = [
             Some(self.settings.method()),
             self.settings.split.then(|| self.settings.split_method()),
         ];
-        if !self.settings.split {
-            self.viewport.split = None;
-            self.viewport.keys[1] = None;
-        }
+        let needs_reference = self.settings.needs_reference();
+        let hover = self.viewport.hover;
+        let revision = self.revision;
+        let camera = self.camera;
+        let Some(core) = self.core.as_mut() else {
+            return;
+        };
+        core.session.set_camera(camera);
         let mut errors = Vec::new();
-        for (slot, method) in methods.into_iter().enumerate() {
-            let Some(method) = method else { continue };
-            let request = FrameRequest { method, ..base };
-            let key = RenderKey {
-                request,
-                camera: self.camera,
-                revision: self.revision,
+
+        // The reference: rays on the worker thread, finished samples to the GPU.
+        let reference_request = FrameRequest {
+            method: Method::REFERENCE,
+            ..base
+        };
+        if needs_reference {
+            let key = core.session.reference_key(&reference_request);
+            core.worker.want(core.session.scene(), key);
+            if let Err(e) = core.take_reference() {
+                errors.push(format!("reference: {e}"));
+            }
+            if core.worker.busy() {
+                // Keep frames coming while it converges (new samples about every 90 ms).
+                ctx.request_repaint_after(std::time::Duration::from_millis(30));
+            }
+        } else {
+            core.worker.pause();
+        }
+        let reference_ready = core.session.has_reference(&reference_request);
+        let reference_serial = if reference_ready {
+            core.reference_serial
+        } else {
+            0
+        };
+        let progress = core
+            .session
+            .reference_progress()
+            .filter(|_| reference_ready);
+
+        let mut jobs_meta = Vec::new();
+        let [main_slot, split_slot] = &mut core.slots;
+        let mut jobs: Vec<FrameJob<'_>> = Vec::new();
+        for (i, (slot, method)) in [main_slot, split_slot].into_iter().zip(methods).enumerate() {
+            let Some(method) = method else {
+                self.viewport.shown[i] = None;
+                self.viewport.keys[i] = None;
+                self.viewport.views[i] = None;
+                continue;
             };
-            let converging = method == Method::Reference && core.converging();
-            if self.viewport.keys[slot] == Some(key) && !converging {
+            let request = FrameRequest { method, ..base };
+            if method.is_reference() && !reference_ready {
+                let shown = self.viewport.shown[i].get_or_insert_with(|| Shown {
+                    method,
+                    request,
+                    light: core.session.scene().light,
+                    reference: None,
+                    note: None,
+                    serial: 0,
+                });
+                shown.note = Some("reference: waiting for its first samples".into());
                 continue;
             }
-            self.viewport.keys[slot] = Some(key);
-            let builds = core.geometry_builds();
-            let t0 = Instant::now();
-            match core.frame(&request) {
-                Ok(frame) => {
-                    let wall_ms = t0.elapsed().as_secs_f64() * 1e3;
-                    let rebuilt = core.geometry_builds() != builds;
-                    let geometry_ms = rebuilt.then(|| core.geometry_ms());
-                    self.stats.render(wall_ms, geometry_ms, &frame.gpu_ms);
-                    self.viewport.serial += 1;
-                    let shown = Shown {
-                        light_view: *core.light_view(),
-                        light: core.scene().light,
-                        reference: core.reference_progress(),
-                        frame,
-                        method,
-                        serial: self.viewport.serial,
-                        texture: None,
-                        display: None,
-                        view_note: None,
-                    };
-                    let place = if slot == 0 {
-                        &mut self.viewport.main
-                    } else {
-                        &mut self.viewport.split
-                    };
-                    // Keep the texture: `set` on it is cheaper than a new one.
-                    let texture = place.take().and_then(|s| s.texture);
-                    *place = Some(Shown { texture, ..shown });
-                }
-                Err(e) => errors.push(format!("{method}: {e}")),
-            }
-        }
-        // The error view needs the reference even when neither side shows it.
-        if self.settings.view == View::Error && !self.settings.shows_reference() {
-            let request = FrameRequest {
-                method: Method::Reference,
-                ..base
-            };
             let key = RenderKey {
                 request,
-                camera: self.camera,
-                revision: self.revision,
+                camera,
+                revision,
+                reference: if method.is_reference() {
+                    reference_serial
+                } else {
+                    0
+                },
             };
-            if self.viewport.reference_key != Some(key) || core.converging() {
-                self.viewport.reference_key = Some(key);
-                if let Err(e) = core.advance_reference(&request) {
-                    errors.push(format!("reference: {e}"));
+            let view_key = ViewKey {
+                params,
+                reference: if params.view == View::Error {
+                    reference_serial
+                } else {
+                    0
+                },
+            };
+            let render = self.viewport.keys[i] != Some(key) || slot.targets.rendered.is_none();
+            let redraw = render || self.viewport.views[i] != Some(view_key);
+            let mut probes = Vec::new();
+            let serial = if render {
+                self.viewport.serial + 1
+            } else {
+                self.viewport.shown[i].as_ref().map_or(0, |s| s.serial)
+            };
+            if let Some(h) = hover.filter(|h| h.split == (i == 1)) {
+                let here = Some((h.x, h.y, serial, params.view));
+                if redraw || self.viewport.probed[i] != here {
+                    probes.push(ProbeRequest::Pixel {
+                        x: h.x,
+                        y: h.y,
+                        params,
+                    });
+                    self.viewport.probed[i] = here;
+                }
+            }
+            let fit_key = Some((key, params.view, params.channels));
+            if params.mapping.auto
+                && params.view != View::Final
+                && params.view != View::Classes
+                && (self.viewport.fitted[i] != fit_key
+                    || view_key.reference != self.viewport.views[i].map_or(0, |v| v.reference))
+            {
+                probes.push(ProbeRequest::Fit { params });
+                self.viewport.fitted[i] = fit_key;
+            }
+            if !redraw && probes.is_empty() {
+                continue;
+            }
+            if render {
+                self.viewport.serial += 1;
+            }
+            self.viewport.keys[i] = Some(key);
+            self.viewport.views[i] = Some(view_key);
+            let note = (params.view == View::Error && !reference_ready)
+                .then(|| "no reference of this size yet: the error view waits for it".to_string());
+            self.viewport.shown[i] = Some(Shown {
+                method,
+                request,
+                light: core.session.scene().light,
+                reference: progress,
+                note,
+                serial: self.viewport.serial,
+            });
+            jobs_meta.push((i, render));
+            jobs.push(FrameJob {
+                targets: &mut slot.targets,
+                request,
+                view: Some(params),
+                render,
+                probes,
+            });
+        }
+        let renders = jobs_meta.iter().filter(|(_, r)| *r).count();
+        if !jobs.is_empty() {
+            let builds = core.session.geometry_builds(base.method).0;
+            let t = std::time::Instant::now();
+            match core.session.submit(&core.ctx, &mut jobs) {
+                Ok(bytes) => {
+                    drop(jobs);
+                    let wall_ms = t.elapsed().as_secs_f64() * 1e3;
+                    let (after, geometry_ms) = core.session.geometry_builds(base.method);
+                    let rebuilt = (after != builds).then_some(geometry_ms);
+                    self.stats.submitted(renders, wall_ms, rebuilt, bytes);
+                }
+                Err(e) => errors.push(e.to_string()),
+            }
+        } else {
+            drop(jobs);
+            self.stats.submitted(0, 0.0, None, 0);
+        }
+        if let Some(rs) = frame.wgpu_render_state() {
+            core.register_textures(rs);
+        }
+        if let Some(timings) = core.session.poll_timings(&core.ctx) {
+            self.stats.gpu(timings);
+        }
+        for (i, results) in core.probe_results().into_iter().enumerate() {
+            for r in results {
+                match r.request {
+                    ProbeRequest::Pixel { x, y, params } => {
+                        self.inspector.arrived(i, x, y, params.view, r.values);
+                    }
+                    ProbeRequest::Fit { params } => {
+                        if let Some(m) = self.settings.mapping_mut(params.view) {
+                            let before = *m;
+                            m.fit(r.values.iter().copied());
+                            if *m != before {
+                                ctx.request_repaint();
+                            }
+                        }
+                    }
                 }
             }
         }
-        // Every shown frame reports the reference as it stands now (legend, inspector, and the
-        // error view redraws as it converges).
-        let progress = core.reference_progress();
-        for shown in [self.viewport.main.as_mut(), self.viewport.split.as_mut()]
-            .into_iter()
-            .flatten()
+        // Answers still on their way are picked up by the next frame.
+        if core
+            .slots
+            .iter()
+            .any(|s| s.targets.probe.as_ref().is_some_and(|p| p.pending()))
         {
-            shown.reference = progress;
-        }
-        if core.converging() && self.settings.needs_reference() {
             ctx.request_repaint();
+        }
+        // The light-space view of a method that keeps no such maps says so.
+        for shown in self.viewport.shown.iter_mut().flatten() {
+            if params.view == View::DBuffer && core.session.light_maps(shown.method).is_none() {
+                shown.note = Some(format!("{} keeps no light-space maps", shown.method));
+            }
         }
         if errors.is_empty() {
             self.render_error = None;
@@ -270,80 +394,32 @@ impl LabApp {
         }
     }
 
-    fn update_textures(&mut self, ctx: &egui::Context) {
-        let view = self.settings.view;
-        let channels = self.settings.channels;
-        let reference: Option<Vec<f32>> = if view == View::Error {
-            self.core
-                .as_ref()
-                .and_then(|c| c.reference_visibility().map(<[f32]>::to_vec))
-        } else {
-            None
-        };
-        for slot in 0..2 {
-            let mapping = self.settings.mapping(view).copied();
-            let shown = if slot == 0 {
-                self.viewport.main.as_mut()
-            } else {
-                self.viewport.split.as_mut()
-            };
-            let Some(shown) = shown else { continue };
-            let key = DisplayKey {
-                serial: shown.serial,
-                view,
-                channels,
-                mapping,
-                reference: shown.reference,
-            };
-            if shown.display == Some(key) && shown.texture.is_some() {
-                continue;
-            }
-            let mut mapping = mapping.unwrap_or_else(Mapping::unit);
-            let (image, note) =
-                view_image(shown, view, channels, &mut mapping, reference.as_deref());
-            if let Some(m) = self.settings.mapping_mut(view) {
-                *m = mapping;
-            }
-            shown.view_note = note;
-            shown.display = Some(DisplayKey {
-                mapping: self.settings.mapping(view).copied(),
-                ..key
-            });
-            match shown.texture.as_mut() {
-                Some(t) => t.set(image, TextureOptions::NEAREST),
-                None => {
-                    shown.texture = Some(ctx.load_texture(
-                        if slot == 0 { "lab-main" } else { "lab-split" },
-                        image,
-                        TextureOptions::NEAREST,
-                    ))
-                }
-            }
-        }
-    }
-
     fn split_x(&self, rect: Rect) -> Option<f32> {
-        (self.settings.split && self.viewport.split.is_some())
+        (self.settings.split && self.viewport.shown[1].is_some())
             .then(|| rect.left() + rect.width() * self.settings.split_at)
     }
 
     fn paint_frames(&self, ui: &egui::Ui, rect: Rect) {
         let painter = ui.painter();
-        let full = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
-        let Some(main) = self.viewport.main.as_ref() else {
+        let Some(core) = self.core.as_ref() else {
+            return;
+        };
+        let Some(main) = self.viewport.shown[0].as_ref() else {
             return;
         };
         let split_x = self.split_x(rect);
-        if let Some(t) = &main.texture {
+        let texture = |slot: usize| core.slots[slot].texture.map(|(id, _)| id);
+        if let Some(id) = texture(0) {
             match split_x {
                 None => {
-                    painter.image(t.id(), rect, full, Color32::WHITE);
+                    let full = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
+                    painter.image(id, rect, full, Color32::WHITE);
                 }
                 Some(x) => {
                     let s = self.settings.split_at;
                     let left = Rect::from_min_max(rect.min, Pos2::new(x, rect.bottom()));
                     let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(s, 1.0));
-                    painter.image(t.id(), left, uv, Color32::WHITE);
+                    painter.image(id, left, uv, Color32::WHITE);
                 }
             }
         }
@@ -356,12 +432,12 @@ impl LabApp {
                 Color32::WHITE,
             );
         };
-        if let (Some(x), Some(split)) = (split_x, self.viewport.split.as_ref()) {
-            if let Some(t) = &split.texture {
+        if let (Some(x), Some(split)) = (split_x, self.viewport.shown[1].as_ref()) {
+            if let Some(id) = texture(1) {
                 let s = self.settings.split_at;
                 let right = Rect::from_min_max(Pos2::new(x, rect.top()), rect.max);
                 let uv = Rect::from_min_max(Pos2::new(s, 0.0), Pos2::new(1.0, 1.0));
-                painter.image(t.id(), right, uv, Color32::WHITE);
+                painter.image(id, right, uv, Color32::WHITE);
             }
             painter.line_segment(
                 [Pos2::new(x, rect.top()), Pos2::new(x, rect.bottom())],
@@ -386,16 +462,14 @@ impl LabApp {
             return;
         };
         let split = self.split_x(rect).is_some_and(|x| pos.x >= x);
-        let shown = if split {
-            self.viewport.split.as_ref()
-        } else {
-            self.viewport.main.as_ref()
+        let Some(shown) = self.viewport.shown[usize::from(split)].as_ref() else {
+            return;
         };
-        let Some(shown) = shown else { return };
+        let r = &shown.request;
         let (w, h) = if self.settings.view == View::DBuffer {
-            (shown.frame.dbuffer_size, shown.frame.dbuffer_size)
+            (r.dbuffer_size, r.dbuffer_size)
         } else {
-            (shown.frame.width, shown.frame.height)
+            (r.width, r.height)
         };
         if let Some((x, y)) = camera::pixel_at(rect, pos, w, h) {
             self.viewport.hover = Some(Hover { split, x, y });
@@ -555,41 +629,5 @@ impl LabApp {
     pub fn screen_pos(&self, p: Vec3) -> Option<Pos2> {
         let rect = self.viewport.rect?;
         Projector::new(&self.camera, rect).point(p)
-    }
-}
-
-/// The image of `view` for one shown frame, and a note when the view cannot be drawn.
-fn view_image(
-    shown: &Shown,
-    view: View,
-    channels: [bool; 4],
-    mapping: &mut Mapping,
-    reference: Option<&[f32]>,
-) -> (ColorImage, Option<String>) {
-    let f = &shown.frame;
-    let fallback = || views::final_image(f);
-    match view {
-        View::Final => (views::final_image(f), None),
-        View::Visibility => (views::scalar_image(f, &f.visibility, mapping), None),
-        View::T => (views::scalar_image(f, &f.t, mapping), None),
-        View::Classes => (views::classes_image(f), None),
-        View::Error => {
-            let reference = if shown.method == Method::Reference {
-                Some(f.visibility.as_slice())
-            } else {
-                reference
-            };
-            match reference.and_then(|r| views::error_image(f, r, mapping)) {
-                Some(img) => (img, None),
-                None => (
-                    fallback(),
-                    Some("no reference of this size yet: the error view waits for it".into()),
-                ),
-            }
-        }
-        View::DBuffer => match views::dbuffer_image(f, channels, mapping) {
-            Some(img) => (img, None),
-            None => (fallback(), Some("this frame carries no D-buffer".into())),
-        },
     }
 }

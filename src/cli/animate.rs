@@ -24,7 +24,7 @@ use anyhow::{bail, Context, Result};
 use dbuffer::geometry::VtVariant;
 use dbuffer::output::{self, Staged};
 use dbuffer::render::offline::Offline;
-use dbuffer::render::{FrameRequest, Method};
+use dbuffer::render::{FrameRequest, Method, Session};
 use dbuffer::scene::{self, Camera, DiskLight, Scene};
 use glam::{Quat, Vec3};
 
@@ -95,8 +95,8 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
     let method: Method = args.method.parse().map_err(anyhow::Error::msg)?;
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
-    let params = args.knobs.params()?;
-    let mut scene =
+    let knobs = args.knobs.knobs()?;
+    let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
     let request = FrameRequest {
         width,
@@ -104,8 +104,8 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
         dbuffer_size: args.dbuffer_size,
         method,
         vt,
-        params,
-        ..FrameRequest::default()
+        knobs,
+        read_dbuffer: false,
     };
     let poses = Poses::new(&scene, orbit);
     if let Some(note) = &poses.note {
@@ -125,15 +125,19 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
     let mut writer = encoder.write_header().context("writing the APNG header")?;
 
     let mut offline = Offline::new()?;
+    // One session for the whole orbit: meshes uploaded and casters prepared once, only the
+    // light-dependent work redone per frame.
+    let name = scene.name.clone();
+    let mut session = offline.session(scene);
     let progress = Progress::new("animate", args.frames as u64, "frames");
     progress.stage(&format!(
-        "{}, the {} orbiting, {width}x{height}, {method}",
-        scene.name, args.orbit
+        "{name}, the {} orbiting, {width}x{height}, {method}",
+        args.orbit
     ));
     let mut warned: Vec<String> = Vec::new();
     for k in 0..args.frames {
-        poses.apply(&mut scene, k, args.frames);
-        let (rgb, warnings) = render_rgb8(&mut offline, &scene, &request)?;
+        poses.apply(&mut session, k, args.frames);
+        let (rgb, warnings) = render_rgb8(&mut offline, &mut session, &request)?;
         for w in warnings {
             if !warned.contains(&w) {
                 progress.stage(&format!("warning: {w}"));
@@ -169,16 +173,16 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
 /// 8-bit sRGB bytes and the render's warnings.
 fn render_rgb8(
     offline: &mut Offline,
-    scene: &Scene,
+    session: &mut Session,
     request: &FrameRequest,
 ) -> Result<(Vec<u8>, Vec<String>)> {
-    let (_, outputs) = offline.render(&scene.name, scene, request)?;
-    let rgb = outputs
+    let (frame, report) = offline.render_in(session, request)?;
+    let rgb = frame
         .color
         .iter()
-        .flat_map(|c| c.map(output::linear_to_srgb8))
+        .flat_map(|c| [c[0], c[1], c[2]])
         .collect();
-    Ok((rgb, outputs.meta.warnings))
+    Ok((rgb, report.warnings))
 }
 
 /// `frame-0007.png`.
@@ -251,8 +255,17 @@ impl Poses {
         }
     }
 
-    /// Put frame `k` of `n`'s light or camera into `scene`.
-    pub fn apply(&self, scene: &mut Scene, k: usize, n: usize) {
+    /// Put frame `k` of `n`'s light or camera into `session`.
+    pub fn apply(&self, session: &mut Session, k: usize, n: usize) {
+        let (light, camera) = self.at(k, n);
+        match self.orbit {
+            Orbit::Light => session.set_light(light),
+            Orbit::Camera => session.set_camera(camera),
+        }
+    }
+
+    /// Frame `k` of `n`'s light and camera (the one that does not orbit stays as it was).
+    pub fn at(&self, k: usize, n: usize) -> (DiskLight, Camera) {
         let angle = std::f32::consts::TAU * k as f32 / n.max(1) as f32;
         let turn = Quat::from_rotation_y(angle);
         let about = |p: Vec3| {
@@ -260,19 +273,21 @@ impl Poses {
             axis + turn * (p - axis)
         };
         match self.orbit {
-            Orbit::Light => {
-                scene.light = DiskLight {
+            Orbit::Light => (
+                DiskLight {
                     center: about(self.light.center),
                     normal: (turn * self.light.normal).normalize_or(self.light.normal),
                     ..self.light
-                };
-            }
-            Orbit::Camera => {
-                scene.camera = Camera {
+                },
+                self.camera,
+            ),
+            Orbit::Camera => (
+                self.light,
+                Camera {
                     eye: about(self.camera.eye),
                     ..self.camera
-                };
-            }
+                },
+            ),
         }
     }
 }
@@ -302,15 +317,14 @@ mod tests {
 
     #[test]
     fn the_light_keeps_its_height_distance_and_relative_tilt() {
-        let mut scene = scene::load("fig7-concave").unwrap();
+        let scene = scene::load("fig7-concave").unwrap();
         let poses = Poses::new(&scene, Orbit::Light);
         let start = scene.light;
         let centre = casters_centre(&scene).unwrap();
         let axis_dist = |p: Vec3| Vec3::new(p.x - centre.x, 0.0, p.z - centre.z).length();
         let mut last = start.center;
         for k in 0..8 {
-            poses.apply(&mut scene, k, 8);
-            let l = scene.light;
+            let (l, _) = poses.at(k, 8);
             assert!((l.center.y - poses.light.center.y).abs() < 1e-5);
             assert!((axis_dist(l.center) - axis_dist(poses.light.center)).abs() < 1e-4);
             // The normal keeps its angle to the direction toward the axis.
@@ -324,8 +338,7 @@ mod tests {
             }
             last = l.center;
         }
-        poses.apply(&mut scene, 0, 8);
-        assert!((scene.light.center - poses.light.center).length() < 1e-6);
+        assert!((poses.at(0, 8).0.center - poses.light.center).length() < 1e-6);
     }
 
     #[test]
@@ -340,9 +353,10 @@ mod tests {
         let poses = Poses::new(&scene, Orbit::Camera);
         let target = scene.camera.target;
         let d0 = (scene.camera.eye - target).length();
-        poses.apply(&mut scene, 3, 12);
-        assert_eq!(scene.camera.target, target);
-        assert!(((scene.camera.eye - target).length() - d0).abs() < 1e-4);
+        let (_, camera) = poses.at(3, 12);
+        assert_eq!(camera.target, target);
+        assert!(((camera.eye - target).length() - d0).abs() < 1e-4);
+        assert!((camera.eye - scene.camera.eye).length() > 1e-3);
     }
 
     #[test]

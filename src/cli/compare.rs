@@ -24,7 +24,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let (width, height) = parse_size(args.size)?;
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
-    let params = args.knobs.params()?;
+    let knobs = args.knobs.knobs()?;
     let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
     let mut offline = Offline::new()?;
@@ -35,7 +35,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         height,
         dbuffer_size: args.dbuffer_size,
         vt,
-        params,
+        knobs,
     };
     let comparison = compare::run(&mut offline, &scene.name, &scene, &request, |what| {
         eprintln!("rendering {what}")

@@ -8,8 +8,9 @@ use anyhow::{bail, Context, Result};
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
 use dbuffer::output;
+use dbuffer::render::methods::all_knobs;
 use dbuffer::render::offline::Offline;
-use dbuffer::render::{FrameRequest, Method, MethodParams};
+use dbuffer::render::{FrameRequest, Knobs, Method};
 use dbuffer::scene;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -21,74 +22,61 @@ mod progress;
 pub use animate::{animate, AnimateArgs};
 pub use compare::{compare, CompareArgs};
 
-/// The knobs of the comparison methods, as flags of `render` and `compare`.
-#[derive(clap::Args, Clone, Debug)]
+/// The knobs of every method of the registry, as flags of `render` and `compare`
+/// (`--pcf-radius`, `--lights`, …): each method's module declares its own.
+#[derive(Clone, Debug, Default)]
 pub struct MethodFlags {
-    /// pcf: kernel radius in shadow-map texels ((2R+1)² taps), 0 to 8.
-    #[arg(long, default_value_t = MethodParams::default().pcf_radius)]
-    pub pcf_radius: u32,
-    /// pcss: blocker-search taps (rotated Poisson disk), 1 to 64.
-    #[arg(long, default_value_t = MethodParams::default().pcss_blocker_taps)]
-    pub blocker_taps: u32,
-    /// pcss: filter taps (rotated Poisson disk), 1 to 64.
-    #[arg(long, default_value_t = MethodParams::default().pcss_filter_taps)]
-    pub filter_taps: u32,
-    /// sampled: shadow maps from this many stratified points on the disk, 1 to 64.
-    #[arg(long, default_value_t = MethodParams::default().sampled_lights)]
-    pub lights: u32,
-    /// reference: rays to this many stratified disk samples per pixel (K).
-    #[arg(long, default_value_t = MethodParams::default().reference_samples)]
-    pub samples: u32,
+    /// The knobs given on the command line.
+    pub given: Vec<(&'static str, u32)>,
+}
+
+impl clap::FromArgMatches for MethodFlags {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        Ok(MethodFlags {
+            given: all_knobs()
+                .into_iter()
+                .filter_map(|k| m.get_one::<u32>(k.name).map(|v| (k.name, *v)))
+                .collect(),
+        })
+    }
+
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+impl clap::Args for MethodFlags {
+    fn augment_args(mut cmd: clap::Command) -> clap::Command {
+        for k in all_knobs() {
+            cmd = cmd.arg(
+                clap::Arg::new(k.name)
+                    .long(k.name)
+                    .value_name("N")
+                    .value_parser(clap::value_parser!(u32))
+                    .help(format!(
+                        "{}, {} to {} (default {})",
+                        k.help, k.min, k.max, k.default
+                    )),
+            );
+        }
+        cmd
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
 }
 
 impl MethodFlags {
     /// The knobs, each checked against its range (the message names the flag).
-    pub fn params(&self) -> Result<MethodParams> {
-        let checks = [
-            (
-                "--pcf-radius",
-                self.pcf_radius,
-                0,
-                dbuffer::render::frame::MAX_PCF_RADIUS,
-            ),
-            (
-                "--blocker-taps",
-                self.blocker_taps,
-                1,
-                dbuffer::render::frame::MAX_TAPS,
-            ),
-            (
-                "--filter-taps",
-                self.filter_taps,
-                1,
-                dbuffer::render::frame::MAX_TAPS,
-            ),
-            (
-                "--lights",
-                self.lights,
-                1,
-                dbuffer::render::frame::MAX_SAMPLED_LIGHTS,
-            ),
-            (
-                "--samples",
-                self.samples,
-                1,
-                dbuffer::render::frame::MAX_REFERENCE_SAMPLES,
-            ),
-        ];
-        for (flag, value, lo, hi) in checks {
-            if !(lo..=hi).contains(&value) {
-                bail!("{flag} expects {lo} to {hi}, found {value}");
-            }
+    pub fn knobs(&self) -> Result<Knobs> {
+        let mut knobs = Knobs::default();
+        for &(name, value) in &self.given {
+            knobs.set(name, value).map_err(anyhow::Error::msg)?;
         }
-        Ok(MethodParams {
-            pcf_radius: self.pcf_radius,
-            pcss_blocker_taps: self.blocker_taps,
-            pcss_filter_taps: self.filter_taps,
-            sampled_lights: self.lights,
-            reference_samples: self.samples,
-            ..MethodParams::default()
-        })
+        knobs.validate().map_err(anyhow::Error::msg)?;
+        Ok(knobs)
     }
 }
 
@@ -116,7 +104,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let method: Method = args.method.parse().map_err(anyhow::Error::msg)?;
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
-    let params = args.knobs.params()?;
+    let knobs = args.knobs.knobs()?;
     let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
     let mut offline = Offline::new()?;
@@ -129,24 +117,36 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         dbuffer_size: args.dbuffer_size,
         method,
         vt,
-        params,
-        ..FrameRequest::default()
+        knobs,
+        read_dbuffer: true,
     };
-    if method == Method::Reference {
+    if method.is_reference() {
         offline.progress = Some(progress::reference_samples());
     }
-    let (_, outputs) = offline.render(&scene.name, &scene, &request)?;
-    for w in &outputs.meta.warnings {
+    let name = scene.name.clone();
+    let mut session = offline.session(scene);
+    let (frame, report) = offline.render_in(&mut session, &request)?;
+    let meta = output::render_meta(
+        &name,
+        session.scene(),
+        &request,
+        &offline.ctx,
+        &frame,
+        &report,
+    );
+    for w in &meta.warnings {
         eprintln!("warning   {w}");
     }
     if args.verbose {
-        for (stage, ms) in &outputs.meta.cpu_ms {
+        for (stage, ms) in &meta.cpu_ms {
             eprintln!("cpu ms    {stage:<20} {ms:8.3}");
         }
-        for (pass, ms) in &outputs.meta.gpu_ms {
+        for (pass, ms) in &meta.gpu_ms {
             eprintln!("gpu ms    {pass:<20} {ms:8.3}");
         }
     }
+    let outputs = output::RenderOutputs::from_frame(&frame, meta);
+    drop(frame);
     let written = output::write_render(args.out, &outputs)?;
     if args.verbose {
         for path in written {

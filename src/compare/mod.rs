@@ -13,8 +13,9 @@ use std::time::Instant;
 use crate::geometry::bvh::Bvh;
 use crate::geometry::metrics::{self, Metrics};
 use crate::geometry::{view, VtVariant};
+use crate::render::methods::reference::SAMPLES;
 use crate::render::offline::Offline;
-use crate::render::{Frame, FrameRequest, Method, MethodParams, RenderError};
+use crate::render::{Frame, FrameRequest, Knobs, Method, RenderError};
 use crate::scene::Scene;
 
 /// What to compare.
@@ -25,8 +26,15 @@ pub struct CompareRequest {
     pub dbuffer_size: u32,
     /// The V(t) variant of the D-buffer methods.
     pub vt: VtVariant,
-    /// The knobs of every method; `reference_samples` is the reference's K.
-    pub params: MethodParams,
+    /// The knobs of every method; the reference's `samples` is its K.
+    pub knobs: Knobs,
+}
+
+impl CompareRequest {
+    /// The reference's disk samples per pixel.
+    pub fn samples(&self) -> u32 {
+        self.knobs.get(&SAMPLES)
+    }
 }
 
 /// One method measured against the reference.
@@ -52,7 +60,7 @@ pub struct Comparison {
     pub request: CompareRequest,
     /// The pixels that count.
     pub mask: Vec<bool>,
-    /// The reference first, then every other method in [`Method::ALL`] order.
+    /// The reference first, then every other method in registry order.
     pub results: Vec<MethodResult>,
     /// Reference shadow rays per second (all cores).
     pub reference_rays_per_s: f64,
@@ -64,7 +72,7 @@ impl Comparison {
     }
 }
 
-/// Render the reference and every method; `progress` hears what is being done.
+/// Render the reference and every method in one session; `progress` hears what is being done.
 pub fn run(
     offline: &mut Offline,
     name: &str,
@@ -72,24 +80,26 @@ pub fn run(
     request: &CompareRequest,
     mut progress: impl FnMut(&str),
 ) -> Result<Comparison, RenderError> {
-    request.params.validate().map_err(RenderError::Request)?;
+    request.knobs.validate().map_err(RenderError::Request)?;
     let frame_request = |method| FrameRequest {
         width: request.width,
         height: request.height,
         dbuffer_size: request.dbuffer_size,
         method,
         vt: request.vt,
-        params: request.params,
+        knobs: request.knobs,
         read_dbuffer: false,
     };
-    let k = request.params.reference_samples;
+    let k = request.samples();
     progress(&format!(
         "reference: {} rays per pixel over {}x{}",
         k, request.width, request.height
     ));
-    let (reference, ref_out) = offline.render(name, scene, &frame_request(Method::Reference))?;
-    let rays_ms = cpu(&ref_out.meta.cpu_ms, "reference_rays");
-    let hit_pixels = reference.position.iter().filter(|p| p[3] > 0.5).count();
+    let mut session = offline.session(scene.clone());
+    let (reference, ref_report) =
+        offline.render_in(&mut session, &frame_request(Method::REFERENCE))?;
+    let rays_ms = cpu(&ref_report.cpu_ms, "reference_rays");
+    let hit_pixels = ref_report.reference_rays.map_or(0, |(_, n)| n);
     let reference_rays_per_s = hit_pixels as f64 * f64::from(k) / (rays_ms.max(1e-9) * 1e-3);
 
     let receivers = view::receivers(
@@ -100,40 +110,37 @@ pub fn run(
     );
     let mask: Vec<bool> = receivers
         .iter()
-        .zip(&reference.position)
-        .map(|(r, p)| p[3] > 0.5 && r.is_some_and(|r| r.faces_light))
+        .enumerate()
+        .map(|(i, r)| reference.hit(i) && r.is_some_and(|r| r.faces_light))
         .collect();
 
     let mut results = vec![MethodResult {
-        method: Method::Reference,
+        method: Method::REFERENCE,
         metrics: metrics::compare(&reference.visibility, &reference.visibility, &mask),
         gpu_ms: gpu_total(&reference),
         cpu_ms: rays_ms,
-        wall_ms: cpu(&ref_out.meta.cpu_ms, "frame_and_readback"),
+        wall_ms: cpu(&ref_report.cpu_ms, "frame_and_readback"),
         frame: reference,
     }];
-    for method in Method::ALL {
-        if method == Method::Reference {
+    for &method in Method::all() {
+        if method.is_reference() {
             continue;
         }
         progress(&format!("{method}: {}", method.description()));
         let req = frame_request(method);
         // The first frame of a pipeline includes shader compilation on some drivers: time the
-        // second.
-        offline.render(name, scene, &req)?;
+        // second, with its light-space passes made again.
+        offline.render_in(&mut session, &req)?;
+        session.invalidate_light_maps();
         let t = Instant::now();
-        let (frame, out) = offline.render(name, scene, &req)?;
+        let (frame, _) = offline.render_in(&mut session, &req)?;
         let wall_ms = t.elapsed().as_secs_f64() * 1e3;
-        let cpu_ms = if matches!(method, Method::DBuffer | Method::DBufferCenter) {
-            cpu(&out.meta.cpu_ms, "geometry_volumes")
-        } else {
-            0.0
-        };
+        let (builds, geometry_ms) = session.geometry_builds(method);
         results.push(MethodResult {
             method,
             metrics: metrics::compare(&results[0].frame.visibility, &frame.visibility, &mask),
             gpu_ms: gpu_total(&frame),
-            cpu_ms,
+            cpu_ms: if builds > 0 { geometry_ms } else { 0.0 },
             wall_ms,
             frame,
         });

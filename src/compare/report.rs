@@ -58,7 +58,7 @@ fn files(method: Method) -> (String, String, Option<String>) {
     (
         format!("{n}.png"),
         format!("{n}-visibility.exr"),
-        (method != Method::Reference).then(|| format!("{n}-error.png")),
+        (!method.is_reference()).then(|| format!("{n}-error.png")),
     )
 }
 
@@ -71,7 +71,7 @@ impl Report {
             height: c.request.height,
             dbuffer_size: c.request.dbuffer_size,
             vt: c.request.vt.name().to_string(),
-            samples: c.request.params.reference_samples,
+            samples: c.request.samples(),
             reference_rays_per_s: c.reference_rays_per_s,
             pixels: c.mask.iter().filter(|&&m| m).count(),
             methods: c.results.iter().map(row).collect(),

@@ -32,6 +32,13 @@ impl LightView {
         self.projection * self.view
     }
 
+    /// The slope (tangent) one texel of a `size`² map spans, the larger of its two axes.
+    pub fn texel_slope(&self, size: u32) -> f32 {
+        let w = 2.0 / self.projection.x_axis.x;
+        let h = 2.0 / self.projection.y_axis.y;
+        w.abs().max(h.abs()) / size.max(1) as f32
+    }
+
     /// Fit to the scene's casters; with no caster, a 90° cone around the light normal.
     pub fn fit(scene: &Scene) -> LightView {
         let light = scene.light;

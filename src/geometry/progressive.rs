@@ -99,6 +99,11 @@ impl ProgressiveReference {
     pub fn oracle(&self) -> &Oracle {
         &self.oracle
     }
+
+    /// The point under each pixel (`None` where no surface was hit).
+    pub fn points(&self) -> &[Option<Vec3>] {
+        &self.points
+    }
 }
 
 /// The `i`-th index of a permutation of `0..k` by a stride near `k / φ` that is coprime to `k`.

@@ -97,6 +97,16 @@ impl VtVariant {
         }
     }
 
+    /// Small integer code, the same one the GPU reads (`VT_*` in `shaders/shared/camera.wgsl`).
+    pub fn code(self) -> u32 {
+        match self {
+            VtVariant::Smoothstep => 0,
+            VtVariant::Sqrt => 1,
+            VtVariant::Exact => 2,
+            VtVariant::Linear => 3,
+        }
+    }
+
     /// `V(t)`, with `t` clamped to `[0, 1]`.
     pub fn apply(self, t: f64) -> f64 {
         let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };

@@ -1,6 +1,12 @@
 //! The GPU device the render core draws with: headless here (no surface), or handed over by
 //! eframe in the lab. Any adapter works, a CPU one (lavapipe) included.
+//!
+//! Besides the device and queue it keeps the objects that live as long as the device: each pass's
+//! pipelines and layouts, built once on first use and shared by every [`super::Session`] on it
+//! ([`GpuContext::shared`]), so a new scene never compiles a shader again.
 
+use std::any::{Any, TypeId};
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use super::RenderError;
@@ -14,6 +20,27 @@ pub struct GpuContext {
     pub timestamps: bool,
     /// Validation errors no error scope caught, kept instead of panicking.
     uncaptured: Arc<Mutex<Vec<String>>>,
+    /// Device-lifetime pass objects by type and name ([`GpuContext::shared`]).
+    shared: Mutex<HashMap<(TypeId, &'static str), Arc<dyn Any + Send + Sync>>>,
+}
+
+/// The limits the render core asks of an adapter: everything the adapter supports where it
+/// matters for size (buffers, textures), so every image, D-buffer and mesh inside the budget that
+/// the adapter can hold works, not only what wgpu's portable defaults allow.
+pub fn wanted_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
+    wgpu::Limits {
+        max_texture_dimension_2d: adapter.max_texture_dimension_2d,
+        max_texture_array_layers: adapter.max_texture_array_layers,
+        max_buffer_size: adapter.max_buffer_size,
+        max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
+        max_uniform_buffer_binding_size: adapter.max_uniform_buffer_binding_size,
+        ..wgpu::Limits::default().using_resolution(adapter.clone())
+    }
+}
+
+/// The features the render core uses when the adapter has them.
+pub fn wanted_features(adapter: wgpu::Features) -> wgpu::Features {
+    adapter & wgpu::Features::TIMESTAMP_QUERY
 }
 
 impl GpuContext {
@@ -31,15 +58,13 @@ impl GpuContext {
         Self::from_adapter(&adapter)
     }
 
-    /// Open a device on `adapter` with the features the render core uses when present.
+    /// Open a device on `adapter` with the features and limits the render core uses.
     pub fn from_adapter(adapter: &wgpu::Adapter) -> Result<GpuContext, RenderError> {
         let info = adapter.get_info();
-        let wanted = wgpu::Features::TIMESTAMP_QUERY;
-        let features = adapter.features() & wanted;
         let desc = wgpu::DeviceDescriptor {
             label: Some("dbuffer::device"),
-            required_features: features,
-            required_limits: wgpu::Limits::default().using_resolution(adapter.limits()),
+            required_features: wanted_features(adapter.features()),
+            required_limits: wanted_limits(&adapter.limits()),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
@@ -65,6 +90,7 @@ impl GpuContext {
             adapter,
             timestamps,
             uncaptured,
+            shared: Mutex::new(HashMap::new()),
         }
     }
 
@@ -82,5 +108,45 @@ impl GpuContext {
             .lock()
             .map(|mut e| std::mem::take(&mut *e))
             .unwrap_or_default()
+    }
+
+    /// The device-lifetime object of type `T` (a pass's pipelines and layouts), made by `make`
+    /// on first use.
+    pub fn shared<T: Any + Send + Sync>(&self, make: impl FnOnce(&wgpu::Device) -> T) -> Arc<T> {
+        self.shared_named("", make)
+    }
+
+    /// [`GpuContext::shared`] for several objects of one type, told apart by `name`.
+    pub fn shared_named<T: Any + Send + Sync>(
+        &self,
+        name: &'static str,
+        make: impl FnOnce(&wgpu::Device) -> T,
+    ) -> Arc<T> {
+        let key = (TypeId::of::<T>(), name);
+        if let Some(found) = self
+            .shared
+            .lock()
+            .ok()
+            .and_then(|m| m.get(&key).cloned())
+            .and_then(|a| a.downcast::<T>().ok())
+        {
+            return found;
+        }
+        // Built outside the lock: making a pipeline may itself ask for another shared object.
+        let made = Arc::new(make(&self.device));
+        if let Ok(mut m) = self.shared.lock() {
+            m.insert(key, made.clone());
+        }
+        made
+    }
+
+    /// The largest 2D texture side the device takes.
+    pub fn max_texture_side(&self) -> u32 {
+        self.device.limits().max_texture_dimension_2d
+    }
+
+    /// The largest buffer the device takes.
+    pub fn max_buffer_size(&self) -> u64 {
+        self.device.limits().max_buffer_size
     }
 }

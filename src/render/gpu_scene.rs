@@ -1,72 +1,102 @@
-//! The scene on the GPU: every surface triangle (flat-shaded, both passes) and each caster's
-//! umbra and penumbra volumes (the light pass). Surfaces are uploaded once per scene; volumes again
-//! whenever the geometry stage ran (the light or a caster moved).
+//! The scene's surfaces on the GPU, uploaded once per scene (again when an object moves): every
+//! object's indexed triangles (position and albedo per vertex; passes that shade take the flat
+//! normal from the screen-space derivatives of the position), split into chunks no larger than
+//! the device's buffer limit allows, so meshes of tens of millions of triangles upload and draw.
 
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
-use super::{SurfaceVertex, VolumeVertex};
-use crate::geometry::{CasterGeometry, SceneGeometry};
+use super::SurfaceVertex;
 use crate::scene::Scene;
 
 /// Albedo of casters and of receivers-only objects (the ground).
-const CASTER_ALBEDO: f32 = 0.75;
-const RECEIVER_ALBEDO: f32 = 0.85;
+pub const CASTER_ALBEDO: f32 = 0.75;
+pub const RECEIVER_ALBEDO: f32 = 0.85;
 
-/// A vertex buffer and how many vertices it holds (`None` when empty: wgpu has no empty buffers).
-pub struct VertexBuffer {
-    pub buffer: Option<wgpu::Buffer>,
-    pub count: u32,
+/// The largest buffer one chunk uses, at most the device's own limit: uploads go through a
+/// staging copy of each buffer, so smaller chunks keep the peak memory of an upload low.
+pub const CHUNK_BYTES: u64 = 128 << 20;
+
+/// An indexed piece of the surfaces.
+struct SurfaceChunk {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
 }
 
-impl VertexBuffer {
-    fn new<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, data: &[T]) -> VertexBuffer {
-        let buffer = (!data.is_empty()).then(|| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytemuck::cast_slice(data),
-                usage: wgpu::BufferUsages::VERTEX,
+/// Non-indexed vertices (volume triangles), in chunks of whole triangles.
+pub struct VertexChunks {
+    chunks: Vec<(wgpu::Buffer, u32)>,
+    /// Vertices over all chunks.
+    pub count: u64,
+}
+
+impl VertexChunks {
+    pub fn new<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, data: &[T]) -> VertexChunks {
+        let size = std::mem::size_of::<T>().max(1) as u64;
+        let limit = CHUNK_BYTES.min(device.limits().max_buffer_size);
+        // Whole triangles per chunk.
+        let per_chunk = ((limit / size) / 3 * 3).max(3) as usize;
+        let chunks = data
+            .chunks(per_chunk)
+            .map(|piece| {
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: bytemuck::cast_slice(piece),
+                    usage: wgpu::BufferUsages::VERTEX,
+                });
+                (buffer, piece.len() as u32)
             })
-        });
-        VertexBuffer {
-            buffer,
-            count: data.len() as u32,
+            .collect();
+        VertexChunks {
+            chunks,
+            count: data.len() as u64,
         }
     }
 
-    /// Draw all vertices, if any.
+    pub fn empty() -> VertexChunks {
+        VertexChunks {
+            chunks: Vec::new(),
+            count: 0,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// Draw every vertex, chunk by chunk, into vertex buffer slot 0.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
-        self.draw_instances(pass, 0..1);
-    }
-
-    /// Draw all vertices for each of `instances` (a shader may read its `instance_index`).
-    pub fn draw_instances(&self, pass: &mut wgpu::RenderPass<'_>, instances: std::ops::Range<u32>) {
-        if let Some(b) = &self.buffer {
-            pass.set_vertex_buffer(0, b.slice(..));
-            pass.draw(0..self.count, instances);
+        for (buffer, count) in &self.chunks {
+            pass.set_vertex_buffer(0, buffer.slice(..));
+            pass.draw(0..*count, 0..1);
         }
     }
-}
-
-/// One caster's volumes on the GPU.
-pub struct CasterVolumes {
-    pub umbra: VertexBuffer,
 }
 
 pub struct GpuScene {
-    pub surfaces: VertexBuffer,
-    pub casters: Vec<CasterVolumes>,
-    /// Every caster's penumbra triangles: one rule (nearest entry) over all of them.
-    pub penumbra: VertexBuffer,
+    chunks: Vec<SurfaceChunk>,
     /// Bounds `(min, max)` of every surface, taken once at upload (the camera's depth range is
     /// derived from them each frame).
     pub bounds: (Vec3, Vec3),
+    pub triangles: u64,
 }
 
 impl GpuScene {
-    pub fn new(device: &wgpu::Device, scene: &Scene, geometry: &SceneGeometry) -> GpuScene {
-        let mut surfaces = Vec::new();
+    pub fn new(device: &wgpu::Device, scene: &Scene) -> GpuScene {
+        let limit = CHUNK_BYTES.min(device.limits().max_buffer_size);
+        let vertex_size = std::mem::size_of::<SurfaceVertex>() as u64;
+        // A chunk of n triangles holds at most 3n vertices and 3n indices.
+        let max_triangles = (limit / (3 * vertex_size.max(4))).max(1) as usize;
+        let mut builder = ChunkBuilder {
+            device,
+            max_triangles,
+            vertices: Vec::new(),
+            indices: Vec::new(),
+            chunks: Vec::new(),
+        };
         let mut bounds = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        let mut triangles = 0u64;
         for object in &scene.objects {
             if let Some((lo, hi)) = object.mesh.bounds() {
                 bounds = (bounds.0.min(lo), bounds.1.max(hi));
@@ -76,66 +106,113 @@ impl GpuScene {
             } else {
                 RECEIVER_ALBEDO
             };
-            for tri in object.mesh.triangle_corners() {
-                let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
-                surfaces.extend(tri.map(|p| SurfaceVertex {
-                    position: p.to_array(),
-                    albedo,
-                    normal: n.to_array(),
-                    _pad: 0.0,
-                }));
-            }
+            triangles += object.mesh.triangles.len() as u64;
+            builder.add(&object.mesh.positions, &object.mesh.triangles, albedo);
         }
-        let mut gpu = GpuScene {
-            surfaces: VertexBuffer::new(device, "GpuScene::surfaces", &surfaces),
-            casters: Vec::new(),
-            penumbra: VertexBuffer::new::<VolumeVertex>(device, "GpuScene::penumbra", &[]),
+        builder.flush();
+        GpuScene {
+            chunks: builder.chunks,
             bounds,
-        };
-        gpu.set_volumes(device, geometry);
-        gpu
+            triangles,
+        }
     }
 
-    /// Replace the volumes after the geometry stage ran again.
-    pub fn set_volumes(&mut self, device: &wgpu::Device, geometry: &SceneGeometry) {
-        let mut penumbra = Vec::new();
-        self.casters = geometry
-            .casters
-            .iter()
-            .map(|g| {
-                let (umbra, pen) = volume_vertices(g);
-                penumbra.extend(pen);
-                CasterVolumes {
-                    umbra: VertexBuffer::new(device, "GpuScene::umbra", &umbra),
-                }
-            })
-            .collect();
-        self.penumbra = VertexBuffer::new(device, "GpuScene::penumbra", &penumbra);
+    /// Draw every surface triangle (vertex buffer slot 0, indexed).
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        self.draw_instances(pass, 0..1);
+    }
+
+    /// Draw every surface triangle for each of `instances` (a shader may read its
+    /// `instance_index`).
+    pub fn draw_instances(&self, pass: &mut wgpu::RenderPass<'_>, instances: std::ops::Range<u32>) {
+        for c in &self.chunks {
+            pass.set_vertex_buffer(0, c.vertices.slice(..));
+            pass.set_index_buffer(c.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..c.index_count, 0, instances.clone());
+        }
     }
 }
 
-/// The caster's volume triangles as GPU vertices, umbra and penumbra apart, each vertex carrying
-/// its triangle's normal (the winding says which way a ray crosses it).
-pub fn volume_vertices(g: &CasterGeometry) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
-    let (mut umbra, mut penumbra) = (Vec::new(), Vec::new());
-    for i in 0..g.volumes.triangle_count() {
-        let (corners, attrs) = g.volumes.triangle(i);
-        let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
-        let n = n.normalize_or_zero();
-        let out = if attrs.kind.is_umbra() {
-            &mut umbra
-        } else {
-            &mut penumbra
-        };
-        out.extend(corners.map(|p| VolumeVertex {
+/// Packs objects' triangles into chunks, remapping vertex indices per chunk.
+struct ChunkBuilder<'a> {
+    device: &'a wgpu::Device,
+    max_triangles: usize,
+    vertices: Vec<SurfaceVertex>,
+    indices: Vec<u32>,
+    chunks: Vec<SurfaceChunk>,
+}
+
+impl ChunkBuilder<'_> {
+    fn add(&mut self, positions: &[Vec3], triangles: &[[u32; 3]], albedo: f32) {
+        let vertex = |p: Vec3| SurfaceVertex {
             position: p.to_array(),
-            kind: attrs.kind.code(),
-            normal: n.to_array(),
-            edge_a: attrs.edge[0].to_array(),
-            edge_b: attrs.edge[1].to_array(),
-            extrusion: attrs.extrusion.to_array(),
-            ..VolumeVertex::default()
-        }));
+            albedo,
+        };
+        let room = self.max_triangles - self.indices.len() / 3;
+        let vertex_room = 3 * self.max_triangles - self.vertices.len();
+        let in_range = |t: &[u32; 3]| t.iter().all(|&i| (i as usize) < positions.len());
+        if triangles.len() <= room && positions.len() <= vertex_room {
+            // The whole object fits: its vertices as they are.
+            let base = self.vertices.len() as u32;
+            self.vertices.extend(positions.iter().map(|&p| vertex(p)));
+            self.indices.extend(
+                triangles
+                    .iter()
+                    .filter(|t| in_range(t))
+                    .flatten()
+                    .map(|&i| base + i),
+            );
+            return;
+        }
+        // Too big: in pieces, each with only the vertices it uses.
+        let mut slot = vec![u32::MAX; positions.len()];
+        let mut used: Vec<u32> = Vec::new();
+        for tri in triangles.iter().filter(|t| in_range(t)) {
+            if self.indices.len() / 3 >= self.max_triangles
+                || self.vertices.len() + 3 > 3 * self.max_triangles
+            {
+                self.flush();
+                for &v in &used {
+                    slot[v as usize] = u32::MAX;
+                }
+                used.clear();
+            }
+            for &i in tri {
+                let k = i as usize;
+                if slot[k] == u32::MAX {
+                    slot[k] = self.vertices.len() as u32;
+                    self.vertices.push(vertex(positions[k]));
+                    used.push(i);
+                }
+                self.indices.push(slot[k]);
+            }
+        }
     }
-    (umbra, penumbra)
+
+    fn flush(&mut self) {
+        if self.indices.is_empty() {
+            return;
+        }
+        let vertices = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("GpuScene::vertices"),
+                contents: bytemuck::cast_slice(&self.vertices),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+        let indices = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("GpuScene::indices"),
+                contents: bytemuck::cast_slice(&self.indices),
+                usage: wgpu::BufferUsages::INDEX,
+            });
+        self.chunks.push(SurfaceChunk {
+            vertices,
+            indices,
+            index_count: self.indices.len() as u32,
+        });
+        self.vertices.clear();
+        self.indices.clear();
+    }
 }

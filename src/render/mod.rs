@@ -1,26 +1,45 @@
-//! The render core on wgpu: the D-buffer from the light centre, then the camera pass. Headless
-//! (`dbuffer render`, the tests) and inside the lab window alike; the pass order is in
-//! [`frame`], each pass is one file here with its WGSL twin of the same name in `shaders/`.
+//! The render core on wgpu, headless (`dbuffer render`, `compare`, `bench`, the tests) and inside
+//! the lab window alike.
+//!
+//! - [`frame`]: what a frame is ([`FrameRequest`], the [`FrameTargets`] it stays in on the GPU,
+//!   the [`Frame`] read back from them) and the pass order, in one short function;
+//! - [`methods`]: one module per shadow method and the registry of them;
+//! - [`passes`]: one file per pass, each with its WGSL twin of the same name in `shaders/passes/`;
+//! - [`session`]: a scene being looked at over many frames (light-space work only when the light
+//!   or a caster moved); [`offline`]: one frame, read back into a render's files;
+//! - [`reference`]: the ray-cast ground truth, on the CPU, in a worker thread for the lab;
+//! - [`readback`], [`timer`], [`gpu_scene`], [`context`]: staging buffers, pass timings, the
+//!   scene's surfaces on the GPU, the device.
 
-pub mod camera_pass;
 pub mod context;
 pub mod frame;
 pub mod gpu_scene;
-pub mod light_pass;
+pub mod methods;
 pub mod offline;
-mod readback;
+pub mod passes;
+pub mod readback;
 pub mod reference;
-pub mod sample_maps;
 pub mod session;
+pub mod timer;
 
 pub use context::GpuContext;
-pub use frame::{Frame, FrameRenderer, FrameRequest, Method, MethodParams};
+pub use frame::{Frame, FrameRequest, FrameTargets};
+pub use methods::{Knobs, Method};
+pub use session::Session;
 
 /// The expanded source of an embedded shader. The embedded set is fixed at compile time and
 /// `tests/shaders.rs` expands and validates every file of it, so a failure here is a build defect;
 /// it still yields WGSL (an empty module) rather than a panic, and pipeline creation then reports it.
 pub(crate) fn shader(name: &str) -> String {
     crate::shader_source::load(name).unwrap_or_else(|e| format!("// {e}\n"))
+}
+
+/// A shader module from an embedded shader, labelled with its name.
+pub(crate) fn shader_module(device: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(shader(name).into()),
+    })
 }
 
 /// A uniform-buffer entry of a bind group layout.
@@ -40,21 +59,81 @@ pub(crate) fn uniform_entry(
     }
 }
 
-/// A fragment-stage entry for a float texture read with `textureLoad` (not filterable: the
-/// 32-bit float targets are not).
+/// An entry for a float texture read with `textureLoad` (not filterable: the 32-bit float
+/// targets are not).
 pub(crate) fn texture_entry(
     binding: u32,
+    visibility: wgpu::ShaderStages,
     view_dimension: wgpu::TextureViewDimension,
 ) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
+        visibility,
         ty: wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Float { filterable: false },
             view_dimension,
             multisampled: false,
         },
         count: None,
+    }
+}
+
+/// A bind group entry for a texture view.
+pub(crate) fn view_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: wgpu::BindingResource::TextureView(view),
+    }
+}
+
+/// A bind group entry for a whole buffer.
+pub(crate) fn buffer_entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
+
+/// A uniform buffer of `T`, written each frame.
+pub(crate) fn uniform_buffer<T>(device: &wgpu::Device, label: &str) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: std::mem::size_of::<T>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// A 2D texture with one mip level and its default view.
+pub struct Texture {
+    pub texture: wgpu::Texture,
+    pub view: wgpu::TextureView,
+}
+
+impl Texture {
+    pub fn new(
+        device: &wgpu::Device,
+        label: &str,
+        (width, height): (u32, u32),
+        format: wgpu::TextureFormat,
+        usage: wgpu::TextureUsages,
+    ) -> Texture {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        Texture { texture, view }
     }
 }
 
@@ -67,42 +146,117 @@ pub(crate) fn opaque(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetSta
     })
 }
 
-/// A pipeline that draws the scene's surfaces ([`SurfaceVertex`]) with `vs_main`/`fs_main` of
-/// `module`, two-sided, nearest depth (Depth32Float) wins.
-pub(crate) fn surface_pipeline(
+/// A colour attachment cleared to `clear` and stored.
+pub(crate) fn cleared(
+    view: &wgpu::TextureView,
+    clear: wgpu::Color,
+) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+    Some(wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: wgpu::LoadOp::Clear(clear),
+            store: wgpu::StoreOp::Store,
+        },
+    })
+}
+
+/// `(r, 0, 0, 0)`: the clear value of a distance target.
+pub(crate) fn red(r: f64) -> wgpu::Color {
+    wgpu::Color {
+        r,
+        g: 0.0,
+        b: 0.0,
+        a: 0.0,
+    }
+}
+
+/// A depth attachment loaded with `load`; its content is kept when `store`.
+pub(crate) fn depth_attachment(
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<f32>,
+    store: bool,
+) -> Option<wgpu::RenderPassDepthStencilAttachment<'_>> {
+    Some(wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load,
+            store: if store {
+                wgpu::StoreOp::Store
+            } else {
+                wgpu::StoreOp::Discard
+            },
+        }),
+        stencil_ops: None,
+    })
+}
+
+/// What a pipeline over the scene's surfaces or volumes needs to know.
+pub(crate) struct PipelineSpec<'a> {
+    pub label: &'a str,
+    pub module: &'a wgpu::ShaderModule,
+    pub layout: &'a wgpu::PipelineLayout,
+    pub vs: &'a str,
+    pub fs: Option<&'a str>,
+    pub buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    pub targets: &'a [Option<wgpu::ColorTargetState>],
+    pub cull: Option<wgpu::Face>,
+    pub depth: Option<wgpu::DepthStencilState>,
+}
+
+pub(crate) fn render_pipeline(
     device: &wgpu::Device,
-    label: &str,
-    module: &wgpu::ShaderModule,
-    layout: &wgpu::PipelineLayout,
-    targets: &[Option<wgpu::ColorTargetState>],
+    spec: &PipelineSpec<'_>,
 ) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(label),
-        layout: Some(layout),
+        label: Some(spec.label),
+        layout: Some(spec.layout),
         vertex: wgpu::VertexState {
-            module,
-            entry_point: Some("vs_main"),
+            module: spec.module,
+            entry_point: Some(spec.vs),
             compilation_options: Default::default(),
-            buffers: &[Some(SurfaceVertex::layout())],
+            buffers: spec.buffers,
         },
-        // Surfaces are two-sided (open meshes, the ground seen from below).
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: wgpu::TextureFormat::Depth32Float,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: wgpu::StencilState::default(),
-            bias: wgpu::DepthBiasState::default(),
-        }),
+        primitive: wgpu::PrimitiveState {
+            cull_mode: spec.cull,
+            ..Default::default()
+        },
+        depth_stencil: spec.depth.clone(),
         multisample: wgpu::MultisampleState::default(),
-        fragment: Some(wgpu::FragmentState {
-            module,
-            entry_point: Some("fs_main"),
+        fragment: spec.fs.map(|fs| wgpu::FragmentState {
+            module: spec.module,
+            entry_point: Some(fs),
             compilation_options: Default::default(),
-            targets,
+            targets: spec.targets,
         }),
         multiview_mask: None,
         cache: None,
+    })
+}
+
+/// A Depth32Float test with depth writes.
+pub(crate) fn depth_test(compare: wgpu::CompareFunction) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format: wgpu::TextureFormat::Depth32Float,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(compare),
+        stencil: wgpu::StencilState::default(),
+        bias: wgpu::DepthBiasState::default(),
+    })
+}
+
+/// A pipeline layout over bind group layouts.
+pub(crate) fn pipeline_layout(
+    device: &wgpu::Device,
+    label: &str,
+    groups: &[&wgpu::BindGroupLayout],
+) -> wgpu::PipelineLayout {
+    let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(|g| Some(*g)).collect();
+    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &groups,
+        immediate_size: 0,
     })
 }
 
@@ -119,41 +273,35 @@ pub enum RenderError {
     Request(String),
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
-    #[error("{what} of {size} is not supported: expected 1 to {max}")]
+    #[error("{what} of {size} is not supported by this adapter ({adapter}): expected 1 to {max}")]
     Size {
         what: &'static str,
         size: u32,
         max: u32,
+        adapter: String,
     },
 }
 
-/// GPU vertex of a scene surface (both passes). Layout checked against the WGSL `SurfaceIn` by
-/// `tests/render_layout.rs`.
+/// GPU vertex of a scene surface (every pass that draws the scene). Layout checked against the
+/// WGSL `SurfaceIn` by `tests/render_layout.rs`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SurfaceVertex {
     pub position: [f32; 3],
     pub albedo: f32,
-    pub normal: [f32; 3],
-    pub _pad: f32,
 }
 
 impl SurfaceVertex {
-    pub const ATTRIBUTES: [wgpu::VertexAttribute; 3] = [
+    pub const ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
         wgpu::VertexAttribute {
             format: wgpu::VertexFormat::Float32x3,
             offset: 0,
             shader_location: 0,
         },
         wgpu::VertexAttribute {
-            format: wgpu::VertexFormat::Float32x3,
-            offset: 16,
-            shader_location: 1,
-        },
-        wgpu::VertexAttribute {
             format: wgpu::VertexFormat::Float32,
             offset: 12,
-            shader_location: 2,
+            shader_location: 1,
         },
     ];
 
@@ -166,25 +314,21 @@ impl SurfaceVertex {
     }
 }
 
-/// GPU vertex of a shadow volume: position, kind, the triangle's normal, and the silhouette edge
-/// and rim point it was extruded from (for eq. 2 per fragment).
+/// GPU vertex of a shadow volume: position, kind, and the silhouette edge and rim point it was
+/// extruded from (for eq. 2 per fragment). Which way a ray crosses the triangle is its winding,
+/// which the pipelines' culling reads.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct VolumeVertex {
     pub position: [f32; 3],
     pub kind: u32,
-    pub normal: [f32; 3],
-    pub _pad0: f32,
     pub edge_a: [f32; 3],
-    pub _pad1: f32,
     pub edge_b: [f32; 3],
-    pub _pad2: f32,
     pub extrusion: [f32; 3],
-    pub _pad3: f32,
 }
 
 impl VolumeVertex {
-    pub const ATTRIBUTES: [wgpu::VertexAttribute; 6] = [
+    pub const ATTRIBUTES: [wgpu::VertexAttribute; 5] = [
         wgpu::VertexAttribute {
             format: wgpu::VertexFormat::Float32x3,
             offset: 0,
@@ -202,18 +346,13 @@ impl VolumeVertex {
         },
         wgpu::VertexAttribute {
             format: wgpu::VertexFormat::Float32x3,
-            offset: 32,
+            offset: 28,
             shader_location: 3,
         },
         wgpu::VertexAttribute {
             format: wgpu::VertexFormat::Float32x3,
-            offset: 48,
+            offset: 40,
             shader_location: 4,
-        },
-        wgpu::VertexAttribute {
-            format: wgpu::VertexFormat::Float32x3,
-            offset: 64,
-            shader_location: 5,
         },
     ];
 
@@ -226,61 +365,5 @@ impl VolumeVertex {
     }
 }
 
-/// `LightUniforms` of `shaders/light_pass.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct LightUniforms {
-    pub view_proj: [[f32; 4]; 4],
-    pub center: [f32; 4],
-    pub normal: [f32; 4],
-    pub depth_scale: [f32; 4],
-}
-
-/// `CameraUniforms` of `shaders/camera_pass.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct CameraUniforms {
-    pub view_proj: [[f32; 4]; 4],
-    pub light_view_proj: [[f32; 4]; 4],
-    pub eye: [f32; 4],
-    pub light_center: [f32; 4],
-    pub light_normal: [f32; 4],
-    pub bias: [f32; 4],
-    pub mode: [u32; 4],
-}
-
-/// `MethodUniforms` of `shaders/camera_pass.wgsl`: the knobs of the comparison methods.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct MethodUniforms {
-    /// PCF radius (texels), PCSS blocker taps, PCSS filter taps, sampled lights.
-    pub params: [f32; 4],
-    /// x: the nearest caster's distance from the light centre (PCSS blocker search).
-    pub pcss: [f32; 4],
-    /// Light-view clip space back to world (receiver-plane depth of filter taps).
-    pub inv_light_view_proj: [[f32; 4]; 4],
-    /// 64 Poisson-disk points in the unit disk, two per entry (xy, zw); every prefix is spread.
-    pub poisson: [[f32; 4]; 32],
-}
-
-/// One point light of the `sampled` method (`shaders/shared/sample_lights.wgsl`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct SampleLight {
-    pub view_proj: [[f32; 4]; 4],
-    pub point: [f32; 4],
-}
-
-/// Every point light of the `sampled` method.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct SampleLights {
-    pub lights: [SampleLight; 64],
-}
-
-const _: () = assert!(std::mem::size_of::<MethodUniforms>() == 608);
-const _: () = assert!(std::mem::size_of::<SampleLights>() == 64 * 80);
-const _: () = assert!(std::mem::size_of::<SurfaceVertex>() == 32);
-const _: () = assert!(std::mem::size_of::<VolumeVertex>() == 80);
-const _: () = assert!(std::mem::size_of::<LightUniforms>() == 112);
-const _: () = assert!(std::mem::size_of::<CameraUniforms>() == 208);
+const _: () = assert!(std::mem::size_of::<SurfaceVertex>() == 16);
+const _: () = assert!(std::mem::size_of::<VolumeVertex>() == 52);

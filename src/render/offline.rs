@@ -1,201 +1,119 @@
-//! A whole frame without a window, as `dbuffer render` and the tests make it: geometry, upload,
-//! the passes, and everything read back into [`RenderOutputs`] with its timings.
+//! A frame without a window, as `dbuffer render`, `compare` and the tests make it: a
+//! [`Session`] on a headless device, the reference computed when the method is the reference,
+//! one frame rendered and read back with the D-buffer and its timings.
 
 use std::time::Instant;
 
-use super::frame::{Frame, FrameRenderer, FrameRequest, Method};
-use super::gpu_scene::GpuScene;
-use super::light_pass::NO_SURFACE;
+use super::frame::{Frame, FrameRequest};
 use super::reference;
+use super::session::{dbuffer_of, Session};
 use super::{GpuContext, RenderError};
-use crate::geometry::light_view::LightView;
-use crate::geometry::metrics::ShadowClass;
-use crate::geometry::{PreparedCasters, VolumeParams};
-use crate::output::{RenderMeta, RenderOutputs};
+use crate::geometry::GeometryStats;
 use crate::scene::Scene;
 
-/// A GPU context with its passes, kept across renders.
+/// A GPU context kept across renders (its pipelines are built once).
 pub struct Offline {
     pub ctx: GpuContext,
-    renderer: FrameRenderer,
     /// Called with (samples done, samples total) while the reference accumulates.
     pub progress: Option<Box<dyn FnMut(usize, usize)>>,
 }
 
+/// What one offline frame cost and built.
+#[derive(Clone, Debug, Default)]
+pub struct FrameReport {
+    /// CPU milliseconds per stage, in order.
+    pub cpu_ms: Vec<(String, f64)>,
+    /// Counts of the geometry stage behind the D-buffer read back with the frame.
+    pub geometry: GeometryStats,
+    /// What the geometry stage warned about.
+    pub warnings: Vec<String>,
+    /// Reference shadow rays per pixel hit (K) and the pixels hit, for the reference.
+    pub reference_rays: Option<(u32, usize)>,
+    /// The casters' penumbrae reach beyond what the D-buffer's frustum can hold.
+    pub clipped: bool,
+}
+
 impl Offline {
     pub fn new() -> Result<Offline, RenderError> {
-        let ctx = GpuContext::headless()?;
-        let renderer = FrameRenderer::new(&ctx);
         Ok(Offline {
-            ctx,
-            renderer,
+            ctx: GpuContext::headless()?,
             progress: None,
         })
     }
 
-    /// Render `scene` (called `name` in meta.json) as `request` says.
+    /// A session on `scene` for several frames.
+    pub fn session(&self, scene: Scene) -> Session {
+        Session::new(&self.ctx, scene)
+    }
+
+    /// Render `scene` as `request` says and read it back, the D-buffer included
+    /// (`output::RenderOutputs::from_frame` turns it into a render's files).
     pub fn render(
         &mut self,
-        name: &str,
         scene: &Scene,
         request: &FrameRequest,
-    ) -> Result<(Frame, RenderOutputs), RenderError> {
-        let t0 = Instant::now();
-        let prepared = PreparedCasters::new(scene);
-        let prepare_ms = ms(t0);
-        let t1 = Instant::now();
-        let params = VolumeParams {
-            center_silhouettes: request.method.center_silhouettes(),
-            ..VolumeParams::for_scene(scene)
-        };
-        let geometry = prepared.build(&scene.light, &params);
-        let volumes_ms = ms(t1);
-        let t2 = Instant::now();
-        let view = LightView::fit(scene);
-        let gpu = GpuScene::new(&self.ctx.device, scene, &geometry);
-        let upload_ms = ms(t2);
-        let mut reference_ms = Vec::new();
-        let t3 = Instant::now();
-        let frame = if request.method == Method::Reference {
-            let positions = self.renderer.render(
-                &self.ctx,
-                scene,
-                &gpu,
-                &view,
-                &reference::positions_request(request),
-            )?;
+    ) -> Result<(Frame, FrameReport), RenderError> {
+        let t = Instant::now();
+        let mut session = self.session(scene.clone());
+        let setup_ms = t.elapsed().as_secs_f64() * 1e3;
+        let (frame, mut report) = self.render_in(&mut session, request)?;
+        report.cpu_ms.insert(0, ("session_setup".into(), setup_ms));
+        report.clipped = session.light_view().clipped;
+        Ok((frame, report))
+    }
+
+    /// Render `request` in `session` and read it back, the D-buffer included; for the reference
+    /// its rays are cast first.
+    pub fn render_in(
+        &mut self,
+        session: &mut Session,
+        request: &FrameRequest,
+    ) -> Result<(Frame, FrameReport), RenderError> {
+        request.validate(&self.ctx)?;
+        let mut report = FrameReport::default();
+        if request.method.is_reference() {
+            let key = session.reference_key(request);
             let t = Instant::now();
-            let mut r = reference::start(scene, &positions, request.params.reference_samples);
-            let total = r.samples_total();
-            // Steps of about a second's work on this machine's CPU, for the progress line.
-            let step = (total / 16).max(1);
-            while r.step(step) > 0 {
-                if let Some(progress) = &mut self.progress {
-                    progress(r.samples_done(), total);
-                }
-            }
-            let rays_ms = ms(t);
-            reference_ms.push(("reference_rays".to_string(), rays_ms));
-            self.renderer.render_with(
-                &self.ctx,
-                scene,
-                &gpu,
-                &view,
-                request,
-                Some(r.visibility()),
-            )?
-        } else {
-            self.renderer
-                .render(&self.ctx, scene, &gpu, &view, request)?
-        };
-        let frame_ms = ms(t3);
-
-        let mut warnings = geometry.warnings.clone();
-        if view.clipped {
-            warnings.push(format!(
-                "the casters' penumbrae reach beyond {}° from the D-buffer's axis; shadows there are cut",
-                crate::geometry::light_view::MAX_HALF_ANGLE_DEG
-            ));
+            let mut noop = |_: usize, _: usize| {};
+            let progress: &mut dyn FnMut(usize, usize) = match self.progress.as_mut() {
+                Some(p) => p.as_mut(),
+                None => &mut noop,
+            };
+            let r = reference::compute(
+                session.scene(),
+                key.width,
+                key.height,
+                key.samples,
+                progress,
+            );
+            report
+                .cpu_ms
+                .push(("reference".into(), t.elapsed().as_secs_f64() * 1e3));
+            report.cpu_ms.push(("reference_rays".into(), r.rays_ms));
+            report.reference_rays = Some((key.samples, r.hit_pixels));
+            session.set_reference(&self.ctx, key, &r.visibility, (key.samples, key.samples))?;
         }
-        let n = (frame.width * frame.height) as usize;
-        let hit: Vec<bool> = frame.position.iter().map(|p| p[3] > 0.5).collect();
-        let class = frame
-            .visibility
-            .iter()
-            .zip(&hit)
-            .map(|(&v, &h)| match (h, ShadowClass::of(f64::from(v))) {
-                (false, _) | (true, ShadowClass::Lit) => 0,
-                (true, ShadowClass::Penumbra) => 1,
-                (true, ShadowClass::Umbra) => 2,
-            })
-            .collect();
-        let outputs = RenderOutputs {
-            width: frame.width,
-            height: frame.height,
-            color: frame
-                .color
-                .iter()
-                .map(|c| {
-                    [
-                        srgb_to_linear(c[0]),
-                        srgb_to_linear(c[1]),
-                        srgb_to_linear(c[2]),
-                    ]
-                })
-                .collect(),
-            visibility: frame.visibility.clone(),
-            hit,
-            position: frame.position.iter().map(|p| [p[0], p[1], p[2]]).collect(),
-            class,
-            dbuffer_size: frame.dbuffer_size,
-            d_o: frame
-                .distance
-                .iter()
-                .map(|&d| {
-                    if f64::from(d) >= NO_SURFACE * 0.5 {
-                        f32::INFINITY
-                    } else {
-                        d
-                    }
-                })
-                .collect(),
-            d_u: frame.umbra.iter().map(|u| u[0]).collect(),
-            d_p: frame.penumbra.iter().map(|p| p[0]).collect(),
-            s_u: frame.umbra.iter().map(|u| u[1]).collect(),
-            s_p: frame.penumbra.iter().map(|p| p[1]).collect(),
-            meta: RenderMeta {
-                scene: name.to_string(),
-                method: request.method.name().to_string(),
-                variant: request.vt.name().to_string(),
-                width: frame.width,
-                height: frame.height,
-                dbuffer_size: frame.dbuffer_size,
-                adapter: self.ctx.adapter.name.clone(),
-                backend: format!("{:?}", self.ctx.adapter.backend),
-                cpu_ms: [
-                    ("geometry_prepare".into(), prepare_ms),
-                    ("geometry_volumes".into(), volumes_ms),
-                    ("upload".into(), upload_ms),
-                    ("frame_and_readback".into(), frame_ms),
-                ]
-                .into_iter()
-                .chain(reference_ms)
-                .collect(),
-                gpu_ms: frame.gpu_ms.clone(),
-                triangles: scene.objects.iter().map(|o| o.mesh.triangles.len()).sum(),
-                caster_triangles: scene.caster_triangle_count(),
-                umbra_silhouette_edges: geometry.stats.umbra_edges,
-                penumbra_silhouette_edges: geometry.stats.penumbra_edges,
-                umbra_volume_triangles: geometry.stats.umbra_triangles,
-                penumbra_volume_triangles: geometry.stats.penumbra_triangles,
-                warnings,
+        let t = Instant::now();
+        let frame = session.frame(
+            &self.ctx,
+            &FrameRequest {
+                read_dbuffer: true,
+                ..*request
             },
-        };
-        debug_assert_eq!(outputs.color.len(), n);
-        Ok((frame, outputs))
-    }
-}
-
-fn ms(since: Instant) -> f64 {
-    since.elapsed().as_secs_f64() * 1e3
-}
-
-/// The sRGB transfer function, inverted.
-fn srgb_to_linear(c: u8) -> f32 {
-    let c = f32::from(c) / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn srgb_round_trips_through_the_writer() {
-        for c in 0..=255u8 {
-            assert_eq!(crate::output::linear_to_srgb8(super::srgb_to_linear(c)), c);
+        )?;
+        report
+            .cpu_ms
+            .push(("frame_and_readback".into(), t.elapsed().as_secs_f64() * 1e3));
+        let dbuffer = dbuffer_of(request.method);
+        let (_, geometry_ms) = session.geometry_builds(dbuffer);
+        report
+            .cpu_ms
+            .insert(0, ("geometry_volumes".into(), geometry_ms));
+        if let Some(g) = session.geometry(dbuffer) {
+            report.geometry = g.stats;
+            report.warnings = g.warnings.clone();
         }
+        report.clipped = session.light_view().clipped;
+        Ok((frame, report))
     }
 }

@@ -1,58 +1,95 @@
-//! A scene being looked at over many frames (the lab, benchmarks): the geometry stage runs again
-//! only when the light or a caster changed, or the method wants volumes built differently; the
-//! passes run every frame (seed 000 §6.1). The ray-cast reference accumulates over frames.
+//! A scene being looked at over many frames (the lab, benchmarks, `render`): the surfaces are
+//! uploaded once; each method's light-space work (geometry, D-buffer, shadow maps) runs again only
+//! when the light or a caster moved (seed 000 §6.1: the D-buffer does not depend on the camera);
+//! the camera pass runs every frame. Frames stay on the GPU in [`FrameTargets`]; reading one back
+//! is a separate call.
 
-use std::time::Instant;
+use std::cell::OnceCell;
+use std::collections::HashMap;
 
-use super::frame::{Frame, FrameRenderer, FrameRequest, Method};
+use super::frame::{read_frame, record_frame, Frame, FrameParts, FrameRequest, FrameTargets};
 use super::gpu_scene::GpuScene;
+use super::methods::{External, FrameInputs, LightMaps, Method, MethodState, SharedMaps};
+use super::passes::camera::Camera;
+use super::passes::probe::ProbeRequest;
+use super::passes::shadow_map::ShadowMap;
+use super::passes::view::ViewParams;
+use super::readback::Readback;
 use super::reference::{self, ReferenceKey};
-use super::{GpuContext, RenderError};
+use super::timer::{PassTimer, Recorder};
+use super::{GpuContext, RenderError, Texture};
 use crate::geometry::light_view::LightView;
 use crate::geometry::progressive::ProgressiveReference;
-use crate::geometry::{PreparedCasters, SceneGeometry, VolumeParams};
-use crate::scene::{Camera, DiskLight, Mesh, Scene};
+use crate::geometry::{PreparedCasters, SceneGeometry};
+use crate::scene::{Camera as SceneCamera, DiskLight, Mesh, Scene};
+
+/// One frame to record: into which targets, what, and (for a window) how to show it.
+pub struct FrameJob<'a> {
+    pub targets: &'a mut FrameTargets,
+    pub request: FrameRequest,
+    /// Draw the view pass into the targets' display texture.
+    pub view: Option<ViewParams>,
+    /// `false`: the targets already hold this frame; only the view (and probe) run.
+    pub render: bool,
+    /// Values to read back through the targets' probe (the inspector, the display range's fit).
+    pub probes: Vec<ProbeRequest>,
+}
+
+/// The reference V on the GPU.
+struct ReferenceImage {
+    texture: Texture,
+    key: ReferenceKey,
+    done: u32,
+    total: u32,
+    generation: u64,
+}
 
 pub struct Session {
     scene: Scene,
-    prepared: PreparedCasters,
-    geometry: SceneGeometry,
-    gpu: GpuScene,
-    view: LightView,
-    renderer: FrameRenderer,
-    /// The light or a caster moved since the geometry was built.
-    dirty: bool,
-    /// Whether the current volumes were built from the light centre only (`dbuffer-center`).
-    center_silhouettes: bool,
-    geometry_builds: u64,
-    /// CPU milliseconds of the last geometry build.
-    geometry_ms: f64,
-    /// Bumped whenever an object's mesh changes (the reference depends on it).
+    /// Built on first use: methods without volumes never need it.
+    prepared: OnceCell<PreparedCasters>,
+    surfaces: GpuScene,
+    light_view: LightView,
+    /// Bumped whenever the light or a caster changed.
+    revision: u64,
+    /// Bumped whenever an object's mesh changes (the reference depends on every object).
     meshes: u64,
-    reference: Option<(ReferenceKey, ProgressiveReference)>,
+    methods: HashMap<Method, Box<dyn MethodState>>,
+    shared: SharedMaps,
+    camera: Camera,
+    timer: Option<PassTimer>,
+    readback: Readback,
+    reference: Option<ReferenceImage>,
+    /// The synchronous reference ([`Session::advance_reference`]).
+    progressive: Option<(ReferenceKey, ProgressiveReference)>,
+    /// The targets [`Session::frame`] renders into.
+    own: FrameTargets,
+    /// Bytes the last submit will read back (timings, probes).
+    pending_read_bytes: u64,
 }
 
 impl Session {
     pub fn new(ctx: &GpuContext, scene: Scene) -> Session {
-        let prepared = PreparedCasters::new(&scene);
-        let t = Instant::now();
-        let geometry = prepared.build(&scene.light, &VolumeParams::for_scene(&scene));
-        let geometry_ms = t.elapsed().as_secs_f64() * 1e3;
-        let gpu = GpuScene::new(&ctx.device, &scene, &geometry);
-        let view = LightView::fit(&scene);
+        let surfaces = GpuScene::new(&ctx.device, &scene);
+        let light_view = LightView::fit(&scene);
         Session {
-            renderer: FrameRenderer::new(ctx),
+            shared: SharedMaps {
+                shadow_map: ShadowMap::new(ctx),
+            },
+            camera: Camera::new(ctx),
+            timer: PassTimer::new(ctx),
+            readback: Readback::default(),
             scene,
-            prepared,
-            geometry,
-            gpu,
-            view,
-            dirty: false,
-            center_silhouettes: false,
-            geometry_builds: 1,
-            geometry_ms,
+            prepared: OnceCell::new(),
+            surfaces,
+            light_view,
+            revision: 1,
             meshes: 0,
+            methods: HashMap::new(),
             reference: None,
+            progressive: None,
+            own: FrameTargets::new(),
+            pending_read_bytes: 0,
         }
     }
 
@@ -60,46 +97,42 @@ impl Session {
         &self.scene
     }
 
-    /// The geometry of the last frame (or of construction).
-    pub fn geometry(&self) -> &SceneGeometry {
-        &self.geometry
+    /// The scene's surfaces on the GPU.
+    pub fn surfaces(&self) -> &GpuScene {
+        &self.surfaces
     }
 
-    /// The D-buffer's view from the light centre.
+    /// The casters, welded with their adjacency (what the overlays draw faces from).
+    pub fn prepared(&self) -> &PreparedCasters {
+        self.prepared
+            .get_or_init(|| PreparedCasters::new(&self.scene))
+    }
+
+    /// The light centre's view the D-buffer and the shadow maps are drawn in.
     pub fn light_view(&self) -> &LightView {
-        &self.view
+        &self.light_view
     }
 
-    /// How many times the geometry stage has run.
-    pub fn geometry_builds(&self) -> u64 {
-        self.geometry_builds
+    /// Bumped whenever the light or a caster moved.
+    pub fn revision(&self) -> u64 {
+        self.revision
     }
 
-    /// CPU milliseconds of the last geometry build (classes, silhouettes, volumes).
-    pub fn geometry_ms(&self) -> f64 {
-        self.geometry_ms
-    }
-
-    /// Move the light; the geometry is rebuilt on the next frame if it changed.
+    /// Move the light; light-space work is redone on the next frame if it changed.
     pub fn set_light(&mut self, light: DiskLight) {
         if light != self.scene.light {
             self.scene.light = light;
-            self.dirty = true;
+            self.moved();
         }
     }
 
-    /// Move the camera (only the reference depends on it beyond the frame itself).
-    pub fn set_camera(&mut self, camera: Camera) {
+    /// Move the camera: only the camera pass (and the reference) depend on it.
+    pub fn set_camera(&mut self, camera: SceneCamera) {
         self.scene.camera = camera;
     }
 
-    /// Rebuild the geometry on the next frame even if nothing moved (to measure frame coherence).
-    pub fn invalidate_geometry(&mut self) {
-        self.dirty = true;
-    }
-
-    /// Replace object `index`'s world-space mesh (it moved); a caster's adjacency is prepared
-    /// again, and the surfaces are uploaded again.
+    /// Replace object `index`'s world-space mesh (it moved): the surfaces are uploaded again,
+    /// and a caster's adjacency is prepared again.
     pub fn set_object_mesh(&mut self, ctx: &GpuContext, index: usize, mesh: Mesh) {
         let Some(object) = self.scene.objects.get_mut(index) else {
             return;
@@ -108,98 +141,411 @@ impl Session {
             return;
         }
         object.mesh = mesh;
-        self.prepared = PreparedCasters::new(&self.scene);
-        self.gpu = GpuScene::new(&ctx.device, &self.scene, &self.geometry);
-        self.meshes += 1;
-        self.dirty = true;
-    }
-
-    /// Run the geometry stage if something moved or `method` builds volumes differently.
-    fn update_geometry(&mut self, ctx: &GpuContext, method: Method) {
-        // Methods without volumes keep whichever volumes there are.
-        let center = match method {
-            Method::DBuffer | Method::DBufferCenter => method.center_silhouettes(),
-            _ => self.center_silhouettes,
-        };
-        if !self.dirty && center == self.center_silhouettes {
-            return;
+        if object.casts_shadow {
+            self.prepared = OnceCell::new();
         }
-        let params = VolumeParams {
-            center_silhouettes: center,
-            ..VolumeParams::for_scene(&self.scene)
-        };
-        let t = Instant::now();
-        self.geometry = self.prepared.build(&self.scene.light, &params);
-        self.geometry_ms = t.elapsed().as_secs_f64() * 1e3;
-        self.gpu.set_volumes(&ctx.device, &self.geometry);
-        self.view = LightView::fit(&self.scene);
-        self.geometry_builds += 1;
-        self.center_silhouettes = center;
-        self.dirty = false;
+        self.surfaces = GpuScene::new(&ctx.device, &self.scene);
+        self.meshes += 1;
+        self.moved();
     }
 
-    /// Render a frame, running the geometry stage first only if something moved. With
-    /// [`Method::Reference`] the reference first takes `params.reference_step` more samples.
+    /// Redo every method's geometry and light-space work on the next frame even if nothing
+    /// moved (to measure frame coherence).
+    pub fn invalidate_geometry(&mut self) {
+        self.moved();
+    }
+
+    /// Redo the light-space passes (not the geometry) on the next frame: to time them.
+    pub fn invalidate_light_maps(&mut self) {
+        self.shared.shadow_map.invalidate();
+        for m in self.methods.values_mut() {
+            m.invalidate();
+        }
+    }
+
+    fn moved(&mut self) {
+        self.revision += 1;
+        self.light_view = LightView::fit(&self.scene);
+    }
+
+    /// The geometry stage's output `method` last built its light pass from.
+    pub fn geometry(&self, method: Method) -> Option<&SceneGeometry> {
+        self.methods.get(&method).and_then(|m| m.geometry())
+    }
+
+    /// How many times `method` has run the geometry stage, and its last CPU milliseconds.
+    pub fn geometry_builds(&self, method: Method) -> (u64, f64) {
+        self.methods
+            .get(&method)
+            .map_or((0, 0.0), |m| m.geometry_builds())
+    }
+
+    /// `method`'s light-space maps as they stand.
+    pub fn light_maps(&self, method: Method) -> Option<LightMaps<'_>> {
+        self.methods
+            .get(&method)
+            .and_then(|m| m.light_maps(&self.shared))
+    }
+
+    /// What the reference for `request` depends on.
+    pub fn reference_key(&self, request: &FrameRequest) -> ReferenceKey {
+        ReferenceKey {
+            light: self.scene.light,
+            camera: self.scene.camera,
+            width: request.width,
+            height: request.height,
+            samples: request.knobs.get(&super::methods::reference::SAMPLES),
+            meshes: self.meshes,
+        }
+    }
+
+    /// Hand the GPU reference V for `key` (row-major, `key.width`×`key.height`), holding `done`
+    /// of `total` samples per pixel.
+    pub fn set_reference(
+        &mut self,
+        ctx: &GpuContext,
+        key: ReferenceKey,
+        visibility: &[f32],
+        (done, total): (u32, u32),
+    ) -> Result<(), RenderError> {
+        let (w, h) = (key.width, key.height);
+        if visibility.len() != w as usize * h as usize {
+            return Err(RenderError::Request(format!(
+                "the reference needs V for each of the {w}×{h} pixels, found {}",
+                visibility.len()
+            )));
+        }
+        if self
+            .reference
+            .as_ref()
+            .is_none_or(|r| (r.key.width, r.key.height) != (w, h))
+        {
+            self.reference = Some(ReferenceImage {
+                texture: Texture::new(
+                    &ctx.device,
+                    "Session::reference",
+                    (w, h),
+                    wgpu::TextureFormat::R32Float,
+                    wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                ),
+                key,
+                done,
+                total,
+                generation: super::passes::next_generation(),
+            });
+        }
+        let Some(r) = self.reference.as_mut() else {
+            return Ok(());
+        };
+        ctx.queue.write_texture(
+            r.texture.texture.as_image_copy(),
+            bytemuck::cast_slice(visibility),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 4),
+                rows_per_image: Some(h),
+            },
+            r.texture.texture.size(),
+        );
+        r.key = key;
+        r.done = done;
+        r.total = total;
+        Ok(())
+    }
+
+    /// Whether the GPU holds the reference for `request` (some samples of it).
+    pub fn has_reference(&self, request: &FrameRequest) -> bool {
+        let key = self.reference_key(request);
+        self.reference.as_ref().is_some_and(|r| r.key == key)
+    }
+
+    /// Samples per pixel of the reference on the GPU, and how many it will hold when complete.
+    pub fn reference_progress(&self) -> Option<(u32, u32)> {
+        self.reference.as_ref().map(|r| (r.done, r.total))
+    }
+
+    /// Take `step` more reference samples per pixel for `request` here, on this thread (starting
+    /// over when what it depends on changed), and hand them to the GPU. Returns (done, total).
+    pub fn advance_reference(
+        &mut self,
+        ctx: &GpuContext,
+        request: &FrameRequest,
+        step: u32,
+    ) -> Result<(u32, u32), RenderError> {
+        request.validate(ctx)?;
+        let key = self.reference_key(request);
+        if self.progressive.as_ref().is_none_or(|(k, _)| *k != key) {
+            let r = reference::start(&self.scene, key.width, key.height, key.samples);
+            self.progressive = Some((key, r));
+        }
+        let Some((_, r)) = self.progressive.as_mut() else {
+            return Ok((0, 0));
+        };
+        r.step(step as usize);
+        let progress = (r.samples_done() as u32, r.samples_total() as u32);
+        let v = r.visibility().to_vec();
+        self.set_reference(ctx, key, &v, progress)?;
+        Ok(progress)
+    }
+
+    /// The reference V of the synchronous reference so far, if one was advanced for `request`.
+    pub fn reference_visibility(&self, request: &FrameRequest) -> Option<&[f32]> {
+        let key = self.reference_key(request);
+        self.progressive
+            .as_ref()
+            .filter(|(k, _)| *k == key)
+            .map(|(_, r)| r.visibility())
+    }
+
+    /// Whether the synchronous reference still has samples to take.
+    pub fn converging(&self) -> bool {
+        self.progressive
+            .as_ref()
+            .is_some_and(|(_, r)| !r.is_complete())
+    }
+
+    /// Record every job's frame (light-space work only where stale, the camera pass, the view,
+    /// the probe) into one encoder and submit it; nothing waits. Returns the bytes the submit
+    /// will read back (timings and probes).
+    pub fn submit(
+        &mut self,
+        ctx: &GpuContext,
+        jobs: &mut [FrameJob<'_>],
+    ) -> Result<u64, RenderError> {
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("Session::encoder"),
+            });
+        let mut bytes = 0;
+        let result = (|| {
+            for job in jobs.iter_mut() {
+                bytes += self.record_job(ctx, &mut encoder, job)?;
+            }
+            Ok::<_, RenderError>(())
+        })();
+        if let Some(t) = self.timer.as_mut() {
+            bytes += t.finish(&mut encoder);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        for job in jobs.iter_mut() {
+            if let Some(p) = job.targets.probe.as_mut() {
+                p.request_map();
+            }
+        }
+        if let Some(t) = self.timer.as_mut() {
+            t.request_maps();
+        }
+        // Errors raised before the scope (creating pipelines) come first: they are the cause.
+        let scoped = pollster::block_on(scope.pop());
+        if let Some(e) = ctx.take_uncaptured_errors().into_iter().next() {
+            return Err(RenderError::Gpu(e));
+        }
+        if let Some(e) = scoped {
+            return Err(RenderError::Gpu(e.to_string()));
+        }
+        result?;
+        self.pending_read_bytes = bytes;
+        Ok(bytes)
+    }
+
+    fn record_job(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        job: &mut FrameJob<'_>,
+    ) -> Result<u64, RenderError> {
+        let request = job.request;
+        request.validate(ctx)?;
+        let method = request.method;
+        let state = self
+            .methods
+            .entry(method)
+            .or_insert_with(|| (method.spec().new)(ctx));
+        let reference = self
+            .reference
+            .as_ref()
+            .filter(|r| (r.key.width, r.key.height) == (request.width, request.height));
+        let current = ReferenceKey {
+            light: self.scene.light,
+            camera: self.scene.camera,
+            width: request.width,
+            height: request.height,
+            samples: request.knobs.get(&super::methods::reference::SAMPLES),
+            meshes: self.meshes,
+        };
+        // The reference method shades only the reference of exactly this view.
+        let external = reference.filter(|r| r.key == current).map(|r| External {
+            view: &r.texture.view,
+            generation: r.generation,
+        });
+        let inputs = FrameInputs {
+            ctx,
+            scene: &self.scene,
+            surfaces: &self.surfaces,
+            prepared: &self.prepared,
+            light_view: &self.light_view,
+            revision: self.revision,
+            map_size: request.dbuffer_size,
+            vt: request.vt,
+            knobs: &request.knobs,
+            external,
+        };
+        // The error view compares with the reference of exactly this view.
+        let view_reference = reference
+            .filter(|r| r.key == current)
+            .map(|r| (&r.texture.view, r.generation));
+        let mut rec = Recorder::new(encoder, self.timer.as_ref());
+        if job.render || job.targets.rendered.is_none() {
+            record_frame(
+                FrameParts {
+                    inputs,
+                    request: &request,
+                    method: state.as_mut(),
+                    shared: &mut self.shared,
+                    camera: &self.camera,
+                    surfaces: &self.surfaces,
+                },
+                job.targets,
+                job.view.as_ref().map(|v| (v, view_reference)),
+                &mut rec,
+            )?;
+        } else if let Some(params) = &job.view {
+            super::frame::record_view(
+                ctx,
+                job.targets,
+                params,
+                view_reference,
+                state.light_maps(&self.shared),
+                &mut rec,
+            );
+        }
+        let mut bytes = 0;
+        for p in &job.probes {
+            bytes += super::passes::probe::record(
+                ctx,
+                job.targets,
+                p,
+                view_reference,
+                state.light_maps(&self.shared),
+                &mut rec,
+            );
+        }
+        Ok(bytes)
+    }
+
+    /// The newest pass timings that have come back, without waiting (a window, a frame later).
+    pub fn poll_timings(&mut self, ctx: &GpuContext) -> Option<Vec<(String, f64)>> {
+        self.timer.as_mut().and_then(|t| t.poll(ctx))
+    }
+
+    /// Render `request` into the session's own targets and read it back (with the D-buffer if
+    /// `request.read_dbuffer`), with its pass timings: what `dbuffer render` makes. One submit,
+    /// one wait.
     pub fn frame(
         &mut self,
         ctx: &GpuContext,
         request: &FrameRequest,
     ) -> Result<Frame, RenderError> {
-        self.update_geometry(ctx, request.method);
-        if request.method == Method::Reference {
-            self.advance_reference(ctx, request)?;
-            let v = self.reference.as_ref().map(|(_, r)| r.visibility());
-            return self
-                .renderer
-                .render_with(ctx, &self.scene, &self.gpu, &self.view, request, v);
+        let mut own = std::mem::take(&mut self.own);
+        let dbuffer = request.read_dbuffer.then(|| dbuffer_of(request.method));
+        let submitted = (|| {
+            self.submit(
+                ctx,
+                &mut [FrameJob {
+                    targets: &mut own,
+                    request: *request,
+                    view: None,
+                    render: true,
+                    probes: Vec::new(),
+                }],
+            )?;
+            if let Some(d) = dbuffer.filter(|d| *d != request.method) {
+                // The D-buffer of the paper's method, for a method that has none of its own
+                // (after the frame, so the frame's timings are its own).
+                self.prepare_only(ctx, d, request)?;
+            }
+            Ok::<_, RenderError>(())
+        })();
+        let read = submitted.and_then(|_| {
+            let maps = dbuffer.and_then(|d| {
+                self.methods
+                    .get(&d)
+                    .and_then(|m| m.light_maps(&self.shared))
+            });
+            read_frame(ctx, &mut self.readback, &own, maps.as_ref())
+        });
+        self.own = own;
+        let mut frame = read?;
+        if let Some(t) = self.timer.as_mut() {
+            frame.gpu_ms = t.wait(ctx)?;
         }
-        self.renderer
-            .render(ctx, &self.scene, &self.gpu, &self.view, request)
+        Ok(frame)
     }
 
-    /// Take `params.reference_step` more reference samples per pixel for this request's size and
-    /// the current scene; starts over when the light, camera, a mesh, the size or K changed.
-    pub fn advance_reference(
+    /// Bring `method`'s light-space products up to date for `request`, without a camera pass.
+    fn prepare_only(
         &mut self,
         ctx: &GpuContext,
+        method: Method,
         request: &FrameRequest,
     ) -> Result<(), RenderError> {
-        request.params.validate().map_err(RenderError::Request)?;
-        let key = ReferenceKey::new(&self.scene, request, self.meshes);
-        if self.reference.as_ref().is_none_or(|(k, _)| *k != key) {
-            self.update_geometry(ctx, request.method);
-            let positions = self.renderer.render(
-                ctx,
-                &self.scene,
-                &self.gpu,
-                &self.view,
-                &reference::positions_request(request),
-            )?;
-            let start = reference::start(&self.scene, &positions, request.params.reference_samples);
-            self.reference = Some((key, start));
-        }
-        if let Some((_, r)) = &mut self.reference {
-            r.step(request.params.reference_step as usize);
-        }
+        let state = self
+            .methods
+            .entry(method)
+            .or_insert_with(|| (method.spec().new)(ctx));
+        let inputs = FrameInputs {
+            ctx,
+            scene: &self.scene,
+            surfaces: &self.surfaces,
+            prepared: &self.prepared,
+            light_view: &self.light_view,
+            revision: self.revision,
+            map_size: request.dbuffer_size,
+            vt: request.vt,
+            knobs: &request.knobs,
+            external: None,
+        };
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("Session::prepare_only"),
+            });
+        let mut rec = Recorder::new(&mut encoder, None);
+        state.prepare(&inputs, &mut self.shared, &mut rec)?;
+        ctx.queue.submit([encoder.finish()]);
         Ok(())
     }
 
-    /// Samples per pixel the reference holds, and how many it will hold when complete.
-    pub fn reference_progress(&self) -> Option<(u32, u32)> {
-        self.reference
-            .as_ref()
-            .map(|(_, r)| (r.samples_done() as u32, r.samples_total() as u32))
+    /// Read back whatever `targets` hold, with `method`'s light-space maps if given: for tests
+    /// and exports of a frame a window shows.
+    pub fn read(
+        &mut self,
+        ctx: &GpuContext,
+        targets: &FrameTargets,
+        maps_of: Option<Method>,
+    ) -> Result<Frame, RenderError> {
+        let maps = maps_of.and_then(|m| {
+            self.methods
+                .get(&m)
+                .and_then(|s| s.light_maps(&self.shared))
+        });
+        read_frame(ctx, &mut self.readback, targets, maps.as_ref())
     }
 
-    /// The reference V so far (row-major, the size of the last request that advanced it).
-    pub fn reference_visibility(&self) -> Option<&[f32]> {
-        self.reference.as_ref().map(|(_, r)| r.visibility())
+    /// Bytes the last submit reads back.
+    pub fn pending_read_bytes(&self) -> u64 {
+        self.pending_read_bytes
     }
+}
 
-    /// Whether the reference is still converging (another frame would change it).
-    pub fn converging(&self) -> bool {
-        self.reference
-            .as_ref()
-            .is_some_and(|(_, r)| !r.is_complete())
+/// Which method's D-buffer `dbuffer.exr` holds for a frame of `method`: its own if it is a
+/// D-buffer method, else the paper's.
+pub fn dbuffer_of(method: Method) -> Method {
+    if method == Method::DBUFFER_CENTER {
+        method
+    } else {
+        Method::DBUFFER
     }
 }

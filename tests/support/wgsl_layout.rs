@@ -104,3 +104,38 @@ macro_rules! assert_wgsl_layout {
         )
     };
 }
+
+/// The value of the scalar WGSL `const` called `name` in `wgsl` (f32, u32, i32 or bool
+/// literals), or `None` when there is none of that name.
+pub fn const_value(wgsl: &str, name: &str) -> Option<f64> {
+    let module = match naga::front::wgsl::parse_str(wgsl) {
+        Ok(module) => module,
+        Err(e) => panic!("WGSL does not parse:\n{}", e.emit_to_string(wgsl)),
+    };
+    let (_, c) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))?;
+    match module.global_expressions[c.init] {
+        naga::Expression::Literal(naga::Literal::F32(v)) => Some(f64::from(v)),
+        naga::Expression::Literal(naga::Literal::U32(v)) => Some(f64::from(v)),
+        naga::Expression::Literal(naga::Literal::I32(v)) => Some(f64::from(v)),
+        naga::Expression::Literal(naga::Literal::Bool(v)) => Some(f64::from(u8::from(v))),
+        naga::Expression::Literal(naga::Literal::AbstractInt(v)) => Some(v as f64),
+        naga::Expression::Literal(naga::Literal::AbstractFloat(v)) => Some(v),
+        ref other => panic!("`{name}` is not a scalar literal: {other:?}"),
+    }
+}
+
+/// Assert that every `(WGSL const name, Rust value)` pair agrees.
+pub fn assert_consts(wgsl: &str, file: &str, pairs: &[(&str, f64)]) {
+    for &(name, rust) in pairs {
+        match const_value(wgsl, name) {
+            Some(v) => assert!(
+                (v - rust).abs() <= 1e-9 * rust.abs().max(1.0),
+                "{file}: const {name} is {v}, the Rust side says {rust}"
+            ),
+            None => panic!("{file} declares no const `{name}`"),
+        }
+    }
+}

@@ -1,7 +1,7 @@
 // The `sampled` method's shadow maps (seed 002 §3.1): every surface seen from N stratified points
 // on the disk, one array layer each, storing the Euclidean distance to that point (as |cx_o| does
-// for the centre). The draw's instance index picks the layer's light; the camera pass reads the
-// same SampleLights.
+// for the centre). The draw's instance index picks the layer's light; the method's camera pass
+// reads the same SampleLights (shaders/methods/sampled.wgsl).
 // #include shared/surface.wgsl
 // #include shared/sample_lights.wgsl
 
@@ -24,5 +24,5 @@ fn vs_main(v: SurfaceIn, @builtin(instance_index) layer: u32) -> MapOut {
 
 @fragment
 fn fs_main(f: MapOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(distance(f.world, lights.lights[f.layer].point.xyz), 0.0, 0.0, 0.0);
+    return vec4<f32>(distance(f.world, lights.lights[f.layer].point), 0.0, 0.0, 0.0);
 }

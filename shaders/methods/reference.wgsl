@@ -1,0 +1,12 @@
+// `reference`: V computed elsewhere — by rays to K stratified disk samples per pixel on the CPU
+// (src/render/reference.rs) — uploaded as a texture and shaded like every other method
+// (src/render/methods/reference.rs).
+// #include shared/camera.wgsl
+
+@group(1) @binding(0) var external_v: texture_2d<f32>;
+
+fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
+    let size = vec2<i32>(textureDimensions(external_v));
+    let p = clamp(vec2<i32>(floor(pixel)), vec2<i32>(0), size - 1);
+    return plain(textureLoad(external_v, p, 0).x);
+}

@@ -1,0 +1,151 @@
+// The probe (src/render/passes/probe.rs): what the lab reads back of a frame instead of the
+// frame. PROBE_PIXEL: every value under the cursor — colour, V, t + 2·branch, depth, the world
+// position, the reference V, and the three light-map texels under that position (or under the
+// cursor in the light-maps view) — PIXEL_FLOATS floats. PROBE_FIT: the shown scalar at samples on
+// a grid, for the display range's auto-fit (NaN where there is none).
+// #include shared/view_inputs.wgsl
+
+const PROBE_PIXEL: u32 = 0u;
+const PROBE_FIT: u32 = 1u;
+const PIXEL_FLOATS: u32 = 28u;
+const NAN_BITS: u32 = 0x7fc00000u;
+
+@group(1) @binding(0) var<storage, read_write> out: array<f32>;
+
+fn nan() -> f32 {
+    return bitcast<f32>(NAN_BITS);
+}
+
+fn put_texels(base: u32, q: vec2<i32>) {
+    for (var t = 0u; t < 3u; t++) {
+        let v = map_texel(t, q);
+        for (var c = 0u; c < 4u; c++) {
+            out[base + 4u * t + c] = v[c];
+        }
+    }
+}
+
+fn map_size_i() -> i32 {
+    return i32(view.map_size);
+}
+
+// The light-map texel under world point x, or (-1, -1) outside the maps.
+fn texel_under(x: vec3<f32>) -> vec2<i32> {
+    let clip = view.map_view_proj * vec4<f32>(x, 1.0);
+    if !(clip.w > 0.0) || view.map_size < 1.0 {
+        return vec2<i32>(-1);
+    }
+    let ndc = clip.xy / clip.w;
+    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    let n = view.map_size;
+    let t = clamp(floor(uv * n), vec2<f32>(0.0), vec2<f32>(n - 1.0));
+    return vec2<i32>(t);
+}
+
+fn probe_pixel() {
+    let p = vec2<i32>(view.probe.xy);
+    for (var i = 0u; i < PIXEL_FLOATS; i++) {
+        out[i] = nan();
+    }
+    if view.kind == VIEW_LIGHT_MAPS {
+        out[14] = f32(p.x);
+        out[15] = f32(p.y);
+        if p.x < map_size_i() && p.y < map_size_i() {
+            put_texels(16u, p);
+        }
+        return;
+    }
+    let size = vec2<i32>(textureDimensions(data));
+    if any(p >= size) {
+        return;
+    }
+    let c = textureLoad(color_bytes, p, 0);
+    out[0] = c.r;
+    out[1] = c.g;
+    out[2] = c.b;
+    out[3] = c.a;
+    let d = textureLoad(data, p, 0);
+    out[4] = d.x;
+    out[5] = d.y;
+    let z = textureLoad(depth, p, 0);
+    out[6] = z;
+    out[7] = select(0.0, 1.0, z > 0.0);
+    if view.has_reference != 0u {
+        out[8] = textureLoad(reference_v, p, 0).x;
+    }
+    if z > 0.0 {
+        let dims = vec2<f32>(size);
+        let ndc = vec2<f32>((f32(p.x) + 0.5) / dims.x * 2.0 - 1.0, 1.0 - (f32(p.y) + 0.5) / dims.y * 2.0);
+        let w = view.inv_view_proj * vec4<f32>(ndc, z, 1.0);
+        let x = w.xyz / w.w;
+        out[9] = x.x;
+        out[10] = x.y;
+        out[11] = x.z;
+        let q = texel_under(x);
+        if q.x >= 0 {
+            out[14] = f32(q.x);
+            out[15] = f32(q.y);
+            put_texels(16u, q);
+        }
+    }
+}
+
+// The value the fit sees at grid sample i.
+fn fit_value(i: u32, grid: u32) -> f32 {
+    let gx = i % grid;
+    let gy = i / grid;
+    if view.kind == VIEW_LIGHT_MAPS {
+        let n = view.map_size;
+        let q = vec2<i32>(vec2<f32>((f32(gx) + 0.5) / f32(grid) * n, (f32(gy) + 0.5) / f32(grid) * n));
+        let mask = view.channel_mask & ((1u << view.channel_count) - 1u);
+        let shown = countOneBits(mask);
+        if shown == 0u {
+            return nan();
+        }
+        // Sample i looks at the (i mod shown)-th shown channel.
+        var k = i % shown;
+        var c = 0u;
+        for (var j = 0u; j < 4u; j++) {
+            if (mask & (1u << j)) != 0u {
+                if k == 0u {
+                    c = j;
+                    break;
+                }
+                k -= 1u;
+            }
+        }
+        let v = channel_at(c, q);
+        return select(nan(), v.value, v.valid);
+    }
+    let dims = vec2<f32>(textureDimensions(data));
+    let p = vec2<i32>(vec2<f32>((f32(gx) + 0.5) / f32(grid) * dims.x, (f32(gy) + 0.5) / f32(grid) * dims.y));
+    if !is_hit(p) {
+        return nan();
+    }
+    let d = textureLoad(data, p, 0).xy;
+    switch view.kind {
+        case VIEW_VISIBILITY: { return d.x; }
+        case VIEW_T: { return d.y - 2.0 * branch_of(d.y); }
+        case VIEW_ERROR: {
+            if view.has_reference == 0u {
+                return nan();
+            }
+            return abs(d.x - textureLoad(reference_v, p, 0).x);
+        }
+        default: { return nan(); }
+    }
+}
+
+@compute @workgroup_size(64)
+fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if view.probe.z == PROBE_PIXEL {
+        if id.x == 0u {
+            probe_pixel();
+        }
+        return;
+    }
+    let grid = max(view.probe.w, 1u);
+    if id.x < grid * grid {
+        out[id.x] = fit_value(id.x, grid);
+    }
+}

@@ -1,0 +1,134 @@
+// The camera pass every method shares (src/render/passes/camera.rs): every surface from the
+// camera, V per pixel from the method, diffuse shading from the disk times V. A method's shader
+// (shaders/methods/NAME.wgsl) includes this file and defines
+//     fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
+// for the shaded point x, its normal n (turned toward the camera) and the pixel's centre, with
+// its own bindings in group 1. Depth is reversed (1 at the near plane, 0 at the far one) for
+// precision: the world position is read back from it.
+// #include shared/surface.wgsl
+
+struct CameraUniforms {
+    view_proj: mat4x4<f32>,
+    // The camera position.
+    eye: vec3<f32>,
+    // The ambient share of the shading, so shadowed surfaces keep their shape.
+    ambient: f32,
+    // The disk centre c.
+    light_center: vec3<f32>,
+    light_radius: f32,
+    // The unit normal n_c, toward the emitting side.
+    light_normal: vec3<f32>,
+    light_intensity: f32,
+    // VT_* below: which V(t) the D-buffer methods apply.
+    vt_variant: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+};
+
+@group(0) @binding(0) var<uniform> camera: CameraUniforms;
+
+// V(t) variants, as geometry::VtVariant::code().
+const VT_SMOOTHSTEP: u32 = 0u;
+const VT_SQRT: u32 = 1u;
+const VT_EXACT: u32 = 2u;
+const VT_LINEAR: u32 = 3u;
+
+// Branch codes, as geometry::Branch::code().
+const BRANCH_UMBRA: f32 = 0.0;
+const BRANCH_PENUMBRA_HIDDEN: f32 = 1.0;
+const BRANCH_PENUMBRA_VISIBLE: f32 = 2.0;
+const BRANCH_LIT: f32 = 3.0;
+
+// geometry::metrics::CLASS_EPS: V at or below it is umbra, at or above 1 - it lit.
+const CLASS_EPSILON: f32 = 0.004;
+
+struct Visibility {
+    v: f32,
+    t: f32,
+    branch: f32,
+};
+
+// The visible fraction of the unit disk beyond a chord at signed distance h from its centre.
+fn disk_segment_fraction(h_in: f32) -> f32 {
+    let h = clamp(h_in, -1.0, 1.0);
+    return (acos(h) - h * sqrt(max(1.0 - h * h, 0.0))) / 3.14159265358979;
+}
+
+fn v_of_t(t_in: f32) -> f32 {
+    let t = clamp(t_in, 0.0, 1.0);
+    switch camera.vt_variant {
+        case VT_SQRT: { return sqrt(t); }
+        case VT_EXACT: { return disk_segment_fraction(1.0 - 2.0 * t); }
+        case VT_LINEAR: { return t; }
+        default: { return t * t * (3.0 - 2.0 * t); }
+    }
+}
+
+// V given for a method that is not the D-buffer: t = V, the branch by the class of V.
+fn plain(v: f32) -> Visibility {
+    var out: Visibility;
+    out.v = v;
+    out.t = v;
+    out.branch = select(
+        select(BRANCH_PENUMBRA_VISIBLE, BRANCH_LIT, v >= 1.0 - CLASS_EPSILON),
+        BRANCH_UMBRA,
+        v <= CLASS_EPSILON
+    );
+    return out;
+}
+
+// Whether x lies on the emitting side of the one-sided light.
+fn in_front_of_light(x: vec3<f32>) -> bool {
+    return dot(x - camera.light_center, camera.light_normal) > 0.0;
+}
+
+// Whether the side of the surface the camera sees faces the light centre (else it is its own
+// shadow: nothing arrives, and the oracle agrees: rays from it run into the object).
+fn faces_light_center(x: vec3<f32>, n: vec3<f32>) -> bool {
+    return dot(n, camera.light_center - x) > 0.0;
+}
+
+struct SurfaceOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) @interpolate(flat) albedo: f32,
+};
+
+@vertex
+fn vs_main(v: SurfaceIn) -> SurfaceOut {
+    var out: SurfaceOut;
+    out.clip = camera.view_proj * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    out.albedo = v.albedo;
+    return out;
+}
+
+struct Targets {
+    // Linear RGB (the sRGB target encodes it); a = 1.
+    @location(0) color: vec4<f32>,
+    // V, and t + 2 × branch code: t is in [0, 1], so both are exact in one f32.
+    @location(1) data: vec2<f32>,
+};
+
+@fragment
+fn fs_main(f: SurfaceOut) -> Targets {
+    // The flat normal of the triangle from the derivatives of its (affine) position, turned to
+    // the side the camera sees: surfaces are two-sided.
+    let to_eye = camera.eye - f.world;
+    let m = cross(dpdx(f.world), dpdy(f.world));
+    var n = select(normalize(to_eye), normalize(m), dot(m, m) > 1e-30);
+    if dot(n, to_eye) < 0.0 {
+        n = -n;
+    }
+    let vis = method_visibility(f.world, n, f.clip.xy);
+    let l = normalize(camera.light_center - f.world);
+    let cos_receiver = max(dot(n, l), 0.0);
+    let cos_emitter = max(dot(-l, camera.light_normal), 0.0);
+    let direct = camera.light_intensity * vis.v * cos_receiver * cos_emitter;
+    let shade = f.albedo * (camera.ambient + (1.0 - camera.ambient) * min(direct, 1.0));
+    var out: Targets;
+    out.color = vec4<f32>(vec3<f32>(shade), 1.0);
+    out.data = vec2<f32>(vis.v, vis.t + 2.0 * vis.branch);
+    return out;
+}

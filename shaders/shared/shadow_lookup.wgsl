@@ -1,0 +1,85 @@
+// Looking up the centre's shadow map (|cx_o|, render::passes::shadow_map) from the camera pass:
+// the methods built on it (hard, pcf, pcss, the D-buffer family) include this file after
+// shared/camera.wgsl and bind their ShadowUniforms and the map as group 1, bindings 0 and 1.
+
+struct ShadowUniforms {
+    // World to the light view's clip space, and back.
+    light_view_proj: mat4x4<f32>,
+    inv_light_view_proj: mat4x4<f32>,
+    // The map is size × size texels.
+    size: f32,
+    // The slope (tangent) one texel spans in the light view.
+    texel_slope: f32,
+    // Bias of the hidden-from-centre test, relative to |cx|: constant, and the factor of the
+    // slope one texel spans times the tangent of the incidence angle.
+    bias_constant: f32,
+    bias_slope: f32,
+    // The method's own numbers (its knobs), as it documents them.
+    knobs: vec4<f32>,
+};
+
+@group(1) @binding(0) var<uniform> shadow: ShadowUniforms;
+@group(1) @binding(1) var d_o: texture_2d<f32>;
+
+// Where a shaded point falls in the light view.
+struct LightLookup {
+    // |cx|.
+    d: f32,
+    // In [0, 1]² over the map; inside: the point is in the map's frustum.
+    uv: vec2<f32>,
+    texel: vec2<i32>,
+    inside: bool,
+    // The bias of the |cx_o| test here, relative to |cx|.
+    rel_bias: f32,
+};
+
+// The texel under a point of the light view's image, `uv` in [0, 1]².
+fn texel_of(uv: vec2<f32>) -> vec2<i32> {
+    let size = shadow.size;
+    return vec2<i32>(clamp(floor(uv * size), vec2<f32>(0.0), vec2<f32>(size - 1.0)));
+}
+
+fn light_lookup(x: vec3<f32>, n: vec3<f32>) -> LightLookup {
+    var out: LightLookup;
+    let to_x = x - camera.light_center;
+    out.d = length(to_x);
+    let clip = shadow.light_view_proj * vec4<f32>(x, 1.0);
+    let ndc = clip.xyz / clip.w;
+    out.inside = clip.w > 0.0 && all(abs(ndc.xy) <= vec2<f32>(1.0));
+    out.uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    out.texel = texel_of(out.uv);
+    // Slope-scaled bias: a texel spans a slope of texel_slope in the light view; on a surface
+    // tilted away from the light its footprint grows with tan(incidence).
+    let cos_i = clamp(abs(dot(n, -to_x / out.d)), 0.05, 1.0);
+    let tan_i = sqrt(1.0 - cos_i * cos_i) / cos_i;
+    out.rel_bias = shadow.bias_constant + shadow.bias_slope * shadow.texel_slope * tan_i;
+    return out;
+}
+
+// Whether the nearest surface at the point's texel hides it from c.
+fn hidden_from_center(l: LightLookup) -> bool {
+    let o = textureLoad(d_o, l.texel, 0).x;
+    return l.d > o + l.d * l.rel_bias;
+}
+
+// Where the receiver's plane (through x, normal n) meets the ray from c through the centre of
+// `texel`: the |cx| a filter tap there must be compared with (receiver-plane depth bias).
+fn receiver_distance(texel: vec2<i32>, x: vec3<f32>, n: vec3<f32>, d: f32) -> f32 {
+    let uv = (vec2<f32>(texel) + 0.5) / shadow.size;
+    let ndc = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.5, 1.0);
+    let p = shadow.inv_light_view_proj * ndc;
+    let c = camera.light_center;
+    let dir = normalize(p.xyz / p.w - c);
+    let denom = dot(n, dir);
+    let t = dot(n, x - c) / denom;
+    // Grazing or behind: fall back to the point's own distance.
+    return select(d, t, abs(denom) > 1e-4 && t > 0.0 && t < 4.0 * d);
+}
+
+// 1 where the shadow map at `texel` does not hide a receiver at `expected`.
+fn lit_at(texel: vec2<i32>, expected: f32, rel_bias: f32) -> f32 {
+    let size = i32(shadow.size);
+    let q = clamp(texel, vec2<i32>(0), vec2<i32>(size - 1));
+    let o = textureLoad(d_o, q, 0).x;
+    return select(0.0, 1.0, expected <= o + expected * rel_bias);
+}

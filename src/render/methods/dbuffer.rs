@@ -1,0 +1,312 @@
+//! `dbuffer` (seed 000, with design.md's corrections) and `dbuffer-center` (its silhouettes and
+//! volumes taken from the light centre only: the penumbra-wedge approximation seed 000 Fig. 1
+//! criticises).
+//!
+//! Per light or caster move: the geometry stage (`geometry::PreparedCasters::build`: classes,
+//! silhouettes, volumes), the volumes uploaded, then the light pass — the session's shadow map
+//! (`|cx_o|`) and the volume channels (`passes::dbuffer_volumes`). Per frame: the camera pass
+//! with `shaders/methods/dbuffer.wgsl`. CPU twin: `geometry::DBufferTwin`.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::Vec3;
+
+use super::{
+    CameraBindings, Channel, Empty, FrameInputs, LightMaps, MethodPipeline, MethodSpec,
+    MethodState, SharedMaps,
+};
+use crate::geometry::light_view::LightView;
+use crate::geometry::{CasterGeometry, SceneGeometry, VolumeParams};
+use crate::render::gpu_scene::VertexChunks;
+use crate::render::passes::dbuffer_volumes::{CasterVolumes, DBufferVolumes};
+use crate::render::passes::shadow_map::{lookup_entries, LightUniforms, ShadowUniforms};
+use crate::render::timer::Recorder;
+use crate::render::{
+    buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError, VolumeVertex,
+};
+
+pub static DBUFFER: MethodSpec = MethodSpec {
+    name: "dbuffer",
+    description: "D-buffer soft shadows (Jakobsen et al. 2004)",
+    knobs: &[],
+    cpu_side: false,
+    new: |ctx| Box::new(DBuffer::new(ctx, false)),
+};
+
+pub static DBUFFER_CENTER: MethodSpec = MethodSpec {
+    name: "dbuffer-center",
+    description: "D-buffer with silhouettes from the light centre only",
+    knobs: &[],
+    cpu_side: false,
+    new: |ctx| Box::new(DBuffer::new(ctx, true)),
+};
+
+const SHADER: &str = "methods/dbuffer.wgsl";
+
+/// The D-buffer's channels, in `dbuffer.exr` order (R, G, B, A): textures 0 (`|cx_o|`), 1
+/// (umbra: `|cx_uv|`, `|cx_s|`), 2 (penumbra: `|cx_pv|`, `|cx_s|`). `|cx_s|` is the umbra's
+/// where it has one.
+pub const CHANNELS: &[Channel] = &[
+    Channel {
+        name: "|cx_o|",
+        texture: 0,
+        component: 0,
+        empty: Empty::Far,
+        or: None,
+    },
+    Channel {
+        name: "|cx_uv|",
+        texture: 1,
+        component: 0,
+        empty: Empty::NonPositive,
+        or: None,
+    },
+    Channel {
+        name: "|cx_pv|",
+        texture: 2,
+        component: 0,
+        empty: Empty::NonPositive,
+        or: None,
+    },
+    Channel {
+        name: "|cx_s|",
+        texture: 1,
+        component: 1,
+        empty: Empty::NonPositive,
+        or: Some((2, 1)),
+    },
+];
+
+pub struct DBuffer {
+    center_silhouettes: bool,
+    pipeline: Arc<MethodPipeline>,
+    uniforms: wgpu::Buffer,
+    /// The geometry, and the revision it was built for.
+    geometry: Option<(SceneGeometry, u64)>,
+    builds: u64,
+    geometry_ms: f64,
+    casters: Vec<CasterVolumes>,
+    penumbra: VertexChunks,
+    volumes: DBufferVolumes,
+    /// The revision, size and shadow map generation the volume channels hold.
+    made_for: Option<(u64, u32, u64)>,
+    view_proj: glam::Mat4,
+    /// The bind group and the (shadow map, volume targets) generations it binds.
+    bind_group: Option<(wgpu::BindGroup, (u64, u64))>,
+}
+
+impl DBuffer {
+    pub fn new(ctx: &GpuContext, center_silhouettes: bool) -> DBuffer {
+        let mut entries = lookup_entries().to_vec();
+        entries.extend([
+            texture_entry(
+                2,
+                wgpu::ShaderStages::FRAGMENT,
+                wgpu::TextureViewDimension::D2,
+            ),
+            texture_entry(
+                3,
+                wgpu::ShaderStages::FRAGMENT,
+                wgpu::TextureViewDimension::D2,
+            ),
+        ]);
+        DBuffer {
+            center_silhouettes,
+            pipeline: MethodPipeline::get(ctx, SHADER, &entries),
+            uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "DBuffer::uniforms"),
+            geometry: None,
+            builds: 0,
+            geometry_ms: 0.0,
+            casters: Vec::new(),
+            penumbra: VertexChunks::empty(),
+            volumes: DBufferVolumes::new(ctx),
+            made_for: None,
+            view_proj: glam::Mat4::IDENTITY,
+            bind_group: None,
+        }
+    }
+
+    /// The geometry stage and the volumes' upload, when the light or a caster moved.
+    fn update_geometry(&mut self, inputs: &FrameInputs<'_>) {
+        if self
+            .geometry
+            .as_ref()
+            .is_some_and(|(_, r)| *r == inputs.revision)
+        {
+            return;
+        }
+        let params = VolumeParams {
+            center_silhouettes: self.center_silhouettes,
+            ..VolumeParams::for_scene(inputs.scene)
+        };
+        let t = Instant::now();
+        let geometry = inputs.prepared().build(&inputs.scene.light, &params);
+        self.geometry_ms = t.elapsed().as_secs_f64() * 1e3;
+        self.builds += 1;
+        let device = &inputs.ctx.device;
+        let mut penumbra = Vec::new();
+        self.casters = geometry
+            .casters
+            .iter()
+            .map(|g| {
+                let (umbra, pen) = volume_vertices(g);
+                penumbra.extend(pen);
+                CasterVolumes {
+                    rect: light_view_rect(
+                        inputs.light_view,
+                        umbra.iter().map(|v| Vec3::from(v.position)),
+                    ),
+                    umbra: VertexChunks::new(device, "DBuffer::umbra", &umbra),
+                }
+            })
+            .collect();
+        self.penumbra = VertexChunks::new(device, "DBuffer::penumbra", &penumbra);
+        self.geometry = Some((geometry, inputs.revision));
+        self.made_for = None;
+    }
+}
+
+impl MethodState for DBuffer {
+    fn prepare(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        shared: &mut SharedMaps,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), RenderError> {
+        self.update_geometry(inputs);
+        shared.shadow_map.update(inputs, rec);
+        let Some(map) = shared.shadow_map.targets() else {
+            return Err(RenderError::Gpu("the shadow map was not made".into()));
+        };
+        let key = (inputs.revision, map.size, map.generation);
+        if self.made_for != Some(key) {
+            self.volumes.record(
+                inputs.ctx,
+                rec,
+                &LightUniforms::new(&inputs.scene.light, inputs.light_view),
+                &map.depth.texture,
+                &self.casters,
+                &self.penumbra,
+            );
+            self.made_for = Some(key);
+            self.view_proj = inputs.light_view.view_projection();
+        }
+        let uniforms = ShadowUniforms::new(inputs.light_view, map.size, [0.0; 4]);
+        inputs
+            .ctx
+            .queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+        let Some(v) = self.volumes.targets() else {
+            return Err(RenderError::Gpu(
+                "the D-buffer's targets were not made".into(),
+            ));
+        };
+        let generations = (map.generation, v.generation);
+        if self
+            .bind_group
+            .as_ref()
+            .is_none_or(|(_, g)| *g != generations)
+        {
+            let group = inputs
+                .ctx
+                .device
+                .create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("DBuffer::bind_group"),
+                    layout: &self.pipeline.layout,
+                    entries: &[
+                        buffer_entry(0, &self.uniforms),
+                        view_entry(1, &map.distance.view),
+                        view_entry(2, &v.umbra.view),
+                        view_entry(3, &v.penumbra.view),
+                    ],
+                });
+            self.bind_group = Some((group, generations));
+        }
+        Ok(())
+    }
+
+    fn camera(&self) -> Option<CameraBindings<'_>> {
+        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
+            pipeline: &self.pipeline.pipeline,
+            bind_group: g,
+        })
+    }
+
+    fn light_maps<'a>(&'a self, shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
+        self.made_for?;
+        let map = shared.shadow_map.targets()?;
+        let v = self.volumes.targets()?;
+        Some(LightMaps {
+            size: v.size,
+            view_proj: self.view_proj,
+            textures: [&map.distance.view, &v.umbra.view, &v.penumbra.view],
+            raw: [&map.distance.texture, &v.umbra.texture, &v.penumbra.texture],
+            channels: CHANNELS,
+            generation: map.generation ^ v.generation.rotate_left(32),
+        })
+    }
+
+    fn geometry(&self) -> Option<&SceneGeometry> {
+        self.geometry.as_ref().map(|(g, _)| g)
+    }
+
+    fn geometry_builds(&self) -> (u64, f64) {
+        (self.builds, self.geometry_ms)
+    }
+
+    fn invalidate(&mut self) {
+        self.made_for = None;
+    }
+}
+
+/// The caster's volume triangles as GPU vertices, umbra and penumbra apart, each vertex carrying
+/// its triangle's attributes (its winding says which way a ray crosses it).
+pub fn volume_vertices(g: &CasterGeometry) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
+    let (mut umbra, mut penumbra) = (Vec::new(), Vec::new());
+    for i in 0..g.volumes.triangle_count() {
+        let (corners, attrs) = g.volumes.triangle(i);
+        let out = if attrs.kind.is_umbra() {
+            &mut umbra
+        } else {
+            &mut penumbra
+        };
+        out.extend(corners.map(|p| VolumeVertex {
+            position: p.to_array(),
+            kind: attrs.kind.code(),
+            edge_a: attrs.edge[0].to_array(),
+            edge_b: attrs.edge[1].to_array(),
+            extrusion: attrs.extrusion.to_array(),
+        }));
+    }
+    (umbra, penumbra)
+}
+
+/// The part `[x0, y0, x1, y1]` of the light view's image (`[0, 1]²`, y down) that triangles
+/// with these corners can cover; all of it if a corner lies behind the light centre.
+fn light_view_rect(view: &LightView, points: impl Iterator<Item = Vec3>) -> [f32; 4] {
+    let vp = view.view_projection();
+    let mut rect = [f32::MAX, f32::MAX, f32::MIN, f32::MIN];
+    for p in points {
+        let c = vp * p.extend(1.0);
+        if !(c.w > 1e-6) {
+            return [0.0, 0.0, 1.0, 1.0];
+        }
+        let (u, v) = (c.x / c.w * 0.5 + 0.5, 0.5 - c.y / c.w * 0.5);
+        rect = [
+            rect[0].min(u),
+            rect[1].min(v),
+            rect[2].max(u),
+            rect[3].max(v),
+        ];
+    }
+    if rect[0] > rect[2] {
+        return [0.0; 4];
+    }
+    [
+        rect[0].clamp(0.0, 1.0),
+        rect[1].clamp(0.0, 1.0),
+        rect[2].clamp(0.0, 1.0),
+        rect[3].clamp(0.0, 1.0),
+    ]
+}

@@ -1,0 +1,438 @@
+//! The shadow methods. Each is one module here with its passes, its WGSL
+//! (`shaders/methods/NAME.wgsl`: the method's `method_visibility`, pasted into the shared camera
+//! pass), its knobs and its CPU twin where it has one. [`ALL`] is the registry: adding a method is
+//! its module and one line there.
+//!
+//! A method's per-scene GPU state is a [`MethodState`]: it brings its light-space products
+//! (D-buffer, shadow maps) up to date only when the light or a caster moved, and hands the
+//! camera pass its pipeline and bind group. What every method shares — the surfaces, shading,
+//! V(t), the targets — is the camera pass's ([`super::passes::camera`]).
+
+pub mod dbuffer;
+pub mod hard;
+pub mod on_shadow_map;
+pub mod pcf;
+pub mod pcss;
+pub mod reference;
+pub mod sampled;
+
+use std::cell::OnceCell;
+use std::fmt;
+use std::str::FromStr;
+use std::sync::Arc;
+
+use glam::Mat4;
+
+use super::gpu_scene::GpuScene;
+use super::passes::shadow_map::ShadowMap;
+use super::timer::Recorder;
+use super::{GpuContext, RenderError};
+use crate::geometry::light_view::LightView;
+use crate::geometry::{PreparedCasters, SceneGeometry, VtVariant};
+use crate::scene::Scene;
+
+/// Every method, in the order pickers, `compare` and `bench` list them. The registry.
+pub const ALL: &[Method] = &[
+    Method(&dbuffer::DBUFFER),
+    Method(&dbuffer::DBUFFER_CENTER),
+    Method(&hard::HARD),
+    Method(&pcf::PCF),
+    Method(&pcss::PCSS),
+    Method(&sampled::SAMPLED),
+    Method(&reference::REFERENCE),
+];
+
+/// What a method is, for the registry.
+pub struct MethodSpec {
+    /// The command-line name (`--method`, pickers, `report.json`).
+    pub name: &'static str,
+    /// One line for menus and `--help`.
+    pub description: &'static str,
+    /// Its knobs (command-line flags, lab sliders).
+    pub knobs: &'static [&'static Knob],
+    /// V is computed on the CPU (the ray-cast reference): only wall time measures it.
+    pub cpu_side: bool,
+    /// Its per-scene GPU state.
+    pub new: fn(&GpuContext) -> Box<dyn MethodState>,
+}
+
+/// A method of [`ALL`].
+#[derive(Clone, Copy)]
+pub struct Method(&'static MethodSpec);
+
+impl Method {
+    /// The paper's method, the default.
+    pub const DBUFFER: Method = Method(&dbuffer::DBUFFER);
+    /// The D-buffer with silhouettes from the light centre.
+    pub const DBUFFER_CENTER: Method = Method(&dbuffer::DBUFFER_CENTER);
+    /// The hard shadow map, the baseline of the benchmarks.
+    pub const HARD: Method = Method(&hard::HARD);
+    /// The ray-cast ground truth.
+    pub const REFERENCE: Method = Method(&reference::REFERENCE);
+
+    pub fn all() -> &'static [Method] {
+        ALL
+    }
+
+    pub fn spec(self) -> &'static MethodSpec {
+        self.0
+    }
+
+    pub fn name(self) -> &'static str {
+        self.0.name
+    }
+
+    pub fn description(self) -> &'static str {
+        self.0.description
+    }
+
+    pub fn knobs(self) -> &'static [&'static Knob] {
+        self.0.knobs
+    }
+
+    /// Whether V is computed on the CPU (the reference).
+    pub fn cpu_side(self) -> bool {
+        self.0.cpu_side
+    }
+
+    pub fn is_reference(self) -> bool {
+        self == Method::REFERENCE
+    }
+}
+
+impl Default for Method {
+    fn default() -> Self {
+        Method::DBUFFER
+    }
+}
+
+impl PartialEq for Method {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.name == other.0.name
+    }
+}
+
+impl Eq for Method {}
+
+impl std::hash::Hash for Method {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.0.name.hash(state);
+    }
+}
+
+impl fmt::Debug for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Method({})", self.0.name)
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.0.name)
+    }
+}
+
+impl FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        ALL.iter().copied().find(|m| m.name() == s).ok_or_else(|| {
+            let names: Vec<&str> = ALL.iter().map(|m| m.name()).collect();
+            format!("unknown method '{s}': expected one of {}", names.join(", "))
+        })
+    }
+}
+
+/// A method's knob: a command-line flag `--NAME` and a slider in the lab.
+#[derive(Debug)]
+pub struct Knob {
+    /// The flag without its dashes, e.g. `pcf-radius`.
+    pub name: &'static str,
+    pub help: &'static str,
+    pub min: u32,
+    pub max: u32,
+    pub default: u32,
+}
+
+/// At most this many distinct knobs over all methods (checked by a test).
+pub const MAX_KNOBS: usize = 16;
+
+/// Every distinct knob of the registry, in registry order.
+pub fn all_knobs() -> Vec<&'static Knob> {
+    let mut out: Vec<&'static Knob> = Vec::new();
+    for m in ALL {
+        for &k in m.knobs() {
+            if !out.iter().any(|o| o.name == k.name) {
+                out.push(k);
+            }
+        }
+    }
+    out
+}
+
+fn knob_slot(name: &str) -> Option<usize> {
+    all_knobs()
+        .iter()
+        .position(|k| k.name == name)
+        .filter(|&i| i < MAX_KNOBS)
+}
+
+/// The value of every knob (defaults where not set): what a frame request carries.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct Knobs {
+    values: [Option<u32>; MAX_KNOBS],
+}
+
+impl Default for Knobs {
+    fn default() -> Self {
+        Knobs {
+            values: [None; MAX_KNOBS],
+        }
+    }
+}
+
+impl fmt::Debug for Knobs {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mut m = f.debug_map();
+        for k in all_knobs() {
+            m.entry(&k.name, &self.get(k));
+        }
+        m.finish()
+    }
+}
+
+impl Knobs {
+    /// The value of `knob`, its default if not set.
+    pub fn get(&self, knob: &Knob) -> u32 {
+        knob_slot(knob.name)
+            .and_then(|i| self.values[i])
+            .unwrap_or(knob.default)
+    }
+
+    /// Set the knob called `name` (no range check: see [`Knobs::validate`]).
+    pub fn set(&mut self, name: &str, value: u32) -> Result<(), String> {
+        let i = knob_slot(name).ok_or_else(|| format!("unknown knob '{name}'"))?;
+        self.values[i] = Some(value);
+        Ok(())
+    }
+
+    /// `self` with `knob` set to `value`.
+    pub fn with(mut self, knob: &Knob, value: u32) -> Knobs {
+        if let Some(i) = knob_slot(knob.name) {
+            self.values[i] = Some(value);
+        }
+        self
+    }
+
+    /// Every knob in its range, or which one is not and what was expected (naming the flag).
+    pub fn validate(&self) -> Result<(), String> {
+        for k in all_knobs() {
+            let v = self.get(k);
+            if !(k.min..=k.max).contains(&v) {
+                return Err(format!(
+                    "--{} expects {} to {}, found {v}",
+                    k.name, k.min, k.max
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What a method sees of the session while it records a frame.
+pub struct FrameInputs<'a> {
+    pub ctx: &'a GpuContext,
+    pub scene: &'a Scene,
+    pub surfaces: &'a GpuScene,
+    /// The casters welded with their adjacency, prepared on first use ([`FrameInputs::prepared`]).
+    pub prepared: &'a OnceCell<PreparedCasters>,
+    pub light_view: &'a LightView,
+    /// Bumped whenever the light or a caster changed: light-space products made for an older
+    /// revision are stale.
+    pub revision: u64,
+    /// The D-buffer and shadow maps are this many texels square.
+    pub map_size: u32,
+    pub vt: VtVariant,
+    pub knobs: &'a Knobs,
+    /// V per pixel handed in from outside (the ray-cast reference), if any.
+    pub external: Option<External<'a>>,
+}
+
+impl FrameInputs<'_> {
+    /// The casters welded with their adjacency (built once per mesh, on first use: methods
+    /// without volumes never pay for it).
+    pub fn prepared(&self) -> &PreparedCasters {
+        self.prepared
+            .get_or_init(|| PreparedCasters::new(self.scene))
+    }
+}
+
+/// V per pixel handed in from outside, and a number that changes when its texture does.
+#[derive(Clone, Copy)]
+pub struct External<'a> {
+    pub view: &'a wgpu::TextureView,
+    pub generation: u64,
+}
+
+/// Light-space maps a method keeps (the D-buffer view, the inspector, `dbuffer.exr`): up to
+/// three textures, and which component of which texture each named channel is.
+pub struct LightMaps<'a> {
+    pub size: u32,
+    /// The light view's world → clip transform (to find the texel under a world point).
+    pub view_proj: Mat4,
+    /// One to three `textureLoad`-able float textures (unused slots repeat the first).
+    pub textures: [&'a wgpu::TextureView; 3],
+    /// The same textures, to read back.
+    pub raw: [&'a wgpu::Texture; 3],
+    pub channels: &'static [Channel],
+    /// Changes whenever the textures are made again (whoever binds them binds again).
+    pub generation: u64,
+}
+
+/// One channel of [`LightMaps`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Channel {
+    pub name: &'static str,
+    /// Which of the (up to) three textures.
+    pub texture: u32,
+    /// Which component (0 = R … 3 = A).
+    pub component: u32,
+    /// How "nothing here" is stored: values at or above it (a distance for no surface), or zero
+    /// and below (no volume crossing), read as "no data".
+    pub empty: Empty,
+    /// Where this one has no data: the value of another `(texture, component)` instead.
+    pub or: Option<(u32, u32)>,
+}
+
+impl Channel {
+    /// Whether `v` is data (not the "nothing here" mark).
+    pub fn has_value(&self, v: f32) -> bool {
+        match self.empty {
+            Empty::Far => v < 1.5e38,
+            Empty::NonPositive => v > 0.0 && v < 1.5e38,
+        }
+    }
+
+    /// The channel's value in a texel given as the three textures' RGBA, `None` where it has
+    /// none (the GPU twin is `channel_at` in `shaders/shared/view_inputs.wgsl`).
+    pub fn value(&self, texel: &[[f32; 4]; 3]) -> Option<f32> {
+        let at = |t: u32, c: u32| texel[(t as usize).min(2)][(c as usize).min(3)];
+        let v = at(self.texture, self.component);
+        if self.has_value(v) {
+            return Some(v);
+        }
+        let (t, c) = self.or?;
+        let w = at(t, c);
+        self.has_value(w).then_some(w)
+    }
+}
+
+/// How a light-map channel marks texels without data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Empty {
+    /// Values ≥ 1.5e38 (the "no surface" distance).
+    Far,
+    /// Values ≤ 0 (no volume crossing).
+    NonPositive,
+}
+
+/// A method's camera pipeline and the layout of its group 1, built once per device.
+pub struct MethodPipeline {
+    pub pipeline: wgpu::RenderPipeline,
+    pub layout: wgpu::BindGroupLayout,
+}
+
+impl MethodPipeline {
+    /// The pipeline of `shader` (`methods/NAME.wgsl`) whose group 1 has `entries`.
+    pub fn get(
+        ctx: &GpuContext,
+        shader: &'static str,
+        entries: &[wgpu::BindGroupLayoutEntry],
+    ) -> Arc<MethodPipeline> {
+        ctx.shared_named(shader, |device| {
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(shader),
+                entries,
+            });
+            let camera = super::passes::camera::CameraPass::get(ctx);
+            MethodPipeline {
+                pipeline: camera.method_pipeline(device, shader, &layout),
+                layout,
+            }
+        })
+    }
+}
+
+/// The camera pass's view of a method: its pipeline and its bind group (group 1).
+pub struct CameraBindings<'a> {
+    pub pipeline: &'a wgpu::RenderPipeline,
+    pub bind_group: &'a wgpu::BindGroup,
+}
+
+/// The session's light-space products several methods share (the centre shadow map of `hard`,
+/// `pcf`, `pcss` and the D-buffer's `|cx_o|`), each made once per revision.
+pub struct SharedMaps {
+    pub shadow_map: ShadowMap,
+}
+
+/// A method's GPU state for one scene.
+pub trait MethodState: Send {
+    /// Bring the light-space products up to date for `inputs`, recording the passes that make
+    /// them only when they are stale, and write this frame's uniforms.
+    fn prepare(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        shared: &mut SharedMaps,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), RenderError>;
+
+    /// Its camera pipeline and bind group; `None` before the first [`MethodState::prepare`].
+    fn camera(&self) -> Option<CameraBindings<'_>>;
+
+    /// Its light-space maps, if it has any.
+    fn light_maps<'a>(&'a self, _shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
+        None
+    }
+
+    /// The geometry stage's output its light pass was built from (overlays, stats).
+    fn geometry(&self) -> Option<&SceneGeometry> {
+        None
+    }
+
+    /// CPU milliseconds of its last geometry build, and how many builds it has made.
+    fn geometry_builds(&self) -> (u64, f64) {
+        (0, 0.0)
+    }
+
+    /// Forget the light-space products: the next frame remakes them (to time them).
+    fn invalidate(&mut self) {}
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_and_parse_back() {
+        for (i, m) in ALL.iter().enumerate() {
+            assert_eq!(m.name().parse::<Method>(), Ok(*m));
+            assert!(ALL[..i].iter().all(|o| o.name() != m.name()), "{m} twice");
+        }
+        assert!("nope".parse::<Method>().unwrap_err().contains("dbuffer, "));
+    }
+
+    #[test]
+    fn knobs_fit_and_validate_by_flag() {
+        assert!(all_knobs().len() <= MAX_KNOBS);
+        let k = Knobs::default();
+        assert_eq!(k.get(&pcf::RADIUS), pcf::RADIUS.default);
+        k.validate().unwrap();
+        let bad = k.with(&pcf::RADIUS, 99);
+        assert_eq!(bad.get(&pcf::RADIUS), 99);
+        let e = bad.validate().unwrap_err();
+        assert!(e.contains("--pcf-radius") && e.contains("99"), "{e}");
+        let mut named = Knobs::default();
+        named.set("lights", 4).unwrap();
+        assert_eq!(named.get(&sampled::LIGHTS), 4);
+        assert!(named.set("nope", 1).is_err());
+    }
+}

@@ -1,0 +1,113 @@
+//! What the methods that only filter the centre's shadow map (`hard`, `pcf`, `pcss`) share: the
+//! map itself is the session's ([`super::SharedMaps`]), made once per light or caster move; each
+//! method has its own camera shader, the map's `ShadowUniforms` with its knobs, and maybe one
+//! uniform buffer of its own (binding 2).
+
+use std::sync::Arc;
+
+use super::{CameraBindings, FrameInputs, LightMaps, MethodPipeline, MethodState, SharedMaps};
+use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
+use crate::render::timer::Recorder;
+use crate::render::{
+    buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
+};
+
+/// How one of these methods differs from the others.
+pub struct Flavor {
+    /// Its camera shader, `methods/NAME.wgsl`.
+    pub shader: &'static str,
+    /// Its numbers for `ShadowUniforms::knobs`, from the frame.
+    pub knobs: fn(&FrameInputs<'_>) -> [f32; 4],
+    /// The contents of its own uniform buffer (binding 2), if it has one, and that buffer's size.
+    pub extra: Option<(u64, fn() -> Vec<u8>)>,
+}
+
+pub struct OnShadowMap {
+    flavor: &'static Flavor,
+    pipeline: Arc<MethodPipeline>,
+    uniforms: wgpu::Buffer,
+    extra: Option<wgpu::Buffer>,
+    /// The bind group and the shadow map generation it binds.
+    bind_group: Option<(wgpu::BindGroup, u64)>,
+}
+
+impl OnShadowMap {
+    pub fn new(ctx: &GpuContext, flavor: &'static Flavor) -> OnShadowMap {
+        let mut entries = lookup_entries().to_vec();
+        if flavor.extra.is_some() {
+            entries.push(uniform_entry(2, wgpu::ShaderStages::FRAGMENT));
+        }
+        let pipeline = MethodPipeline::get(ctx, flavor.shader, &entries);
+        let extra = flavor.extra.map(|(size, contents)| {
+            let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("OnShadowMap::extra"),
+                size,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            ctx.queue.write_buffer(&buffer, 0, &contents());
+            buffer
+        });
+        OnShadowMap {
+            flavor,
+            pipeline,
+            uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "OnShadowMap::uniforms"),
+            extra,
+            bind_group: None,
+        }
+    }
+}
+
+impl MethodState for OnShadowMap {
+    fn prepare(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        shared: &mut SharedMaps,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), RenderError> {
+        shared.shadow_map.update(inputs, rec);
+        let Some(map) = shared.shadow_map.targets() else {
+            return Err(RenderError::Gpu("the shadow map was not made".into()));
+        };
+        let uniforms =
+            ShadowUniforms::new(inputs.light_view, map.size, (self.flavor.knobs)(inputs));
+        inputs
+            .ctx
+            .queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+        if self
+            .bind_group
+            .as_ref()
+            .is_none_or(|(_, g)| *g != map.generation)
+        {
+            let mut entries = vec![
+                buffer_entry(0, &self.uniforms),
+                view_entry(1, &map.distance.view),
+            ];
+            if let Some(extra) = &self.extra {
+                entries.push(buffer_entry(2, extra));
+            }
+            let group = inputs
+                .ctx
+                .device
+                .create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(self.flavor.shader),
+                    layout: &self.pipeline.layout,
+                    entries: &entries,
+                });
+            self.bind_group = Some((group, map.generation));
+        }
+        Ok(())
+    }
+
+    fn camera(&self) -> Option<CameraBindings<'_>> {
+        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
+            pipeline: &self.pipeline.pipeline,
+            bind_group: g,
+        })
+    }
+
+    fn light_maps<'a>(&'a self, shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
+        shared.shadow_map.light_maps()
+    }
+}

@@ -1,0 +1,106 @@
+//! `pcss`: percentage-closer soft shadows (Fernando 2005) sized by the disk, on the centre's
+//! shadow map: a blocker search in the cone from the point to the disk, then a filter as wide as
+//! the penumbra the blockers' mean distance predicts, both over a rotated Poisson disk
+//! (`shaders/methods/pcss.wgsl`).
+
+use super::on_shadow_map::{Flavor, OnShadowMap};
+use super::{FrameInputs, Knob, MethodSpec};
+use crate::scene::Scene;
+
+pub static BLOCKER_TAPS: Knob = Knob {
+    name: "blocker-taps",
+    help: "pcss: blocker-search taps (rotated Poisson disk)",
+    min: 1,
+    max: POISSON_POINTS as u32,
+    default: 16,
+};
+
+pub static FILTER_TAPS: Knob = Knob {
+    name: "filter-taps",
+    help: "pcss: filter taps (rotated Poisson disk)",
+    min: 1,
+    max: POISSON_POINTS as u32,
+    default: 32,
+};
+
+pub static PCSS: MethodSpec = MethodSpec {
+    name: "pcss",
+    description: "percentage-closer soft shadows (Fernando 2005)",
+    knobs: &[&BLOCKER_TAPS, &FILTER_TAPS],
+    cpu_side: false,
+    new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
+};
+
+/// Points of the Poisson disk (`PoissonDisk` of the shader: two per vec4).
+pub const POISSON_POINTS: usize = 64;
+
+static FLAVOR: Flavor = Flavor {
+    shader: "methods/pcss.wgsl",
+    knobs: knobs,
+    extra: Some(((POISSON_POINTS * 8) as u64, poisson_bytes)),
+};
+
+fn knobs(f: &FrameInputs<'_>) -> [f32; 4] {
+    [
+        f.knobs.get(&BLOCKER_TAPS) as f32,
+        f.knobs.get(&FILTER_TAPS) as f32,
+        nearest_caster(f.scene),
+        0.0,
+    ]
+}
+
+fn poisson_bytes() -> Vec<u8> {
+    let points: Vec<f32> = poisson_disk(POISSON_POINTS)
+        .iter()
+        .flat_map(|p| [p.x, p.y])
+        .collect();
+    bytemuck::cast_slice(&points).to_vec()
+}
+
+/// The distance from the light centre to the nearest caster vertex in front of the light: where
+/// the blocker search stops.
+fn nearest_caster(scene: &Scene) -> f32 {
+    let light = scene.light;
+    scene
+        .casters()
+        .flat_map(|o| o.mesh.positions.iter())
+        .filter(|v| light.height_of(**v) > 0.0)
+        .map(|v| (*v - light.center).length())
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .fold(f32::MAX, f32::min)
+        .min(1e30)
+}
+
+/// `n` points in the unit disk by Mitchell's best-candidate algorithm (deterministic): each new
+/// point is the farthest of a few candidates from those before it, so every prefix is spread over
+/// the disk and a method may use the first k taps of one table.
+pub fn poisson_disk(n: usize) -> Vec<glam::Vec2> {
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = move || {
+        // SplitMix64.
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let mut points: Vec<glam::Vec2> = Vec::with_capacity(n);
+    while points.len() < n {
+        let candidates = 8 * (points.len() + 1);
+        let mut best = glam::Vec2::ZERO;
+        let mut best_d = -1.0f32;
+        for _ in 0..candidates {
+            let p = crate::geometry::oracle::concentric(next(), next());
+            let d = points
+                .iter()
+                .map(|q| q.distance_squared(p))
+                .fold(f32::MAX, f32::min);
+            if d > best_d {
+                best_d = d;
+                best = p;
+            }
+        }
+        points.push(best);
+    }
+    points
+}

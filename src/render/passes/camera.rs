@@ -1,0 +1,274 @@
+//! The camera pass every method shares (`shaders/shared/camera.wgsl`, completed by each method's
+//! `shaders/methods/NAME.wgsl`): every surface from the camera, V per pixel from the method,
+//! diffuse shading from the disk times V.
+//!
+//! Targets, `width`×`height` each: colour (Rgba8UnormSrgb), data (Rg32Float: V, and t + 2·branch
+//! so both stay exact in one channel) and reversed depth (Depth32Float, 1 at the near plane,
+//! kept): 12 bytes of colour per pixel. The world position, when someone needs it (a render's
+//! `position.exr`, the inspector), comes back from the depth; reversed float depth keeps it
+//! accurate to about 1e-6 of the distance at any range.
+
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3};
+
+use super::next_generation;
+use crate::geometry::VtVariant;
+use crate::render::gpu_scene::GpuScene;
+use crate::render::methods::CameraBindings;
+use crate::render::timer::Recorder;
+use crate::render::{
+    buffer_entry, cleared, opaque, pipeline_layout, render_pipeline, shader_module, uniform_buffer,
+    uniform_entry, GpuContext, PipelineSpec, SurfaceVertex, Texture,
+};
+use crate::scene::Scene;
+
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// The colour target seen as its bytes (the view pass copies them as they are).
+pub const COLOR_BYTES_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+pub const DATA_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The ambient share of the shading, so shadowed surfaces keep their shape.
+pub const AMBIENT: f32 = 0.1;
+
+/// `CameraUniforms` of `shaders/shared/camera.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct CameraUniforms {
+    pub view_proj: [[f32; 4]; 4],
+    pub eye: [f32; 3],
+    pub ambient: f32,
+    pub light_center: [f32; 3],
+    pub light_radius: f32,
+    pub light_normal: [f32; 3],
+    pub light_intensity: f32,
+    pub vt_variant: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<CameraUniforms>() == 128);
+
+/// The camera's world → clip transform for a `width`×`height` image of `scene` (whose surfaces
+/// span `bounds`): reversed depth, planes that hold the whole scene.
+pub fn view_projection(scene: &Scene, bounds: (Vec3, Vec3), width: u32, height: u32) -> Mat4 {
+    let aspect = width as f32 / height.max(1) as f32;
+    let (near, far) = camera_range(scene.camera.eye, bounds);
+    // Near and far swapped: depth 1 at the near plane, 0 at the far one.
+    scene.camera.projection(aspect, far, near) * scene.camera.view()
+}
+
+impl CameraUniforms {
+    pub fn new(scene: &Scene, view_proj: Mat4, vt: VtVariant) -> CameraUniforms {
+        let light = scene.light;
+        CameraUniforms {
+            view_proj: view_proj.to_cols_array_2d(),
+            eye: scene.camera.eye.to_array(),
+            ambient: AMBIENT,
+            light_center: light.center.to_array(),
+            light_radius: light.radius,
+            light_normal: light.normal.to_array(),
+            light_intensity: light.intensity,
+            vt_variant: vt.code(),
+            _pad0: 0,
+            _pad1: 0,
+            _pad2: 0,
+        }
+    }
+}
+
+/// Near and far planes that hold the whole scene, given by its bounds, as seen from `eye`.
+pub fn camera_range(eye: Vec3, (lo, hi): (Vec3, Vec3)) -> (f32, f32) {
+    let mut far = 1.0f32;
+    for corner in 0..8 {
+        let pick = |bit: u32, a: f32, b: f32| if corner & bit == 0 { a } else { b };
+        let p = Vec3::new(
+            pick(1, lo.x, hi.x),
+            pick(2, lo.y, hi.y),
+            pick(4, lo.z, hi.z),
+        );
+        let d = (p - eye).length();
+        if d.is_finite() {
+            far = far.max(d);
+        }
+    }
+    let far = far * 1.5;
+    (far * 1e-4, far)
+}
+
+/// Group 0 of every method's camera pipeline, built once per device.
+pub struct CameraPass {
+    pub layout: wgpu::BindGroupLayout,
+}
+
+impl CameraPass {
+    pub fn get(ctx: &GpuContext) -> Arc<CameraPass> {
+        ctx.shared(|device| CameraPass {
+            layout: device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("CameraPass::layout"),
+                entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
+            }),
+        })
+    }
+
+    /// A method's camera pipeline: `shader` (`methods/NAME.wgsl`, which includes
+    /// `shared/camera.wgsl`), with the method's own bindings as group 1.
+    pub fn method_pipeline(
+        &self,
+        device: &wgpu::Device,
+        shader: &str,
+        method_layout: &wgpu::BindGroupLayout,
+    ) -> wgpu::RenderPipeline {
+        let module = shader_module(device, shader);
+        render_pipeline(
+            device,
+            &PipelineSpec {
+                label: shader,
+                module: &module,
+                layout: &pipeline_layout(
+                    device,
+                    "CameraPass::pipeline_layout",
+                    &[&self.layout, method_layout],
+                ),
+                vs: "vs_main",
+                fs: Some("fs_main"),
+                buffers: &[Some(SurfaceVertex::layout())],
+                targets: &[opaque(COLOR_FORMAT), opaque(DATA_FORMAT)],
+                // Surfaces are two-sided (open meshes, the ground seen from below).
+                cull: None,
+                depth: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Greater),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+            },
+        )
+    }
+}
+
+/// The camera pass's targets.
+pub struct CameraTargets {
+    pub width: u32,
+    pub height: u32,
+    pub color: Texture,
+    /// `color` as its bytes (Rgba8Unorm): what the view pass copies.
+    pub color_bytes: wgpu::TextureView,
+    pub data: Texture,
+    pub depth: Texture,
+    /// Changes whenever the textures are made again (whoever binds them binds again).
+    pub generation: u64,
+}
+
+impl CameraTargets {
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> CameraTargets {
+        use wgpu::TextureUsages as U;
+        let usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
+        let color = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("CameraTargets::color"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: COLOR_FORMAT,
+            usage,
+            view_formats: &[COLOR_BYTES_FORMAT],
+        });
+        let color_view = color.create_view(&wgpu::TextureViewDescriptor::default());
+        let color_bytes = color.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("CameraTargets::color_bytes"),
+            format: Some(COLOR_BYTES_FORMAT),
+            ..Default::default()
+        });
+        CameraTargets {
+            width,
+            height,
+            color: Texture {
+                texture: color,
+                view: color_view,
+            },
+            color_bytes,
+            data: Texture::new(
+                device,
+                "CameraTargets::data",
+                (width, height),
+                DATA_FORMAT,
+                usage,
+            ),
+            depth: Texture::new(
+                device,
+                "CameraTargets::depth",
+                (width, height),
+                DEPTH_FORMAT,
+                usage,
+            ),
+            generation: next_generation(),
+        }
+    }
+}
+
+/// A session's camera pass: its uniforms.
+pub struct Camera {
+    uniforms: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+}
+
+impl Camera {
+    pub fn new(ctx: &GpuContext) -> Camera {
+        let pass = CameraPass::get(ctx);
+        let uniforms = uniform_buffer::<CameraUniforms>(&ctx.device, "Camera::uniforms");
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("Camera::bind_group"),
+            layout: &pass.layout,
+            entries: &[buffer_entry(0, &uniforms)],
+        });
+        Camera {
+            uniforms,
+            bind_group,
+        }
+    }
+
+    /// Record the pass into `targets` with the method's pipeline and bindings.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        rec: &mut Recorder<'_>,
+        uniforms: &CameraUniforms,
+        targets: &CameraTargets,
+        method: CameraBindings<'_>,
+        surfaces: &GpuScene,
+    ) {
+        ctx.queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
+        let span = rec.span("camera_pass");
+        let mut pass = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("Camera::pass"),
+            color_attachments: &[
+                cleared(&targets.color.view, wgpu::Color::TRANSPARENT),
+                cleared(&targets.data.view, wgpu::Color::TRANSPARENT),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &targets.depth.view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: span.writes(rec.timer, true, true),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(method.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_bind_group(1, method.bind_group, &[]);
+        surfaces.draw(&mut pass);
+    }
+}
