@@ -6,6 +6,7 @@ pub mod file;
 pub mod gltf;
 mod mesh;
 pub mod obj;
+pub mod orbit;
 pub mod shapes;
 
 pub use error::SceneError;
