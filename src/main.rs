@@ -17,11 +17,11 @@ struct Args {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Open the lab on a scene file or built-in name.
+    /// Open the lab on a built-in name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
     Gui { scene: Option<String> },
     /// Render a scene headless into DIR (image.png, visibility.exr, ...).
     Render {
-        /// A built-in scene name, a .toml scene file or an .obj mesh.
+        /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
         scene: String,
         /// Folder for image.png, visibility.exr, position.exr, dbuffer.exr, dbuffer_s.exr,
         /// classes.png and meta.json (created if missing; written all or nothing).
@@ -48,7 +48,7 @@ enum Command {
     /// Render every method and the ray-traced reference, and report their errors: each
     /// method's image, visibility EXR and error heatmap, report.md and report.json.
     Compare {
-        /// A built-in scene name, a .toml scene file or an .obj mesh.
+        /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
         scene: String,
         /// Folder for the images and reports (created if missing).
         #[arg(long)]
@@ -60,6 +60,39 @@ enum Command {
         #[arg(long, default_value = "exact")]
         vt: String,
         /// The D-buffer and the shadow maps are N×N texels.
+        #[arg(long, default_value_t = 1024)]
+        dbuffer_size: u32,
+        #[command(flatten)]
+        knobs: cli::MethodFlags,
+    },
+    /// Render the light (or the camera) once around an orbit: frame-0000.png, ... and
+    /// animation.png (an APNG of the loop), written all or nothing.
+    Animate {
+        /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
+        scene: String,
+        /// Folder for the frames and animation.png (created if missing).
+        #[arg(long)]
+        out: std::path::PathBuf,
+        /// Frames in the loop (1 to 3600); 48 is a 7.5° step, smooth at the default 16 fps.
+        #[arg(long, default_value_t = 48)]
+        frames: usize,
+        /// What moves: the light (about the vertical axis through the casters) or the camera
+        /// (about its target).
+        #[arg(long, default_value = "light")]
+        orbit: String,
+        /// Frames per second of animation.png (1 to 60).
+        #[arg(long, default_value_t = 16)]
+        fps: u32,
+        /// Image size, WxH.
+        #[arg(long, default_value = "480x360")]
+        size: String,
+        /// The shadow method (as for render).
+        #[arg(long, default_value = "dbuffer")]
+        method: String,
+        /// V(t): smoothstep, sqrt, exact or linear.
+        #[arg(long, default_value = "smoothstep")]
+        vt: String,
+        /// The D-buffer is N×N texels.
         #[arg(long, default_value_t = 1024)]
         dbuffer_size: u32,
         #[command(flatten)]
@@ -94,6 +127,7 @@ enum Command {
     Scenes,
     /// Print what the geometry stage makes of a scene: classes, silhouettes, volumes, warnings.
     Inspect {
+        /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
         scene: String,
         /// Also compare the CPU twin of the method with ray-cast ground truth over the camera's
         /// view, with this many disk samples per pixel.
@@ -154,6 +188,29 @@ fn main() -> ExitCode {
             scene: &scene,
             out: &out,
             size: &size,
+            vt: &vt,
+            dbuffer_size,
+            knobs: &knobs,
+        }),
+        Some(Command::Animate {
+            scene,
+            out,
+            frames,
+            orbit,
+            fps,
+            size,
+            method,
+            vt,
+            dbuffer_size,
+            knobs,
+        }) => cli::animate(&cli::AnimateArgs {
+            scene: &scene,
+            out: &out,
+            frames,
+            orbit: &orbit,
+            fps,
+            size: &size,
+            method: &method,
             vt: &vt,
             dbuffer_size,
             knobs: &knobs,

@@ -406,6 +406,19 @@ fn write_render_with(
     fault: &mut Fault<'_>,
 ) -> Result<Vec<PathBuf>, OutputError> {
     validate(out)?;
+    let names: Vec<String> = FILE_NAMES.iter().map(|n| n.to_string()).collect();
+    prepare_dir(dir, &names)?;
+    let temp = create_temp_dir(dir)?;
+    if let Err(e) = stage(dir, &temp, out, fault) {
+        let _ = fs::remove_dir_all(&temp);
+        return Err(e);
+    }
+    finish(dir, temp, &names, &[], fault)
+}
+
+/// The output folder exists (created with its parents if missing) and is a folder, and none of
+/// `names` in it is a folder.
+fn prepare_dir(dir: &Path, names: &[String]) -> Result<(), OutputError> {
     match fs::metadata(dir) {
         Ok(m) if m.is_dir() => {}
         Ok(_) => {
@@ -418,18 +431,25 @@ fn write_render_with(
         }
         Err(e) => return Err(io_err(dir, "read")(e)),
     }
-    for name in FILE_NAMES {
+    for name in names {
         let target = dir.join(name);
         if fs::symlink_metadata(&target).is_ok_and(|m| m.is_dir()) {
             return Err(OutputError::TargetIsDirectory { path: target });
         }
     }
-    let temp = create_temp_dir(dir)?;
-    if let Err(e) = stage(dir, &temp, out, fault) {
-        let _ = fs::remove_dir_all(&temp);
-        return Err(e);
-    }
-    match install(dir, &temp, fault) {
+    Ok(())
+}
+
+/// Move the staged `names` from `temp` into `dir` and remove `stale` from it, all or nothing;
+/// `temp` is removed unless putting things back failed (then it keeps the previous files).
+fn finish(
+    dir: &Path,
+    temp: PathBuf,
+    names: &[String],
+    stale: &[String],
+    fault: &mut Fault<'_>,
+) -> Result<Vec<PathBuf>, OutputError> {
+    match install(dir, &temp, names, stale, fault) {
         Ok(paths) => {
             let _ = fs::remove_dir_all(&temp);
             // Make the renames durable where the platform can (best effort: not on Windows).
@@ -448,6 +468,93 @@ fn write_render_with(
             cause: Box::new(cause),
             rollback,
         }),
+    }
+}
+
+/// Any set of files written into one folder all or nothing, by the same rules as
+/// [`write_render`]: each file is written (and flushed) into a hidden folder inside `dir` as it
+/// is [`add`](Staged::add)ed, so a long job holds only one file in memory at a time; nothing in
+/// `dir` changes until [`commit`](Staged::commit), which moves them all into place (and removes
+/// the files named [`stale`](Staged::remove_on_commit)), or puts everything back as it was. A
+/// `Staged` dropped without a commit leaves `dir` untouched.
+pub struct Staged {
+    dir: PathBuf,
+    temp: Option<PathBuf>,
+    names: Vec<String>,
+    stale: Vec<String>,
+}
+
+impl Staged {
+    /// Start writing into `dir` (created with its parents if missing; an error if it is not a
+    /// folder).
+    pub fn new(dir: &Path) -> Result<Staged, OutputError> {
+        prepare_dir(dir, &[])?;
+        let temp = create_temp_dir(dir)?;
+        Ok(Staged {
+            dir: dir.to_path_buf(),
+            temp: Some(temp),
+            names: Vec::new(),
+            stale: Vec::new(),
+        })
+    }
+
+    /// Stage file `name` (a plain file name, no folders) with `bytes`.
+    pub fn add(&mut self, name: &str, bytes: &[u8]) -> Result<(), OutputError> {
+        let target = self.dir.join(name);
+        let plain = Path::new(name).file_name().is_some_and(|n| n == name);
+        if !plain || name.starts_with(TEMP_PREFIX) || self.names.iter().any(|n| n == name) {
+            return Err(io_err(&target, "write")(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "expected a new plain file name",
+            )));
+        }
+        if fs::symlink_metadata(&target).is_ok_and(|m| m.is_dir()) {
+            return Err(OutputError::TargetIsDirectory { path: target });
+        }
+        let Some(temp) = &self.temp else {
+            return Err(io_err(&target, "write")(io::Error::other(
+                "already committed",
+            )));
+        };
+        let result = (|| {
+            let mut f = File::create(temp.join(name))?;
+            f.write_all(bytes)?;
+            f.sync_all()
+        })();
+        result.map_err(io_err(&target, "write"))?;
+        self.names.push(name.to_string());
+        Ok(())
+    }
+
+    /// Remove file `name` from `dir` when committing (a previous run's file the new set does
+    /// not replace); put back if the commit fails.
+    pub fn remove_on_commit(&mut self, name: &str) {
+        if !self.names.iter().any(|n| n == name) && !self.stale.iter().any(|n| n == name) {
+            self.stale.push(name.to_string());
+        }
+    }
+
+    /// Move every staged file into place, all or nothing. Returns their paths in the order
+    /// they were added.
+    pub fn commit(mut self) -> Result<Vec<PathBuf>, OutputError> {
+        let Some(temp) = self.temp.take() else {
+            return Ok(Vec::new());
+        };
+        let stale: Vec<String> = self
+            .stale
+            .iter()
+            .filter(|n| fs::symlink_metadata(self.dir.join(n)).is_ok_and(|m| m.is_file()))
+            .cloned()
+            .collect();
+        finish(&self.dir, temp, &self.names, &stale, &mut |_| Ok(()))
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if let Some(temp) = self.temp.take() {
+            let _ = fs::remove_dir_all(temp);
+        }
     }
 }
 
@@ -670,12 +777,20 @@ enum InstallError {
     Stuck(OutputError, io::Error),
 }
 
-/// Back up the previous files into `temp`, then rename the new ones over them; on failure, put
-/// the previous files back.
-fn install(dir: &Path, temp: &Path, fault: &mut Fault<'_>) -> Result<Vec<PathBuf>, InstallError> {
+/// Back up the previous files into `temp`, then rename the new ones over them and remove the
+/// `stale` ones; on failure, put the previous files back. Step indices count `names` first,
+/// then `stale`.
+fn install(
+    dir: &Path,
+    temp: &Path,
+    names: &[String],
+    stale: &[String],
+    fault: &mut Fault<'_>,
+) -> Result<Vec<PathBuf>, InstallError> {
     let backup_of = |name: &str| temp.join(format!("{name}.previous"));
-    let mut had_previous = [false; FILE_NAMES.len()];
-    for (i, name) in FILE_NAMES.iter().enumerate() {
+    let all: Vec<&String> = names.iter().chain(stale).collect();
+    let mut had_previous = vec![false; all.len()];
+    for (i, name) in all.iter().enumerate() {
         let target = dir.join(name);
         match fs::symlink_metadata(&target) {
             Ok(_) => {
@@ -692,15 +807,27 @@ fn install(dir: &Path, temp: &Path, fault: &mut Fault<'_>) -> Result<Vec<PathBuf
             Err(e) => return Err(InstallError::RolledBack(io_err(&target, "read")(e))),
         }
     }
-    let mut paths = Vec::with_capacity(FILE_NAMES.len());
-    for (i, name) in FILE_NAMES.iter().enumerate() {
+    let mut paths = Vec::with_capacity(names.len());
+    for (i, name) in all.iter().enumerate() {
         let target = dir.join(name);
-        let moved = fault(Step::Install(i)).and_then(|()| fs::rename(temp.join(name), &target));
+        let installing = i < names.len();
+        let moved = fault(Step::Install(i)).and_then(|()| {
+            if installing {
+                fs::rename(temp.join(name), &target)
+            } else {
+                fs::remove_file(&target)
+            }
+        });
         if let Err(e) = moved {
-            let cause = io_err(&target, "move into place")(e);
-            // Undo files 0..i, last first.
+            let action = if installing {
+                "move into place"
+            } else {
+                "remove"
+            };
+            let cause = io_err(&target, action)(e);
+            // Undo steps 0..i, last first.
             let mut undo = Ok(());
-            for (j, name) in FILE_NAMES.iter().enumerate().take(i).rev() {
+            for (j, name) in all.iter().enumerate().take(i).rev() {
                 let target = dir.join(name);
                 let step = if had_previous[j] {
                     fs::rename(backup_of(name), &target)
@@ -716,7 +843,9 @@ fn install(dir: &Path, temp: &Path, fault: &mut Fault<'_>) -> Result<Vec<PathBuf
                 Err(rollback) => InstallError::Stuck(cause, rollback),
             });
         }
-        paths.push(target);
+        if installing {
+            paths.push(target);
+        }
     }
     Ok(paths)
 }
@@ -874,6 +1003,76 @@ mod tests {
         assert!(text.contains("\"nan\": null"), "{text}");
         assert!(text.contains("\"gpu_ms\": {}"), "{text}");
         assert!(text.ends_with("}\n"));
+    }
+
+    /// `Staged`: nothing changes before the commit; the commit replaces, adds and removes the
+    /// stale files; a stale file failing to go puts everything back.
+    #[test]
+    fn staged_files_are_all_or_nothing() {
+        let dir = temp_dir("staged");
+        for name in [
+            "frame-0000.png",
+            "frame-0001.png",
+            "frame-0002.png",
+            "notes.txt",
+        ] {
+            fs::write(dir.join(name), b"old").unwrap();
+        }
+        let before = snapshot(&dir);
+        let mut staged = Staged::new(&dir).unwrap();
+        staged.add("frame-0000.png", b"new0").unwrap();
+        staged.add("frame-0001.png", b"new1").unwrap();
+        assert!(
+            staged.add("frame-0001.png", b"again").is_err(),
+            "a name twice"
+        );
+        assert!(
+            staged.add("../escape.png", b"x").is_err(),
+            "a path, not a name"
+        );
+        staged.remove_on_commit("frame-0002.png");
+        assert_eq!(
+            snapshot(&dir).len(),
+            before.len() + 1,
+            "only the hidden folder is new"
+        );
+        drop(staged);
+        assert_eq!(snapshot(&dir), before, "dropped without commit: untouched");
+
+        let mut staged = Staged::new(&dir).unwrap();
+        staged.add("frame-0000.png", b"new0").unwrap();
+        staged.add("frame-0001.png", b"new1").unwrap();
+        staged.add("loop.png", b"anim").unwrap();
+        staged.remove_on_commit("frame-0002.png");
+        staged.remove_on_commit("frame-0009.png");
+        let paths = staged.commit().unwrap();
+        assert_eq!(paths.len(), 3);
+        let after = snapshot(&dir);
+        let names: Vec<&str> = after.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(
+            names,
+            ["frame-0000.png", "frame-0001.png", "loop.png", "notes.txt"]
+        );
+        assert_eq!(fs::read(dir.join("frame-0001.png")).unwrap(), b"new1");
+
+        // A failing removal of a stale file undoes the installs (the generic install with a
+        // fault at the last step).
+        let before = snapshot(&dir);
+        let temp = create_temp_dir(&dir).unwrap();
+        fs::write(temp.join("frame-0000.png"), b"newer").unwrap();
+        let names = vec!["frame-0000.png".to_string()];
+        let stale = vec!["frame-0001.png".to_string()];
+        let err = finish(&dir, temp, &names, &stale, &mut |step| {
+            if step == Step::Install(1) {
+                Err(io::Error::other("injected"))
+            } else {
+                Ok(())
+            }
+        })
+        .unwrap_err();
+        assert!(err.to_string().contains("frame-0001.png"), "{err}");
+        assert_eq!(snapshot(&dir), before);
+        let _ = fs::remove_dir_all(&dir);
     }
 
     /// A failure at any point of writing leaves the folder as it was, with no temporary folder,

@@ -99,10 +99,81 @@ fn missing_required_key() {
     let light = LIGHT.replace("radius = 0.5\n", "");
     let msg = parse_err(&format!("{CAMERA}\n{light}"));
     assert_has(&msg, &["my.toml", "missing field `radius`", "[light]"]);
-    let msg = parse_err(LIGHT);
-    assert_has(&msg, &["my.toml", "missing field `camera`"]);
+    let msg = parse_err(CAMERA);
+    assert_has(&msg, &["my.toml", "missing field `light`"]);
     let msg = parse_err(&format!("{CAMERA}\n{LIGHT}\n[[object]]\nname = \"x\"\n"));
     assert_has(&msg, &["my.toml", "missing field `mesh`"]);
+}
+
+/// A file without `[camera]` loads, sees the casters and the light, and saves without one.
+#[test]
+fn a_scene_without_camera_is_framed_on_the_casters_and_the_light() {
+    let body =
+        format!("{LIGHT}\n{GROUND}\n[[object]]\nmesh = \"sphere:16x8\"\ntranslate = [2, 1, -1]\n");
+    let f = SceneFile::parse(&body, "nocam.toml").unwrap();
+    assert!(f.camera.is_none());
+    assert!(!f.to_toml().contains("[camera]"), "{}", f.to_toml());
+    let s = f.build(Path::new("."), "nocam.toml").unwrap();
+    let cam = s.camera;
+    let view = glam::Mat4::look_at_rh(cam.eye, cam.target, glam::Vec3::Y);
+    let proj = glam::Mat4::perspective_rh(cam.fov_y_deg.to_radians(), 1.0, 0.05, 100.0);
+    let inside = |p: glam::Vec3| {
+        let c = proj * view * p.extend(1.0);
+        c.w > 0.0 && (c.x / c.w).abs() <= 1.0 && (c.y / c.w).abs() <= 1.0
+    };
+    let (lo, hi) = s.objects[1].mesh.bounds().unwrap();
+    for i in 0..8 {
+        let corner = glam::Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        assert!(inside(corner), "caster corner {corner} outside {cam:?}");
+    }
+    // And the middle of the shadow below the caster (the light is straight above it).
+    assert!(
+        inside(glam::Vec3::new(2.0, 0.0, -1.0)),
+        "the shadow is in view"
+    );
+    // Looking down at the scene from the front.
+    assert!(
+        cam.eye.y > cam.target.y && cam.eye.z > cam.target.z,
+        "{cam:?}"
+    );
+    // Not absurdly far: the caster box fills a good part of the view.
+    let d = (cam.eye - cam.target).length();
+    assert!(d < 20.0, "{d}");
+    // The same file with the camera it computed written out renders the same view.
+    let with = format!(
+        "[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov_y_deg = {}\n{body}",
+        cam.eye.x, cam.eye.y, cam.eye.z, cam.target.x, cam.target.y, cam.target.z, cam.fov_y_deg
+    );
+    let again = SceneFile::parse(&with, "cam.toml")
+        .unwrap()
+        .build(Path::new("."), "cam.toml")
+        .unwrap();
+    assert_eq!(again.camera, cam);
+}
+
+/// A bare `.obj` and a scene file without `[camera]` holding the same placed mesh get the same
+/// view.
+#[test]
+fn a_bare_obj_and_a_camera_less_file_get_the_same_view() {
+    let dir = temp_dir("samecam");
+    let obj = dir.join("tet.obj");
+    std::fs::write(
+        &obj,
+        format!("{TRI}v 0 1 0\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n"),
+    )
+    .unwrap();
+    let bare = load(&obj.display().to_string()).unwrap();
+    let (file, _) = load_file(&obj.display().to_string()).unwrap();
+    assert!(file.camera.is_none());
+    let toml = dir.join("tet.toml");
+    std::fs::write(&toml, file.to_toml()).unwrap();
+    let from_file = load(&toml.display().to_string()).unwrap();
+    assert_eq!(bare.camera, from_file.camera);
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

@@ -76,11 +76,11 @@ impl SceneDoc {
         use crate::scene::file::CameraSpec;
         let doc = SceneDoc {
             file: SceneFile {
-                camera: CameraSpec {
+                camera: Some(CameraSpec {
                     eye: [0.0, 3.0, 6.0],
                     target: [0.0, 0.5, 0.0],
                     fov_y_deg: 45.0,
-                },
+                }),
                 light: LightSpec {
                     center: [0.0, 4.0, 0.0],
                     normal: [0.0, -1.0, 0.0],
@@ -106,21 +106,26 @@ impl SceneDoc {
 
     /// The whole scene in world space.
     pub fn scene(&self) -> Scene {
+        let objects = self.objects();
         Scene {
             name: self.name.clone(),
-            camera: self.camera(),
+            camera: self.camera_for(&objects),
             light: self.light(),
-            objects: (0..self.file.objects.len())
-                .filter_map(|i| {
-                    let o = &self.file.objects[i];
-                    Some(Object {
-                        name: o.display_name().to_string(),
-                        mesh: self.world_mesh(i)?,
-                        casts_shadow: o.casts_shadow,
-                    })
-                })
-                .collect(),
+            objects,
         }
+    }
+
+    fn objects(&self) -> Vec<Object> {
+        (0..self.file.objects.len())
+            .filter_map(|i| {
+                let o = &self.file.objects[i];
+                Some(Object {
+                    name: o.display_name().to_string(),
+                    mesh: self.world_mesh(i)?,
+                    casts_shadow: o.casts_shadow,
+                })
+            })
+            .collect()
     }
 
     pub fn world_mesh(&self, i: usize) -> Option<Mesh> {
@@ -128,12 +133,18 @@ impl SceneDoc {
         Some(self.local.get(i)?.transformed(&spec.transform()))
     }
 
+    /// The file's `[camera]`, or the framed view a scene without one gets.
     pub fn camera(&self) -> Camera {
-        let c = &self.file.camera;
-        Camera {
-            eye: v3(c.eye),
-            target: v3(c.target),
-            fov_y_deg: c.fov_y_deg as f32,
+        match &self.file.camera {
+            Some(c) => c.camera(),
+            None => self.camera_for(&self.objects()),
+        }
+    }
+
+    fn camera_for(&self, objects: &[Object]) -> Camera {
+        match &self.file.camera {
+            Some(c) => c.camera(),
+            None => scene::framed_camera(&self.light(), objects),
         }
     }
 
@@ -174,12 +185,19 @@ impl SceneDoc {
     }
 
     /// Write the scene as TOML to `path` (temporary file, then rename), with `camera` as its
-    /// camera. Relative `.obj` paths are made absolute when the file moves to another folder.
+    /// camera. A scene without `[camera]` gets one only if `camera` is not the framed view it
+    /// shows without one. Relative mesh paths are made absolute when the file moves to another
+    /// folder.
     pub fn save(&mut self, path: &Path, camera: &Camera) -> Result<(), String> {
         let mut file = self.file.clone();
-        file.camera.eye = f3(camera.eye);
-        file.camera.target = f3(camera.target);
-        file.camera.fov_y_deg = f64::from(camera.fov_y_deg);
+        let framed = self.file.camera.is_none() && same_camera(camera, &self.camera());
+        if !framed {
+            file.camera = Some(crate::scene::file::CameraSpec {
+                eye: f3(camera.eye),
+                target: f3(camera.target),
+                fov_y_deg: f64::from(camera.fov_y_deg),
+            });
+        }
         let target_dir = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
@@ -213,6 +231,11 @@ impl SceneDoc {
                 .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
         })
     }
+}
+
+fn same_camera(a: &Camera, b: &Camera) -> bool {
+    let close = |p: Vec3, q: Vec3| (p - q).length() <= 1e-5 * (1.0 + p.length().max(q.length()));
+    close(a.eye, b.eye) && close(a.target, b.target) && (a.fov_y_deg - b.fov_y_deg).abs() < 1e-4
 }
 
 fn same_path(a: &Path, b: &Path) -> bool {
@@ -362,6 +385,33 @@ mod tests {
                 assert!((a - a2).abs() < 1e-6, "{a} {a2}");
             }
         }
+    }
+
+    /// A scene without `[camera]` (here a glTF model) shows the framed view and saves without
+    /// a camera unless the view was moved.
+    #[test]
+    fn a_camera_less_scene_saves_a_camera_only_when_moved() {
+        let fox = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models/Fox.glb");
+        let (mut doc, scene) = SceneDoc::open(fox.to_str().unwrap()).unwrap();
+        assert!(doc.file.camera.is_none());
+        assert_eq!(scene.objects.len(), 2);
+        assert_eq!(doc.camera(), scene.camera);
+        let dir = std::env::temp_dir().join(format!("dbuffer-doc-cam-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("fox.toml");
+        let framed = doc.camera();
+        doc.save(&path, &framed).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(!text.contains("[camera]"), "{text}");
+        let moved = Camera {
+            eye: framed.eye + Vec3::new(1.0, 0.0, 0.0),
+            ..framed
+        };
+        doc.save(&path, &moved).unwrap();
+        let (again, scene) = SceneDoc::open(path.to_str().unwrap()).unwrap();
+        assert!(again.file.camera.is_some());
+        assert!((scene.camera.eye - moved.eye).length() < 1e-5);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

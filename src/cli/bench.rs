@@ -80,8 +80,21 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         config.frames,
         config.estimate_s()
     );
-    let mut progress = |line: &str| eprintln!("bench  {line}");
+    // One step per report of bench::run: each scene's geometry, each (scene, size), the
+    // coherence run, each point of the scaling curve.
+    let steps = config.scenes.len() * (1 + config.sizes.len())
+        + usize::from(config.coherence)
+        + config.scaling.len();
+    let bar = super::progress::Progress::new("bench", steps as u64, "steps");
+    let mut done = 0u64;
+    let mut progress = |line: &str| {
+        bar.set(done);
+        bar.stage(line);
+        done += 1;
+    };
     let report = bench::run(&ctx, &config, &mut progress)?;
+    bar.set(steps as u64);
+    bar.finish();
     let markdown = bench::table::markdown(&report);
 
     std::fs::create_dir_all(args.out)

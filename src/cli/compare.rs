@@ -8,7 +8,7 @@ use dbuffer::geometry::VtVariant;
 use dbuffer::render::offline::Offline;
 use dbuffer::scene;
 
-use super::{check_dbuffer_size, parse_size, progress_line, MethodFlags};
+use super::{check_dbuffer_size, parse_size, progress, MethodFlags};
 
 /// The arguments of `dbuffer compare`, as typed.
 pub struct CompareArgs<'a> {
@@ -29,7 +29,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
     let mut offline = Offline::new()?;
     eprintln!("adapter   {}", offline.ctx.adapter_description());
-    offline.progress = Some(progress_line("reference"));
+    offline.progress = Some(progress::reference_samples());
     let request = CompareRequest {
         width,
         height,

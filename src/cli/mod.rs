@@ -15,8 +15,11 @@ use dbuffer::scene;
 use glam::Vec3;
 use rayon::prelude::*;
 
+mod animate;
 pub mod bench;
 mod compare;
+mod progress;
+pub use animate::{animate, AnimateArgs};
 pub use compare::{compare, CompareArgs};
 
 /// The knobs of every method of the registry, as flags of `render` and `compare`
@@ -118,7 +121,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         read_dbuffer: true,
     };
     if method.is_reference() {
-        offline.progress = Some(progress_line("reference"));
+        offline.progress = Some(progress::reference_samples());
     }
     let name = scene.name.clone();
     let mut session = offline.session(scene);
@@ -170,20 +173,6 @@ fn check_dbuffer_size(size: u32) -> Result<()> {
         bail!("--dbuffer-size expects a texel count from 1 to 8192, found {size}");
     }
     Ok(())
-}
-
-/// A progress callback that rewrites one stderr line: "what: done/total samples".
-fn progress_line(what: &'static str) -> Box<dyn FnMut(usize, usize)> {
-    let start = Instant::now();
-    Box::new(move |done, total| {
-        eprint!(
-            "\r{what}: {done}/{total} samples per pixel ({:.1} s)",
-            start.elapsed().as_secs_f64()
-        );
-        if done >= total {
-            eprintln!();
-        }
-    })
 }
 
 pub fn inspect(

@@ -29,10 +29,10 @@ pub enum SceneError {
         found: String,
     },
 
-    /// A mesh name that is neither a built-in shape nor a path to an existing `.obj` file.
+    /// A mesh name that is neither a built-in shape nor a path to an existing mesh file.
     #[error(
         "{file}: {key}: unknown mesh {name:?}: expected a built-in shape ({known}) \
-         or a path to an existing .obj file"
+         or a path to an existing .obj, .gltf or .glb file"
     )]
     UnknownMesh {
         file: String,
@@ -61,6 +61,11 @@ pub enum SceneError {
     #[error("{file}: {problem}")]
     Obj { file: String, problem: String },
 
+    /// A problem with a glTF model (`.gltf`/`.glb`): its container, JSON, buffers, accessors or
+    /// scene graph. `problem` says where (buffer, accessor, node) and what was expected.
+    #[error("{file}: {problem}")]
+    Gltf { file: String, problem: String },
+
     /// A mesh referenced from a scene file failed to load; `source` says why and where.
     #[error("{file}: {key}: {source}")]
     Mesh {
@@ -70,9 +75,10 @@ pub enum SceneError {
         source: Box<SceneError>,
     },
 
-    /// `load` got something that is neither a built-in scene nor a `.toml`/`.obj` file.
+    /// `load` got something that is neither a built-in scene nor a `.toml`/`.obj`/`.gltf`/`.glb` file.
     #[error(
-        "{name:?}: not a built-in scene ({known}) nor a path to a .toml scene file or an .obj mesh"
+        "{name:?}: not a built-in scene ({known}) nor a path to a .toml scene file or an \
+         .obj, .gltf or .glb model"
     )]
     UnknownScene { name: String, known: String },
 }

@@ -1,7 +1,7 @@
 //! The scene file (design.md §3): TOML, +Y up, right-handed, metres, angles in degrees.
 //!
 //! ```toml
-//! [camera]
+//! [camera]                 # optional: without it the view is framed on the casters and the light
 //! eye = [0.0, 3.0, 6.0]
 //! target = [0.0, 0.5, 0.0]
 //! fov_y_deg = 45.0
@@ -14,7 +14,7 @@
 //!
 //! [[object]]
 //! name = "ground"          # optional, default: the mesh name
-//! mesh = "plane"           # a built-in shape name (see `shapes`), or a path to .obj relative to this file
+//! mesh = "plane"           # a built-in shape name (see `shapes`), or a path to .obj/.gltf/.glb relative to this file
 //! translate = [0.0, 0.0, 0.0]    # optional, default 0
 //! rotate_deg = [0.0, 0.0, 0.0]   # optional, XYZ Euler, default 0
 //! scale = 10.0             # optional, a number or [x, y, z], default 1
@@ -40,7 +40,9 @@ use std::path::Path;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
-    pub camera: CameraSpec,
+    /// `[camera]` is optional: without it the scene is seen by [`super::framed_camera`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraSpec>,
     pub light: LightSpec,
     #[serde(rename = "object", default, skip_serializing_if = "Vec::is_empty")]
     pub objects: Vec<ObjectSpec>,
@@ -170,6 +172,17 @@ fn show(a: &[f64]) -> String {
     }
 }
 
+impl CameraSpec {
+    /// The camera, in `f32`.
+    pub fn camera(&self) -> Camera {
+        Camera {
+            eye: v3(self.eye),
+            target: v3(self.target),
+            fov_y_deg: self.fov_y_deg as f32,
+        }
+    }
+}
+
 impl ObjectSpec {
     /// The object's name: `name`, or else the mesh name.
     pub fn display_name(&self) -> &str {
@@ -226,23 +239,24 @@ impl SceneFile {
             }
         };
 
-        let c = &self.camera;
-        finite("camera.eye", &c.eye)?;
-        finite("camera.target", &c.target)?;
-        finite("camera.fov_y_deg", &[c.fov_y_deg])?;
-        if !(c.fov_y_deg > 0.0 && c.fov_y_deg < 180.0) {
-            return Err(invalid(
-                "camera.fov_y_deg",
-                "a vertical field of view in degrees strictly between 0 and 180",
-                show(&[c.fov_y_deg]),
-            ));
-        }
-        if v3(c.eye) == v3(c.target) {
-            return Err(invalid(
-                "camera.target",
-                "a point different from camera.eye",
-                show(&c.target),
-            ));
+        if let Some(c) = &self.camera {
+            finite("camera.eye", &c.eye)?;
+            finite("camera.target", &c.target)?;
+            finite("camera.fov_y_deg", &[c.fov_y_deg])?;
+            if !(c.fov_y_deg > 0.0 && c.fov_y_deg < 180.0) {
+                return Err(invalid(
+                    "camera.fov_y_deg",
+                    "a vertical field of view in degrees strictly between 0 and 180",
+                    show(&[c.fov_y_deg]),
+                ));
+            }
+            if v3(c.eye) == v3(c.target) {
+                return Err(invalid(
+                    "camera.target",
+                    "a point different from camera.eye",
+                    show(&c.target),
+                ));
+            }
         }
 
         let l = &self.light;
@@ -278,7 +292,7 @@ impl SceneFile {
             if o.mesh.trim().is_empty() {
                 return Err(invalid(
                     &key("mesh"),
-                    "a built-in shape name or a path to an .obj file",
+                    "a built-in shape name or a path to an .obj, .gltf or .glb file",
                     "an empty string".into(),
                 ));
             }
@@ -301,8 +315,8 @@ impl SceneFile {
         Ok(())
     }
 
-    /// Loads the meshes (relative `.obj` paths are resolved against `base_dir`) and places every
-    /// object in world space. `label` names the scene file in errors; the scene is named after
+    /// Loads the meshes (relative paths are resolved against `base_dir`) and places every
+    /// object in world space; without `[camera]` the view is [`super::framed_camera`]'s. `label` names the scene file in errors; the scene is named after
     /// `label`'s file stem.
     pub fn build(&self, base_dir: &Path, label: &str) -> Result<Scene, SceneError> {
         let name = Path::new(label)
@@ -320,7 +334,6 @@ impl SceneFile {
         name: &str,
     ) -> Result<Scene, SceneError> {
         self.validate(label)?;
-        let c = &self.camera;
         let l = &self.light;
         let mut objects = Vec::with_capacity(self.objects.len());
         for (i, o) in self.objects.iter().enumerate() {
@@ -331,19 +344,20 @@ impl SceneFile {
                 casts_shadow: o.casts_shadow,
             });
         }
+        let light = DiskLight {
+            center: v3(l.center),
+            normal: v3(l.normal).normalize(),
+            radius: l.radius as f32,
+            intensity: l.intensity as f32,
+        };
+        let camera = match &self.camera {
+            Some(c) => c.camera(),
+            None => super::framed_camera(&light, &objects),
+        };
         Ok(Scene {
             name: name.to_string(),
-            camera: Camera {
-                eye: v3(c.eye),
-                target: v3(c.target),
-                fov_y_deg: c.fov_y_deg as f32,
-            },
-            light: DiskLight {
-                center: v3(l.center),
-                normal: v3(l.normal).normalize(),
-                radius: l.radius as f32,
-                intensity: l.intensity as f32,
-            },
+            camera,
+            light,
             objects,
         })
     }
@@ -356,8 +370,10 @@ impl SceneFile {
     }
 }
 
-/// A mesh name from a scene file: a built-in shape, else a path to an `.obj` file relative to
-/// `base_dir`. `key` (e.g. `object[2].mesh`) names it in errors.
+/// A mesh name from a scene file: a built-in shape, else a path to an `.obj`, `.gltf` or `.glb`
+/// file relative to `base_dir` (a glTF model gives every triangle of its scene, placed by its
+/// node transforms; its lights are not used here). `key` (e.g. `object[2].mesh`) names it in
+/// errors.
 pub fn resolve_mesh(
     mesh: &str,
     base_dir: &Path,
@@ -375,15 +391,21 @@ pub fn resolve_mesh(
         });
     }
     let path = base_dir.join(mesh);
+    let in_file = |source| SceneError::Mesh {
+        file: label.to_string(),
+        key: key.to_string(),
+        source: Box::new(source),
+    };
+    if super::gltf::is_gltf_path(&path) {
+        return super::gltf::load_gltf(&path)
+            .map(|m| m.mesh)
+            .map_err(in_file);
+    }
     let is_obj = Path::new(mesh)
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     if is_obj || path.is_file() {
-        return super::obj::load_obj(&path).map_err(|source| SceneError::Mesh {
-            file: label.to_string(),
-            key: key.to_string(),
-            source: Box::new(source),
-        });
+        return super::obj::load_obj(&path).map_err(in_file);
     }
     Err(unknown_mesh(label, key, mesh))
 }

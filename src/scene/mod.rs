@@ -3,8 +3,10 @@
 pub mod builtin;
 mod error;
 pub mod file;
+pub mod gltf;
 mod mesh;
 pub mod obj;
+pub mod orbit;
 pub mod shapes;
 
 pub use error::SceneError;
@@ -79,6 +81,73 @@ impl Camera {
     }
 }
 
+/// The view a scene gets when it has no camera of its own (a scene file without `[camera]`, a
+/// bare `.obj` or glTF model): 45° vertical field of view, looking from the front right and
+/// above (from the direction (0.6, 0.7, 1), 31° down) at the casters (every object if none
+/// casts) and at the shadow they cast from the light's centre onto the plane they stand on
+/// (each corner of their bounding box projected from the light, at most 4× as far as the light
+/// is above it), just far enough that all of it fits a square view with a 10 % margin (a wider
+/// image shows more on the sides). The light itself is left out of the frame: it is drawn
+/// nowhere in a render, and taking it in would leave half the picture to the sky.
+pub fn framed_camera(light: &DiskLight, objects: &[Object]) -> Camera {
+    const FOV_Y_DEG: f32 = 45.0;
+    let any_caster = objects.iter().any(|o| o.casts_shadow);
+    let bounds = objects
+        .iter()
+        .filter(|o| o.casts_shadow || !any_caster)
+        .filter_map(|o| o.mesh.bounds())
+        .reduce(|(lo, hi), (a, b)| (lo.min(a), hi.max(b)));
+    let (mut lo, mut hi) = match bounds {
+        Some(b) => b,
+        None => {
+            let r = Vec3::splat(light.radius.max(0.5));
+            (light.center - r, light.center + r)
+        }
+    };
+    let corners = |lo: Vec3, hi: Vec3| {
+        (0..8).map(move |i| {
+            Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            )
+        })
+    };
+    // The shadow of the box on the plane y = lo.y, seen from the light's centre.
+    let c = light.center;
+    let floor = lo.y;
+    if bounds.is_some() && c.y > floor {
+        for p in corners(lo, hi).collect::<Vec<_>>() {
+            if c.y - p.y > 1e-4 {
+                let t = ((c.y - floor) / (c.y - p.y)).min(4.0);
+                let q = c + (p - c) * t;
+                lo = lo.min(q);
+                hi = hi.max(q);
+            }
+        }
+    }
+    let target = (lo + hi) * 0.5;
+    let back = Vec3::new(0.6, 0.7, 1.0).normalize();
+    let forward = -back;
+    let right = forward.cross(Vec3::Y).normalize();
+    let up = right.cross(forward);
+    let tan = (0.5 * FOV_Y_DEG).to_radians().tan() / 1.1;
+    // The eye at `target + back·d`: a corner q (relative to the target) is at depth d + q·forward
+    // and must have |q·up| and |q·right| within tan·depth, and lie in front of the eye.
+    let mut distance: f32 = 0.5;
+    for corner in corners(lo, hi) {
+        let q = corner - target;
+        let along = q.dot(forward);
+        let side = q.dot(up).abs().max(q.dot(right).abs());
+        distance = distance.max(side / tan - along).max(0.1 - along);
+    }
+    Camera {
+        eye: target + back * distance,
+        target,
+        fov_y_deg: FOV_Y_DEG,
+    }
+}
+
 /// An object of the scene with its mesh already in world space.
 #[derive(Clone, Debug)]
 pub struct Object {
@@ -118,8 +187,9 @@ impl Scene {
 }
 
 /// Loads a scene: a built-in scene name (see [`builtin::names`]), else a path to a `.toml` scene
-/// file (`.obj` paths in it are relative to the file), else a path to an `.obj` mesh, which is
-/// shown on a default ground under a default light (see [`obj_scene`]).
+/// file (mesh paths in it are relative to the file), else a path to an `.obj` mesh or a
+/// `.gltf`/`.glb` model, which is shown on a default ground under a default light (see
+/// [`obj_scene`], [`gltf_scene`]).
 pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
     let source = load_source(name_or_path)?;
     source
@@ -128,8 +198,9 @@ pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
 }
 
 /// Like [`load`] but stops before loading meshes: the parsed scene file and the file it came from
-/// (`None` for a built-in scene). For an `.obj` path the scene file is the generated one, its
-/// mesh an absolute path, and the path returned is the `.obj`. Useful to edit and save a scene.
+/// (`None` for a built-in scene). For an `.obj` or glTF path the scene file is the generated
+/// one, its mesh an absolute path, and the path returned is the model's. Useful to edit and save
+/// a scene.
 pub fn load_file(name_or_path: &str) -> Result<(SceneFile, Option<PathBuf>), SceneError> {
     let source = load_source(name_or_path)?;
     Ok((source.file, source.path))
@@ -188,6 +259,13 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
             label,
             name,
         }),
+        Some("gltf" | "glb") => Ok(Source {
+            file: gltf_scene(path)?,
+            path: Some(path.to_path_buf()),
+            base_dir,
+            label,
+            name,
+        }),
         _ => Err(SceneError::UnknownScene {
             name: name_or_path.to_string(),
             known: builtin::names().join(", "),
@@ -197,28 +275,40 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
 
 /// The scene shown for a bare `.obj`: the mesh scaled to 1.5 m across its largest extent,
 /// centred over the origin and standing on a 10 m ground plane, under a disk light of radius 0.5
-/// at 4 m pointing down. The mesh path is made absolute so the scene can be saved anywhere.
+/// at 4 m pointing down, seen by [`framed_camera`] (the file has no `[camera]`). The mesh path
+/// is made absolute so the scene can be saved anywhere.
 pub fn obj_scene(obj_path: &Path) -> Result<SceneFile, SceneError> {
     let mesh = obj::load_obj(obj_path)?;
+    model_scene(obj_path, &mesh, None)
+}
+
+/// The scene shown for a bare `.gltf`/`.glb`: as [`obj_scene`], with the model's first spot or
+/// point light (KHR_lights_punctual) as the disk light when it has one: the light is placed by
+/// the same scale and translation as the model, points where the spot points (a point light
+/// points down), and gets radius 0.5, or less where that would reach the model (half the
+/// distance from the light to the model's bounding box, at least 1 cm).
+pub fn gltf_scene(path: &Path) -> Result<SceneFile, SceneError> {
+    let model = gltf::load_gltf(path)?;
+    model_scene(path, &model.mesh, model.light)
+}
+
+/// A default ground, the model standing on it, a light, no camera.
+fn model_scene(
+    path: &Path,
+    mesh: &Mesh,
+    light: Option<gltf::GltfLight>,
+) -> Result<SceneFile, SceneError> {
     let (lo, hi) = mesh.bounds().ok_or_else(|| SceneError::Obj {
-        file: obj_path.display().to_string(),
+        file: path.display().to_string(),
         problem: "contains no vertices".into(),
     })?;
     let extent = (hi - lo).max_element();
     let scale = if extent > 0.0 { 1.5 / extent } else { 1.0 };
     let centre = (lo + hi) / 2.0;
-    let translate = [
-        (-centre.x * scale) as f64,
-        (-lo.y * scale) as f64,
-        (-centre.z * scale) as f64,
-    ];
-    let absolute = std::path::absolute(obj_path).unwrap_or_else(|_| obj_path.to_path_buf());
+    let shift = Vec3::new(-centre.x * scale, -lo.y * scale, -centre.z * scale);
+    let translate = [shift.x as f64, shift.y as f64, shift.z as f64];
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
     const TEXT: &str = r#"
-[camera]
-eye = [0.0, 3.0, 5.0]
-target = [0.0, 0.5, 0.0]
-fov_y_deg = 45.0
-
 [light]
 center = [0.0, 4.0, 0.0]
 normal = [0.0, -1.0, 0.0]
@@ -230,16 +320,25 @@ mesh = "plane"
 scale = 10.0
 casts_shadow = false
 "#;
-    let mut file = SceneFile::parse(TEXT, "generated obj scene")?;
+    let mut file = SceneFile::parse(TEXT, "generated model scene")?;
+    if let Some(l) = light {
+        let center = l.position * scale + shift;
+        let (blo, bhi) = (lo * scale + shift, hi * scale + shift);
+        let gap = (center.clamp(blo, bhi) - center).length();
+        let radius = (0.5 * gap).clamp(0.01, 0.5);
+        let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
+        file.light.center = f(center);
+        file.light.normal = f(l.direction);
+        file.light.radius = f64::from(radius);
+    }
     file.objects.push(file::ObjectSpec {
-        name: obj_path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned()),
+        name: path.file_stem().map(|s| s.to_string_lossy().into_owned()),
         mesh: absolute.display().to_string(),
         translate,
         rotate_deg: [0.0; 3],
         scale: file::Scale::Uniform(scale as f64),
         casts_shadow: true,
     });
+    file.validate(&path.display().to_string())?;
     Ok(file)
 }
