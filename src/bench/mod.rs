@@ -782,7 +782,7 @@ fn time_display(ctx: &GpuContext, scene: &Scene, config: &Config, size: u32) -> 
         if moving {
             // The light a centimetre to one side or the other: everything light-space is redone.
             nudge += 1;
-            let dx = if nudge % 2 == 0 { 0.01 } else { -0.01 };
+            let dx = if nudge.is_multiple_of(2) { 0.01 } else { -0.01 };
             session.set_light(DiskLight {
                 center: base.center + Vec3::new(dx, 0.0, 0.0),
                 ..base

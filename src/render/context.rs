@@ -11,6 +11,9 @@ use std::sync::{Arc, Mutex};
 
 use super::RenderError;
 
+/// A device-lifetime object of some pass.
+type SharedObject = Arc<dyn Any + Send + Sync>;
+
 /// A device and queue with what the render core needs to know about them.
 pub struct GpuContext {
     pub device: wgpu::Device,
@@ -21,7 +24,7 @@ pub struct GpuContext {
     /// Validation errors no error scope caught, kept instead of panicking.
     uncaptured: Arc<Mutex<Vec<String>>>,
     /// Device-lifetime pass objects by type and name ([`GpuContext::shared`]).
-    shared: Mutex<HashMap<(TypeId, &'static str), Arc<dyn Any + Send + Sync>>>,
+    shared: Mutex<HashMap<(TypeId, &'static str), SharedObject>>,
 }
 
 /// The limits the render core asks of an adapter: everything the adapter supports where it

@@ -434,7 +434,7 @@ fn light_view_rect(view: &LightView, points: impl Iterator<Item = Vec3>) -> [f32
     let mut rect = [f32::MAX, f32::MAX, f32::MIN, f32::MIN];
     for p in points {
         let c = vp * p.extend(1.0);
-        if !(c.w > 1e-6) {
+        if c.w.is_nan() || c.w <= 1e-6 {
             return [0.0, 0.0, 1.0, 1.0];
         }
         let (u, v) = (c.x / c.w * 0.5 + 0.5, 0.5 - c.y / c.w * 0.5);

@@ -13,14 +13,17 @@ use crate::render::{
     buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
 };
 
+/// A method's own uniform buffer: its size, and what it holds.
+pub type Extra = (u64, fn() -> Vec<u8>);
+
 /// How one of these methods differs from the others.
 pub struct Flavor {
     /// Its camera shader, `methods/NAME.wgsl`.
     pub shader: &'static str,
     /// Its numbers for `ShadowUniforms::knobs`, from the frame.
     pub knobs: fn(&FrameInputs<'_>) -> [f32; 4],
-    /// The contents of its own uniform buffer (binding 2), if it has one, and that buffer's size.
-    pub extra: Option<(u64, fn() -> Vec<u8>)>,
+    /// Its own uniform buffer (binding 2), if it has one.
+    pub extra: Option<Extra>,
 }
 
 pub struct OnShadowMap {

@@ -36,11 +36,11 @@ pub const POISSON_POINTS: usize = 64;
 
 static FLAVOR: Flavor = Flavor {
     shader: "methods/pcss.wgsl",
-    knobs: knobs,
+    knobs: pcss_knobs,
     extra: Some(((POISSON_POINTS * 8) as u64, poisson_bytes)),
 };
 
-fn knobs(f: &FrameInputs<'_>) -> [f32; 4] {
+fn pcss_knobs(f: &FrameInputs<'_>) -> [f32; 4] {
     [
         f.knobs.get(&BLOCKER_TAPS) as f32,
         f.knobs.get(&FILTER_TAPS) as f32,

@@ -20,6 +20,9 @@ use crate::render::{buffer_entry, pipeline_layout, shader_module, GpuContext};
 pub const PIXEL_FLOATS: usize = 28;
 /// The auto-fit samples a grid of this many squared.
 pub const FIT_GRID: u32 = 24;
+/// `PROBE_*` of the shader: what a dispatch reads.
+pub const PROBE_PIXEL: u32 = 0;
+pub const PROBE_FIT: u32 = 1;
 
 /// What to read.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -250,11 +253,11 @@ pub fn record(
     // probe: x, y, PROBE_* mode, grid.
     let groups = match *request {
         ProbeRequest::Pixel { x, y, .. } => {
-            uniforms.probe = [x, y, 0, 0];
+            uniforms.probe = [x, y, PROBE_PIXEL, 0];
             1
         }
         ProbeRequest::Fit { .. } => {
-            uniforms.probe = [0, 0, 1, FIT_GRID];
+            uniforms.probe = [0, 0, PROBE_FIT, FIT_GRID];
             (FIT_GRID * FIT_GRID).div_ceil(64)
         }
     };
@@ -279,6 +282,9 @@ pub fn record(
     bytes
 }
 
+/// A light-map texel's coordinates and its three textures' RGBA.
+pub type MapTexel = ((u32, u32), [[f32; 4]; 3]);
+
 /// A pixel probe's values, decoded.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PixelValues {
@@ -294,7 +300,7 @@ pub struct PixelValues {
     pub reference: Option<f32>,
     /// The light-map texel under the point (or under the cursor in the light-space view) and
     /// the three textures' RGBA there.
-    pub texel: Option<((u32, u32), [[f32; 4]; 3])>,
+    pub texel: Option<MapTexel>,
 }
 
 impl PixelValues {

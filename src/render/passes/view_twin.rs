@@ -35,8 +35,10 @@ impl ColorMap {
             ColorMap::Gray => rgb(x, x, x),
             ColorMap::Heat => rgb(x * 3.0, x * 3.0 - 1.0, x * 3.0 - 2.0),
             ColorMap::Turbo => {
-                // Polynomial fit of Google's Turbo (Mikhailov 2019).
-                let poly = |c: [f32; 6]| c.iter().rev().fold(0.0f32, |acc, k| acc * x + k);
+                // Polynomial fit of Google's Turbo (Mikhailov 2019), its coefficients as
+                // published (the GPU evaluates them in f32: one level apart at most).
+                let x = f64::from(x);
+                let poly = |c: [f64; 6]| c.iter().rev().fold(0.0, |acc, k| acc * x + k) as f32;
                 rgb(
                     poly([
                         0.13572138,
