@@ -6,6 +6,12 @@
 // #include shared/fullscreen_vs.wgsl
 // #include shared/view_inputs.wgsl
 
+// Which view and which colour map: fixed per pipeline (VIEW_* and COLORMAP_* of
+// shared/view_inputs.wgsl). A CPU rasteriser runs every path of a branch on every pixel, so a
+// switch on a uniform would cost every view's fetches and every map's arithmetic.
+override VIEW_KIND: u32 = 0u;
+override COLORMAP: u32 = 0u;
+
 // Background of pixels that hit no surface, and of map texels with no data (views::NO_DATA).
 const NO_DATA: vec3<f32> = vec3<f32>(20.0, 24.0, 48.0) / 255.0;
 
@@ -38,7 +44,7 @@ fn colormap(x_in: f32) -> vec3<f32> {
     if x_in != x_in {
         x = 0.0;
     }
-    switch view.colormap {
+    switch COLORMAP {
         case COLORMAP_HEAT: {
             return clamp(vec3<f32>(x * 3.0, x * 3.0 - 1.0, x * 3.0 - 2.0), vec3<f32>(0.0), vec3<f32>(1.0));
         }
@@ -60,7 +66,7 @@ fn mapped(v: f32) -> vec3<f32> {
 }
 
 fn camera_view(p: vec2<i32>) -> vec3<f32> {
-    if view.kind == VIEW_FINAL {
+    if VIEW_KIND == VIEW_FINAL {
         return textureLoad(color_bytes, p, 0).rgb;
     }
     if !is_hit(p) {
@@ -68,7 +74,7 @@ fn camera_view(p: vec2<i32>) -> vec3<f32> {
     }
     let d = textureLoad(data, p, 0).xy;
     let branch = branch_of(d.y);
-    switch view.kind {
+    switch VIEW_KIND {
         case VIEW_VISIBILITY: { return mapped(d.x); }
         case VIEW_T: { return mapped(d.y - 2.0 * branch); }
         case VIEW_ERROR: {
@@ -117,7 +123,7 @@ fn maps_view(q: vec2<i32>) -> vec3<f32> {
 fn fs_main(in: FullscreenVertex) -> @location(0) vec4<f32> {
     let p = vec2<i32>(floor(in.position.xy));
     var rgb: vec3<f32>;
-    if view.kind == VIEW_LIGHT_MAPS {
+    if VIEW_KIND == VIEW_LIGHT_MAPS {
         rgb = maps_view(p);
     } else {
         rgb = camera_view(p);

@@ -352,6 +352,10 @@ impl LabApp {
             self.stats.gpu(timings);
         }
         for (i, results) in core.probe_results().into_iter().enumerate() {
+            if !results.is_empty() {
+                // The panels drawn before the viewport show them on the next frame.
+                ctx.request_repaint();
+            }
             for r in results {
                 match r.request {
                     ProbeRequest::Pixel { x, y, params } => {

@@ -4,7 +4,7 @@
 //! scalar through a [`Mapping`] (black/white range, colour map). The frame never leaves the GPU
 //! for it. Its CPU twin is [`super::view_twin`]; a test holds the two to agree on every view.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use glam::Mat4;
 use serde::{Deserialize, Serialize};
@@ -13,8 +13,8 @@ use super::camera::CameraTargets;
 use crate::render::methods::{Channel, Empty, LightMaps};
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, cleared, opaque, pipeline_layout, render_pipeline, shader_module, texture_entry,
-    uniform_buffer, uniform_entry, view_entry, GpuContext, PipelineSpec, Texture,
+    buffer_entry, cleared, opaque, pipeline_layout, shader_module, texture_entry, uniform_buffer,
+    uniform_entry, view_entry, GpuContext, Texture,
 };
 
 /// The display texture's format: egui samples it as gamma-encoded bytes.
@@ -389,32 +389,63 @@ impl ViewBindings {
     }
 }
 
-/// The pipeline, built once per device.
+/// The pipelines, one per view and colour map (made on first use), built once per device.
 pub struct ViewPass {
-    pipeline: wgpu::RenderPipeline,
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+    pipelines: [OnceLock<wgpu::RenderPipeline>; 6 * 3],
 }
 
 impl ViewPass {
     pub fn get(ctx: &GpuContext) -> Arc<ViewPass> {
         ctx.shared(|device| {
             let layout = ViewLayout::get(ctx);
-            let module = shader_module(device, "passes/view.wgsl");
             ViewPass {
-                pipeline: render_pipeline(
-                    device,
-                    &PipelineSpec {
-                        label: "ViewPass::pipeline",
-                        module: &module,
-                        layout: &pipeline_layout(device, "ViewPass::layout", &[&layout.layout]),
-                        vs: "vs_main",
-                        fs: Some("fs_main"),
-                        buffers: &[],
-                        targets: &[opaque(DISPLAY_FORMAT)],
-                        cull: None,
-                        depth: None,
-                    },
-                ),
+                module: shader_module(device, "passes/view.wgsl"),
+                layout: pipeline_layout(device, "ViewPass::layout", &[&layout.layout]),
+                pipelines: Default::default(),
             }
+        })
+    }
+
+    /// The pipeline drawing `params`'s view (and colour map, for the scalar views).
+    fn pipeline(&self, device: &wgpu::Device, params: &ViewParams) -> &wgpu::RenderPipeline {
+        let map = match params.view {
+            View::Visibility | View::T | View::Error | View::DBuffer => params.mapping.map.code(),
+            View::Final | View::Classes => 0,
+        };
+        let slot = (params.view.code() * 3 + map) as usize;
+        self.pipelines[slot.min(17)].get_or_init(|| {
+            let constants = [
+                ("VIEW_KIND", f64::from(params.view.code())),
+                ("COLORMAP", f64::from(map)),
+            ];
+            let options = wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            };
+            let targets = [opaque(DISPLAY_FORMAT)];
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("ViewPass::pipeline"),
+                layout: Some(&self.layout),
+                vertex: wgpu::VertexState {
+                    module: &self.module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: options.clone(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: options,
+                    targets: &targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
         })
     }
 }
@@ -497,7 +528,7 @@ impl ViewTarget {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pass.pipeline);
+        pass.set_pipeline(self.pass.pipeline(&ctx.device, params));
         pass.set_bind_group(0, group, &[]);
         pass.draw(0..3, 0..1);
     }
