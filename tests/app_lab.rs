@@ -326,3 +326,67 @@ fn the_window_keeps_making_frames_while_the_reference_converges() {
     assert!(done > 0 && done < total, "{done}/{total}: still converging");
     assert!(app.window_frames() > 10);
 }
+
+/// A file dropped on the window, as egui-winit hands it over.
+#[derive(Debug)]
+struct Dropped(std::path::PathBuf);
+
+impl egui::DroppedFile for Dropped {
+    fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+fn drop_file(h: &mut Harness<'_, LabApp>, path: &std::path::Path) {
+    h.input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(path.to_path_buf())));
+    h.run();
+}
+
+#[test]
+fn a_dropped_model_opens_and_a_dropped_bad_file_keeps_the_scene() {
+    let mut h = lab(None);
+    h.run();
+    let first = shown_frame(&mut h, false);
+
+    // A file the lab does not open: the status says which kinds it does.
+    let dir = std::env::temp_dir().join(format!("dbuffer-drop-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let notes = dir.join("notes.txt");
+    std::fs::write(&notes, "not a scene").expect("write");
+    drop_file(&mut h, &notes);
+    let (text, level) = h.state().status();
+    assert_eq!(level, Level::Error);
+    assert!(
+        text.contains("notes.txt") && text.contains(".glb"),
+        "{text}"
+    );
+    assert_eq!(h.state().scene_name(), dbuffer::app::DEFAULT_SCENE);
+
+    // A truncated model: refused, the scene stays.
+    let broken = dir.join("broken.glb");
+    std::fs::write(&broken, b"glTF\x02\x00\x00\x00").expect("write");
+    drop_file(&mut h, &broken);
+    let (text, level) = h.state().status();
+    assert_eq!(level, Level::Error);
+    assert!(text.contains("broken.glb"), "{text}");
+    assert_eq!(h.state().scene_name(), dbuffer::app::DEFAULT_SCENE);
+
+    // The glTF model of assets/ opens and is drawn.
+    let fox = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models/Fox.glb");
+    drop_file(&mut h, &fox);
+    let (text, level) = h.state().status();
+    assert_ne!(level, Level::Error, "{text}");
+    assert!(text.contains("Fox"), "{text}");
+    assert_eq!(h.state().scene_name(), "Fox");
+    let fox_frame = shown_frame(&mut h, false);
+    assert_ne!(
+        fox_frame.visibility, first.visibility,
+        "the viewport shows the new scene"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,5 +1,6 @@
-//! Files: open a scene or an OBJ (dialog, path field, built-ins, recent files), save the scene
-//! (temporary file, then rename), export a PNG of the viewport as shown (overlays included).
+//! Files: open a scene, an OBJ or a glTF model (dialog, path field, a file dropped on the window,
+//! built-ins, recent files), save the scene (temporary file, then rename), export a PNG of the
+//! viewport as shown (overlays included).
 //! Every failure goes to the status line; the lab keeps running on what it had.
 //!
 //! Dialogs come from the desktop (rfd: the XDG portal, else zenity). Where there is neither — a
@@ -100,6 +101,15 @@ fn fallback_path(name: &str, ext: &str) -> PathBuf {
     unused_path(&dir, name, ext)
 }
 
+/// What the lab opens, by extension (a dialog's filter, files dropped on the window).
+pub const OPENABLE: [&str; 4] = ["toml", "obj", "glb", "gltf"];
+
+fn is_openable(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| OPENABLE.iter().any(|o| o.eq_ignore_ascii_case(e)))
+}
+
 const NO_DIALOG: &str = "no file dialog here (it needs xdg-desktop-portal or zenity)";
 
 fn with_extension(path: PathBuf, ext: &str) -> PathBuf {
@@ -114,7 +124,7 @@ impl LabApp {
     pub(super) fn open_dialog(&mut self) {
         let mut dialog = rfd::FileDialog::new()
             .set_title("Open a scene or a mesh")
-            .add_filter("scene or mesh", &["toml", "obj"]);
+            .add_filter("scene or model", &OPENABLE);
         if let Some(dir) = self.doc.path.as_deref().and_then(Path::parent) {
             dialog = dialog.set_directory(dir);
         }
@@ -126,6 +136,71 @@ impl LabApp {
                 Level::Warning,
             ),
         }
+    }
+
+    /// Open a file dropped on the window this frame (the first one the lab can open; errors go
+    /// to the status line and the current scene stays).
+    pub(super) fn open_dropped(&mut self, ctx: &egui::Context) {
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_path_buf())
+                .collect()
+        });
+        if dropped.is_empty() {
+            return;
+        }
+        match dropped.iter().find(|p| is_openable(p)) {
+            Some(path) => {
+                self.open_scene(&path.display().to_string());
+                let ignored = dropped.len() - 1;
+                if ignored > 0 && self.status.1 != Level::Error {
+                    let (text, level) = self.status.clone();
+                    self.set_status(
+                        format!(
+                            "{text} ({ignored} more dropped files ignored: one scene at a time)"
+                        ),
+                        level,
+                    );
+                }
+            }
+            None => self.set_status(
+                format!(
+                    "cannot open {}: the lab opens .{} files",
+                    dropped[0].display(),
+                    OPENABLE.join(", .")
+                ),
+                Level::Error,
+            ),
+        }
+    }
+
+    /// While files hover over the window: say what dropping them will do.
+    pub(super) fn drop_hint(&self, ctx: &egui::Context) {
+        let hovered: Vec<Option<PathBuf>> =
+            ctx.input(|i| i.raw.hovered_files.iter().map(|f| f.path.clone()).collect());
+        let Some(first) = hovered.first() else {
+            return;
+        };
+        let text = match first {
+            Some(p) if is_openable(p) => format!("drop to open {}", p.display()),
+            Some(p) => format!("{} is not a scene, OBJ or glTF", p.display()),
+            None => "drop a scene, OBJ or glTF to open it".to_string(),
+        };
+        let rect = ctx.content_rect();
+        let painter = ctx.layer_painter(egui::LayerId::new(
+            egui::Order::Foreground,
+            egui::Id::unique("drop_hint"),
+        ));
+        painter.rect_filled(rect, 0.0, egui::Color32::from_black_alpha(160));
+        painter.text(
+            rect.center(),
+            egui::Align2::CENTER_CENTER,
+            text,
+            egui::FontId::proportional(20.0),
+            egui::Color32::WHITE,
+        );
     }
 
     pub(super) fn save(&mut self) {

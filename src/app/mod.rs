@@ -236,7 +236,7 @@ impl LabApp {
         }
     }
 
-    /// Open a built-in scene name, a `.toml` scene or an `.obj`; on failure the error goes to
+    /// Open a built-in scene name, a `.toml` scene, an `.obj` or a `.glb`/`.gltf`; on failure the error goes to
     /// the status line and the current scene stays.
     pub fn open_scene(&mut self, name_or_path: &str) {
         match SceneDoc::open(name_or_path) {
@@ -387,6 +387,7 @@ impl eframe::App for LabApp {
         let ctx = ui.ctx().clone();
         self.stats.ui_frame(&ctx, frame.info().cpu_usage);
         self.shortcuts(&ctx);
+        self.open_dropped(&ctx);
         self.menu_bar(ui);
         self.status_bar(ui);
         self.controls_panel(ui);
@@ -396,6 +397,7 @@ impl eframe::App for LabApp {
             self.history.close();
         }
         self.finish_export(&ctx);
+        self.drop_hint(&ctx);
         self.smoke_step(&ctx);
     }
 
