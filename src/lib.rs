@@ -6,11 +6,13 @@
 //!   D-buffer lookup and the ray-cast visibility oracle (plain Rust, no GPU types);
 //! - [`render`]: the wgpu render core (light pass, camera pass), headless or in the lab;
 //! - [`output`]: writing one render's files (PNG, EXR, JSON), all or nothing.
+//! - [`animation`]: an orbit recorded as PNG frames and an APNG (`dbuffer animate`, the lab).
 //! - [`app`]: the lab window (eframe), around the same render core;
 //! - [`shader_source`]: WGSL sources from `shaders/` with their `// #include` lines expanded.
 //! - [`bench`]: `dbuffer bench` (Table 1, the competition, coherence, geometry scaling).
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod animation;
 pub mod app;
 pub mod bench;
 pub mod compare;

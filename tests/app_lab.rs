@@ -390,3 +390,49 @@ fn a_dropped_model_opens_and_a_dropped_bad_file_keeps_the_scene() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The number of frames an APNG says it has, and its size.
+fn apng_frames(path: &std::path::Path) -> (u32, u32, u32) {
+    let file = std::fs::File::open(path).expect("animation.png");
+    let reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .expect("a PNG");
+    let info = reader.info();
+    let frames = info.animation_control.expect("an APNG").num_frames;
+    (frames, info.width, info.height)
+}
+
+#[test]
+fn record_orbit_writes_the_frames_and_an_apng_of_the_current_view() {
+    let dir = std::env::temp_dir().join(format!("dbuffer-record-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut h = lab(None);
+    h.run();
+    let (w, h_px) = {
+        let s = h.state().shown().expect("a frame");
+        (s.request.width, s.request.height)
+    };
+    click(&mut h, "File");
+    click(&mut h, "Record orbit…");
+    h.get_by_label("Folder").focus();
+    h.get_by_label("Folder")
+        .type_text(&dir.display().to_string());
+    h.run();
+    h.state_mut().record.frames = 3;
+    click(&mut h, "Record");
+    for _ in 0..50 {
+        if h.state().record.progress().is_none() {
+            break;
+        }
+        h.step();
+    }
+    let (text, level) = h.state().status();
+    assert_eq!(level, Level::Info, "{text}");
+    assert!(text.contains("recorded 3 frames"), "{text}");
+    let frames: Vec<Vec<u8>> = (0..3)
+        .map(|k| std::fs::read(dir.join(format!("frame-{k:04}.png"))).expect("a frame file"))
+        .collect();
+    assert_ne!(frames[0], frames[1], "the light moved between frames");
+    assert_eq!(apng_frames(&dir.join("animation.png")), (3, w, h_px));
+    let _ = std::fs::remove_dir_all(&dir);
+}

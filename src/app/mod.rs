@@ -17,6 +17,7 @@ mod files;
 mod inspector;
 mod overlays;
 mod panels;
+pub mod record;
 pub mod settings;
 mod smoke;
 mod stats;
@@ -89,6 +90,8 @@ pub struct LabApp {
     open_text: String,
     smoke: Option<smoke::Smoke>,
     export: Option<files::PendingExport>,
+    /// File → Record orbit…: its window and the recording under way.
+    pub record: record::RecordState,
     /// What the overlays could not draw in full, for the legend.
     overlay_notes: Vec<String>,
     deterministic: bool,
@@ -150,6 +153,7 @@ impl LabApp {
             open_text: String::new(),
             smoke: options.smoke_screenshot.map(smoke::Smoke::new),
             export: None,
+            record: record::RecordState::default(),
             overlay_notes: Vec::new(),
             deterministic: options.deterministic,
         };
@@ -397,6 +401,7 @@ impl eframe::App for LabApp {
             self.history.close();
         }
         self.finish_export(&ctx);
+        self.record_ui(&ctx);
         self.drop_hint(&ctx);
         self.smoke_step(&ctx);
     }

@@ -62,6 +62,9 @@ impl LabApp {
                     if ui.button("Export PNG…").clicked() {
                         self.export_dialog(&ctx);
                     }
+                    if ui.button("Record orbit…").clicked() {
+                        self.record.open = true;
+                    }
                     ui.separator();
                     if ui.button("Quit").clicked() {
                         ctx.send_viewport_cmd(egui::ViewportCommand::Close);

@@ -69,51 +69,61 @@ impl Offline {
         session: &mut Session,
         request: &FrameRequest,
     ) -> Result<(Frame, FrameReport), RenderError> {
-        request.validate(&self.ctx)?;
-        let mut report = FrameReport::default();
-        if request.method.is_reference() {
-            let key = session.reference_key(request);
-            let t = Instant::now();
-            let mut noop = |_: usize, _: usize| {};
-            let progress: &mut dyn FnMut(usize, usize) = match self.progress.as_mut() {
-                Some(p) => p.as_mut(),
-                None => &mut noop,
-            };
-            let r = reference::compute(
-                session.scene(),
-                key.width,
-                key.height,
-                key.samples,
-                progress,
-            );
-            report
-                .cpu_ms
-                .push(("reference".into(), t.elapsed().as_secs_f64() * 1e3));
-            report.cpu_ms.push(("reference_rays".into(), r.rays_ms));
-            report.reference_rays = Some((key.samples, r.hit_pixels));
-            session.set_reference(&self.ctx, key, &r.visibility, (key.samples, key.samples))?;
-        }
-        let t = Instant::now();
-        let frame = session.frame(
-            &self.ctx,
-            &FrameRequest {
-                read_dbuffer: true,
-                ..*request
-            },
-        )?;
-        report
-            .cpu_ms
-            .push(("frame_and_readback".into(), t.elapsed().as_secs_f64() * 1e3));
-        let dbuffer = dbuffer_of(request.method);
-        let (_, geometry_ms) = session.geometry_builds(dbuffer);
-        report
-            .cpu_ms
-            .insert(0, ("geometry_volumes".into(), geometry_ms));
-        if let Some(g) = session.geometry(dbuffer) {
-            report.geometry = g.stats;
-            report.warnings = g.warnings.clone();
-        }
-        report.clipped = session.light_view().clipped;
-        Ok((frame, report))
+        let mut noop = |_: usize, _: usize| {};
+        let progress: &mut dyn FnMut(usize, usize) = match self.progress.as_mut() {
+            Some(p) => p.as_mut(),
+            None => &mut noop,
+        };
+        let request = FrameRequest {
+            read_dbuffer: true,
+            ..*request
+        };
+        render_in(&self.ctx, session, &request, progress)
     }
+}
+
+/// Render `request` in `session` and read it back (the method's light-space maps if
+/// `request.read_dbuffer`); for the reference its rays are cast first (on this thread),
+/// `progress` told (samples done, total).
+pub fn render_in(
+    ctx: &GpuContext,
+    session: &mut Session,
+    request: &FrameRequest,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(Frame, FrameReport), RenderError> {
+    request.validate(ctx)?;
+    let mut report = FrameReport::default();
+    if request.method.is_reference() {
+        let key = session.reference_key(request);
+        let t = Instant::now();
+        let r = reference::compute(
+            session.scene(),
+            key.width,
+            key.height,
+            key.samples,
+            progress,
+        );
+        report
+            .cpu_ms
+            .push(("reference".into(), t.elapsed().as_secs_f64() * 1e3));
+        report.cpu_ms.push(("reference_rays".into(), r.rays_ms));
+        report.reference_rays = Some((key.samples, r.hit_pixels));
+        session.set_reference(ctx, key, &r.visibility, (key.samples, key.samples))?;
+    }
+    let t = Instant::now();
+    let frame = session.frame(ctx, request)?;
+    report
+        .cpu_ms
+        .push(("frame_and_readback".into(), t.elapsed().as_secs_f64() * 1e3));
+    let dbuffer = dbuffer_of(request.method);
+    let (_, geometry_ms) = session.geometry_builds(dbuffer);
+    report
+        .cpu_ms
+        .insert(0, ("geometry_volumes".into(), geometry_ms));
+    if let Some(g) = session.geometry(dbuffer) {
+        report.geometry = g.stats;
+        report.warnings = g.warnings.clone();
+    }
+    report.clipped = session.light_view().clipped;
+    Ok((frame, report))
 }
