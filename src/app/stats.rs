@@ -97,19 +97,25 @@ impl Stats {
         median(self.renders.iter().filter_map(|r| r.geometry_ms).collect())
     }
 
-    /// Median GPU milliseconds per pass over the kept frames, in the order they last came.
+    /// Median GPU milliseconds per pass over the kept frames, every pass any of them ran (a
+    /// frame that only redraws the view still lists the camera pass of the last render), in
+    /// the order they first came.
     pub fn median_gpu_ms(&self) -> Vec<(String, f64)> {
-        let Some(last) = self.gpu.back() else {
-            return Vec::new();
-        };
-        last.iter()
-            .filter_map(|(pass, _)| {
+        let mut passes: Vec<&str> = Vec::new();
+        for (pass, _) in self.gpu.iter().flatten() {
+            if !passes.contains(&pass.as_str()) {
+                passes.push(pass);
+            }
+        }
+        passes
+            .into_iter()
+            .filter_map(|pass| {
                 let values = self
                     .gpu
                     .iter()
                     .flat_map(|r| r.iter().filter(|(p, _)| p == pass).map(|(_, ms)| *ms))
                     .collect();
-                median(values).map(|m| (pass.clone(), m))
+                median(values).map(|m| (pass.to_string(), m))
             })
             .collect()
     }
@@ -171,6 +177,12 @@ mod tests {
         assert_eq!(s.median_geometry_ms(), Some(7.0));
         assert_eq!(s.median_wall_ms(false), Some(3.0));
         assert_eq!(s.median_gpu_ms(), vec![("shadow_map".to_string(), 1.5)]);
+        // A frame that only redraws the view keeps the last render's passes listed.
+        s.gpu(vec![("view".into(), 0.5)]);
+        assert_eq!(
+            s.median_gpu_ms(),
+            vec![("shadow_map".to_string(), 1.5), ("view".to_string(), 0.5)]
+        );
         assert_eq!(s.renders_total, 4);
         assert_eq!(
             s.read_bytes(),
