@@ -30,10 +30,125 @@
 //! The light's normal need not be unit length; it is normalised when the scene is built.
 
 use super::{shapes, Camera, DiskLight, Mesh, Object, Scene, SceneError};
+use crate::budget::{MAX_SCENE_FILE_BYTES, MAX_SCENE_TRIANGLES};
+use crate::fsutil::ByteBudget;
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 use serde::{de, Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
 use std::path::Path;
+
+/// The byte budget of one scene file.
+pub const SCENE_FILE_BUDGET: ByteBudget = ByteBudget {
+    limit: MAX_SCENE_FILE_BYTES,
+    name: "MAX_SCENE_FILE_BYTES",
+    what: "a scene file",
+};
+
+/// A scene file's bytes as text, without a leading UTF-8 byte-order mark. Bytes that are not
+/// UTF-8 are an error naming the first one's byte offset, line and column (never the text).
+pub fn decode_utf8<'a>(bytes: &'a [u8], label: &str) -> Result<&'a str, SceneError> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    std::str::from_utf8(bytes).map_err(|e| {
+        let offset = e.valid_up_to();
+        let before = &bytes[..offset];
+        let line_start = before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        // The part of the line before the bad byte is valid UTF-8: count its characters.
+        let column = 1 + String::from_utf8_lossy(&before[line_start..])
+            .chars()
+            .count();
+        SceneError::NotUtf8 {
+            file: label.to_string(),
+            line: 1 + before.iter().filter(|&&b| b == b'\n').count(),
+            column,
+            offset,
+        }
+    })
+}
+
+/// 1-based line and column (in characters) of byte `offset` of `text`.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &text[..offset];
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (
+        1 + before.matches('\n').count(),
+        1 + before[line_start..].chars().count(),
+    )
+}
+
+/// Words toml and serde quote in their messages that come from our schema or the TOML
+/// grammar, not from the file: they are kept; anything else quoted is left out of the message.
+const SCHEMA_WORDS: &[&str] = &[
+    "camera",
+    "light",
+    "object",
+    "eye",
+    "target",
+    "fov_y_deg",
+    "center",
+    "normal",
+    "radius",
+    "intensity",
+    "name",
+    "mesh",
+    "translate",
+    "rotate_deg",
+    "scale",
+    "casts_shadow",
+    "true",
+    "false",
+    "inf",
+    "nan",
+];
+
+/// toml's message without anything it quotes from the file: a `` `word` `` or `"word"` that is
+/// not one of [`SCHEMA_WORDS`] or TOML punctuation is dropped with the space before it
+/// ("unknown field `secret`, expected one of `center`" becomes "unknown field, expected one of
+/// `center`"); lines are joined with "; ".
+fn sanitize_toml_message(message: &str) -> String {
+    let keep = |quoted: &str| {
+        // A key path such as `object.1.scale` of schema words and indices.
+        quoted.split('.').all(|k| {
+            SCHEMA_WORDS.contains(&k) || (!k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+        }) || (!quoted.is_empty()
+            && quoted.len() <= 3
+            && quoted.chars().all(|c| c.is_ascii_punctuation() || c == ' '))
+            || (quoted.len() == 2 && quoted.starts_with('\\'))
+    };
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(open) = rest.find(['`', '"']) {
+        let quote = rest[open..].chars().next().unwrap_or('`');
+        let after = &rest[open + 1..];
+        let Some(len) = after.find(quote) else {
+            break;
+        };
+        let quoted = &after[..len];
+        if keep(quoted) {
+            out.push_str(&rest[..open + 1 + len + 1]);
+        } else {
+            out.push_str(rest[..open].trim_end_matches(' '));
+        }
+        rest = &after[len + 1..];
+    }
+    if rest.contains(['`', '"']) {
+        // An unmatched quote: what follows it may be the file's; keep only what came before.
+        rest = &rest[..rest.find(['`', '"']).unwrap_or(rest.len())];
+    }
+    out.push_str(rest);
+    let lines: Vec<&str> = out
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    lines.join("; ")
+}
 
 /// A parsed scene file, before meshes are loaded. Numbers are kept as `f64` so a file written
 /// back by [`SceneFile::to_toml`] reads `0.1`, not `0.10000000149011612`.
@@ -195,10 +310,20 @@ impl ObjectSpec {
 
 impl SceneFile {
     /// Parses and validates scene TOML; `label` names the file in errors.
+    /// A leading byte-order mark is skipped. Errors never quote the text: toml's message is
+    /// kept without what it quotes from the file, with the line and column.
     pub fn parse(text: &str, label: &str) -> Result<SceneFile, SceneError> {
-        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Toml {
-            file: label.to_string(),
-            message: e.to_string().trim_end().to_string(),
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let file: SceneFile = toml::from_str(text).map_err(|mut e| {
+            let (line, column) = e.span().map_or((1, 1), |s| line_column(text, s.start));
+            // Without the input, toml's message names the key path instead of quoting the line.
+            e.set_input(None);
+            SceneError::Toml {
+                file: label.to_string(),
+                line,
+                column,
+                message: sanitize_toml_message(&e.to_string()),
+            }
         })?;
         file.validate(label)?;
         Ok(file)
@@ -273,6 +398,7 @@ impl SceneFile {
             ));
         }
 
+        let mut shape_triangles = 0u64;
         for (i, o) in self.objects.iter().enumerate() {
             let key = |k: &str| format!("object[{i}].{k}");
             if o.mesh.trim().is_empty() {
@@ -281,6 +407,21 @@ impl SceneFile {
                     "a built-in shape name or a path to an .obj file",
                     "an empty string".into(),
                 ));
+            }
+            if shapes::is_shape_name(&o.mesh) {
+                // Parameters and size are known before anything is built.
+                let count = shapes::triangle_count(&o.mesh)
+                    .map_err(|e| shape_error(e, label, &key("mesh")))?;
+                shape_triangles += count;
+                if shape_triangles > MAX_SCENE_TRIANGLES {
+                    return Err(over_budget(
+                        label,
+                        &key("mesh"),
+                        &o.mesh,
+                        count,
+                        shape_triangles,
+                    ));
+                }
             }
             finite(&key("translate"), &o.translate)?;
             finite(&key("rotate_deg"), &o.rotate_deg)?;
@@ -319,18 +460,22 @@ impl SceneFile {
         label: &str,
         name: &str,
     ) -> Result<Scene, SceneError> {
-        self.validate(label)?;
+        let meshes = self.load_meshes(base_dir, label)?;
         let c = &self.camera;
         let l = &self.light;
-        let mut objects = Vec::with_capacity(self.objects.len());
-        for (i, o) in self.objects.iter().enumerate() {
-            let mesh = resolve_mesh(&o.mesh, base_dir, label, &format!("object[{i}].mesh"))?;
-            objects.push(Object {
-                name: o.display_name().to_string(),
-                mesh: mesh.transformed(&o.transform()),
-                casts_shadow: o.casts_shadow,
-            });
-        }
+        let objects = self
+            .objects
+            .iter()
+            .zip(meshes)
+            .map(|(o, mut mesh)| {
+                mesh.transform_in_place(&o.transform());
+                Object {
+                    name: o.display_name().to_string(),
+                    mesh,
+                    casts_shadow: o.casts_shadow,
+                }
+            })
+            .collect();
         Ok(Scene {
             name: name.to_string(),
             camera: Camera {
@@ -348,6 +493,34 @@ impl SceneFile {
         })
     }
 
+    /// Every object's mesh in its own space (before its transform), within the scene's triangle
+    /// budget (`MAX_SCENE_TRIANGLES`): the built-in shapes are counted from their parameters
+    /// before any is built, the `.obj` files while they are read, each with what the shapes
+    /// and the files before it leave. Validates the file first.
+    pub fn load_meshes(&self, base_dir: &Path, label: &str) -> Result<Vec<Mesh>, SceneError> {
+        self.validate(label)?;
+        let shape_triangles: u64 = self
+            .objects
+            .iter()
+            .filter_map(|o| shapes::triangle_count(&o.mesh).ok())
+            .sum();
+        let mut file_triangles = 0u64;
+        let mut meshes = Vec::with_capacity(self.objects.len());
+        for (i, o) in self.objects.iter().enumerate() {
+            let key = format!("object[{i}].mesh");
+            let mesh = if shapes::is_shape_name(&o.mesh) {
+                resolve_mesh(&o.mesh, base_dir, label, &key)?
+            } else {
+                let others = shape_triangles + file_triangles;
+                let mesh = resolve_mesh_within(&o.mesh, base_dir, label, &key, others)?;
+                file_triangles += mesh.triangles.len() as u64;
+                mesh
+            };
+            meshes.push(mesh);
+        }
+        Ok(meshes)
+    }
+
     /// The scene as TOML in the format [`SceneFile::parse`] reads.
     pub fn to_toml(&self) -> String {
         // Serialising plain structs of numbers, strings and arrays cannot fail; fall back to a
@@ -357,35 +530,76 @@ impl SceneFile {
 }
 
 /// A mesh name from a scene file: a built-in shape, else a path to an `.obj` file relative to
-/// `base_dir`. `key` (e.g. `object[2].mesh`) names it in errors.
+/// `base_dir`. `key` (e.g. `object[2].mesh`) names it in errors. The mesh alone may have the
+/// scene's whole triangle budget; [`SceneFile::load_meshes`] checks the sum over a scene.
 pub fn resolve_mesh(
     mesh: &str,
     base_dir: &Path,
     label: &str,
     key: &str,
 ) -> Result<Mesh, SceneError> {
+    resolve_mesh_within(mesh, base_dir, label, key, 0)
+}
+
+/// Like [`resolve_mesh`] in a scene whose other objects have `others` triangles: an `.obj` may
+/// have what is left of `MAX_SCENE_TRIANGLES` (counted while it is read).
+pub fn resolve_mesh_within(
+    mesh: &str,
+    base_dir: &Path,
+    label: &str,
+    key: &str,
+    others: u64,
+) -> Result<Mesh, SceneError> {
     if shapes::is_shape_name(mesh) {
-        return shapes::build(mesh).map_err(|e| match e {
-            shapes::ShapeError::Unknown(name) => unknown_mesh(label, key, &name),
-            shapes::ShapeError::BadParams(expected) => SceneError::ShapeParams {
-                file: label.to_string(),
-                key: key.to_string(),
-                expected,
-            },
-        });
+        let shape = shapes::Shape::parse(mesh).map_err(|e| shape_error(e, label, key))?;
+        let count = shape.triangles();
+        if others + count > MAX_SCENE_TRIANGLES {
+            return Err(over_budget(label, key, mesh, count, others + count));
+        }
+        return shape.build().map_err(|e| shape_error(e, label, key));
     }
     let path = base_dir.join(mesh);
     let is_obj = Path::new(mesh)
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    if is_obj || path.is_file() {
-        return super::obj::load_obj(&path).map_err(|source| SceneError::Mesh {
+    // `metadata` follows symlinks: only a regular file without the .obj extension is tried as
+    // one (a directory or a device never is; an .obj that is not a file is refused by the
+    // loader, before reading).
+    if is_obj || std::fs::metadata(&path).is_ok_and(|m| m.is_file()) {
+        return super::obj::load_obj_within(&path, others).map_err(|error| SceneError::Mesh {
             file: label.to_string(),
             key: key.to_string(),
-            source: Box::new(source),
+            error: Box::new(error),
         });
     }
     Err(unknown_mesh(label, key, mesh))
+}
+
+fn shape_error(e: shapes::ShapeError, label: &str, key: &str) -> SceneError {
+    match e {
+        shapes::ShapeError::Unknown(name) => unknown_mesh(label, key, &name),
+        shapes::ShapeError::BadParams(expected) => SceneError::ShapeParams {
+            file: label.to_string(),
+            key: key.to_string(),
+            expected,
+        },
+    }
+}
+
+/// Shape `mesh` of `count` triangles brings the scene to `total`, over the budget.
+fn over_budget(label: &str, key: &str, mesh: &str, count: u64, total: u64) -> SceneError {
+    let found = if total == count {
+        format!("`{mesh}` has {count} triangles")
+    } else {
+        format!("`{mesh}` has {count} triangles, {total} with the objects before it")
+    };
+    SceneError::OverBudget {
+        file: label.to_string(),
+        key: key.to_string(),
+        found,
+        limit: format!("{MAX_SCENE_TRIANGLES} triangles per scene"),
+        name: "MAX_SCENE_TRIANGLES",
+    }
 }
 
 fn unknown_mesh(label: &str, key: &str, name: &str) -> SceneError {

@@ -169,12 +169,11 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     match ext.as_deref() {
         Some("toml") => {
-            let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-                file: label.clone(),
-                source,
-            })?;
+            let bytes = crate::fsutil::read_regular(path, file::SCENE_FILE_BUDGET)
+                .map_err(|e| read_error(&label, e))?;
+            let text = file::decode_utf8(&bytes, &label)?;
             Ok(Source {
-                file: SceneFile::parse(&text, &label)?,
+                file: SceneFile::parse(text, &label)?,
                 path: Some(path.to_path_buf()),
                 base_dir,
                 label,
@@ -195,6 +194,27 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
     }
 }
 
+/// A file that could not be read, as a [`SceneError`] naming `file`.
+pub(crate) fn read_error(file: &str, e: crate::fsutil::ReadError) -> SceneError {
+    match e {
+        crate::fsutil::ReadError::Io(error) => SceneError::Io {
+            file: file.to_string(),
+            error,
+        },
+        reason => SceneError::Refused {
+            file: file.to_string(),
+            reason,
+        },
+    }
+}
+
+/// Smallest extent of a bare `.obj` that can be scaled to 1.5 m in f32 (1.5 over the largest
+/// f32 number).
+pub const MIN_BARE_EXTENT: f64 = 1.5 / f32::MAX as f64;
+/// Largest extent of a bare `.obj` that can be scaled to 1.5 m in f32 (1.5 over the smallest
+/// normal f32 number).
+pub const MAX_BARE_EXTENT: f64 = 1.5 / f32::MIN_POSITIVE as f64;
+
 /// The scene shown for a bare `.obj`: the mesh scaled to 1.5 m across its largest extent,
 /// centred over the origin and standing on a 10 m ground plane, under a disk light of radius 0.5
 /// at 4 m pointing down. The mesh path is made absolute so the scene can be saved anywhere.
@@ -204,14 +224,38 @@ pub fn obj_scene(obj_path: &Path) -> Result<SceneFile, SceneError> {
         file: obj_path.display().to_string(),
         problem: "contains no vertices".into(),
     })?;
+    // In f64: the extent of a mesh spanning ±3e38 overflows f32, and 1.5 / 1e-45 does too.
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
     let extent = (hi - lo).max_element();
     let scale = if extent > 0.0 { 1.5 / extent } else { 1.0 };
+    // The transform is applied in f32: the scale must be a normal f32 number.
+    if !(scale as f32).is_normal() {
+        let size = if scale as f32 == f32::INFINITY || scale > 1.0 {
+            "too small"
+        } else {
+            "too large"
+        };
+        return Err(SceneError::Obj {
+            file: obj_path.display().to_string(),
+            problem: format!(
+                "its vertices span {extent:e} (from {lo} to {hi}), {size} to be scaled to the \
+                 1.5 m a bare mesh is shown at in single precision (f32): expected an extent \
+                 between {MIN_BARE_EXTENT:e} and {MAX_BARE_EXTENT:e}"
+            ),
+        });
+    }
     let centre = (lo + hi) / 2.0;
-    let translate = [
-        (-centre.x * scale) as f64,
-        (-lo.y * scale) as f64,
-        (-centre.z * scale) as f64,
-    ];
+    let translate = [-centre.x * scale, -lo.y * scale, -centre.z * scale];
+    if translate.iter().any(|&t| !(t as f32).is_finite()) {
+        return Err(SceneError::Obj {
+            file: obj_path.display().to_string(),
+            problem: format!(
+                "its vertices lie around {centre}, {:e} times their extent away from the \
+                 origin: too far to be moved to it in single precision (f32)",
+                centre.abs().max_element() / extent
+            ),
+        });
+    }
     let absolute = std::path::absolute(obj_path).unwrap_or_else(|_| obj_path.to_path_buf());
     const TEXT: &str = r#"
 [camera]
@@ -238,7 +282,7 @@ casts_shadow = false
         mesh: absolute.display().to_string(),
         translate,
         rotate_deg: [0.0; 3],
-        scale: file::Scale::Uniform(scale as f64),
+        scale: file::Scale::Uniform(scale),
         casts_shadow: true,
     });
     Ok(file)
