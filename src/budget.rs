@@ -26,9 +26,22 @@ pub const MAX_OBJ_LINE_BYTES: usize = 1 << 20;
 /// their files are read.
 pub const MAX_SCENE_TRIANGLES: u64 = 1 << 24;
 
-/// Vertex positions (`v` lines) of one OBJ file: 16 Mi, as many as a closed mesh of twice
-/// [`MAX_SCENE_TRIANGLES`] has.
+/// Vertices over all objects of one scene, after welding: 8 Mi, what a closed mesh of
+/// [`MAX_SCENE_TRIANGLES`] has. It bounds memory where triangles share few vertices (a
+/// triangle soup has three per triangle). Built-in shapes have about one per two triangles.
+pub const MAX_SCENE_VERTICES: u64 = 1 << 23;
+
+/// Vertex positions (`v` lines) of one OBJ file before welding: 16 Mi (files that repeat
+/// positions weld down to [`MAX_SCENE_VERTICES`]). Loading keeps 16 bytes per `v` line.
 pub const MAX_MESH_VERTICES: u64 = 1 << 24;
+
+/// Triangles of the umbra and penumbra volumes over all casters of a scene, for one light:
+/// 2 Mi, some 350 MB on the CPU. Known after classification, before a volume is built (every
+/// silhouette face, two per silhouette edge, then the fans as they are made); a caster whose
+/// volumes would pass what its scene has left casts no shadow, with a warning. Four
+/// 4M-triangle spheres under a 0.5 m light need 1.7 Mi; a light much larger than the casters
+/// makes nearly every face a silhouette face.
+pub const MAX_VOLUME_TRIANGLES: u64 = 1 << 21;
 
 /// Segments of one parameter of a built-in shape (`sphere:SxK`, `cylinder:S`, ...).
 pub const MAX_SHAPE_SEGMENTS: u32 = 4096;
@@ -50,9 +63,14 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 26;
 /// Longest side of a rendered image, in pixels (`--size`).
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
-/// Pixels of `inspect`'s CPU comparison view (`inspect --size`): 16 Mi, 4096×4096. The CPU twin
-/// keeps some 60 bytes per pixel, on top of the scene.
-pub const MAX_INSPECT_PIXELS: u64 = 1 << 24;
+/// Pixels of `inspect`'s CPU comparison view (`inspect --size`): 4 Mi, 2048×2048. The CPU twin
+/// keeps some 55 bytes per pixel, on top of the scene.
+pub const MAX_INSPECT_PIXELS: u64 = 1 << 22;
+
+/// Triangles of a scene `inspect --samples` compares on the CPU: 4 Mi. The ray-cast reference
+/// and the CPU twin each build a BVH over every triangle of the scene, some 350 bytes per
+/// triangle in all (1.5 GB at 4 Mi).
+pub const MAX_ORACLE_TRIANGLES: u64 = 1 << 22;
 
 /// Texels on a side of the D-buffer and the shadow maps (`--dbuffer-size N`).
 pub const MAX_DBUFFER_SIZE: u32 = 8192;
@@ -62,7 +80,7 @@ pub const MEMORY_BOUND_BYTES: u64 = 2 << 30;
 
 /// The budget as the lines `dbuffer --help` prints after its commands.
 pub fn summary() -> String {
-    let rows: [(&str, String, &str); 11] = [
+    let rows: [(&str, String, &str); 14] = [
         (
             "MAX_SCENE_FILE_BYTES",
             bytes(MAX_SCENE_FILE_BYTES),
@@ -84,9 +102,19 @@ pub fn summary() -> String {
             "triangles over all objects of a scene",
         ),
         (
+            "MAX_SCENE_VERTICES",
+            MAX_SCENE_VERTICES.to_string(),
+            "vertices over all objects of a scene, after welding",
+        ),
+        (
             "MAX_MESH_VERTICES",
             MAX_MESH_VERTICES.to_string(),
             "`v` lines of one .obj file",
+        ),
+        (
+            "MAX_VOLUME_TRIANGLES",
+            MAX_VOLUME_TRIANGLES.to_string(),
+            "shadow-volume triangles of a scene (over it: no shadow, a warning)",
         ),
         (
             "MAX_SHAPE_QUADS",
@@ -107,6 +135,11 @@ pub fn summary() -> String {
             "MAX_INSPECT_PIXELS",
             MAX_INSPECT_PIXELS.to_string(),
             "--size of inspect",
+        ),
+        (
+            "MAX_ORACLE_TRIANGLES",
+            MAX_ORACLE_TRIANGLES.to_string(),
+            "triangles of a scene inspect --samples ray-casts on the CPU",
         ),
         (
             "MAX_DBUFFER_SIZE",
@@ -147,6 +180,8 @@ mod tests {
         const { assert!(MAX_SCENE_TRIANGLES >= 16 * 1024 * 1024) };
         // One shape never exceeds the scene budget alone.
         const { assert!(2 * MAX_SHAPE_QUADS <= MAX_SCENE_TRIANGLES) };
+        // A closed mesh of half the triangle budget fits the vertex budget.
+        const { assert!(MAX_SCENE_TRIANGLES / 4 + 2 <= MAX_SCENE_VERTICES) };
         // 8192×8192 is an image the budget allows.
         const { assert!(8192 * 8192 <= MAX_IMAGE_PIXELS && 8192 <= MAX_IMAGE_SIDE) };
     }

@@ -99,7 +99,7 @@ enum Command {
         /// view, with this many disk samples per pixel (1 to 65536).
         #[arg(long)]
         samples: Option<usize>,
-        /// View size for the comparison, WxH (at most 16 Mpixels).
+        /// View size for the comparison, WxH (at most 4 Mpixels).
         #[arg(long, default_value = "96x96")]
         size: String,
         /// V(t) variant for the comparison.

@@ -6,7 +6,8 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use dbuffer::budget::{
-    MAX_DBUFFER_SIZE, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_INSPECT_PIXELS, MAX_REFERENCE_SAMPLES,
+    MAX_DBUFFER_SIZE, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_INSPECT_PIXELS, MAX_ORACLE_TRIANGLES,
+    MAX_REFERENCE_SAMPLES,
 };
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
@@ -259,6 +260,14 @@ pub fn inspect(
         None => None,
     };
     let scene = scene::load(name).with_context(|| format!("cannot load scene '{name}'"))?;
+    let triangles: usize = scene.objects.iter().map(|o| o.mesh.triangles.len()).sum();
+    if comparison.is_some() && triangles as u64 > MAX_ORACLE_TRIANGLES {
+        bail!(
+            "--samples: the scene has {triangles} triangles, more than the CPU reference \
+             ray-casts ({MAX_ORACLE_TRIANGLES}, MAX_ORACLE_TRIANGLES); inspect it without \
+             --samples, or compare it on the GPU with `dbuffer compare`"
+        );
+    }
     let t0 = Instant::now();
     let prepared = PreparedCasters::new(&scene);
     let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;

@@ -54,12 +54,19 @@ impl PreparedCasters {
         }
     }
 
-    /// Classes, silhouettes and volumes of every caster for this light.
+    /// Classes, silhouettes and volumes of every caster for this light, within the scene's
+    /// budget of volume triangles (`MAX_VOLUME_TRIANGLES`, shared by the casters in order: one
+    /// that would pass what is left casts no shadow, with a warning).
     pub fn build(&self, light: &DiskLight, params: &VolumeParams) -> SceneGeometry {
+        let mut left = volumes::MAX_VOLUME_TRIANGLES as usize;
         let casters: Vec<CasterGeometry> = self
             .meshes
             .iter()
-            .map(|m| volumes::build_caster(m, light, params))
+            .map(|m| {
+                let c = volumes::build_caster_within(m, light, params, left);
+                left -= c.volumes.triangle_count().min(left);
+                c
+            })
             .collect();
         let mut stats = GeometryStats::default();
         let mut warnings = Vec::new();

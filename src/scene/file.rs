@@ -29,8 +29,9 @@
 //!
 //! The light's normal need not be unit length; it is normalised when the scene is built.
 
+use super::obj::Others;
 use super::{shapes, Camera, DiskLight, Mesh, Object, Scene, SceneError};
-use crate::budget::{MAX_SCENE_FILE_BYTES, MAX_SCENE_TRIANGLES};
+use crate::budget::{MAX_SCENE_FILE_BYTES, MAX_SCENE_TRIANGLES, MAX_SCENE_VERTICES};
 use crate::fsutil::ByteBudget;
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 use serde::{de, Deserialize, Deserializer, Serialize, Serializer};
@@ -398,7 +399,7 @@ impl SceneFile {
             ));
         }
 
-        let mut shape_triangles = 0u64;
+        let mut shapes_use = Others::default();
         for (i, o) in self.objects.iter().enumerate() {
             let key = |k: &str| format!("object[{i}].{k}");
             if o.mesh.trim().is_empty() {
@@ -410,18 +411,10 @@ impl SceneFile {
             }
             if shapes::is_shape_name(&o.mesh) {
                 // Parameters and size are known before anything is built.
-                let count = shapes::triangle_count(&o.mesh)
+                let shape = shapes::Shape::parse(&o.mesh)
                     .map_err(|e| shape_error(e, label, &key("mesh")))?;
-                shape_triangles += count;
-                if shape_triangles > MAX_SCENE_TRIANGLES {
-                    return Err(over_budget(
-                        label,
-                        &key("mesh"),
-                        &o.mesh,
-                        count,
-                        shape_triangles,
-                    ));
-                }
+                check_budget(label, &key("mesh"), &o.mesh, &shape, shapes_use)?;
+                shapes_use.add(&shape);
             }
             finite(&key("translate"), &o.translate)?;
             finite(&key("rotate_deg"), &o.rotate_deg)?;
@@ -499,21 +492,22 @@ impl SceneFile {
     /// and the files before it leave. Validates the file first.
     pub fn load_meshes(&self, base_dir: &Path, label: &str) -> Result<Vec<Mesh>, SceneError> {
         self.validate(label)?;
-        let shape_triangles: u64 = self
-            .objects
-            .iter()
-            .filter_map(|o| shapes::triangle_count(&o.mesh).ok())
-            .sum();
-        let mut file_triangles = 0u64;
+        // What the shapes use (validated above), then each file in turn.
+        let mut used = Others::default();
+        for o in &self.objects {
+            if let Ok(shape) = shapes::Shape::parse(&o.mesh) {
+                used.add(&shape);
+            }
+        }
         let mut meshes = Vec::with_capacity(self.objects.len());
         for (i, o) in self.objects.iter().enumerate() {
             let key = format!("object[{i}].mesh");
             let mesh = if shapes::is_shape_name(&o.mesh) {
                 resolve_mesh(&o.mesh, base_dir, label, &key)?
             } else {
-                let others = shape_triangles + file_triangles;
-                let mesh = resolve_mesh_within(&o.mesh, base_dir, label, &key, others)?;
-                file_triangles += mesh.triangles.len() as u64;
+                let mesh = resolve_mesh_within(&o.mesh, base_dir, label, &key, used)?;
+                used.triangles += mesh.triangles.len() as u64;
+                used.vertices += mesh.positions.len() as u64;
                 mesh
             };
             meshes.push(mesh);
@@ -538,7 +532,7 @@ pub fn resolve_mesh(
     label: &str,
     key: &str,
 ) -> Result<Mesh, SceneError> {
-    resolve_mesh_within(mesh, base_dir, label, key, 0)
+    resolve_mesh_within(mesh, base_dir, label, key, Others::default())
 }
 
 /// Like [`resolve_mesh`] in a scene whose other objects have `others` triangles: an `.obj` may
@@ -548,14 +542,11 @@ pub fn resolve_mesh_within(
     base_dir: &Path,
     label: &str,
     key: &str,
-    others: u64,
+    others: Others,
 ) -> Result<Mesh, SceneError> {
     if shapes::is_shape_name(mesh) {
         let shape = shapes::Shape::parse(mesh).map_err(|e| shape_error(e, label, key))?;
-        let count = shape.triangles();
-        if others + count > MAX_SCENE_TRIANGLES {
-            return Err(over_budget(label, key, mesh, count, others + count));
-        }
+        check_budget(label, key, mesh, &shape, others)?;
         return shape.build().map_err(|e| shape_error(e, label, key));
     }
     let path = base_dir.join(mesh);
@@ -586,20 +577,49 @@ fn shape_error(e: shapes::ShapeError, label: &str, key: &str) -> SceneError {
     }
 }
 
-/// Shape `mesh` of `count` triangles brings the scene to `total`, over the budget.
-fn over_budget(label: &str, key: &str, mesh: &str, count: u64, total: u64) -> SceneError {
-    let found = if total == count {
-        format!("`{mesh}` has {count} triangles")
-    } else {
-        format!("`{mesh}` has {count} triangles, {total} with the objects before it")
-    };
-    SceneError::OverBudget {
-        file: label.to_string(),
-        key: key.to_string(),
-        found,
-        limit: format!("{MAX_SCENE_TRIANGLES} triangles per scene"),
-        name: "MAX_SCENE_TRIANGLES",
+/// Whether shape `mesh` fits in what `others` leave of the scene's budget; the error names
+/// the object, the shape's size, the total and the budget.
+fn check_budget(
+    label: &str,
+    key: &str,
+    mesh: &str,
+    shape: &shapes::Shape,
+    others: Others,
+) -> Result<(), SceneError> {
+    let limits = [
+        (
+            shape.triangles(),
+            others.triangles,
+            MAX_SCENE_TRIANGLES,
+            "triangles",
+            "MAX_SCENE_TRIANGLES",
+        ),
+        (
+            shape.vertices(),
+            others.vertices,
+            MAX_SCENE_VERTICES,
+            "vertices",
+            "MAX_SCENE_VERTICES",
+        ),
+    ];
+    for (count, before, limit, what, name) in limits {
+        let total = before + count;
+        if total > limit {
+            let found = if before == 0 {
+                format!("`{mesh}` has {count} {what}")
+            } else {
+                format!("`{mesh}` has {count} {what}, {total} with the scene's other objects")
+            };
+            return Err(SceneError::OverBudget {
+                file: label.to_string(),
+                key: key.to_string(),
+                found,
+                limit: format!("{limit} {what} per scene"),
+                name,
+            });
+        }
     }
+    Ok(())
 }
 
 fn unknown_mesh(label: &str, key: &str, name: &str) -> SceneError {

@@ -22,6 +22,7 @@
 use super::{Mesh, SceneError};
 use crate::budget::{
     MAX_MESH_FILE_BYTES, MAX_MESH_VERTICES, MAX_OBJ_LINE_BYTES, MAX_SCENE_TRIANGLES,
+    MAX_SCENE_VERTICES,
 };
 use crate::fsutil::{self, ByteBudget};
 use glam::Vec3;
@@ -35,15 +36,30 @@ pub const MESH_FILE_BUDGET: ByteBudget = ByteBudget {
     what: "a mesh file",
 };
 
-/// Loads the OBJ file at `path`; errors name the file as `path` displays. The mesh may have the
-/// whole scene budget of triangles (`MAX_SCENE_TRIANGLES`).
-pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
-    load_obj_within(path, 0)
+/// What a scene's other objects already use of its budget: a mesh may have what is left of
+/// `MAX_SCENE_TRIANGLES` and `MAX_SCENE_VERTICES`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Others {
+    pub triangles: u64,
+    pub vertices: u64,
 }
 
-/// Like [`load_obj`] for a scene whose other objects already have `others` triangles: the
-/// mesh may have what is left of `MAX_SCENE_TRIANGLES`.
-pub fn load_obj_within(path: &Path, others: u64) -> Result<Mesh, SceneError> {
+impl Others {
+    /// Adds what built-in shape `shape` will use.
+    pub fn add(&mut self, shape: &super::shapes::Shape) {
+        self.triangles += shape.triangles();
+        self.vertices += shape.vertices();
+    }
+}
+
+/// Loads the OBJ file at `path`; errors name the file as `path` displays. The mesh may have the
+/// whole scene budget of triangles and vertices.
+pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
+    load_obj_within(path, Others::default())
+}
+
+/// Like [`load_obj`] in a scene whose other objects already use `others` of its budget.
+pub fn load_obj_within(path: &Path, others: Others) -> Result<Mesh, SceneError> {
     let label = path.display().to_string();
     let (file, _size) =
         fsutil::open_regular(path, MESH_FILE_BUDGET).map_err(|e| super::read_error(&label, e))?;
@@ -55,12 +71,12 @@ pub fn load_obj_within(path: &Path, others: u64) -> Result<Mesh, SceneError> {
 
 /// Parses OBJ text; `label` names it in errors.
 pub fn parse_obj_str(text: &str, label: &str) -> Result<Mesh, SceneError> {
-    parse(text.as_bytes(), label, 0)
+    parse(text.as_bytes(), label, Others::default())
 }
 
 /// Parses OBJ bytes (not necessarily UTF-8: invalid bytes are an error naming the line) in a
-/// scene whose other objects have `others` triangles.
-pub fn parse_obj_bytes(bytes: &[u8], label: &str, others: u64) -> Result<Mesh, SceneError> {
+/// scene whose other objects already use `others` of its budget.
+pub fn parse_obj_bytes(bytes: &[u8], label: &str, others: Others) -> Result<Mesh, SceneError> {
     parse(bytes, label, others)
 }
 
@@ -72,8 +88,8 @@ struct Forward {
     index: u64,
 }
 
-fn parse(mut reader: impl BufRead, label: &str, others: u64) -> Result<Mesh, SceneError> {
-    let budget = MAX_SCENE_TRIANGLES.saturating_sub(others);
+fn parse(mut reader: impl BufRead, label: &str, others: Others) -> Result<Mesh, SceneError> {
+    let budget = MAX_SCENE_TRIANGLES.saturating_sub(others.triangles);
     let whole = |problem: String| SceneError::Obj {
         file: label.to_string(),
         problem,
@@ -243,7 +259,7 @@ fn parse(mut reader: impl BufRead, label: &str, others: u64) -> Result<Mesh, Sce
                 }
                 let added = face.len() as u64 - 2;
                 if corners.len() as u64 + added > budget {
-                    return Err(err(over_triangle_budget(others)));
+                    return Err(err(over_triangle_budget(others.triangles)));
                 }
                 corners.reserve(face.len() - 2);
                 for i in 1..face.len() - 1 {
@@ -278,6 +294,19 @@ fn parse(mut reader: impl BufRead, label: &str, others: u64) -> Result<Mesh, Sce
         });
     }
     let mesh = weld(&raw, corners);
+    let vertices_left = MAX_SCENE_VERTICES.saturating_sub(others.vertices);
+    if mesh.positions.len() as u64 > vertices_left {
+        let of = if others.vertices == 0 {
+            String::new()
+        } else {
+            format!(" after the {} of its other objects", others.vertices)
+        };
+        return Err(whole(format!(
+            "its faces use {} distinct vertices, more than the {vertices_left} the scene's \
+             budget of {MAX_SCENE_VERTICES} vertices (MAX_SCENE_VERTICES) leaves{of}",
+            mesh.positions.len()
+        )));
+    }
     if mesh.triangles.is_empty() {
         return Err(whole(
             "contains no triangles: expected at least one `f` line with 3 or more distinct \
@@ -547,21 +576,36 @@ mod tests {
     #[test]
     fn the_triangle_budget_is_counted_while_reading() {
         let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3 4\nf 1 2 3\n";
-        let full = parse_obj_bytes(text.as_bytes(), "t.obj", MAX_SCENE_TRIANGLES - 3).unwrap();
+        let others = |triangles, vertices| Others {
+            triangles,
+            vertices,
+        };
+        let full =
+            parse_obj_bytes(text.as_bytes(), "t.obj", others(MAX_SCENE_TRIANGLES - 3, 0)).unwrap();
         assert_eq!(full.triangles.len(), 3);
-        let msg = parse_obj_bytes(text.as_bytes(), "t.obj", MAX_SCENE_TRIANGLES - 2)
+        let msg = parse_obj_bytes(text.as_bytes(), "t.obj", others(MAX_SCENE_TRIANGLES - 2, 0))
             .unwrap_err()
             .to_string();
         assert!(
             msg.starts_with("t.obj:6:") && msg.contains("MAX_SCENE_TRIANGLES"),
             "{msg}"
         );
+        // Four distinct vertices; the budget of vertices is checked after welding.
+        assert!(
+            parse_obj_bytes(text.as_bytes(), "t.obj", others(0, MAX_SCENE_VERTICES - 4)).is_ok()
+        );
+        let msg = parse_obj_bytes(text.as_bytes(), "t.obj", others(0, MAX_SCENE_VERTICES - 3))
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("MAX_SCENE_VERTICES"), "{msg}");
     }
 
     #[test]
     fn an_endless_line_is_refused() {
         let text = vec![b'v'; MAX_OBJ_LINE_BYTES + 1];
-        let msg = parse_obj_bytes(&text, "t.obj", 0).unwrap_err().to_string();
+        let msg = parse_obj_bytes(&text, "t.obj", Others::default())
+            .unwrap_err()
+            .to_string();
         assert!(msg.contains("MAX_OBJ_LINE_BYTES"), "{msg}");
     }
 

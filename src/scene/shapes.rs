@@ -54,6 +54,8 @@ pub use crate::budget::{
 
 /// Triangles of the embedded Stanford bunny (`bunny`); `bunny-open` has fewer.
 pub const BUNNY_TRIANGLES: u64 = 3674;
+/// Vertices of the embedded Stanford bunny.
+pub const BUNNY_VERTICES: u64 = 1839;
 
 /// Why a mesh name could not be turned into a shape.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -166,6 +168,23 @@ impl Shape {
             Shape::Cylinder(s) => 4 * w(s),
             Shape::Cone(s) => 2 * w(s),
             Shape::Icosphere(level) => 20 << (2 * level),
+        }
+    }
+
+    /// The number of vertices [`Shape::build`] makes (for `bunny-open`, an upper bound).
+    pub fn vertices(self) -> u64 {
+        let w = u64::from;
+        match self {
+            Shape::Plane => 4,
+            Shape::Cube => 8,
+            Shape::LPrism => 12,
+            Shape::Wedge => 6,
+            Shape::Bunny | Shape::BunnyOpen => BUNNY_VERTICES,
+            Shape::Sphere(s, k) | Shape::RoundedBox(s, k) => w(s) * (w(k) - 1) + 2,
+            Shape::Torus(m, n) | Shape::TorusKnot(m, n) => w(m) * w(n),
+            Shape::Cylinder(s) => 2 * w(s) + 2,
+            Shape::Cone(s) => w(s) + 2,
+            Shape::Icosphere(level) => 10 * (1 << (2 * level)) + 2,
         }
     }
 
@@ -701,8 +720,14 @@ mod tests {
             "icosphere:0",
             "icosphere:3",
         ] {
-            let built = build(name).unwrap().triangles.len() as u64;
-            assert_eq!(triangle_count(name).unwrap(), built, "{name}");
+            let mesh = build(name).unwrap();
+            assert_eq!(
+                triangle_count(name).unwrap(),
+                mesh.triangles.len() as u64,
+                "{name}"
+            );
+            let shape = Shape::parse(name).unwrap();
+            assert_eq!(shape.vertices(), mesh.positions.len() as u64, "{name}");
         }
         let open = build("bunny-open").unwrap().triangles.len() as u64;
         assert!(open <= triangle_count("bunny-open").unwrap());
