@@ -30,6 +30,9 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     output::check_out_dir(args.out, &[]).context("--out")?;
     let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
+    for w in scene.warnings() {
+        errln!("warning   {w}");
+    }
     let mut offline = Offline::new()?;
     errln!("adapter   {}", offline.ctx.adapter_description());
     offline.progress = Some(progress_line("reference"));

@@ -34,6 +34,9 @@ use crate::scene::{DiskLight, Scene};
 #[derive(Clone, Debug, Default)]
 pub struct PreparedCasters {
     pub meshes: Vec<CasterMesh>,
+    /// The scene's own warnings ([`Scene::warnings`]: camera, size, empty objects), passed on
+    /// first in every [`SceneGeometry::warnings`].
+    pub scene_warnings: Vec<String>,
 }
 
 /// The geometry of every caster for one light.
@@ -51,6 +54,7 @@ impl PreparedCasters {
                 .casters()
                 .map(|o| CasterMesh::new(&o.name, &o.mesh))
                 .collect(),
+            scene_warnings: scene.warnings(),
         }
     }
 
@@ -69,7 +73,7 @@ impl PreparedCasters {
             })
             .collect();
         let mut stats = GeometryStats::default();
-        let mut warnings = Vec::new();
+        let mut warnings = self.scene_warnings.clone();
         for c in &casters {
             stats += c.stats;
             warnings.extend(c.warnings.iter().cloned());

@@ -115,7 +115,97 @@ impl Scene {
     pub fn caster_triangle_count(&self) -> usize {
         self.casters().map(|o| o.mesh.triangles.len()).sum()
     }
+
+    /// What will make the picture wrong although the scene loaded: a camera whose direction or
+    /// field of view single precision cannot resolve, a scene smaller or larger than the render
+    /// core draws right ([`MIN_SCENE_EXTENT`] to [`MAX_SCENE_EXTENT`]), an object whose
+    /// vertices overflow single precision or of which nothing is left (every triangle of zero
+    /// area in f32). One line each; the geometry stage passes them on with its own warnings
+    /// (`PreparedCasters`), so `render`, `inspect` and the lab show them.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        let c = &self.camera;
+        let apart = c.eye.distance(c.target);
+        let far = c.eye.abs().max_element().max(c.target.abs().max_element());
+        if apart < CAMERA_PRECISION * far {
+            warnings.push(format!(
+                "camera: eye and target are {apart:.1e} apart at {far:.1e} from the origin, \
+                 too close for single precision (under {CAMERA_PRECISION:e} of it): the view \
+                 direction is imprecise and the picture may be wrong"
+            ));
+        }
+        if !(MIN_FOV_DEG..=MAX_FOV_DEG).contains(&c.fov_y_deg) {
+            warnings.push(format!(
+                "camera: fov_y_deg {} is outside {MIN_FOV_DEG}..={MAX_FOV_DEG}: {}",
+                c.fov_y_deg,
+                if c.fov_y_deg > MAX_FOV_DEG {
+                    "the scene shrinks to a few pixels in the middle of the picture"
+                } else {
+                    "a pixel is finer than single precision resolves positions"
+                }
+            ));
+        }
+
+        let mut lo = self.light.center - Vec3::splat(self.light.radius);
+        let mut hi = self.light.center + Vec3::splat(self.light.radius);
+        for (i, o) in self.objects.iter().enumerate() {
+            let who = format!("object[{i}] '{}'", o.name);
+            let overflowed = o.mesh.positions.iter().filter(|p| !p.is_finite()).count();
+            if overflowed > 0 {
+                warnings.push(format!(
+                    "{who}: {overflowed} vertices are beyond single precision (±3.4e38) after \
+                     its transform: its triangles there are dropped"
+                ));
+            }
+            let finite = o.mesh.positions.iter().filter(|p| p.is_finite());
+            let bounds = finite.fold(None, |b: Option<(Vec3, Vec3)>, &p| {
+                Some(b.map_or((p, p), |(l, h)| (l.min(p), h.max(p))))
+            });
+            if let Some((l, h)) = bounds {
+                lo = lo.min(l);
+                hi = hi.max(h);
+            }
+            let n = o.mesh.triangles.len();
+            let has_area = (0..n).any(|t| {
+                let [a, b, c] = o.mesh.corners(t);
+                let area = (b - a).cross(c - a).length();
+                area.is_finite() && area > 0.0
+            });
+            if !has_area {
+                let across = bounds.map_or(0.0, |(l, h)| (h - l).max_element());
+                warnings.push(format!(
+                    "{who}: nothing is left of it: all {n} triangles have zero area in single \
+                     precision (it is {across:.1e} across): it is not drawn and casts no shadow"
+                ));
+            }
+        }
+        let extent = (hi - lo).max_element();
+        if extent.is_finite() && !(MIN_SCENE_EXTENT..=MAX_SCENE_EXTENT).contains(&extent) {
+            warnings.push(format!(
+                "the scene (objects and light) is {extent:.1e} across, outside the \
+                 {MIN_SCENE_EXTENT:e}..={MAX_SCENE_EXTENT:e} the render core draws right in \
+                 single precision: the picture will be wrong (scale the scene toward metres)"
+            ));
+        }
+        warnings
+    }
 }
+
+/// Smallest scene (objects and light, the longest side of their bounds) the render core draws
+/// right. Measured: `fig7-concave` (about 10 m across) with every length scaled by 1e-4 to 1e7
+/// gives the same shadow classes at 48×48; by 1e-5 the picture is black, by 1e8 it drifts and
+/// by 1e9 it is all umbra.
+pub const MIN_SCENE_EXTENT: f32 = 1e-3;
+/// Largest scene the render core draws right (see [`MIN_SCENE_EXTENT`]).
+pub const MAX_SCENE_EXTENT: f32 = 1e8;
+/// Narrowest vertical field of view worth a warning-free picture, in degrees.
+pub const MIN_FOV_DEG: f32 = 0.01;
+/// Widest vertical field of view worth a warning-free picture (at 179° the scene shrinks to a
+/// few pixels; at 175° fig7-concave covers 8 of 2304).
+pub const MAX_FOV_DEG: f32 = 179.0;
+/// Eye and target closer than this share of their distance from the origin give an imprecise
+/// view direction (f32 resolves about 1.2e-7 of it).
+pub const CAMERA_PRECISION: f32 = 1e-5;
 
 /// Loads a scene: a built-in scene name (see [`builtin::names`]), else a path to a `.toml` scene
 /// file (`.obj` paths in it are relative to the file), else a path to an `.obj` mesh, which is
@@ -208,6 +298,11 @@ pub(crate) fn read_error(file: &str, e: crate::fsutil::ReadError) -> SceneError 
     }
 }
 
+/// `[x, y, z]` in scientific notation, 4 significant digits.
+fn sci(v: glam::DVec3) -> String {
+    format!("[{:.3e}, {:.3e}, {:.3e}]", v.x, v.y, v.z)
+}
+
 /// Smallest extent of a bare `.obj` that can be scaled to 1.5 m in f32 (1.5 over the largest
 /// f32 number).
 pub const MIN_BARE_EXTENT: f64 = 1.5 / f32::MAX as f64;
@@ -238,9 +333,11 @@ pub fn obj_scene(obj_path: &Path) -> Result<SceneFile, SceneError> {
         return Err(SceneError::Obj {
             file: obj_path.display().to_string(),
             problem: format!(
-                "its vertices span {extent:e} (from {lo} to {hi}), {size} to be scaled to the \
+                "its vertices span {extent:.3e} (from {} to {}), {size} to be scaled to the \
                  1.5 m a bare mesh is shown at in single precision (f32): expected an extent \
-                 between {MIN_BARE_EXTENT:e} and {MAX_BARE_EXTENT:e}"
+                 between {MIN_BARE_EXTENT:.1e} and {MAX_BARE_EXTENT:.1e}",
+                sci(lo),
+                sci(hi)
             ),
         });
     }
@@ -250,8 +347,9 @@ pub fn obj_scene(obj_path: &Path) -> Result<SceneFile, SceneError> {
         return Err(SceneError::Obj {
             file: obj_path.display().to_string(),
             problem: format!(
-                "its vertices lie around {centre}, {:e} times their extent away from the \
+                "its vertices lie around {}, {:.1e} times their extent away from the \
                  origin: too far to be moved to it in single precision (f32)",
+                sci(centre),
                 centre.abs().max_element() / extent
             ),
         });
