@@ -161,7 +161,8 @@ impl CasterMesh {
 
         let edges = build_edges(&faces, positions.len(), &mut report);
         CasterMesh {
-            name: name.to_string(),
+            // Repeated in one-line warnings: control characters escaped, cut if long.
+            name: crate::scene::shown(name),
             positions,
             faces,
             edges,

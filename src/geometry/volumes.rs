@@ -24,6 +24,12 @@ use super::silhouette::{count_silhouettes, extrusion_points, find_silhouettes, S
 pub use crate::budget::MAX_VOLUME_TRIANGLES;
 use crate::scene::{DiskLight, Scene};
 
+/// Largest group of silhouette edge ends at one vertex whose pairs are all compared (see
+/// `Fans::pairs`).
+const EXACT_PAIRING: usize = 64;
+/// Neighbours around the rim each end of a larger group is compared with, on each side.
+const PAIRING_WINDOW: usize = 16;
+
 /// Most triangles of one fan: a half turn (a silhouette turns by less at a vertex) at the
 /// finest step [`VolumeParams::fan_step_deg`] is meant to take (11.25° gives 16).
 const MAX_FAN_TRIANGLES: usize = 64;
@@ -572,17 +578,41 @@ impl Fans<'_> {
     /// touching at a vertex): each chain arrives and leaves, so an incoming end pairs with an
     /// outgoing one, the closest on the disk rim first; ends left over (inconsistent winding)
     /// pair by distance alone.
+    ///
+    /// Every pair is a candidate in a group of up to [`EXACT_PAIRING`] ends. A larger group (the
+    /// apex of a cone of thousands of segments, or rim vertices welded together) would make
+    /// that quadratic in time and memory: there each end's candidates are its
+    /// [`PAIRING_WINDOW`] nearest neighbours on each side around the rim (the extrusion points
+    /// lie on the rim circle, so the nearest by angle are the nearest by distance).
     fn pairs(&self, group: &[EdgeEnd]) -> Vec<(usize, usize)> {
         if group.len() == 2 {
             return vec![(0, 1)];
         }
+        let candidate = |i: usize, j: usize| {
+            let mixed = group[i].outgoing != group[j].outgoing;
+            let gap = group[i].extrusion.distance(group[j].extrusion);
+            (!mixed, gap, i.min(j), i.max(j))
+        };
         let mut candidates: Vec<(bool, f32, usize, usize)> = Vec::new();
-        for i in 0..group.len() {
-            for j in i + 1..group.len() {
-                let mixed = group[i].outgoing != group[j].outgoing;
-                let gap = group[i].extrusion.distance(group[j].extrusion);
-                candidates.push((!mixed, gap, i, j));
+        if group.len() <= EXACT_PAIRING {
+            for i in 0..group.len() {
+                for j in i + 1..group.len() {
+                    candidates.push(candidate(i, j));
+                }
             }
+        } else {
+            let (u, w) = self.light.basis();
+            let c = self.light.center;
+            let angle = |e: &EdgeEnd| (e.extrusion - c).dot(w).atan2((e.extrusion - c).dot(u));
+            let mut around: Vec<usize> = (0..group.len()).collect();
+            around.sort_by(|&a, &b| angle(&group[a]).total_cmp(&angle(&group[b])));
+            for (k, &i) in around.iter().enumerate() {
+                for d in 1..=PAIRING_WINDOW.min(group.len() - 1) {
+                    candidates.push(candidate(i, around[(k + d) % around.len()]));
+                }
+            }
+            candidates.sort_by_key(|&(_, _, i, j)| (i, j));
+            candidates.dedup_by_key(|&mut (_, _, i, j)| (i, j));
         }
         candidates.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
         let mut used = vec![false; group.len()];

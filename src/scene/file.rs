@@ -108,27 +108,97 @@ const SCHEMA_WORDS: &[&str] = &[
     "nan",
 ];
 
-/// toml's message without anything it quotes from the file: a `` `word` `` or `"word"` that is
-/// not one of [`SCHEMA_WORDS`] or TOML punctuation is dropped with the space before it
-/// ("unknown field `secret`, expected one of `center`" becomes "unknown field, expected one of
-/// `center`"); lines are joined with "; ".
+/// toml's message without anything it quotes from the file, one line ("; " between lines).
+///
+/// serde and toml quote the file in a few known shapes: `unknown field `X``, `duplicate key
+/// `X``, `invalid type: string "X"` (a Debug string), `character `X``. Those parts are
+/// dropped by shape; what follows the last ", expected " is the schema's or the grammar's
+/// (field lists, types). Elsewhere a `` `word` `` or `"word"` is kept only if it is a schema
+/// key path or TOML punctuation, and anything after a quote left unmatched is cut.
 fn sanitize_toml_message(message: &str) -> String {
+    let lines: Vec<String> = message
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .map(sanitize_toml_line)
+        .collect();
+    let mut text = lines.join("; ");
+    if text.len() > 400 {
+        let mut cut = 400;
+        while !text.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        text.truncate(cut);
+        text.push('…');
+    }
+    text
+}
+
+fn sanitize_toml_line(line: &str) -> String {
+    // Without the input, toml ends with the key path: `in `light.radius``.
+    if let Some(path) = line.strip_prefix("in `").and_then(|r| r.strip_suffix('`')) {
+        return if is_schema_path(path) {
+            line.to_string()
+        } else {
+            "in a key of the file".into()
+        };
+    }
+    for prefix in ["duplicate key", "unknown field", "unknown variant"] {
+        if line.starts_with(prefix) {
+            // The quoted name comes first; the list of what is expected (ours) after it.
+            let tail = line.rfind(", expected").map_or("", |i| &line[i..]);
+            return format!("{prefix}{}", strip_quoted(tail));
+        }
+    }
+    for prefix in ["invalid type: ", "invalid value: "] {
+        if let Some(rest) = line.strip_prefix(prefix) {
+            // `string "..."`, `integer `5``, `character `x``...: the kind, not the value.
+            let kind: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_alphabetic() || *c == ' ')
+                .collect();
+            let kind = match kind.trim() {
+                "" => "value",
+                k => k,
+            };
+            let tail = rest.rfind(", expected").map_or("", |i| &rest[i..]);
+            return format!("{prefix}{kind}{}", strip_quoted(tail));
+        }
+    }
+    strip_quoted(line)
+}
+
+/// `text` without its quoted words, but for schema key paths and TOML punctuation; after a
+/// quote left unmatched nothing is kept. Double-quoted words may hold `\"` escapes.
+fn strip_quoted(text: &str) -> String {
     let keep = |quoted: &str| {
-        // A key path such as `object.1.scale` of schema words and indices.
-        quoted.split('.').all(|k| {
-            SCHEMA_WORDS.contains(&k) || (!k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
-        }) || (!quoted.is_empty()
-            && quoted.len() <= 3
-            && quoted.chars().all(|c| c.is_ascii_punctuation() || c == ' '))
+        is_schema_path(quoted)
+            || (!quoted.is_empty()
+                && quoted.len() <= 3
+                && quoted.chars().all(|c| c.is_ascii_punctuation() || c == ' '))
             || (quoted.len() == 2 && quoted.starts_with('\\'))
     };
-    let mut out = String::with_capacity(message.len());
-    let mut rest = message;
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
     while let Some(open) = rest.find(['`', '"']) {
-        let quote = rest[open..].chars().next().unwrap_or('`');
+        let quote = rest.as_bytes()[open];
         let after = &rest[open + 1..];
-        let Some(len) = after.find(quote) else {
-            break;
+        // The closing quote: the next one, skipping `\x` escapes inside double quotes.
+        let mut close = None;
+        let mut escaped = false;
+        for (k, b) in after.bytes().enumerate() {
+            if escaped {
+                escaped = false;
+            } else if b == b'\\' && quote == b'"' {
+                escaped = true;
+            } else if b == quote {
+                close = Some(k);
+                break;
+            }
+        }
+        let Some(len) = close else {
+            out.push_str(rest[..open].trim_end_matches(' '));
+            return out;
         };
         let quoted = &after[..len];
         if keep(quoted) {
@@ -138,17 +208,15 @@ fn sanitize_toml_message(message: &str) -> String {
         }
         rest = &after[len + 1..];
     }
-    if rest.contains(['`', '"']) {
-        // An unmatched quote: what follows it may be the file's; keep only what came before.
-        rest = &rest[..rest.find(['`', '"']).unwrap_or(rest.len())];
-    }
     out.push_str(rest);
-    let lines: Vec<&str> = out
-        .lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty())
-        .collect();
-    lines.join("; ")
+    out
+}
+
+/// A key path such as `object.1.scale` of schema words and indices.
+fn is_schema_path(path: &str) -> bool {
+    path.split('.').all(|k| {
+        SCHEMA_WORDS.contains(&k) || (!k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+    })
 }
 
 /// A parsed scene file, before meshes are loaded. Numbers are kept as `f64` so a file written
@@ -463,7 +531,8 @@ impl SceneFile {
             .map(|(o, mut mesh)| {
                 mesh.transform_in_place(&o.transform());
                 Object {
-                    name: o.display_name().to_string(),
+                    // Shown in warnings and lists: one line, not too long.
+                    name: super::shown(o.display_name()),
                     mesh,
                     casts_shadow: o.casts_shadow,
                 }
@@ -605,6 +674,7 @@ fn check_budget(
     for (count, before, limit, what, name) in limits {
         let total = before + count;
         if total > limit {
+            let mesh = super::shown(mesh);
             let found = if before == 0 {
                 format!("`{mesh}` has {count} {what}")
             } else {
@@ -626,7 +696,7 @@ fn unknown_mesh(label: &str, key: &str, name: &str) -> SceneError {
     SceneError::UnknownMesh {
         file: label.to_string(),
         key: key.to_string(),
-        name: name.to_string(),
+        name: super::truncated(name),
         known: shapes::NAMES.join(", "),
     }
 }

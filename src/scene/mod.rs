@@ -149,7 +149,7 @@ impl Scene {
         let mut lo = self.light.center - Vec3::splat(self.light.radius);
         let mut hi = self.light.center + Vec3::splat(self.light.radius);
         for (i, o) in self.objects.iter().enumerate() {
-            let who = format!("object[{i}] '{}'", o.name);
+            let who = format!("object[{i}] '{}'", shown(&o.name));
             let overflowed = o.mesh.positions.iter().filter(|p| !p.is_finite()).count();
             if overflowed > 0 {
                 warnings.push(format!(
@@ -245,7 +245,7 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
         });
     }
     let path = Path::new(name_or_path);
-    let label = path.display().to_string();
+    let label = shown(&path.display().to_string());
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -282,6 +282,36 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
             known: builtin::names().join(", "),
         }),
     }
+}
+
+/// `text` cut to at most about 160 characters (its start and end, `…` between): names from
+/// scene files and paths repeated in messages keep them short.
+pub fn truncated(text: &str) -> String {
+    const HEAD: usize = 100;
+    const TAIL: usize = 50;
+    let n = text.chars().count();
+    if n <= HEAD + TAIL + 10 {
+        return text.to_string();
+    }
+    let head: String = text.chars().take(HEAD).collect();
+    let tail: String = text.chars().skip(n - TAIL).collect();
+    format!("{head}…{tail}")
+}
+
+/// [`truncated`], with control characters escaped (a newline in a path becomes `\n`): what a
+/// one-line message may repeat of a name or path.
+pub fn shown(text: &str) -> String {
+    truncated(text)
+        .chars()
+        .flat_map(|c| {
+            let escaped: Vec<char> = if c.is_control() {
+                c.escape_default().collect()
+            } else {
+                vec![c]
+            };
+            escaped
+        })
+        .collect()
 }
 
 /// A file that could not be read, as a [`SceneError`] naming `file`.
@@ -331,7 +361,7 @@ pub fn obj_scene(obj_path: &Path) -> Result<SceneFile, SceneError> {
             "too large"
         };
         return Err(SceneError::Obj {
-            file: obj_path.display().to_string(),
+            file: shown(&obj_path.display().to_string()),
             problem: format!(
                 "its vertices span {extent:.3e} (from {} to {}), {size} to be scaled to the \
                  1.5 m a bare mesh is shown at in single precision (f32): expected an extent \
@@ -345,7 +375,7 @@ pub fn obj_scene(obj_path: &Path) -> Result<SceneFile, SceneError> {
     let translate = [-centre.x * scale, -lo.y * scale, -centre.z * scale];
     if translate.iter().any(|&t| !(t as f32).is_finite()) {
         return Err(SceneError::Obj {
-            file: obj_path.display().to_string(),
+            file: shown(&obj_path.display().to_string()),
             problem: format!(
                 "its vertices lie around {}, {:.1e} times their extent away from the \
                  origin: too far to be moved to it in single precision (f32)",

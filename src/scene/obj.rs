@@ -60,7 +60,7 @@ pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
 
 /// Like [`load_obj`] in a scene whose other objects already use `others` of its budget.
 pub fn load_obj_within(path: &Path, others: Others) -> Result<Mesh, SceneError> {
-    let label = path.display().to_string();
+    let label = super::shown(&path.display().to_string());
     let (file, _size) =
         fsutil::open_regular(path, MESH_FILE_BUDGET).map_err(|e| super::read_error(&label, e))?;
     let limit = MESH_FILE_BUDGET.limit;

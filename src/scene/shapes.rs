@@ -213,7 +213,8 @@ fn none(base: &str, params: Option<&str>) -> Result<(), ShapeError> {
     match params {
         None => Ok(()),
         Some(p) => Err(ShapeError::BadParams(format!(
-            "`{base}` takes no parameters, found `:{p}`"
+            "`{base}` takes no parameters, found `:{}`",
+            super::shown(p)
         ))),
     }
 }
@@ -229,7 +230,8 @@ fn one(
     match p.trim().parse::<u32>() {
         Ok(n) if (min..=max).contains(&n) => Ok(n),
         _ => Err(ShapeError::BadParams(format!(
-            "`{base}:N` expects an integer N in {min}..={max}, found `{p}`"
+            "`{base}:N` expects an integer N in {min}..={max}, found `{}`",
+            super::shown(p)
         ))),
     }
 }
@@ -244,8 +246,10 @@ fn two(
     let bad = || {
         ShapeError::BadParams(format!(
             "`{base}:AxB` expects two integers A in {}..={MAX_SEGMENTS} and B in \
-             {}..={MAX_SEGMENTS} (MAX_SHAPE_SEGMENTS), found `{p}`",
-            min.0, min.1
+             {}..={MAX_SEGMENTS} (MAX_SHAPE_SEGMENTS), found `{}`",
+            min.0,
+            min.1,
+            super::shown(p)
         ))
     };
     let (a, b) = p.split_once(['x', 'X']).ok_or_else(bad)?;
