@@ -24,8 +24,8 @@ pub enum ReadError {
     NotRegular { kind: &'static str },
     /// Larger than the budget (from its metadata, or while reading if it grew).
     #[error(
-        "is {} or more, larger than the budget of {} for {what} ({name})",
-        crate::budget::bytes(*size), crate::budget::bytes(*limit)
+        "is {size} bytes, more than the budget of {} for {what} ({name})",
+        crate::budget::bytes(*limit)
     )]
     TooLarge {
         size: u64,
@@ -216,11 +216,20 @@ mod tests {
             std::os::unix::fs::symlink("/dev/zero", &link).expect("symlink");
             let e = read_regular(&link, TINY).unwrap_err().to_string();
             assert!(e.contains("character device"), "{e}");
-            // Writing over a device node is refused and leaves it alone.
-            let e = write_atomic(Path::new("/dev/null"), b"x")
-                .unwrap_err()
-                .to_string();
-            assert!(e.contains("not a regular file"), "{e}");
+            // Writing over something that is not a file is refused and leaves it alone (a FIFO
+            // here: were the check to go, the test must not replace a real device node).
+            let fifo = dir.join("fifo");
+            let _ = fs::remove_file(&fifo);
+            let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+            if made.is_ok_and(|s| s.success()) {
+                let e = write_atomic(&fifo, b"x").unwrap_err().to_string();
+                assert!(e.contains("not a regular file"), "{e}");
+                assert!(fs::symlink_metadata(&fifo).is_ok_and(|m| !m.is_file()));
+                let e = read_regular(&fifo, TINY).unwrap_err().to_string();
+                assert!(e.contains("FIFO"), "{e}");
+            }
+            // Nor is a device checked by its path alone ever opened for writing.
+            assert!(check_replaceable(Path::new("/dev/null")).is_err());
         }
         let _ = fs::remove_dir_all(&dir);
     }

@@ -374,8 +374,14 @@ pub fn check_out_dir(dir: &Path, files: &[&str]) -> Result<(), OutputError> {
                     kind: kind_of(&m),
                 })
             }
-            Err(e) if e.kind() == io::ErrorKind::NotFound => {
-                // `dir` will be created: its parent must exist or be created too.
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::NotFound | io::ErrorKind::NotADirectory
+                ) =>
+            {
+                // `dir` will be created: its parent must exist or be created too (and if a
+                // file stands in the way, the walk up finds it).
                 match place.parent() {
                     Some(p) if !p.as_os_str().is_empty() => place = p.to_path_buf(),
                     Some(_) if place != Path::new(".") => place = PathBuf::from("."),
@@ -983,5 +989,78 @@ mod tests {
             assert!(v.iter().all(|p| p[0] == 0.75));
             let _ = fs::remove_dir_all(&dir);
         }
+    }
+
+    /// A folder made for the render (with its missing parents) is taken away again when
+    /// writing fails at any step, and made only once the outputs are checked.
+    #[test]
+    fn a_new_folder_is_not_left_behind_after_a_failure() {
+        let base = temp_dir("new-dir");
+        let dir = base.join("a").join("b");
+        for fail_at in [Step::Stage(0), Step::Stage(6), Step::Install(3)] {
+            let result = write_render_with(&dir, &outputs(3, 2, 2, 0.5), &mut |step| {
+                if step == fail_at {
+                    Err(io::Error::other("injected"))
+                } else {
+                    Ok(())
+                }
+            });
+            assert!(result.is_err(), "{fail_at:?}");
+            assert!(
+                !base.join("a").exists(),
+                "{fail_at:?} left {}",
+                dir.display()
+            );
+        }
+        // Outputs that fail their checks create nothing at all.
+        let mut bad = outputs(3, 2, 2, 0.5);
+        bad.visibility.pop();
+        assert!(write_render(&dir, &bad).is_err());
+        assert!(!base.join("a").exists());
+        // A folder that was there before stays.
+        fs::create_dir_all(&dir).unwrap();
+        let result = write_render_with(&dir, &outputs(3, 2, 2, 0.5), &mut |step| match step {
+            Step::Stage(0) => Err(io::Error::other("injected")),
+            _ => Ok(()),
+        });
+        assert!(result.is_err() && dir.is_dir());
+        let _ = fs::remove_dir_all(&base);
+    }
+
+    /// Output targets are checked before any work: a file where the folder should be, a
+    /// folder under a file, a place nothing can be created in, a device or FIFO as a file.
+    #[test]
+    fn output_targets_are_checked_up_front() {
+        let base = temp_dir("targets");
+        let file = base.join("file.txt");
+        fs::write(&file, b"x").unwrap();
+        let e = check_out_dir(&file, &FILE_NAMES).unwrap_err();
+        assert!(matches!(e, OutputError::NotADirectory { .. }), "{e:?}");
+        assert!(e.to_string().contains("a regular file"), "{e}");
+        let e = check_out_dir(&file.join("sub"), &FILE_NAMES).unwrap_err();
+        assert!(e.to_string().contains("file.txt"), "{e}");
+        check_out_dir(&base.join("new").join("deeper"), &FILE_NAMES).unwrap();
+        assert!(!base.join("new").exists(), "checking creates nothing");
+        #[cfg(target_os = "linux")]
+        {
+            // /proc takes no new entries, whoever asks (root included).
+            let e = check_out_dir(Path::new("/proc/dbuffer-out"), &FILE_NAMES).unwrap_err();
+            assert!(matches!(e, OutputError::Unwritable { .. }), "{e:?}");
+            let e = check_out_file(Path::new("/dev/null")).unwrap_err();
+            assert!(e.to_string().contains("never replaced"), "{e}");
+        }
+        check_out_file(&file).unwrap();
+        check_out_file(&base.join("new.png")).unwrap();
+        let e = check_out_file(&base.join("missing").join("x.png")).unwrap_err();
+        assert!(e.to_string().contains("missing"), "{e}");
+        let e = check_out_file(&base).unwrap_err();
+        assert!(matches!(e, OutputError::TargetIsDirectory { .. }), "{e:?}");
+        let leftovers: Vec<_> = fs::read_dir(&base)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().contains("probe"))
+            .collect();
+        assert!(leftovers.is_empty(), "{leftovers:?}");
+        let _ = fs::remove_dir_all(&base);
     }
 }
