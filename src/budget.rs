@@ -163,7 +163,7 @@ pub fn summary() -> String {
 /// `n` bytes as KiB, MiB or GiB when it is a whole number of them.
 pub fn bytes(n: u64) -> String {
     for (unit, size) in [("GiB", 1u64 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)] {
-        if n >= size && n % size == 0 {
+        if n >= size && n.is_multiple_of(size) {
             return format!("{} {unit}", n / size);
         }
     }
