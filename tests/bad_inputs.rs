@@ -31,11 +31,32 @@ fn object(mesh: &str) -> String {
     format!("[[object]]\nmesh = \"{mesh}\"\ntranslate = [0, 1, 0]\n")
 }
 
-/// A fresh folder for one case.
-fn case_dir(name: &str) -> PathBuf {
+/// A fresh folder for one case, removed when the case ends.
+struct CaseDir(PathBuf);
+
+impl std::ops::Deref for CaseDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for CaseDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for CaseDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn case_dir(name: &str) -> CaseDir {
     let dir = cli::temp_dir("bad-inputs", name);
     std::fs::create_dir_all(&dir).expect("case dir");
-    dir
+    CaseDir(dir)
 }
 
 /// What a run of the binary left.
