@@ -1,6 +1,7 @@
 //! dbuffer: a lab for boundary-correct real-time soft shadows from a disk light.
 //!
-//! Layers, each depending only on those below:
+//! Layers, each depending only on those below ([`budget`], the resource limits, and [`fsutil`]
+//! sit under all of them):
 //! - [`scene`]: scene files, built-in shapes and scenes, meshes;
 //! - [`geometry`]: face classes, silhouettes, umbra/penumbra volumes, the CPU twin of the
 //!   D-buffer lookup and the ray-cast visibility oracle (plain Rust, no GPU types);
@@ -15,6 +16,7 @@
 pub mod animation;
 pub mod app;
 pub mod bench;
+pub mod budget;
 pub mod compare;
 pub mod fsutil;
 pub mod geometry;

@@ -2,7 +2,7 @@
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 mod cli;
 
@@ -27,7 +27,7 @@ enum Command {
         /// classes.png and meta.json (created if missing; written all or nothing).
         #[arg(long)]
         out: std::path::PathBuf,
-        /// Image size, WxH.
+        /// Image size, WxH (at most 64 Mpixels, sides up to 16384).
         #[arg(long, default_value = "512x512")]
         size: String,
         /// dbuffer, dbuffer-center, hard, pcf, pcss, sampled or reference.
@@ -36,7 +36,7 @@ enum Command {
         /// V(t): smoothstep, sqrt, exact or linear.
         #[arg(long, default_value = "smoothstep")]
         vt: String,
-        /// The D-buffer is N×N texels.
+        /// The D-buffer is N×N texels (1 to 8192).
         #[arg(long, default_value_t = 1024)]
         dbuffer_size: u32,
         #[command(flatten)]
@@ -53,13 +53,13 @@ enum Command {
         /// Folder for the images and reports (created if missing).
         #[arg(long)]
         out: std::path::PathBuf,
-        /// Image size, WxH.
+        /// Image size, WxH (at most 64 Mpixels, sides up to 16384).
         #[arg(long, default_value = "512x512")]
         size: String,
         /// V(t) of the D-buffer methods: smoothstep, sqrt, exact or linear.
         #[arg(long, default_value = "exact")]
         vt: String,
-        /// The D-buffer and the shadow maps are N×N texels.
+        /// The D-buffer and the shadow maps are N×N texels (1 to 8192).
         #[arg(long, default_value_t = 1024)]
         dbuffer_size: u32,
         #[command(flatten)]
@@ -130,10 +130,10 @@ enum Command {
         /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
         scene: String,
         /// Also compare the CPU twin of the method with ray-cast ground truth over the camera's
-        /// view, with this many disk samples per pixel.
+        /// view, with this many disk samples per pixel (1 to 65536).
         #[arg(long)]
         samples: Option<usize>,
-        /// View size for the comparison, WxH.
+        /// View size for the comparison, WxH (at most 4 Mpixels).
         #[arg(long, default_value = "96x96")]
         size: String,
         /// V(t) variant for the comparison.
@@ -146,7 +146,14 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
+    // `dbuffer --help` ends with the resource budget.
+    let matches = Args::command()
+        .after_help(dbuffer::budget::summary())
+        .get_matches();
+    let args = match Args::from_arg_matches(&matches) {
+        Ok(args) => args,
+        Err(e) => e.exit(),
+    };
     let result = match args.command {
         Some(Command::Scenes) => cli::scenes(),
         Some(Command::Inspect {
@@ -233,10 +240,16 @@ fn main() -> ExitCode {
             max_triangles,
         }),
     };
+    // Output that could not be written (other than to a reader that went away) fails the run.
+    let result = result.and_then(|()| {
+        cli::print::finish().map_err(|e| anyhow::anyhow!("cannot write to standard output: {e}"))
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("dbuffer: {e:#}");
+            // One line: the causes joined, newlines in any of them (a path) escaped.
+            let line = format!("dbuffer: {e:#}").replace('\n', "\\n");
+            cli::print::err(format_args!("{line}\n"));
             ExitCode::FAILURE
         }
     }

@@ -279,7 +279,8 @@ impl RenderMeta {
     }
 }
 
-/// Why a render's files could not be written or read; every message names the file.
+/// Why a render's files could not be written or read; every message names the file, on one line,
+/// and includes its cause's (so no variant reports a `source()`: `{:#}` would repeat it).
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     #[error("{file}: {field} is 0; it must be positive")]
@@ -312,30 +313,35 @@ pub enum OutputError {
         "classes.png: pixel ({x}, {y}) has class {class}; expected 0 (lit), 1 (penumbra) or 2 (umbra)"
     )]
     BadClass { x: u32, y: u32, class: u8 },
-    #[error("{}: exists and is not a directory", path.display())]
-    NotADirectory { path: PathBuf },
+    #[error(
+        "{}: exists and is {kind}, not a directory (the output is a folder of files)",
+        path.display()
+    )]
+    NotADirectory { path: PathBuf, kind: &'static str },
+    #[error("{}: cannot write there: {error}", path.display())]
+    Unwritable { path: PathBuf, error: io::Error },
     #[error("{}: is a directory; it cannot be replaced by a render output file", path.display())]
     TargetIsDirectory { path: PathBuf },
-    #[error("{}: cannot {action}: {source}", path.display())]
+    #[error("{}: cannot {action}: {error}", path.display())]
     Io {
         path: PathBuf,
         action: &'static str,
-        source: io::Error,
+        error: io::Error,
     },
-    #[error("{}: cannot encode: {source}", path.display())]
+    #[error("{}: cannot encode: {error}", path.display())]
     Encode {
         path: PathBuf,
-        source: image::ImageError,
+        error: image::ImageError,
     },
-    #[error("{}: cannot write JSON: {source}", path.display())]
+    #[error("{}: cannot write JSON: {error}", path.display())]
     Json {
         path: PathBuf,
-        source: serde_json::Error,
+        error: serde_json::Error,
     },
-    #[error("{}: cannot read as an RGBA float EXR: {source}", path.display())]
+    #[error("{}: cannot read as an RGBA float EXR: {error}", path.display())]
     Decode {
         path: PathBuf,
-        source: image::ImageError,
+        error: image::ImageError,
     },
     #[error(
         "{}: {cause}; putting the previous files back failed too ({rollback}), \
@@ -353,10 +359,10 @@ pub enum OutputError {
 
 fn io_err(path: &Path, action: &'static str) -> impl FnOnce(io::Error) -> OutputError {
     let path = path.to_path_buf();
-    move |source| OutputError::Io {
+    move |error| OutputError::Io {
         path,
         action,
-        source,
+        error,
     }
 }
 
@@ -406,38 +412,28 @@ fn write_render_with(
     fault: &mut Fault<'_>,
 ) -> Result<Vec<PathBuf>, OutputError> {
     validate(out)?;
+    check_out_dir(dir, &FILE_NAMES)?;
+    let created = NewDirs::create(dir).map_err(io_err(dir, "create the directory"))?;
+    let result = write_into(dir, out, fault);
+    if result.is_err() {
+        // A folder this call made is not left behind (it is empty again by now).
+        created.remove_if_empty();
+    }
+    result
+}
+
+fn write_into(
+    dir: &Path,
+    out: &RenderOutputs,
+    fault: &mut Fault<'_>,
+) -> Result<Vec<PathBuf>, OutputError> {
     let names: Vec<String> = FILE_NAMES.iter().map(|n| n.to_string()).collect();
-    prepare_dir(dir, &names)?;
     let temp = create_temp_dir(dir)?;
     if let Err(e) = stage(dir, &temp, out, fault) {
         let _ = fs::remove_dir_all(&temp);
         return Err(e);
     }
     finish(dir, temp, &names, &[], fault)
-}
-
-/// The output folder exists (created with its parents if missing) and is a folder, and none of
-/// `names` in it is a folder.
-fn prepare_dir(dir: &Path, names: &[String]) -> Result<(), OutputError> {
-    match fs::metadata(dir) {
-        Ok(m) if m.is_dir() => {}
-        Ok(_) => {
-            return Err(OutputError::NotADirectory {
-                path: dir.to_path_buf(),
-            })
-        }
-        Err(e) if e.kind() == io::ErrorKind::NotFound => {
-            fs::create_dir_all(dir).map_err(io_err(dir, "create the directory"))?
-        }
-        Err(e) => return Err(io_err(dir, "read")(e)),
-    }
-    for name in names {
-        let target = dir.join(name);
-        if fs::symlink_metadata(&target).is_ok_and(|m| m.is_dir()) {
-            return Err(OutputError::TargetIsDirectory { path: target });
-        }
-    }
-    Ok(())
 }
 
 /// Move the staged `names` from `temp` into `dir` and remove `stale` from it, all or nothing;
@@ -482,19 +478,29 @@ pub struct Staged {
     temp: Option<PathBuf>,
     names: Vec<String>,
     stale: Vec<String>,
+    /// The folders `new` made: taken away again if nothing is committed.
+    created: NewDirs,
 }
 
 impl Staged {
-    /// Start writing into `dir` (created with its parents if missing; an error if it is not a
-    /// folder).
+    /// Start writing into `dir` (checked first, as [`check_out_dir`] does; created with its
+    /// parents if missing, and removed again if nothing is committed).
     pub fn new(dir: &Path) -> Result<Staged, OutputError> {
-        prepare_dir(dir, &[])?;
-        let temp = create_temp_dir(dir)?;
+        check_out_dir(dir, &[])?;
+        let created = NewDirs::create(dir).map_err(io_err(dir, "create the directory"))?;
+        let temp = match create_temp_dir(dir) {
+            Ok(t) => t,
+            Err(e) => {
+                created.remove_if_empty();
+                return Err(e);
+            }
+        };
         Ok(Staged {
             dir: dir.to_path_buf(),
             temp: Some(temp),
             names: Vec::new(),
             stale: Vec::new(),
+            created,
         })
     }
 
@@ -554,6 +560,173 @@ impl Drop for Staged {
     fn drop(&mut self) {
         if let Some(temp) = self.temp.take() {
             let _ = fs::remove_dir_all(temp);
+            self.created.remove_if_empty();
+        }
+    }
+}
+
+/// What `meta` describes, for messages.
+fn kind_of(meta: &fs::Metadata) -> &'static str {
+    if meta.is_file() {
+        "a regular file"
+    } else if meta.is_dir() {
+        "a directory"
+    } else if meta.file_type().is_symlink() {
+        "a symbolic link"
+    } else {
+        "a device, FIFO or socket"
+    }
+}
+
+/// Checks an output folder before any work is done: `dir` is a directory, or does not exist
+/// and its nearest existing ancestor is a directory it can be created in; files can be
+/// created there; none of `files` (names inside `dir`) is a directory. Creates nothing (a probe
+/// file is made and removed to test that the place is writable).
+pub fn check_out_dir(dir: &Path, files: &[&str]) -> Result<(), OutputError> {
+    let mut place = dir.to_path_buf();
+    loop {
+        match fs::metadata(&place) {
+            Ok(m) if m.is_dir() => break,
+            Ok(m) => {
+                return Err(OutputError::NotADirectory {
+                    path: place,
+                    kind: kind_of(&m),
+                })
+            }
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::NotFound | io::ErrorKind::NotADirectory
+                ) =>
+            {
+                // `dir` will be created: its parent must exist or be created too (and if a
+                // file stands in the way, the walk up finds it).
+                match place.parent() {
+                    Some(p) if !p.as_os_str().is_empty() => place = p.to_path_buf(),
+                    Some(_) if place != Path::new(".") => place = PathBuf::from("."),
+                    _ => return Err(io_err(&place, "read")(e)),
+                }
+            }
+            Err(e) => return Err(io_err(&place, "read")(e)),
+        }
+    }
+    probe_writable(&place).map_err(|error| OutputError::Unwritable {
+        path: place.clone(),
+        error,
+    })?;
+    if place == dir {
+        for name in files {
+            let target = dir.join(name);
+            if fs::symlink_metadata(&target).is_ok_and(|m| m.is_dir()) {
+                return Err(OutputError::TargetIsDirectory { path: target });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks an output file before any work is done: `path` does not exist or is a regular file
+/// (never a device such as `/dev/null`, a FIFO or a directory, which writing would replace),
+/// and its folder exists and files can be created in it.
+pub fn check_out_file(path: &Path) -> Result<(), OutputError> {
+    match fs::metadata(path) {
+        Ok(m) if m.is_file() => {}
+        Ok(m) if m.is_dir() => {
+            return Err(OutputError::TargetIsDirectory {
+                path: path.to_path_buf(),
+            })
+        }
+        Ok(m) => {
+            return Err(OutputError::Unwritable {
+                path: path.to_path_buf(),
+                error: io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    format!(
+                        "it is {}, not a regular file; it is never replaced",
+                        kind_of(&m)
+                    ),
+                ),
+            })
+        }
+        Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+        Err(e) => return Err(io_err(path, "read")(e)),
+    }
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    match fs::metadata(&folder) {
+        Ok(m) if m.is_dir() => {}
+        Ok(m) => {
+            return Err(OutputError::NotADirectory {
+                path: folder,
+                kind: kind_of(&m),
+            })
+        }
+        Err(e) => return Err(io_err(&folder, "use as the output folder")(e)),
+    }
+    probe_writable(&folder).map_err(|error| OutputError::Unwritable {
+        path: folder,
+        error,
+    })
+}
+
+/// Creates and removes a hidden file in `dir`: whether files can be created there (permissions,
+/// a read-only file system, a full disk's inode table), whoever runs this.
+fn probe_writable(dir: &Path) -> io::Result<()> {
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let probe = dir.join(format!(
+        ".dbuffer-probe-{}-{}",
+        std::process::id(),
+        NEXT.fetch_add(1, Ordering::Relaxed)
+    ));
+    fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)?;
+    fs::remove_file(&probe)
+}
+
+/// The folders one `create_dir_all` made, to take them away again after a failure.
+#[derive(Debug, Default)]
+pub struct NewDirs {
+    /// Outermost first.
+    created: Vec<PathBuf>,
+}
+
+impl NewDirs {
+    /// Creates `dir` and the ancestors it lacks; remembers which it made.
+    pub fn create(dir: &Path) -> io::Result<NewDirs> {
+        let mut missing = Vec::new();
+        let mut p = dir;
+        while !p.as_os_str().is_empty() && fs::symlink_metadata(p).is_err() {
+            missing.push(p.to_path_buf());
+            match p.parent() {
+                Some(parent) => p = parent,
+                None => break,
+            }
+        }
+        missing.reverse();
+        let mut made = NewDirs::default();
+        for d in missing {
+            match fs::create_dir(&d) {
+                Ok(()) => made.created.push(d),
+                Err(e) if e.kind() == io::ErrorKind::AlreadyExists && d.is_dir() => {}
+                Err(e) => {
+                    made.remove_if_empty();
+                    return Err(e);
+                }
+            }
+        }
+        Ok(made)
+    }
+
+    /// Removes the folders made, innermost first, as long as each is empty.
+    pub fn remove_if_empty(&self) {
+        for d in self.created.iter().rev() {
+            if fs::remove_dir(d).is_err() {
+                break;
+            }
         }
     }
 }
@@ -735,9 +908,9 @@ fn encode(name: &str, target: &Path, out: &RenderOutputs) -> Result<Vec<u8>, Out
                 .meta
                 .to_json_pretty()
                 .map(String::into_bytes)
-                .map_err(|source| OutputError::Json {
+                .map_err(|error| OutputError::Json {
                     path: target.to_path_buf(),
-                    source,
+                    error,
                 })
         }
         other => {
@@ -745,9 +918,9 @@ fn encode(name: &str, target: &Path, out: &RenderOutputs) -> Result<Vec<u8>, Out
             return Err(io_err(target, "encode")(io::Error::other(msg)));
         }
     };
-    encoded.map_err(|source| OutputError::Encode {
+    encoded.map_err(|error| OutputError::Encode {
         path: target.to_path_buf(),
-        source,
+        error,
     })
 }
 
@@ -853,9 +1026,9 @@ fn install(
 /// Read an RGBA (or RGB: A = 1) 32-bit float EXR: width, height and the pixels, row-major, row 0
 /// at the top, exactly as stored.
 pub fn read_exr_rgba(path: &Path) -> Result<(u32, u32, Vec<[f32; 4]>), OutputError> {
-    let decode_err = |source| OutputError::Decode {
+    let decode_err = |error| OutputError::Decode {
         path: path.to_path_buf(),
-        source,
+        error,
     };
     let file = File::open(path).map_err(io_err(path, "open"))?;
     let decoder = OpenExrDecoder::with_alpha_preference(BufReader::new(file), Some(true))
@@ -1134,5 +1307,78 @@ mod tests {
             assert!(v.iter().all(|p| p[0] == 0.75));
             let _ = fs::remove_dir_all(&dir);
         }
+    }
+
+    /// A folder made for the render (with its missing parents) is taken away again when
+    /// writing fails at any step, and made only once the outputs are checked.
+    #[test]
+    fn a_new_folder_is_not_left_behind_after_a_failure() {
+        let base = temp_dir("new-dir");
+        let dir = base.join("a").join("b");
+        for fail_at in [Step::Stage(0), Step::Stage(6), Step::Install(3)] {
+            let result = write_render_with(&dir, &outputs(3, 2, 2, 0.5), &mut |step| {
+                if step == fail_at {
+                    Err(io::Error::other("injected"))
+                } else {
+                    Ok(())
+                }
+            });
+            assert!(result.is_err(), "{fail_at:?}");
+            assert!(
+                !base.join("a").exists(),
+                "{fail_at:?} left {}",
+                dir.display()
+            );
+        }
+        // Outputs that fail their checks create nothing at all.
+        let mut bad = outputs(3, 2, 2, 0.5);
+        bad.visibility.pop();
+        assert!(write_render(&dir, &bad).is_err());
+        assert!(!base.join("a").exists());
+        // A folder that was there before stays.
+        fs::create_dir_all(&dir).unwrap();
+        let result = write_render_with(&dir, &outputs(3, 2, 2, 0.5), &mut |step| match step {
+            Step::Stage(0) => Err(io::Error::other("injected")),
+            _ => Ok(()),
+        });
+        assert!(result.is_err() && dir.is_dir());
+        let _ = fs::remove_dir_all(&base);
+    }
+
+    /// Output targets are checked before any work: a file where the folder should be, a
+    /// folder under a file, a place nothing can be created in, a device or FIFO as a file.
+    #[test]
+    fn output_targets_are_checked_up_front() {
+        let base = temp_dir("targets");
+        let file = base.join("file.txt");
+        fs::write(&file, b"x").unwrap();
+        let e = check_out_dir(&file, &FILE_NAMES).unwrap_err();
+        assert!(matches!(e, OutputError::NotADirectory { .. }), "{e:?}");
+        assert!(e.to_string().contains("a regular file"), "{e}");
+        let e = check_out_dir(&file.join("sub"), &FILE_NAMES).unwrap_err();
+        assert!(e.to_string().contains("file.txt"), "{e}");
+        check_out_dir(&base.join("new").join("deeper"), &FILE_NAMES).unwrap();
+        assert!(!base.join("new").exists(), "checking creates nothing");
+        #[cfg(target_os = "linux")]
+        {
+            // /proc takes no new entries, whoever asks (root included).
+            let e = check_out_dir(Path::new("/proc/dbuffer-out"), &FILE_NAMES).unwrap_err();
+            assert!(matches!(e, OutputError::Unwritable { .. }), "{e:?}");
+            let e = check_out_file(Path::new("/dev/null")).unwrap_err();
+            assert!(e.to_string().contains("never replaced"), "{e}");
+        }
+        check_out_file(&file).unwrap();
+        check_out_file(&base.join("new.png")).unwrap();
+        let e = check_out_file(&base.join("missing").join("x.png")).unwrap_err();
+        assert!(e.to_string().contains("missing"), "{e}");
+        let e = check_out_file(&base).unwrap_err();
+        assert!(matches!(e, OutputError::TargetIsDirectory { .. }), "{e:?}");
+        let leftovers: Vec<_> = fs::read_dir(&base)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().contains("probe"))
+            .collect();
+        assert!(leftovers.is_empty(), "{leftovers:?}");
+        let _ = fs::remove_dir_all(&base);
     }
 }

@@ -73,32 +73,31 @@ fn a_good_file_loads_with_defaults() {
 
 #[test]
 fn unknown_key() {
+    // The unknown key is not quoted (nothing of the file is): its line and column are.
     let msg = parse_err(&format!("{CAMERA}\n{LIGHT}radius2 = 1.0\n"));
     assert_has(
         &msg,
-        &["my.toml", "line 10", "unknown field `radius2`", "radius"],
+        &["my.toml", "line 10", "column 1", "unknown field", "radius"],
     );
+    assert!(!msg.contains("radius2"), "{msg}");
     let msg = parse_err(&format!(
         "{CAMERA}\n{LIGHT}\n[[object]]\nmesh = \"cube\"\ncast_shadow = true\n"
     ));
     assert_has(
         &msg,
-        &[
-            "my.toml",
-            "line 13",
-            "unknown field `cast_shadow`",
-            "casts_shadow",
-        ],
+        &["my.toml", "line 13", "unknown field", "casts_shadow"],
     );
+    assert!(!msg.contains("cast_shadow "), "{msg}");
     let msg = parse_err(&format!("{CAMERA}\n{LIGHT}\n[lights]\nradius = 1\n"));
-    assert_has(&msg, &["my.toml", "unknown field `lights`"]);
+    assert_has(&msg, &["my.toml", "line 11", "unknown field"]);
+    assert!(!msg.contains("lights"), "{msg}");
 }
 
 #[test]
 fn missing_required_key() {
     let light = LIGHT.replace("radius = 0.5\n", "");
     let msg = parse_err(&format!("{CAMERA}\n{light}"));
-    assert_has(&msg, &["my.toml", "missing field `radius`", "[light]"]);
+    assert_has(&msg, &["my.toml", "missing field `radius`", "in `light`"]);
     let msg = parse_err(CAMERA);
     assert_has(&msg, &["my.toml", "missing field `light`"]);
     let msg = parse_err(&format!("{CAMERA}\n{LIGHT}\n[[object]]\nname = \"x\"\n"));
@@ -353,7 +352,11 @@ fn malformed_obj_names_file_and_line() {
             "v 0 0 0\nv 1 inf 0\nv 0 0 1\nf 1 2 3\n",
             &["infv.obj:2:", "finite"],
         ),
-        ("text.obj", "v 0 0 zero\n", &["text.obj:1:", "`zero`"]),
+        (
+            "text.obj",
+            "v 0 0 zero\n",
+            &["text.obj:1:", "not a number (number 3)"],
+        ),
         ("shortv.obj", "v 0 0\n", &["shortv.obj:1:", "2 numbers"]),
         (
             "face2.obj",
@@ -379,7 +382,7 @@ fn malformed_obj_names_file_and_line() {
         (
             "junk.obj",
             &format!("{TRI}hello\n"),
-            &["junk.obj:4:", "`hello`"],
+            &["junk.obj:4:", "expected an OBJ statement"],
         ),
     ];
     for (name, content, parts) in cases {
@@ -390,6 +393,11 @@ fn malformed_obj_names_file_and_line() {
         let msg = load_obj(&path).unwrap_err().to_string();
         assert_has(&msg, parts);
         assert!(msg.starts_with(&path.display().to_string()), "{msg}");
+        // Nothing of the file's text is quoted.
+        let text = &msg[path.display().to_string().len()..];
+        for word in ["zero", "hello"] {
+            assert!(!text.contains(word), "{name} quotes {word:?}: {msg}");
+        }
         // ...and through a scene file, which adds the scene file and the key.
         let (msg, scene) = load_err(
             &scene_with(&format!("mesh = \"{name}\"")),

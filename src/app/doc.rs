@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
-use crate::scene::file::{resolve_mesh, LightSpec, ObjectSpec};
+use crate::scene::file::{LightSpec, ObjectSpec};
 use crate::scene::{self, builtin, Camera, DiskLight, Mesh, Object, Scene, SceneError, SceneFile};
 
 pub struct SceneDoc {
@@ -51,13 +51,8 @@ impl SceneDoc {
                 },
             ),
         };
-        file.validate(&label)?;
-        let local = file
-            .objects
-            .iter()
-            .enumerate()
-            .map(|(i, o)| resolve_mesh(&o.mesh, &base_dir, &label, &format!("object[{i}].mesh")))
-            .collect::<Result<Vec<_>, _>>()?;
+        // Validated, and every mesh within the scene's budget together (not each alone).
+        let local = file.load_meshes(&base_dir, &label)?;
         let doc = SceneDoc {
             file,
             path,

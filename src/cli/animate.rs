@@ -58,7 +58,7 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
     // light-dependent work redone per frame.
     let mut recording = Recording::start(&offline.ctx, scene, spec, args.out)?;
     if let Some(note) = recording.note() {
-        eprintln!("note      {note}");
+        errln!("note      {note}");
     }
     let progress = Progress::new("animate", args.frames as u64, "frames");
     progress.stage(&format!(
@@ -77,7 +77,7 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
     }
     progress.finish();
     let written = recording.finish()?;
-    eprintln!(
+    errln!(
         "wrote     {} frames and {ANIMATION_FILE} ({} KiB, {:.1} s at {} fps) into {}",
         written.files.len() - 1,
         written.animation_bytes.div_ceil(1024),

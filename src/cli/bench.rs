@@ -70,7 +70,7 @@ pub fn config(args: &BenchArgs) -> Result<Config> {
 pub fn run(args: &BenchArgs) -> Result<()> {
     let config = config(args)?;
     let ctx = GpuContext::headless()?;
-    eprintln!(
+    errln!(
         "bench on {}: {} scenes × {} sizes × {} methods, {} + {} frames each; about {:.0} s",
         ctx.adapter_description(),
         config.scenes.len(),
@@ -113,9 +113,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let png = bench::plot::scaling_png(&report.scaling, 900, 600)?;
         write("geometry-scaling.png", &png)?;
     }
-    println!("{markdown}");
+    outln!("{markdown}");
     for path in written {
-        eprintln!("wrote  {}", path.display());
+        errln!("wrote  {}", path.display());
     }
     Ok(())
 }

@@ -5,6 +5,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use dbuffer::compare::{self, report, CompareRequest};
 use dbuffer::geometry::VtVariant;
+use dbuffer::output;
 use dbuffer::render::offline::Offline;
 use dbuffer::scene;
 
@@ -25,10 +26,15 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
     let knobs = args.knobs.knobs()?;
+    // Before any work: a comparison that cannot be written is not started.
+    output::check_out_dir(args.out, &[]).context("--out")?;
     let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
+    for w in scene.warnings() {
+        errln!("warning   {w}");
+    }
     let mut offline = Offline::new()?;
-    eprintln!("adapter   {}", offline.ctx.adapter_description());
+    errln!("adapter   {}", offline.ctx.adapter_description());
     offline.progress = Some(progress::reference_samples());
     let request = CompareRequest {
         width,
@@ -38,12 +44,20 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         knobs,
     };
     let comparison = compare::run(&mut offline, &scene.name, &scene, &request, |what| {
-        eprintln!("rendering {what}")
+        errln!("rendering {what}")
     })?;
-    let written = report::write(args.out, &comparison)
-        .with_context(|| format!("cannot write the report into {}", args.out.display()))?;
+    // The folder is made now, at the end, and taken away again if writing fails.
+    let created = output::NewDirs::create(args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let written = report::write(args.out, &comparison).map_err(|e| {
+        created.remove_if_empty();
+        anyhow::Error::new(e).context(format!(
+            "cannot write the report into {}",
+            args.out.display()
+        ))
+    })?;
     let r = report::Report::new(&comparison);
-    println!(
+    outln!(
         "{} ({}x{}, K = {}, reference {:.1} M rays/s, V(t) {})",
         r.scene,
         r.width,
@@ -52,8 +66,8 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         r.reference_rays_per_s / 1e6,
         r.vt
     );
-    print!("{}", r.table());
-    eprintln!(
+    out!("{}", r.table());
+    errln!(
         "wrote     {} files into {}",
         written.len(),
         args.out.display()

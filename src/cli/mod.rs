@@ -5,6 +5,10 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
+use dbuffer::budget::{
+    MAX_DBUFFER_SIZE, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_INSPECT_PIXELS, MAX_ORACLE_TRIANGLES,
+    MAX_REFERENCE_SAMPLES,
+};
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
 use dbuffer::output;
@@ -15,9 +19,37 @@ use dbuffer::scene;
 use glam::Vec3;
 use rayon::prelude::*;
 
+/// `println!` that survives a closed standard output (see [`print`]).
+macro_rules! outln {
+    () => {
+        crate::cli::print::out(format_args!("\n"))
+    };
+    ($($t:tt)*) => {
+        crate::cli::print::out(format_args!("{}\n", format_args!($($t)*)))
+    };
+}
+
+/// `print!` that survives a closed standard output.
+macro_rules! out {
+    ($($t:tt)*) => {
+        crate::cli::print::out(format_args!($($t)*))
+    };
+}
+
+/// `eprintln!` that never panics.
+macro_rules! errln {
+    () => {
+        crate::cli::print::err(format_args!("\n"))
+    };
+    ($($t:tt)*) => {
+        crate::cli::print::err(format_args!("{}\n", format_args!($($t)*)))
+    };
+}
+
 mod animate;
 pub mod bench;
 mod compare;
+pub mod print;
 mod progress;
 pub use animate::{animate, AnimateArgs};
 pub use compare::{compare, CompareArgs};
@@ -82,7 +114,7 @@ impl MethodFlags {
 
 pub fn scenes() -> Result<()> {
     for name in scene::builtin::names() {
-        println!("{name}");
+        outln!("{name}");
     }
     Ok(())
 }
@@ -105,11 +137,13 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
     let knobs = args.knobs.knobs()?;
+    // Before any work: a render that cannot be written is not started.
+    output::check_out_dir(args.out, &output::FILE_NAMES).context("--out")?;
     let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
     let mut offline = Offline::new()?;
     if args.verbose {
-        eprintln!("adapter   {}", offline.ctx.adapter_description());
+        errln!("adapter   {}", offline.ctx.adapter_description());
     }
     let request = FrameRequest {
         width,
@@ -135,14 +169,14 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         &report,
     );
     for w in &meta.warnings {
-        eprintln!("warning   {w}");
+        errln!("warning   {w}");
     }
     if args.verbose {
         for (stage, ms) in &meta.cpu_ms {
-            eprintln!("cpu ms    {stage:<20} {ms:8.3}");
+            errln!("cpu ms    {stage:<20} {ms:8.3}");
         }
         for (pass, ms) in &meta.gpu_ms {
-            eprintln!("gpu ms    {pass:<20} {ms:8.3}");
+            errln!("gpu ms    {pass:<20} {ms:8.3}");
         }
     }
     let outputs = output::RenderOutputs::from_frame(&frame, meta);
@@ -150,7 +184,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let written = output::write_render(args.out, &outputs)?;
     if args.verbose {
         for path in written {
-            eprintln!("wrote     {}", path.display());
+            errln!("wrote     {}", path.display());
         }
     }
     Ok(())
@@ -169,8 +203,11 @@ pub fn gui(scene: Option<String>) -> Result<()> {
 }
 
 fn check_dbuffer_size(size: u32) -> Result<()> {
-    if !(1..=8192).contains(&size) {
-        bail!("--dbuffer-size expects a texel count from 1 to 8192, found {size}");
+    if !(1..=MAX_DBUFFER_SIZE).contains(&size) {
+        bail!(
+            "--dbuffer-size expects a texel count from 1 to {MAX_DBUFFER_SIZE} \
+             (MAX_DBUFFER_SIZE), found {size}"
+        );
     }
     Ok(())
 }
@@ -182,7 +219,37 @@ pub fn inspect(
     vt: &str,
     out: Option<&Path>,
 ) -> Result<()> {
+    // Every flag is checked before the scene is loaded: nothing is computed for a run that
+    // would be refused at the end.
+    let comparison = match samples {
+        Some(k) => {
+            if !(1..=MAX_REFERENCE_SAMPLES as usize).contains(&k) {
+                bail!(
+                    "--samples expects 1 to {MAX_REFERENCE_SAMPLES} disk samples per pixel \
+                     (MAX_REFERENCE_SAMPLES), found {k}"
+                );
+            }
+            let (width, height) = parse_view_size(size, MAX_INSPECT_PIXELS, "MAX_INSPECT_PIXELS")?;
+            let vt: VtVariant = vt.parse().map_err(anyhow::Error::msg)?;
+            if let Some(path) = out {
+                output::check_out_file(path).context("--out")?;
+            }
+            Some((k, width, height, vt))
+        }
+        None if out.is_some() => {
+            bail!("--out needs --samples: the picture compares the method with the reference")
+        }
+        None => None,
+    };
     let scene = scene::load(name).with_context(|| format!("cannot load scene '{name}'"))?;
+    let triangles: usize = scene.objects.iter().map(|o| o.mesh.triangles.len()).sum();
+    if comparison.is_some() && triangles as u64 > MAX_ORACLE_TRIANGLES {
+        bail!(
+            "--samples: the scene has {triangles} triangles, more than the CPU reference \
+             ray-casts ({MAX_ORACLE_TRIANGLES}, MAX_ORACLE_TRIANGLES); inspect it without \
+             --samples, or compare it on the GPU with `dbuffer compare`"
+        );
+    }
     let t0 = Instant::now();
     let prepared = PreparedCasters::new(&scene);
     let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -190,14 +257,19 @@ pub fn inspect(
     let t1 = Instant::now();
     let geometry = prepared.build(&scene.light, &params);
     let build_ms = t1.elapsed().as_secs_f64() * 1e3;
+    // The twin needs the geometry, not the prepared casters (welding and adjacency): give their
+    // memory back before the oracle builds its BVH.
+    drop(prepared);
 
     let l = &scene.light;
-    println!("scene     {}", scene.name);
-    println!(
+    outln!("scene     {}", scene.name);
+    outln!(
         "light     centre {} normal {} radius {}",
-        l.center, l.normal, l.radius
+        l.center,
+        l.normal,
+        l.radius
     );
-    println!(
+    outln!(
         "{:<16} {:>9} {:>9} {:>9} {:>6} {:>6} {:>7} {:>7} {:>5} {:>8} {:>8}",
         "caster",
         "tris",
@@ -213,7 +285,7 @@ pub fn inspect(
     );
     for c in &geometry.casters {
         let s = c.stats;
-        println!(
+        outln!(
             "{:<16} {:>9} {:>9} {:>9} {:>6} {:>6} {:>7} {:>7} {:>5} {:>8} {:>8}",
             c.name,
             s.triangles,
@@ -228,37 +300,46 @@ pub fn inspect(
             s.penumbra_triangles
         );
     }
-    println!("geometry  prepare {prepare_ms:.3} ms (once per mesh), classes+silhouettes+volumes {build_ms:.3} ms");
+    outln!("geometry  prepare {prepare_ms:.3} ms (once per mesh), classes+silhouettes+volumes {build_ms:.3} ms");
     for w in &geometry.warnings {
-        println!("warning   {w}");
+        outln!("warning   {w}");
     }
 
-    if let Some(k) = samples {
-        if k == 0 {
-            bail!("--samples must be at least 1");
-        }
-        let (width, height) = parse_size(size)?;
-        let vt: VtVariant = vt.parse().map_err(anyhow::Error::msg)?;
+    if let Some((k, width, height, vt)) = comparison {
         let frames = compare_twin(&scene, &geometry, k, width, height, vt);
         if let Some(path) = out {
             write_comparison(path, &frames, width, height)?;
-            println!("wrote {}", path.display());
+            outln!("wrote {}", path.display());
         }
-    } else if out.is_some() {
-        bail!("--out needs --samples: the picture compares the method with the reference");
     }
     Ok(())
 }
 
-/// `WxH` with both at least 1.
+/// `WxH` of a rendered image: both from 1 to `MAX_IMAGE_SIDE`, at most `MAX_IMAGE_PIXELS`.
 pub fn parse_size(text: &str) -> Result<(u32, u32)> {
+    parse_view_size(text, MAX_IMAGE_PIXELS, "MAX_IMAGE_PIXELS")
+}
+
+/// `WxH` with both from 1 to `MAX_IMAGE_SIDE` and at most `max_pixels` (called `name`).
+fn parse_view_size(text: &str, max_pixels: u64, name: &str) -> Result<(u32, u32)> {
     let parsed = text
         .split_once(['x', 'X'])
         .and_then(|(w, h)| Some((w.trim().parse::<u32>().ok()?, h.trim().parse::<u32>().ok()?)));
-    match parsed {
-        Some((w, h)) if w > 0 && h > 0 && u64::from(w) * u64::from(h) <= 1 << 26 => Ok((w, h)),
-        _ => bail!("--size expects WxH with positive integers (at most 64 Mpixels), e.g. 512x512; found '{text}'"),
+    let Some((w, h)) = parsed.filter(|&(w, h)| w > 0 && h > 0) else {
+        bail!("--size expects WxH with positive integers, e.g. 512x512; found '{text}'");
+    };
+    if w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
+        bail!("--size {w}x{h}: expected sides of at most {MAX_IMAGE_SIDE} pixels (MAX_IMAGE_SIDE)");
     }
+    let pixels = u64::from(w) * u64::from(h);
+    if pixels > max_pixels {
+        bail!(
+            "--size {w}x{h} is {pixels} pixels: expected at most {max_pixels} \
+             ({name}, {} Mpixels)",
+            max_pixels >> 20
+        );
+    }
+    Ok((w, h))
 }
 
 /// Per pixel of the view: the method's V, the reference V, and whether it counts.
@@ -310,19 +391,23 @@ fn compare_twin(
     let twin_s = t1.elapsed().as_secs_f64();
     let m = metrics::compare(&reference, &method, &mask);
     let rays = mask.iter().filter(|&&m| m).count() * k;
-    println!(
+    outln!(
         "twin vs oracle ({width}x{height}, {} px facing the light, V(t) {vt}, K = {k}):",
         m.pixels
     );
-    println!(
+    outln!(
         "  class mismatch {:.2} %   MAE {:.4}   penumbra MAE {:.4} ({} px)   p99 |dV| {:.3}",
-        m.class_mismatch_pct, m.mae, m.penumbra_mae, m.penumbra_pixels, m.p99
+        m.class_mismatch_pct,
+        m.mae,
+        m.penumbra_mae,
+        m.penumbra_pixels,
+        m.p99
     );
-    println!("  pixels by class, reference (rows) against the twin (columns):");
-    println!("  {:>10} {:>9} {:>9} {:>9}", "", "lit", "penumbra", "umbra");
+    outln!("  pixels by class, reference (rows) against the twin (columns):");
+    outln!("  {:>10} {:>9} {:>9} {:>9}", "", "lit", "penumbra", "umbra");
     for rc in metrics::ShadowClass::ALL {
         let row = m.confusion[rc.index()];
-        println!(
+        outln!(
             "  {:>10} {:>9} {:>9} {:>9}",
             rc.name(),
             row[0],
@@ -330,7 +415,7 @@ fn compare_twin(
             row[2]
         );
     }
-    println!(
+    outln!(
         "  oracle {:.0} ms ({:.1} M rays/s), twin {:.0} ms",
         oracle_s * 1e3,
         rays as f64 / oracle_s / 1e6,

@@ -43,7 +43,7 @@ impl Progress {
             bar
         });
         if bar.is_none() {
-            eprintln!("{what}: {total} {unit}");
+            errln!("{what}: {total} {unit}");
         }
         Progress {
             inner: Arc::new(Inner {
@@ -71,7 +71,7 @@ impl Progress {
                 if quarter > before && quarter < 4 {
                     let s = p.start.elapsed().as_secs_f64();
                     let left = s / done.max(1) as f64 * (p.total - done.min(p.total)) as f64;
-                    eprintln!(
+                    errln!(
                         "{}: {}/{} {} ({} %), {s:.1} s, about {left:.0} s left",
                         p.what,
                         done,
@@ -88,7 +88,7 @@ impl Progress {
     pub fn stage(&self, line: &str) {
         match &self.inner.bar {
             Some(bar) => bar.set_message(line.to_string()),
-            None => eprintln!("{}  {line}", self.inner.what),
+            None => errln!("{}  {line}", self.inner.what),
         }
     }
 
@@ -98,7 +98,7 @@ impl Progress {
         if let Some(bar) = &p.bar {
             bar.finish_and_clear();
         }
-        eprintln!(
+        errln!(
             "{}: {} {} in {:.1} s",
             p.what,
             p.total,

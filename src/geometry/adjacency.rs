@@ -15,8 +15,6 @@
 //!
 //! [`FaceClass::mirrored`]: super::classify::FaceClass::mirrored
 
-use std::collections::HashMap;
-
 use glam::Vec3;
 
 use crate::scene::Mesh;
@@ -124,18 +122,12 @@ fn weld_key(p: Vec3) -> [u32; 3] {
 impl CasterMesh {
     /// Weld, compute face planes and build edge adjacency. Non-finite positions make their faces
     /// degenerate (skipped and counted) rather than poisoning the classification.
+    ///
+    /// Memory: besides the result (32 bytes per face, 16 per edge, 12 per vertex), at most 20
+    /// bytes per input vertex while welding and 4 per half-edge (12 per face) and 4 per vertex
+    /// while pairing edges; nothing of either is held at the same time as the other.
     pub fn new(name: &str, mesh: &Mesh) -> CasterMesh {
-        let mut remap = Vec::with_capacity(mesh.positions.len());
-        let mut positions: Vec<Vec3> = Vec::new();
-        let mut welded: HashMap<[u32; 3], u32> = HashMap::with_capacity(mesh.positions.len());
-        for &p in &mesh.positions {
-            let next = positions.len() as u32;
-            let id = *welded.entry(weld_key(p)).or_insert(next);
-            if id == next {
-                positions.push(p);
-            }
-            remap.push(id);
-        }
+        let (positions, remap) = weld(&mesh.positions);
 
         let mut report = MeshReport::default();
         let mut faces = Vec::with_capacity(mesh.triangles.len());
@@ -164,10 +156,13 @@ impl CasterMesh {
                 source: i as u32,
             });
         }
+        drop(remap);
+        faces.shrink_to_fit();
 
-        let edges = build_edges(&faces, &mut report);
+        let edges = build_edges(&faces, positions.len(), &mut report);
         CasterMesh {
-            name: name.to_string(),
+            // Repeated in one-line warnings: control characters escaped, cut if long.
+            name: crate::scene::shown(name),
             positions,
             faces,
             edges,
@@ -192,71 +187,148 @@ impl CasterMesh {
     }
 }
 
-/// Half-edges sorted by their undirected key, then grouped into edges.
-fn build_edges(faces: &[Face], report: &mut MeshReport) -> Vec<Edge> {
-    // (undirected key, face, forward?) for the three half-edges of every face.
-    let mut half: Vec<(u64, u32, bool)> = Vec::with_capacity(faces.len() * 3);
-    for (f, face) in faces.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (face.v[k], face.v[(k + 1) % 3]);
-            let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-            half.push((key, f as u32, a < b));
+/// Welds bitwise-equal positions (−0 = +0): the welded positions, in order of first occurrence,
+/// and each input position's welded index. Sorts (position, index) pairs, 16 bytes per
+/// position, rather than filling a hash map (about twice that at its load factor).
+fn weld(input: &[Vec3]) -> (Vec<Vec3>, Vec<u32>) {
+    let mut sorted: Vec<([u32; 3], u32)> = input
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| (weld_key(p), i as u32))
+        .collect();
+    sorted.sort_unstable();
+    // The first (smallest) input index of each run of equal positions.
+    let mut remap = vec![0u32; input.len()];
+    for run in sorted.chunk_by(|a, b| a.0 == b.0) {
+        for &(_, i) in run {
+            remap[i as usize] = run[0].1;
         }
     }
-    half.sort_unstable();
+    drop(sorted);
+    // Number the runs in order of first occurrence; a run's first index comes before the rest.
+    let mut positions = Vec::new();
+    for i in 0..input.len() {
+        let first = remap[i] as usize;
+        remap[i] = if first == i {
+            positions.push(input[i]);
+            (positions.len() - 1) as u32
+        } else {
+            remap[first]
+        };
+    }
+    (positions, remap)
+}
 
-    let mut edges = Vec::with_capacity(half.len() / 2 + 1);
-    let mut start = 0;
-    while start < half.len() {
-        let key = half[start].0;
-        let mut end = start + 1;
-        while end < half.len() && half[end].0 == key {
-            end += 1;
+/// Half-edges grouped by their undirected key `(lo, hi)`, then into edges, in the order of
+/// the key, then the face, then the direction (backward first).
+///
+/// The half-edges (`3·face + k`, 4 bytes each) are bucketed by their smaller vertex (a counting
+/// sort, plus 4 bytes per vertex) and each small bucket is sorted by `(hi, face, forward)`,
+/// which gives the same order as sorting all half-edges by `(key, face, forward)`. The edges
+/// are counted first and allocated once.
+fn build_edges(faces: &[Face], vertices: usize, report: &mut MeshReport) -> Vec<Edge> {
+    // (lo, hi, forward) of half-edge h: the edge from corner k to corner k + 1 of its face.
+    let half_edge = |h: u32| {
+        let (f, k) = ((h / 3) as usize, (h % 3) as usize);
+        let v = faces[f].v;
+        let (a, b) = (v[k], v[(k + 1) % 3]);
+        (a.min(b), a.max(b), a < b)
+    };
+    let sort_key = |h: &u32| {
+        let (_, hi, forward) = half_edge(*h);
+        (hi, *h / 3, forward)
+    };
+    let halves = (faces.len() * 3) as u32;
+    // Bucket starts by the smaller vertex.
+    let mut start = vec![0u32; vertices + 1];
+    for h in 0..halves {
+        start[half_edge(h).0 as usize + 1] += 1;
+    }
+    for i in 0..vertices {
+        start[i + 1] += start[i];
+    }
+    let mut bucketed = vec![0u32; halves as usize];
+    {
+        let mut next = start.clone();
+        for h in 0..halves {
+            let slot = &mut next[half_edge(h).0 as usize];
+            bucketed[*slot as usize] = h;
+            *slot += 1;
         }
-        let (lo, hi) = ((key >> 32) as u32, key as u32);
-        let directed = |forward: bool| if forward { [lo, hi] } else { [hi, lo] };
-        let group = &half[start..end];
-        match group {
-            [(_, f, dir)] => {
-                report.boundary_edges += 1;
-                edges.push(Edge {
-                    v: directed(*dir),
-                    faces: [*f, NO_FACE],
-                });
+    }
+    let bucket = |lo: usize| start[lo] as usize..start[lo + 1] as usize;
+    for lo in 0..vertices {
+        bucketed[bucket(lo)].sort_unstable_by_key(sort_key);
+    }
+
+    // Each run of one key (lo, hi) is one edge, or several where more than two faces meet.
+    let runs = |lo: usize| bucketed[bucket(lo)].chunk_by(|&a, &b| half_edge(a).1 == half_edge(b).1);
+    let face = |h: u32| h / 3;
+    let forward = |h: u32| half_edge(h).2;
+    let count: usize = (0..vertices)
+        .flat_map(runs)
+        .map(|run| {
+            let fwd = run.iter().filter(|&&h| forward(h)).count();
+            match run.len() {
+                1 | 2 => 1,
+                n => fwd.max(n - fwd),
             }
-            [(_, f0, d0), (_, f1, d1)] => {
-                if d0 == d1 {
-                    report.inconsistent_edges += 1;
-                }
-                edges.push(Edge {
-                    v: directed(*d0),
-                    faces: [*f0, *f1],
-                });
-            }
-            _ => {
-                report.non_manifold_edges += 1;
-                let mut fwd: Vec<u32> = group.iter().filter(|h| h.2).map(|h| h.1).collect();
-                let mut back: Vec<u32> = group.iter().filter(|h| !h.2).map(|h| h.1).collect();
-                while let (Some(a), Some(b)) = (fwd.last().copied(), back.last().copied()) {
-                    fwd.pop();
-                    back.pop();
+        })
+        .sum();
+    let mut edges = Vec::with_capacity(count);
+    for lo in 0..vertices {
+        for run in runs(lo) {
+            let (lo, hi, _) = half_edge(run[0]);
+            let directed = |forward: bool| if forward { [lo, hi] } else { [hi, lo] };
+            match *run {
+                [h] => {
+                    report.boundary_edges += 1;
                     edges.push(Edge {
-                        v: [lo, hi],
-                        faces: [a, b],
+                        v: directed(forward(h)),
+                        faces: [face(h), NO_FACE],
                     });
                 }
-                for (rest, forward) in [(fwd, true), (back, false)] {
-                    for f in rest {
-                        report.boundary_edges += 1;
+                [h0, h1] => {
+                    if forward(h0) == forward(h1) {
+                        report.inconsistent_edges += 1;
+                    }
+                    edges.push(Edge {
+                        v: directed(forward(h0)),
+                        faces: [face(h0), face(h1)],
+                    });
+                }
+                _ => {
+                    report.non_manifold_edges += 1;
+                    let mut fwd: Vec<u32> = run
+                        .iter()
+                        .filter(|&&h| forward(h))
+                        .map(|&h| face(h))
+                        .collect();
+                    let mut back: Vec<u32> = run
+                        .iter()
+                        .filter(|&&h| !forward(h))
+                        .map(|&h| face(h))
+                        .collect();
+                    while let (Some(a), Some(b)) = (fwd.last().copied(), back.last().copied()) {
+                        fwd.pop();
+                        back.pop();
                         edges.push(Edge {
-                            v: directed(forward),
-                            faces: [f, NO_FACE],
+                            v: [lo, hi],
+                            faces: [a, b],
                         });
+                    }
+                    for (rest, forward) in [(fwd, true), (back, false)] {
+                        for f in rest {
+                            report.boundary_edges += 1;
+                            edges.push(Edge {
+                                v: directed(forward),
+                                faces: [f, NO_FACE],
+                            });
+                        }
                     }
                 }
             }
         }
-        start = end;
     }
     edges
 }
@@ -346,5 +418,113 @@ mod tests {
         let m = CasterMesh::new("bad", &out_of_range);
         assert_eq!(m.report.degenerate_faces, 1);
         assert!(m.edges.is_empty());
+    }
+
+    /// The edge pairing as it was written before it bucketed (one global sort of 16-byte
+    /// half-edges): the bucketed one must give the same edges in the same order.
+    fn edges_by_global_sort(faces: &[Face]) -> (Vec<Edge>, MeshReport) {
+        let mut report = MeshReport::default();
+        let mut half: Vec<(u64, u32, bool)> = Vec::new();
+        for (f, face) in faces.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (face.v[k], face.v[(k + 1) % 3]);
+                let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+                half.push((key, f as u32, a < b));
+            }
+        }
+        half.sort_unstable();
+        let mut edges = Vec::new();
+        for group in half.chunk_by(|x, y| x.0 == y.0) {
+            let (lo, hi) = ((group[0].0 >> 32) as u32, group[0].0 as u32);
+            let directed = |forward: bool| if forward { [lo, hi] } else { [hi, lo] };
+            match group {
+                [(_, f, dir)] => {
+                    report.boundary_edges += 1;
+                    edges.push(Edge {
+                        v: directed(*dir),
+                        faces: [*f, NO_FACE],
+                    });
+                }
+                [(_, f0, d0), (_, f1, d1)] => {
+                    if d0 == d1 {
+                        report.inconsistent_edges += 1;
+                    }
+                    edges.push(Edge {
+                        v: directed(*d0),
+                        faces: [*f0, *f1],
+                    });
+                }
+                _ => {
+                    report.non_manifold_edges += 1;
+                    let mut fwd: Vec<u32> = group.iter().filter(|h| h.2).map(|h| h.1).collect();
+                    let mut back: Vec<u32> = group.iter().filter(|h| !h.2).map(|h| h.1).collect();
+                    while let (Some(a), Some(b)) = (fwd.last().copied(), back.last().copied()) {
+                        fwd.pop();
+                        back.pop();
+                        edges.push(Edge {
+                            v: [lo, hi],
+                            faces: [a, b],
+                        });
+                    }
+                    for (rest, forward) in [(fwd, true), (back, false)] {
+                        for f in rest {
+                            report.boundary_edges += 1;
+                            edges.push(Edge {
+                                v: directed(forward),
+                                faces: [f, NO_FACE],
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        (edges, report)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+
+        /// Random triangles over few vertices (so edges are shared by 1, 2 or many faces, in
+        /// both directions, and some faces repeat): the same edges, in the same order, with the
+        /// same report as the global sort.
+        #[test]
+        fn bucketed_edges_match_the_global_sort(
+            tris in proptest::collection::vec((0u32..7, 0u32..7, 0u32..7), 1..40),
+        ) {
+            let positions: Vec<Vec3> = (0..7)
+                .map(|i| Vec3::new(i as f32, (i * i % 5) as f32, (i % 3) as f32 * 0.5))
+                .collect();
+            let mesh = Mesh::new(positions, tris.iter().map(|&(a, b, c)| [a, b, c]).collect());
+            let m = CasterMesh::new("random", &mesh);
+            let (edges, report) = edges_by_global_sort(&m.faces);
+            proptest::prop_assert_eq!(&m.edges, &edges);
+            proptest::prop_assert_eq!(m.report.boundary_edges, report.boundary_edges);
+            proptest::prop_assert_eq!(m.report.non_manifold_edges, report.non_manifold_edges);
+            proptest::prop_assert_eq!(m.report.inconsistent_edges, report.inconsistent_edges);
+        }
+
+        /// Welding by sorting numbers positions in order of first occurrence, as the hash map
+        /// it replaced did.
+        #[test]
+        fn weld_numbers_in_order_of_first_occurrence(
+            points in proptest::collection::vec((0i8..3, 0i8..3, -1i8..2), 0..30),
+        ) {
+            let input: Vec<Vec3> = points
+                .iter()
+                .map(|&(x, y, z)| Vec3::new(f32::from(x), f32::from(y), if z == 0 { -0.0 } else { f32::from(z) }))
+                .collect();
+            let (positions, remap) = weld(&input);
+            let mut expected: Vec<Vec3> = Vec::new();
+            let mut ids = std::collections::HashMap::new();
+            for (i, &p) in input.iter().enumerate() {
+                let next = expected.len() as u32;
+                let id = *ids.entry(weld_key(p)).or_insert_with(|| {
+                    expected.push(p);
+                    next
+                });
+                proptest::prop_assert_eq!(remap[i], id);
+            }
+            proptest::prop_assert_eq!(positions, expected);
+        }
     }
 }

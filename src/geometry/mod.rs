@@ -34,6 +34,9 @@ use crate::scene::{DiskLight, Scene};
 #[derive(Clone, Debug, Default)]
 pub struct PreparedCasters {
     pub meshes: Vec<CasterMesh>,
+    /// The scene's own warnings ([`Scene::warnings`]: camera, size, empty objects), passed on
+    /// first in every [`SceneGeometry::warnings`].
+    pub scene_warnings: Vec<String>,
 }
 
 /// The geometry of every caster for one light.
@@ -51,18 +54,26 @@ impl PreparedCasters {
                 .casters()
                 .map(|o| CasterMesh::new(&o.name, &o.mesh))
                 .collect(),
+            scene_warnings: scene.warnings(),
         }
     }
 
-    /// Classes, silhouettes and volumes of every caster for this light.
+    /// Classes, silhouettes and volumes of every caster for this light, within the scene's
+    /// budget of volume triangles (`MAX_VOLUME_TRIANGLES`, shared by the casters in order: one
+    /// that would pass what is left casts no shadow, with a warning).
     pub fn build(&self, light: &DiskLight, params: &VolumeParams) -> SceneGeometry {
+        let mut left = volumes::MAX_VOLUME_TRIANGLES as usize;
         let casters: Vec<CasterGeometry> = self
             .meshes
             .iter()
-            .map(|m| volumes::build_caster(m, light, params))
+            .map(|m| {
+                let c = volumes::build_caster_within(m, light, params, left);
+                left -= c.volumes.triangle_count().min(left);
+                c
+            })
             .collect();
         let mut stats = GeometryStats::default();
-        let mut warnings = Vec::new();
+        let mut warnings = self.scene_warnings.clone();
         for c in &casters {
             stats += c.stats;
             warnings.extend(c.warnings.iter().cloned());

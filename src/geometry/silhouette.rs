@@ -151,6 +151,28 @@ fn silhouette_edge(mesh: &CasterMesh, classes: &[FaceClass], i: usize) -> Option
     })
 }
 
+/// How many edges are on the umbra silhouette and how many on the penumbra one (an edge can be
+/// on both), without building them: what the volumes will cost, known before they are made.
+pub fn count_silhouettes(mesh: &CasterMesh, classes: &[FaceClass]) -> (usize, usize) {
+    let count = |edge: &Edge| {
+        let (c0, c1) = edge_classes(edge, classes);
+        (
+            usize::from(is_umbra_pair(c0, c1)),
+            usize::from(is_penumbra_pair(c0, c1)),
+        )
+    };
+    let add = |a: (usize, usize), b: (usize, usize)| (a.0 + b.0, a.1 + b.1);
+    if mesh.edges.len() > 32 * 1024 {
+        mesh.edges
+            .par_iter()
+            .with_min_len(8192)
+            .map(count)
+            .reduce(|| (0, 0), add)
+    } else {
+        mesh.edges.iter().map(count).fold((0, 0), add)
+    }
+}
+
 /// Every edge on the umbra or penumbra silhouette, in edge order.
 pub fn find_silhouettes(mesh: &CasterMesh, classes: &[FaceClass]) -> Vec<SilhouetteEdge> {
     const PARALLEL_ABOVE: usize = 32 * 1024;

@@ -20,8 +20,19 @@ use glam::Vec3;
 
 use super::adjacency::CasterMesh;
 use super::classify::{classify, FaceClass};
-use super::silhouette::{extrusion_points, find_silhouettes, SilhouetteEdge};
+use super::silhouette::{count_silhouettes, extrusion_points, find_silhouettes, SilhouetteEdge};
+pub use crate::budget::MAX_VOLUME_TRIANGLES;
 use crate::scene::{DiskLight, Scene};
+
+/// Largest group of silhouette edge ends at one vertex whose pairs are all compared (see
+/// `Fans::pairs`).
+const EXACT_PAIRING: usize = 64;
+/// Neighbours around the rim each end of a larger group is compared with, on each side.
+const PAIRING_WINDOW: usize = 16;
+
+/// Most triangles of one fan: a half turn (a silhouette turns by less at a vertex) at the
+/// finest step [`VolumeParams::fan_step_deg`] is meant to take (11.25° gives 16).
+const MAX_FAN_TRIANGLES: usize = 64;
 
 /// What a volume triangle is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -259,8 +270,22 @@ pub struct CasterGeometry {
     pub warnings: Vec<String>,
 }
 
-/// Classify, find silhouettes and build both volumes of one caster.
+/// Classify, find silhouettes and build both volumes of one caster, within the whole scene's
+/// budget of volume triangles ([`MAX_VOLUME_TRIANGLES`]).
 pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams) -> CasterGeometry {
+    build_caster_within(mesh, light, params, MAX_VOLUME_TRIANGLES as usize)
+}
+
+/// Like [`build_caster`] with at most `max_triangles` volume triangles. Their number is known
+/// after classification but before any is made (silhouette faces, and two per silhouette edge,
+/// plus the fans, counted as they are made): a caster whose volumes would pass the limit gets
+/// none (it casts no shadow) and a warning naming the budget.
+pub fn build_caster_within(
+    mesh: &CasterMesh,
+    light: &DiskLight,
+    params: &VolumeParams,
+    max_triangles: usize,
+) -> CasterGeometry {
     let classes = if params.center_silhouettes {
         classify(
             mesh,
@@ -272,7 +297,6 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
     } else {
         classify(mesh, light)
     };
-    let silhouettes = find_silhouettes(mesh, &classes);
     let c = light.center;
     let mut volumes = VolumeMesh::default();
     let mut stats = GeometryStats {
@@ -287,6 +311,25 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
             FaceClass::SilhouetteB => stats.silhouette_b += 1,
         }
     }
+    let mut warnings: Vec<String> = mesh.report.warning(&mesh.name).into_iter().collect();
+    // What the volumes cost before they are made: every silhouette face, two triangles per
+    // extruded silhouette edge, then the fans.
+    let (umbra_edges, penumbra_edges) = count_silhouettes(mesh, &classes);
+    let at_least = stats.silhouette_a + stats.silhouette_b + 2 * (umbra_edges + penumbra_edges);
+    if at_least > max_triangles {
+        stats.umbra_edges = umbra_edges;
+        stats.penumbra_edges = penumbra_edges;
+        warnings.push(over_volume_budget(&mesh.name, at_least, max_triangles));
+        return CasterGeometry {
+            name: mesh.name.clone(),
+            classes,
+            silhouettes: Vec::new(),
+            volumes,
+            stats,
+            warnings,
+        };
+    }
+    let silhouettes = find_silhouettes(mesh, &classes);
 
     let extrude = |v: Vec3, p: Vec3| extrude_away(v, p, params.far);
     // Both ends of every extruded edge, for the fans.
@@ -341,8 +384,36 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
         light,
         params,
     };
-    stats.fans = fans.close(&mut volumes, &mut penumbra_ends, VolumeKind::PenumbraFan);
-    stats.umbra_fans = fans.close(&mut volumes, &mut umbra_ends, VolumeKind::UmbraFan);
+    // The silhouette faces come last; the fans may use what they leave of the budget.
+    let fan_limit = max_triangles - (stats.silhouette_a + stats.silhouette_b);
+    let penumbra_fans = fans.close(
+        &mut volumes,
+        &mut penumbra_ends,
+        VolumeKind::PenumbraFan,
+        fan_limit,
+    );
+    let umbra_fans = fans.close(
+        &mut volumes,
+        &mut umbra_ends,
+        VolumeKind::UmbraFan,
+        fan_limit,
+    );
+    let (Some(penumbra_fans), Some(umbra_fans)) = (penumbra_fans, umbra_fans) else {
+        let wanted = volumes.triangle_count() + stats.silhouette_a + stats.silhouette_b;
+        stats.umbra_edges = umbra_edges;
+        stats.penumbra_edges = penumbra_edges;
+        warnings.push(over_volume_budget(&mesh.name, wanted, max_triangles));
+        return CasterGeometry {
+            name: mesh.name.clone(),
+            classes,
+            silhouettes,
+            volumes: VolumeMesh::default(),
+            stats,
+            warnings,
+        };
+    };
+    stats.fans = penumbra_fans;
+    stats.umbra_fans = umbra_fans;
 
     for (face, class) in mesh.faces.iter().zip(&classes) {
         let kind = match class {
@@ -366,10 +437,6 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
     stats.umbra_triangles = volumes.count(VolumeKind::is_umbra);
     stats.penumbra_triangles = volumes.triangle_count() - stats.umbra_triangles;
 
-    let mut warnings = Vec::new();
-    if let Some(w) = mesh.report.warning(&mesh.name) {
-        warnings.push(w);
-    }
     let behind = mesh
         .positions
         .iter()
@@ -400,6 +467,15 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
         stats,
         warnings,
     }
+}
+
+/// The warning for a caster whose volumes would have more than `max` triangles.
+fn over_volume_budget(name: &str, at_least: usize, max: usize) -> String {
+    format!(
+        "caster '{name}': its shadow volumes would have {at_least} or more triangles, over the \
+         {max} the scene's budget leaves it ({MAX_VOLUME_TRIANGLES} volume triangles per scene, \
+         MAX_VOLUME_TRIANGLES): it casts no shadow"
+    )
 }
 
 /// `v` moved `far` further along the ray from the rim point `p` through it. Quads and fans both
@@ -473,35 +549,70 @@ impl Fans<'_> {
     /// D-buffer rules (nearest umbra exit, nearest penumbra entry) never let it win. Deciding
     /// "gap or cross" by which side of the other quad's plane each far edge falls is unreliable
     /// for nearly collinear edges: it sees only the offset across the chain.
-    fn close(&self, volumes: &mut VolumeMesh, ends: &mut [EdgeEnd], kind: VolumeKind) -> usize {
+    ///
+    /// Returns the number of fans, or `None` as soon as `volumes` would pass `limit` triangles.
+    fn close(
+        &self,
+        volumes: &mut VolumeMesh,
+        ends: &mut [EdgeEnd],
+        kind: VolumeKind,
+        limit: usize,
+    ) -> Option<usize> {
         ends.sort_unstable_by_key(|e| (e.vertex, e.edge, e.outgoing));
         let mut count = 0;
         for group in ends.chunk_by(|x, y| x.vertex == y.vertex) {
             let apex = self.mesh.position(group[0].vertex);
             for (i, j) in self.pairs(group) {
                 let before = volumes.triangle_count();
+                if before + MAX_FAN_TRIANGLES > limit {
+                    return None;
+                }
                 self.push_fan(volumes, apex, group[i].extrusion, group[j].extrusion, kind);
                 count += usize::from(volumes.triangle_count() > before);
             }
         }
-        count
+        Some(count)
     }
 
     /// Which edge ends at one vertex belong together. Two: each other. More (silhouette chains
     /// touching at a vertex): each chain arrives and leaves, so an incoming end pairs with an
     /// outgoing one, the closest on the disk rim first; ends left over (inconsistent winding)
     /// pair by distance alone.
+    ///
+    /// Every pair is a candidate in a group of up to [`EXACT_PAIRING`] ends. A larger group (the
+    /// apex of a cone of thousands of segments, or rim vertices welded together) would make
+    /// that quadratic in time and memory: there each end's candidates are its
+    /// [`PAIRING_WINDOW`] nearest neighbours on each side around the rim (the extrusion points
+    /// lie on the rim circle, so the nearest by angle are the nearest by distance).
     fn pairs(&self, group: &[EdgeEnd]) -> Vec<(usize, usize)> {
         if group.len() == 2 {
             return vec![(0, 1)];
         }
+        let candidate = |i: usize, j: usize| {
+            let mixed = group[i].outgoing != group[j].outgoing;
+            let gap = group[i].extrusion.distance(group[j].extrusion);
+            (!mixed, gap, i.min(j), i.max(j))
+        };
         let mut candidates: Vec<(bool, f32, usize, usize)> = Vec::new();
-        for i in 0..group.len() {
-            for j in i + 1..group.len() {
-                let mixed = group[i].outgoing != group[j].outgoing;
-                let gap = group[i].extrusion.distance(group[j].extrusion);
-                candidates.push((!mixed, gap, i, j));
+        if group.len() <= EXACT_PAIRING {
+            for i in 0..group.len() {
+                for j in i + 1..group.len() {
+                    candidates.push(candidate(i, j));
+                }
             }
+        } else {
+            let (u, w) = self.light.basis();
+            let c = self.light.center;
+            let angle = |e: &EdgeEnd| (e.extrusion - c).dot(w).atan2((e.extrusion - c).dot(u));
+            let mut around: Vec<usize> = (0..group.len()).collect();
+            around.sort_by(|&a, &b| angle(&group[a]).total_cmp(&angle(&group[b])));
+            for (k, &i) in around.iter().enumerate() {
+                for d in 1..=PAIRING_WINDOW.min(group.len() - 1) {
+                    candidates.push(candidate(i, around[(k + d) % around.len()]));
+                }
+            }
+            candidates.sort_by_key(|&(_, _, i, j)| (i, j));
+            candidates.dedup_by_key(|&mut (_, _, i, j)| (i, j));
         }
         candidates.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
         let mut used = vec![false; group.len()];
@@ -531,7 +642,7 @@ impl Fans<'_> {
             delta += std::f32::consts::TAU;
         }
         let step = self.params.fan_step_deg.to_radians().max(1e-3);
-        let n = (delta.abs() / step).ceil() as usize;
+        let n = ((delta.abs() / step).ceil() as usize).min(MAX_FAN_TRIANGLES);
         let rim = |k: usize| {
             if k == 0 {
                 return p1;
@@ -658,6 +769,34 @@ mod tests {
             }
         }
         assert!(checked > 1000);
+    }
+
+    #[test]
+    fn volumes_over_the_budget_are_not_built() {
+        let mesh = CasterMesh::new("cube", &cube(Vec3::new(0.0, 1.0, 0.0), 0.5));
+        let l = light(0.5);
+        let params = VolumeParams::default();
+        let full = build_caster(&mesh, &l, &params);
+        let needed = full.volumes.triangle_count();
+        assert!(
+            needed > 0 && full.warnings.is_empty(),
+            "{:?}",
+            full.warnings
+        );
+        // Exactly enough, give or take a fan (the fans are checked conservatively).
+        let roomy = build_caster_within(&mesh, &l, &params, needed + MAX_FAN_TRIANGLES);
+        assert_eq!(roomy.volumes.triangle_count(), needed);
+        // Too little: no volumes at all (never half of them), and a warning naming the budget.
+        for limit in [0, needed / 2, needed - 1] {
+            let g = build_caster_within(&mesh, &l, &params, limit);
+            assert_eq!(g.volumes.triangle_count(), 0, "limit {limit}");
+            assert_eq!(g.classes, full.classes);
+            let w = g.warnings.join("\n");
+            assert!(
+                w.contains("MAX_VOLUME_TRIANGLES") && w.contains("casts no shadow"),
+                "{w}"
+            );
+        }
     }
 
     #[test]

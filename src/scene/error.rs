@@ -3,21 +3,56 @@
 use thiserror::Error;
 
 /// Everything that can go wrong loading a scene or a mesh. Every message names the file (or the
-/// built-in it came from), the key or line, and what was expected.
+/// built-in it came from), the key or line, and what was expected, on one line. A message
+/// includes its cause's, so no variant reports a `source()`: `anyhow`'s `{:#}` would print the
+/// cause a second time.
 #[derive(Debug, Error)]
 pub enum SceneError {
     /// The file could not be read (missing, unreadable, a directory...).
-    #[error("{file}: cannot read the file: {source}")]
-    Io {
+    #[error("{file}: cannot read the file: {error}")]
+    Io { file: String, error: std::io::Error },
+
+    /// Not a regular file (a directory, FIFO, device or socket), or larger than its budget:
+    /// refused before reading.
+    #[error("{file}: {reason}")]
+    Refused {
         file: String,
-        #[source]
-        source: std::io::Error,
+        reason: crate::fsutil::ReadError,
     },
 
-    /// TOML syntax or structure (unknown key, missing key, wrong type). `message` is toml's own,
-    /// which carries the line and column and quotes the offending line.
-    #[error("{file}: {message}")]
-    Toml { file: String, message: String },
+    /// TOML syntax or structure (unknown key, missing key, wrong type) at a line and column.
+    /// `message` is toml's own with anything quoted from the file left out.
+    #[error("{file}: line {line}, column {column}: {message}")]
+    Toml {
+        file: String,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+
+    /// The scene file is not UTF-8 text: the first invalid byte, 0-based, and its line and
+    /// column (1-based, in characters).
+    #[error(
+        "{file}: line {line}, column {column}: expected UTF-8 text, found a byte that is not \
+         (byte offset {offset})"
+    )]
+    NotUtf8 {
+        file: String,
+        line: usize,
+        column: usize,
+        offset: usize,
+    },
+
+    /// An input over the resource budget (`crate::budget`): `found` says what it asked for,
+    /// `limit` and `name` the budget it exceeds.
+    #[error("{file}: {key}: {found}; the budget is {limit} ({name})")]
+    OverBudget {
+        file: String,
+        key: String,
+        found: String,
+        limit: String,
+        name: &'static str,
+    },
 
     /// A value that parsed but is not acceptable; `key` is a path like `light.radius` or
     /// `object[2].scale`.
@@ -57,7 +92,7 @@ pub enum SceneError {
         expected: String,
     },
 
-    /// A problem with an OBJ file as a whole (no triangles, tobj's own errors).
+    /// A problem with an OBJ file as a whole (no triangles, a size it cannot be shown at).
     #[error("{file}: {problem}")]
     Obj { file: String, problem: String },
 
@@ -66,13 +101,12 @@ pub enum SceneError {
     #[error("{file}: {problem}")]
     Gltf { file: String, problem: String },
 
-    /// A mesh referenced from a scene file failed to load; `source` says why and where.
-    #[error("{file}: {key}: {source}")]
+    /// A mesh referenced from a scene file failed to load; `error` says why and where.
+    #[error("{file}: {key}: {error}")]
     Mesh {
         file: String,
         key: String,
-        #[source]
-        source: Box<SceneError>,
+        error: Box<SceneError>,
     },
 
     /// `load` got something that is neither a built-in scene nor a `.toml`/`.obj`/`.gltf`/`.glb` file.

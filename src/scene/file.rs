@@ -29,11 +29,195 @@
 //!
 //! The light's normal need not be unit length; it is normalised when the scene is built.
 
+use super::obj::Others;
 use super::{shapes, Camera, DiskLight, Mesh, Object, Scene, SceneError};
+use crate::budget::{MAX_SCENE_FILE_BYTES, MAX_SCENE_TRIANGLES, MAX_SCENE_VERTICES};
+use crate::fsutil::ByteBudget;
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 use serde::{de, Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
 use std::path::Path;
+
+/// The byte budget of one scene file.
+pub const SCENE_FILE_BUDGET: ByteBudget = ByteBudget {
+    limit: MAX_SCENE_FILE_BYTES,
+    name: "MAX_SCENE_FILE_BYTES",
+    what: "a scene file",
+};
+
+/// A scene file's bytes as text, without a leading UTF-8 byte-order mark. Bytes that are not
+/// UTF-8 are an error naming the first one's byte offset, line and column (never the text).
+pub fn decode_utf8<'a>(bytes: &'a [u8], label: &str) -> Result<&'a str, SceneError> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    std::str::from_utf8(bytes).map_err(|e| {
+        let offset = e.valid_up_to();
+        let before = &bytes[..offset];
+        let line_start = before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        // The part of the line before the bad byte is valid UTF-8: count its characters.
+        let column = 1 + String::from_utf8_lossy(&before[line_start..])
+            .chars()
+            .count();
+        SceneError::NotUtf8 {
+            file: label.to_string(),
+            line: 1 + before.iter().filter(|&&b| b == b'\n').count(),
+            column,
+            offset,
+        }
+    })
+}
+
+/// 1-based line and column (in characters) of byte `offset` of `text`.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &text[..offset];
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (
+        1 + before.matches('\n').count(),
+        1 + before[line_start..].chars().count(),
+    )
+}
+
+/// Words toml and serde quote in their messages that come from our schema or the TOML
+/// grammar, not from the file: they are kept; anything else quoted is left out of the message.
+const SCHEMA_WORDS: &[&str] = &[
+    "camera",
+    "light",
+    "object",
+    "eye",
+    "target",
+    "fov_y_deg",
+    "center",
+    "normal",
+    "radius",
+    "intensity",
+    "name",
+    "mesh",
+    "translate",
+    "rotate_deg",
+    "scale",
+    "casts_shadow",
+    "true",
+    "false",
+    "inf",
+    "nan",
+];
+
+/// toml's message without anything it quotes from the file, one line ("; " between lines).
+///
+/// serde and toml quote the file in a few known shapes: `unknown field `X``, `duplicate key
+/// `X``, `invalid type: string "X"` (a Debug string), `character `X``. Those parts are
+/// dropped by shape; what follows the last ", expected " is the schema's or the grammar's
+/// (field lists, types). Elsewhere a `` `word` `` or `"word"` is kept only if it is a schema
+/// key path or TOML punctuation, and anything after a quote left unmatched is cut.
+fn sanitize_toml_message(message: &str) -> String {
+    let lines: Vec<String> = message
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .map(sanitize_toml_line)
+        .collect();
+    let mut text = lines.join("; ");
+    if text.len() > 400 {
+        let mut cut = 400;
+        while !text.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        text.truncate(cut);
+        text.push('…');
+    }
+    text
+}
+
+fn sanitize_toml_line(line: &str) -> String {
+    // Without the input, toml ends with the key path: `in `light.radius``.
+    if let Some(path) = line.strip_prefix("in `").and_then(|r| r.strip_suffix('`')) {
+        return if is_schema_path(path) {
+            line.to_string()
+        } else {
+            "in a key of the file".into()
+        };
+    }
+    for prefix in ["duplicate key", "unknown field", "unknown variant"] {
+        if line.starts_with(prefix) {
+            // The quoted name comes first; the list of what is expected (ours) after it.
+            let tail = line.rfind(", expected").map_or("", |i| &line[i..]);
+            return format!("{prefix}{}", strip_quoted(tail));
+        }
+    }
+    for prefix in ["invalid type: ", "invalid value: "] {
+        if let Some(rest) = line.strip_prefix(prefix) {
+            // `string "..."`, `integer `5``, `character `x``...: the kind, not the value.
+            let kind: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_alphabetic() || *c == ' ')
+                .collect();
+            let kind = match kind.trim() {
+                "" => "value",
+                k => k,
+            };
+            let tail = rest.rfind(", expected").map_or("", |i| &rest[i..]);
+            return format!("{prefix}{kind}{}", strip_quoted(tail));
+        }
+    }
+    strip_quoted(line)
+}
+
+/// `text` without its quoted words, but for schema key paths and TOML punctuation; after a
+/// quote left unmatched nothing is kept. Double-quoted words may hold `\"` escapes.
+fn strip_quoted(text: &str) -> String {
+    let keep = |quoted: &str| {
+        is_schema_path(quoted)
+            || (!quoted.is_empty()
+                && quoted.len() <= 3
+                && quoted.chars().all(|c| c.is_ascii_punctuation() || c == ' '))
+            || (quoted.len() == 2 && quoted.starts_with('\\'))
+    };
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(open) = rest.find(['`', '"']) {
+        let quote = rest.as_bytes()[open];
+        let after = &rest[open + 1..];
+        // The closing quote: the next one, skipping `\x` escapes inside double quotes.
+        let mut close = None;
+        let mut escaped = false;
+        for (k, b) in after.bytes().enumerate() {
+            if escaped {
+                escaped = false;
+            } else if b == b'\\' && quote == b'"' {
+                escaped = true;
+            } else if b == quote {
+                close = Some(k);
+                break;
+            }
+        }
+        let Some(len) = close else {
+            out.push_str(rest[..open].trim_end_matches(' '));
+            return out;
+        };
+        let quoted = &after[..len];
+        if keep(quoted) {
+            out.push_str(&rest[..open + 1 + len + 1]);
+        } else {
+            out.push_str(rest[..open].trim_end_matches(' '));
+        }
+        rest = &after[len + 1..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// A key path such as `object.1.scale` of schema words and indices.
+fn is_schema_path(path: &str) -> bool {
+    path.split('.').all(|k| {
+        SCHEMA_WORDS.contains(&k) || (!k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+    })
+}
 
 /// A parsed scene file, before meshes are loaded. Numbers are kept as `f64` so a file written
 /// back by [`SceneFile::to_toml`] reads `0.1`, not `0.10000000149011612`.
@@ -208,10 +392,20 @@ impl ObjectSpec {
 
 impl SceneFile {
     /// Parses and validates scene TOML; `label` names the file in errors.
+    /// A leading byte-order mark is skipped. Errors never quote the text: toml's message is
+    /// kept without what it quotes from the file, with the line and column.
     pub fn parse(text: &str, label: &str) -> Result<SceneFile, SceneError> {
-        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Toml {
-            file: label.to_string(),
-            message: e.to_string().trim_end().to_string(),
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let file: SceneFile = toml::from_str(text).map_err(|mut e| {
+            let (line, column) = e.span().map_or((1, 1), |s| line_column(text, s.start));
+            // Without the input, toml's message names the key path instead of quoting the line.
+            e.set_input(None);
+            SceneError::Toml {
+                file: label.to_string(),
+                line,
+                column,
+                message: sanitize_toml_message(&e.to_string()),
+            }
         })?;
         file.validate(label)?;
         Ok(file)
@@ -287,6 +481,7 @@ impl SceneFile {
             ));
         }
 
+        let mut shapes_use = Others::default();
         for (i, o) in self.objects.iter().enumerate() {
             let key = |k: &str| format!("object[{i}].{k}");
             if o.mesh.trim().is_empty() {
@@ -295,6 +490,13 @@ impl SceneFile {
                     "a built-in shape name or a path to an .obj, .gltf or .glb file",
                     "an empty string".into(),
                 ));
+            }
+            if shapes::is_shape_name(&o.mesh) {
+                // Parameters and size are known before anything is built.
+                let shape = shapes::Shape::parse(&o.mesh)
+                    .map_err(|e| shape_error(e, label, &key("mesh")))?;
+                check_budget(label, &key("mesh"), &o.mesh, &shape, shapes_use)?;
+                shapes_use.add(&shape);
             }
             finite(&key("translate"), &o.translate)?;
             finite(&key("rotate_deg"), &o.rotate_deg)?;
@@ -333,17 +535,22 @@ impl SceneFile {
         label: &str,
         name: &str,
     ) -> Result<Scene, SceneError> {
-        self.validate(label)?;
+        let meshes = self.load_meshes(base_dir, label)?;
         let l = &self.light;
-        let mut objects = Vec::with_capacity(self.objects.len());
-        for (i, o) in self.objects.iter().enumerate() {
-            let mesh = resolve_mesh(&o.mesh, base_dir, label, &format!("object[{i}].mesh"))?;
-            objects.push(Object {
-                name: o.display_name().to_string(),
-                mesh: mesh.transformed(&o.transform()),
-                casts_shadow: o.casts_shadow,
-            });
-        }
+        let objects: Vec<Object> = self
+            .objects
+            .iter()
+            .zip(meshes)
+            .map(|(o, mut mesh)| {
+                mesh.transform_in_place(&o.transform());
+                Object {
+                    // Shown in warnings and lists: one line, not too long.
+                    name: super::shown(o.display_name()),
+                    mesh,
+                    casts_shadow: o.casts_shadow,
+                }
+            })
+            .collect();
         let light = DiskLight {
             center: v3(l.center),
             normal: v3(l.normal).normalize(),
@@ -362,6 +569,35 @@ impl SceneFile {
         })
     }
 
+    /// Every object's mesh in its own space (before its transform), within the scene's triangle
+    /// budget (`MAX_SCENE_TRIANGLES`): the built-in shapes are counted from their parameters
+    /// before any is built, the `.obj` files while they are read, each with what the shapes
+    /// and the files before it leave. Validates the file first.
+    pub fn load_meshes(&self, base_dir: &Path, label: &str) -> Result<Vec<Mesh>, SceneError> {
+        self.validate(label)?;
+        // What the shapes use (validated above), then each file in turn.
+        let mut used = Others::default();
+        for o in &self.objects {
+            if let Ok(shape) = shapes::Shape::parse(&o.mesh) {
+                used.add(&shape);
+            }
+        }
+        let mut meshes = Vec::with_capacity(self.objects.len());
+        for (i, o) in self.objects.iter().enumerate() {
+            let key = format!("object[{i}].mesh");
+            let mesh = if shapes::is_shape_name(&o.mesh) {
+                resolve_mesh(&o.mesh, base_dir, label, &key)?
+            } else {
+                let mesh = resolve_mesh_within(&o.mesh, base_dir, label, &key, used)?;
+                used.triangles += mesh.triangles.len() as u64;
+                used.vertices += mesh.positions.len() as u64;
+                mesh
+            };
+            meshes.push(mesh);
+        }
+        Ok(meshes)
+    }
+
     /// The scene as TOML in the format [`SceneFile::parse`] reads.
     pub fn to_toml(&self) -> String {
         // Serialising plain structs of numbers, strings and arrays cannot fail; fall back to a
@@ -373,48 +609,147 @@ impl SceneFile {
 /// A mesh name from a scene file: a built-in shape, else a path to an `.obj`, `.gltf` or `.glb`
 /// file relative to `base_dir` (a glTF model gives every triangle of its scene, placed by its
 /// node transforms; its lights are not used here). `key` (e.g. `object[2].mesh`) names it in
-/// errors.
+/// errors. The mesh alone may have the scene's whole triangle budget;
+/// [`SceneFile::load_meshes`] checks the sum over a scene.
 pub fn resolve_mesh(
     mesh: &str,
     base_dir: &Path,
     label: &str,
     key: &str,
 ) -> Result<Mesh, SceneError> {
+    resolve_mesh_within(mesh, base_dir, label, key, Others::default())
+}
+
+/// Like [`resolve_mesh`] in a scene whose other objects have `others` triangles: an `.obj` may
+/// have what is left of `MAX_SCENE_TRIANGLES` (counted while it is read).
+pub fn resolve_mesh_within(
+    mesh_name: &str,
+    base_dir: &Path,
+    label: &str,
+    key: &str,
+    others: Others,
+) -> Result<Mesh, SceneError> {
+    let mesh = mesh_name;
     if shapes::is_shape_name(mesh) {
-        return shapes::build(mesh).map_err(|e| match e {
-            shapes::ShapeError::Unknown(name) => unknown_mesh(label, key, &name),
-            shapes::ShapeError::BadParams(expected) => SceneError::ShapeParams {
-                file: label.to_string(),
-                key: key.to_string(),
-                expected,
-            },
-        });
+        let shape = shapes::Shape::parse(mesh).map_err(|e| shape_error(e, label, key))?;
+        check_budget(label, key, mesh, &shape, others)?;
+        return shape.build().map_err(|e| shape_error(e, label, key));
     }
     let path = base_dir.join(mesh);
-    let in_file = |source| SceneError::Mesh {
+    let in_file = |error| SceneError::Mesh {
         file: label.to_string(),
         key: key.to_string(),
-        source: Box::new(source),
+        error: Box::new(error),
     };
     if super::gltf::is_gltf_path(&path) {
-        return super::gltf::load_gltf(&path)
+        let mesh = super::gltf::load_gltf(&path)
             .map(|m| m.mesh)
-            .map_err(in_file);
+            .map_err(in_file)?;
+        // The model's own budget bounds its reading; the scene's counts what the others use.
+        check_counts(
+            label,
+            key,
+            mesh_name,
+            mesh.triangles.len() as u64,
+            mesh.positions.len() as u64,
+            others,
+        )?;
+        return Ok(mesh);
     }
     let is_obj = Path::new(mesh)
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    if is_obj || path.is_file() {
-        return super::obj::load_obj(&path).map_err(in_file);
+    // `metadata` follows symlinks: only a regular file without the .obj extension is tried as
+    // one (a directory or a device never is; an .obj that is not a file is refused by the
+    // loader, before reading).
+    if is_obj || std::fs::metadata(&path).is_ok_and(|m| m.is_file()) {
+        return super::obj::load_obj_within(&path, others).map_err(in_file);
     }
     Err(unknown_mesh(label, key, mesh))
+}
+
+fn shape_error(e: shapes::ShapeError, label: &str, key: &str) -> SceneError {
+    match e {
+        shapes::ShapeError::Unknown(name) => unknown_mesh(label, key, &name),
+        shapes::ShapeError::BadParams(expected) => SceneError::ShapeParams {
+            file: label.to_string(),
+            key: key.to_string(),
+            expected,
+        },
+    }
+}
+
+/// Whether shape `mesh` fits in what `others` leave of the scene's budget; the error names
+/// the object, the shape's size, the total and the budget.
+fn check_budget(
+    label: &str,
+    key: &str,
+    mesh: &str,
+    shape: &shapes::Shape,
+    others: Others,
+) -> Result<(), SceneError> {
+    check_counts(
+        label,
+        key,
+        mesh,
+        shape.triangles(),
+        shape.vertices(),
+        others,
+    )
+}
+
+/// A mesh of `triangles` and `vertices` in a scene whose other objects use `others`, against the
+/// scene's budget.
+fn check_counts(
+    label: &str,
+    key: &str,
+    mesh: &str,
+    triangles: u64,
+    vertices: u64,
+    others: Others,
+) -> Result<(), SceneError> {
+    let limits = [
+        (
+            triangles,
+            others.triangles,
+            MAX_SCENE_TRIANGLES,
+            "triangles",
+            "MAX_SCENE_TRIANGLES",
+        ),
+        (
+            vertices,
+            others.vertices,
+            MAX_SCENE_VERTICES,
+            "vertices",
+            "MAX_SCENE_VERTICES",
+        ),
+    ];
+    for (count, before, limit, what, name) in limits {
+        let total = before + count;
+        if total > limit {
+            let mesh = super::shown(mesh);
+            let found = if before == 0 {
+                format!("`{mesh}` has {count} {what}")
+            } else {
+                format!("`{mesh}` has {count} {what}, {total} with the scene's other objects")
+            };
+            return Err(SceneError::OverBudget {
+                file: label.to_string(),
+                key: key.to_string(),
+                found,
+                limit: format!("{limit} {what} per scene"),
+                name,
+            });
+        }
+    }
+    Ok(())
 }
 
 fn unknown_mesh(label: &str, key: &str, name: &str) -> SceneError {
     SceneError::UnknownMesh {
         file: label.to_string(),
         key: key.to_string(),
-        name: name.to_string(),
+        name: super::truncated(name),
         known: shapes::NAMES.join(", "),
     }
 }

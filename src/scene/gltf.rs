@@ -30,19 +30,26 @@
 
 use std::collections::hash_map::Entry;
 use std::collections::HashMap;
-use std::io::Read;
 use std::path::{Component, Path, PathBuf};
 
 use glam::{Mat4, Vec3};
 
 use super::{Mesh, SceneError};
 
-/// The most triangles one model may have, over all primitives and node instances.
-/// (A local stand-in for the project's resource budget, design.md §7.)
-pub const MAX_TRIANGLES: usize = 16_777_216;
+/// The most triangles one model may have, over all primitives and node instances: the scene's
+/// budget ([`crate::budget::MAX_SCENE_TRIANGLES`]); a scene file counts its other objects too.
+pub const MAX_TRIANGLES: usize = crate::budget::MAX_SCENE_TRIANGLES as usize;
 
-/// The largest file read: the model, and each buffer file; also the sum of all buffers read.
-pub const MAX_FILE_BYTES: u64 = 1 << 30;
+/// The largest file read: the model, and each buffer file; also the sum of all buffers read
+/// ([`crate::budget::MAX_MODEL_FILE_BYTES`]).
+pub const MAX_FILE_BYTES: u64 = crate::budget::MAX_MODEL_FILE_BYTES;
+
+/// The byte budget of one model or buffer file.
+const MODEL_FILE_BUDGET: crate::fsutil::ByteBudget = crate::fsutil::ByteBudget {
+    limit: MAX_FILE_BYTES,
+    name: "MAX_MODEL_FILE_BYTES",
+    what: "a glTF model or buffer file",
+};
 
 /// Deepest node hierarchy followed (a chain deeper than this is refused, not walked).
 const MAX_DEPTH: usize = 1024;
@@ -149,38 +156,7 @@ fn document(json: &[u8]) -> Result<::gltf::Document, ::gltf::Error> {
 /// Reads `path` if it is a regular file of at most [`MAX_FILE_BYTES`] (never a directory, a
 /// FIFO or a device: those are refused before being opened).
 fn read_regular_file(path: &Path, label: &str) -> Result<Vec<u8>, SceneError> {
-    let io = |source| SceneError::Io {
-        file: label.to_string(),
-        source,
-    };
-    let meta = std::fs::metadata(path).map_err(io)?;
-    if !meta.is_file() {
-        return Err(SceneError::Gltf {
-            file: label.to_string(),
-            problem: "is not a regular file".into(),
-        });
-    }
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(SceneError::Gltf {
-            file: label.to_string(),
-            problem: format!(
-                "is {} bytes; the limit for a model file is {MAX_FILE_BYTES} bytes (1 GiB)",
-                meta.len()
-            ),
-        });
-    }
-    let file = std::fs::File::open(path).map_err(io)?;
-    let mut bytes = Vec::new();
-    file.take(MAX_FILE_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(io)?;
-    if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(SceneError::Gltf {
-            file: label.to_string(),
-            problem: format!("grew past the limit of {MAX_FILE_BYTES} bytes while being read"),
-        });
-    }
-    Ok(bytes)
+    crate::fsutil::read_regular(path, MODEL_FILE_BUDGET).map_err(|e| super::read_error(label, e))
 }
 
 fn describe_magic(bytes: &[u8]) -> String {

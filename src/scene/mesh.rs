@@ -51,6 +51,18 @@ impl Mesh {
         }
     }
 
+    /// Like [`Mesh::transformed`], in place (no second copy of a large mesh).
+    pub fn transform_in_place(&mut self, m: &Affine3A) {
+        for p in &mut self.positions {
+            *p = m.transform_point3(*p);
+        }
+        if m.matrix3.determinant() < 0.0 {
+            for t in &mut self.triangles {
+                t.swap(1, 2);
+            }
+        }
+    }
+
     /// Axis-aligned bounds `(min, max)`; `None` for a mesh without positions.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let first = *self.positions.first()?;

@@ -13,7 +13,7 @@ pub use error::SceneError;
 pub use file::SceneFile;
 pub use mesh::Mesh;
 
-use glam::{Mat4, Vec3};
+use glam::{DVec3, Mat4, Vec3};
 use std::path::{Path, PathBuf};
 
 /// A one-sided disk light: centre `c`, unit normal `n_c` (the side it emits to), radius `r`.
@@ -184,7 +184,97 @@ impl Scene {
     pub fn caster_triangle_count(&self) -> usize {
         self.casters().map(|o| o.mesh.triangles.len()).sum()
     }
+
+    /// What will make the picture wrong although the scene loaded: a camera whose direction or
+    /// field of view single precision cannot resolve, a scene smaller or larger than the render
+    /// core draws right ([`MIN_SCENE_EXTENT`] to [`MAX_SCENE_EXTENT`]), an object whose
+    /// vertices overflow single precision or of which nothing is left (every triangle of zero
+    /// area in f32). One line each; the geometry stage passes them on with its own warnings
+    /// (`PreparedCasters`), so `render`, `inspect` and the lab show them.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        let c = &self.camera;
+        let apart = c.eye.distance(c.target);
+        let far = c.eye.abs().max_element().max(c.target.abs().max_element());
+        if apart < CAMERA_PRECISION * far {
+            warnings.push(format!(
+                "camera: eye and target are {apart:.1e} apart at {far:.1e} from the origin, \
+                 too close for single precision (under {CAMERA_PRECISION:e} of it): the view \
+                 direction is imprecise and the picture may be wrong"
+            ));
+        }
+        if !(MIN_FOV_DEG..=MAX_FOV_DEG).contains(&c.fov_y_deg) {
+            warnings.push(format!(
+                "camera: fov_y_deg {} is outside {MIN_FOV_DEG}..={MAX_FOV_DEG}: {}",
+                c.fov_y_deg,
+                if c.fov_y_deg > MAX_FOV_DEG {
+                    "the scene shrinks to a few pixels in the middle of the picture"
+                } else {
+                    "a pixel is finer than single precision resolves positions"
+                }
+            ));
+        }
+
+        let mut lo = self.light.center - Vec3::splat(self.light.radius);
+        let mut hi = self.light.center + Vec3::splat(self.light.radius);
+        for (i, o) in self.objects.iter().enumerate() {
+            let who = format!("object[{i}] '{}'", shown(&o.name));
+            let overflowed = o.mesh.positions.iter().filter(|p| !p.is_finite()).count();
+            if overflowed > 0 {
+                warnings.push(format!(
+                    "{who}: {overflowed} vertices are beyond single precision (±3.4e38) after \
+                     its transform: its triangles there are dropped"
+                ));
+            }
+            let finite = o.mesh.positions.iter().filter(|p| p.is_finite());
+            let bounds = finite.fold(None, |b: Option<(Vec3, Vec3)>, &p| {
+                Some(b.map_or((p, p), |(l, h)| (l.min(p), h.max(p))))
+            });
+            if let Some((l, h)) = bounds {
+                lo = lo.min(l);
+                hi = hi.max(h);
+            }
+            let n = o.mesh.triangles.len();
+            let has_area = (0..n).any(|t| {
+                let [a, b, c] = o.mesh.corners(t);
+                let area = (b - a).cross(c - a).length();
+                area.is_finite() && area > 0.0
+            });
+            if !has_area {
+                let across = bounds.map_or(0.0, |(l, h)| (h - l).max_element());
+                warnings.push(format!(
+                    "{who}: nothing is left of it: all {n} triangles have zero area in single \
+                     precision (it is {across:.1e} across): it is not drawn and casts no shadow"
+                ));
+            }
+        }
+        let extent = (hi - lo).max_element();
+        if extent.is_finite() && !(MIN_SCENE_EXTENT..=MAX_SCENE_EXTENT).contains(&extent) {
+            warnings.push(format!(
+                "the scene (objects and light) is {extent:.1e} across, outside the \
+                 {MIN_SCENE_EXTENT:e}..={MAX_SCENE_EXTENT:e} the render core draws right in \
+                 single precision: the picture will be wrong (scale the scene toward metres)"
+            ));
+        }
+        warnings
+    }
 }
+
+/// Smallest scene (objects and light, the longest side of their bounds) the render core draws
+/// right. Measured: `fig7-concave` (about 10 m across) with every length scaled by 1e-4 to 1e7
+/// gives the same shadow classes at 48×48; by 1e-5 the picture is black, by 1e8 it drifts and
+/// by 1e9 it is all umbra.
+pub const MIN_SCENE_EXTENT: f32 = 1e-3;
+/// Largest scene the render core draws right (see [`MIN_SCENE_EXTENT`]).
+pub const MAX_SCENE_EXTENT: f32 = 1e8;
+/// Narrowest vertical field of view worth a warning-free picture, in degrees.
+pub const MIN_FOV_DEG: f32 = 0.01;
+/// Widest vertical field of view worth a warning-free picture (at 179° the scene shrinks to a
+/// few pixels; at 175° fig7-concave covers 8 of 2304).
+pub const MAX_FOV_DEG: f32 = 179.0;
+/// Eye and target closer than this share of their distance from the origin give an imprecise
+/// view direction (f32 resolves about 1.2e-7 of it).
+pub const CAMERA_PRECISION: f32 = 1e-5;
 
 /// Loads a scene: a built-in scene name (see [`builtin::names`]), else a path to a `.toml` scene
 /// file (mesh paths in it are relative to the file), else a path to an `.obj` mesh or a
@@ -226,7 +316,7 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
         });
     }
     let path = Path::new(name_or_path);
-    let label = path.display().to_string();
+    let label = shown(&path.display().to_string());
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -240,12 +330,11 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     match ext.as_deref() {
         Some("toml") => {
-            let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-                file: label.clone(),
-                source,
-            })?;
+            let bytes = crate::fsutil::read_regular(path, file::SCENE_FILE_BUDGET)
+                .map_err(|e| read_error(&label, e))?;
+            let text = file::decode_utf8(&bytes, &label)?;
             Ok(Source {
-                file: SceneFile::parse(&text, &label)?,
+                file: SceneFile::parse(text, &label)?,
                 path: Some(path.to_path_buf()),
                 base_dir,
                 label,
@@ -272,6 +361,62 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
         }),
     }
 }
+
+/// `text` cut to at most about 160 characters (its start and end, `…` between): names from
+/// scene files and paths repeated in messages keep them short.
+pub fn truncated(text: &str) -> String {
+    const HEAD: usize = 100;
+    const TAIL: usize = 50;
+    let n = text.chars().count();
+    if n <= HEAD + TAIL + 10 {
+        return text.to_string();
+    }
+    let head: String = text.chars().take(HEAD).collect();
+    let tail: String = text.chars().skip(n - TAIL).collect();
+    format!("{head}…{tail}")
+}
+
+/// [`truncated`], with control characters escaped (a newline in a path becomes `\n`): what a
+/// one-line message may repeat of a name or path.
+pub fn shown(text: &str) -> String {
+    truncated(text)
+        .chars()
+        .flat_map(|c| {
+            let escaped: Vec<char> = if c.is_control() {
+                c.escape_default().collect()
+            } else {
+                vec![c]
+            };
+            escaped
+        })
+        .collect()
+}
+
+/// A file that could not be read, as a [`SceneError`] naming `file`.
+pub(crate) fn read_error(file: &str, e: crate::fsutil::ReadError) -> SceneError {
+    match e {
+        crate::fsutil::ReadError::Io(error) => SceneError::Io {
+            file: file.to_string(),
+            error,
+        },
+        reason => SceneError::Refused {
+            file: file.to_string(),
+            reason,
+        },
+    }
+}
+
+/// `[x, y, z]` in scientific notation, 4 significant digits.
+fn sci(v: glam::DVec3) -> String {
+    format!("[{:.3e}, {:.3e}, {:.3e}]", v.x, v.y, v.z)
+}
+
+/// Smallest extent of a bare `.obj` that can be scaled to 1.5 m in f32 (1.5 over the largest
+/// f32 number).
+pub const MIN_BARE_EXTENT: f64 = 1.5 / f32::MAX as f64;
+/// Largest extent of a bare `.obj` that can be scaled to 1.5 m in f32 (1.5 over the smallest
+/// normal f32 number).
+pub const MAX_BARE_EXTENT: f64 = 1.5 / f32::MIN_POSITIVE as f64;
 
 /// The scene shown for a bare `.obj`: the mesh scaled to 1.5 m across its largest extent,
 /// centred over the origin and standing on a 10 m ground plane, under a disk light of radius 0.5
@@ -302,11 +447,42 @@ fn model_scene(
         file: path.display().to_string(),
         problem: "contains no vertices".into(),
     })?;
+    // In f64: the extent of a mesh spanning ±3e38 overflows f32, and 1.5 / 1e-45 does too.
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
     let extent = (hi - lo).max_element();
     let scale = if extent > 0.0 { 1.5 / extent } else { 1.0 };
+    // The transform is applied in f32: the scale must be a normal f32 number.
+    if !(scale as f32).is_normal() {
+        let size = if scale as f32 == f32::INFINITY || scale > 1.0 {
+            "too small"
+        } else {
+            "too large"
+        };
+        return Err(SceneError::Obj {
+            file: shown(&path.display().to_string()),
+            problem: format!(
+                "its vertices span {extent:.3e} (from {} to {}), {size} to be scaled to the \
+                 1.5 m a bare mesh is shown at in single precision (f32): expected an extent \
+                 between {MIN_BARE_EXTENT:.1e} and {MAX_BARE_EXTENT:.1e}",
+                sci(lo),
+                sci(hi)
+            ),
+        });
+    }
     let centre = (lo + hi) / 2.0;
-    let shift = Vec3::new(-centre.x * scale, -lo.y * scale, -centre.z * scale);
-    let translate = [shift.x as f64, shift.y as f64, shift.z as f64];
+    let shift = DVec3::new(-centre.x * scale, -lo.y * scale, -centre.z * scale);
+    let translate = shift.to_array();
+    if translate.iter().any(|&t| !(t as f32).is_finite()) {
+        return Err(SceneError::Obj {
+            file: shown(&path.display().to_string()),
+            problem: format!(
+                "its vertices lie around {}, {:.1e} times their extent away from the \
+                 origin: too far to be moved to it in single precision (f32)",
+                sci(centre),
+                centre.abs().max_element() / extent
+            ),
+        });
+    }
     let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
     const TEXT: &str = r#"
 [light]
@@ -322,21 +498,20 @@ casts_shadow = false
 "#;
     let mut file = SceneFile::parse(TEXT, "generated model scene")?;
     if let Some(l) = light {
-        let center = l.position * scale + shift;
+        let center = l.position.as_dvec3() * scale + shift;
         let (blo, bhi) = (lo * scale + shift, hi * scale + shift);
         let gap = (center.clamp(blo, bhi) - center).length();
         let radius = (0.5 * gap).clamp(0.01, 0.5);
-        let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
-        file.light.center = f(center);
-        file.light.normal = f(l.direction);
-        file.light.radius = f64::from(radius);
+        file.light.center = center.to_array();
+        file.light.normal = l.direction.as_dvec3().to_array();
+        file.light.radius = radius;
     }
     file.objects.push(file::ObjectSpec {
         name: path.file_stem().map(|s| s.to_string_lossy().into_owned()),
         mesh: absolute.display().to_string(),
         translate,
         rotate_deg: [0.0; 3],
-        scale: file::Scale::Uniform(scale as f64),
+        scale: file::Scale::Uniform(scale),
         casts_shadow: true,
     });
     file.validate(&path.display().to_string())?;

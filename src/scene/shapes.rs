@@ -48,12 +48,14 @@ pub const NAMES: &[&str] = &[
     "bunny-open",
 ];
 
-/// Largest segment count accepted for one parameter (keeps a typo from allocating gigabytes).
-pub const MAX_SEGMENTS: u32 = 4096;
-/// Largest product of the two parameters of `AxB` shapes (about 4 million triangles).
-pub const MAX_QUADS: u64 = 2_000_000;
-/// Largest icosphere subdivision level accepted (7 gives 327 680 triangles).
-pub const MAX_ICOSPHERE_LEVEL: u32 = 7;
+pub use crate::budget::{
+    MAX_ICOSPHERE_LEVEL, MAX_SHAPE_QUADS as MAX_QUADS, MAX_SHAPE_SEGMENTS as MAX_SEGMENTS,
+};
+
+/// Triangles of the embedded Stanford bunny (`bunny`); `bunny-open` has fewer.
+pub const BUNNY_TRIANGLES: u64 = 3674;
+/// Vertices of the embedded Stanford bunny.
+pub const BUNNY_VERTICES: u64 = 1839;
 
 /// Why a mesh name could not be turned into a shape.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -87,31 +89,123 @@ pub fn is_shape_name(name: &str) -> bool {
 
 /// Builds the built-in shape `name` (see the module documentation for the syntax).
 pub fn build(name: &str) -> Result<Mesh, ShapeError> {
-    let (base, params) = match name.split_once(':') {
-        Some((b, p)) => (b, Some(p)),
-        None => (name, None),
-    };
-    match base {
-        "plane" => none(base, params).map(|()| plane()),
-        "cube" => none(base, params).map(|()| cube()),
-        "l-prism" => none(base, params).map(|()| l_prism()),
-        "wedge" => none(base, params).map(|()| wedge()),
-        "bunny" => none(base, params).and_then(|()| {
-            bunny().map_err(|e| ShapeError::BadParams(format!("embedded bunny: {e}")))
-        }),
-        "bunny-open" => none(base, params).and_then(|()| {
-            bunny()
-                .map(|m| open_base(&m, BUNNY_OPEN_BASE))
-                .map_err(|e| ShapeError::BadParams(format!("embedded bunny: {e}")))
-        }),
-        "sphere" => two(base, params, (32, 16), (3, 2)).map(|(s, k)| sphere(s, k)),
-        "rounded-box" => two(base, params, (32, 16), (3, 2)).map(|(s, k)| rounded_box(s, k)),
-        "torus" => two(base, params, (32, 16), (3, 3)).map(|(m, n)| torus(m, n)),
-        "torus-knot" => two(base, params, (240, 12), (8, 3)).map(|(t, r)| torus_knot(t, r)),
-        "cylinder" => one(base, params, 32, 3, MAX_SEGMENTS).map(cylinder),
-        "cone" => one(base, params, 32, 3, MAX_SEGMENTS).map(cone),
-        "icosphere" => one(base, params, 2, 0, MAX_ICOSPHERE_LEVEL).map(icosphere),
-        _ => Err(ShapeError::Unknown(base.to_string())),
+    Shape::parse(name)?.build()
+}
+
+/// The number of triangles `build(name)` makes, from the parameters alone (nothing is built):
+/// exact for every shape but `bunny-open`, for which it is the bunny's count, an upper bound.
+pub fn triangle_count(name: &str) -> Result<u64, ShapeError> {
+    Shape::parse(name).map(Shape::triangles)
+}
+
+/// A built-in shape and its parameters, parsed from a mesh name and checked against the budget
+/// ([`MAX_SEGMENTS`], [`MAX_QUADS`], [`MAX_ICOSPHERE_LEVEL`]); nothing is built yet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    Plane,
+    Cube,
+    LPrism,
+    Wedge,
+    Bunny,
+    BunnyOpen,
+    Sphere(u32, u32),
+    RoundedBox(u32, u32),
+    Torus(u32, u32),
+    TorusKnot(u32, u32),
+    Cylinder(u32),
+    Cone(u32),
+    Icosphere(u32),
+}
+
+impl Shape {
+    /// Parses `NAME` or `NAME:PARAMS` (see the module documentation).
+    pub fn parse(name: &str) -> Result<Shape, ShapeError> {
+        let (base, params) = match name.split_once(':') {
+            Some((b, p)) => (b, Some(p)),
+            None => (name, None),
+        };
+        Ok(match base {
+            "plane" => none(base, params).map(|()| Shape::Plane)?,
+            "cube" => none(base, params).map(|()| Shape::Cube)?,
+            "l-prism" => none(base, params).map(|()| Shape::LPrism)?,
+            "wedge" => none(base, params).map(|()| Shape::Wedge)?,
+            "bunny" => none(base, params).map(|()| Shape::Bunny)?,
+            "bunny-open" => none(base, params).map(|()| Shape::BunnyOpen)?,
+            "sphere" => {
+                let (s, k) = two(base, params, (32, 16), (3, 2))?;
+                Shape::Sphere(s, k)
+            }
+            "rounded-box" => {
+                let (s, k) = two(base, params, (32, 16), (3, 2))?;
+                Shape::RoundedBox(s, k)
+            }
+            "torus" => {
+                let (m, n) = two(base, params, (32, 16), (3, 3))?;
+                Shape::Torus(m, n)
+            }
+            "torus-knot" => {
+                let (t, r) = two(base, params, (240, 12), (8, 3))?;
+                Shape::TorusKnot(t, r)
+            }
+            "cylinder" => Shape::Cylinder(one(base, params, 32, 3, MAX_SEGMENTS)?),
+            "cone" => Shape::Cone(one(base, params, 32, 3, MAX_SEGMENTS)?),
+            "icosphere" => Shape::Icosphere(one(base, params, 2, 0, MAX_ICOSPHERE_LEVEL)?),
+            _ => return Err(ShapeError::Unknown(base.to_string())),
+        })
+    }
+
+    /// The number of triangles [`Shape::build`] makes (for `bunny-open`, an upper bound).
+    pub fn triangles(self) -> u64 {
+        let w = u64::from;
+        match self {
+            Shape::Plane => 2,
+            Shape::Cube => 12,
+            Shape::LPrism => 20,
+            Shape::Wedge => 8,
+            Shape::Bunny | Shape::BunnyOpen => BUNNY_TRIANGLES,
+            Shape::Sphere(s, k) | Shape::RoundedBox(s, k) => 2 * w(s) * (w(k) - 1),
+            Shape::Torus(m, n) | Shape::TorusKnot(m, n) => 2 * w(m) * w(n),
+            Shape::Cylinder(s) => 4 * w(s),
+            Shape::Cone(s) => 2 * w(s),
+            Shape::Icosphere(level) => 20 << (2 * level),
+        }
+    }
+
+    /// The number of vertices [`Shape::build`] makes (for `bunny-open`, an upper bound).
+    pub fn vertices(self) -> u64 {
+        let w = u64::from;
+        match self {
+            Shape::Plane => 4,
+            Shape::Cube => 8,
+            Shape::LPrism => 12,
+            Shape::Wedge => 6,
+            Shape::Bunny | Shape::BunnyOpen => BUNNY_VERTICES,
+            Shape::Sphere(s, k) | Shape::RoundedBox(s, k) => w(s) * (w(k) - 1) + 2,
+            Shape::Torus(m, n) | Shape::TorusKnot(m, n) => w(m) * w(n),
+            Shape::Cylinder(s) => 2 * w(s) + 2,
+            Shape::Cone(s) => w(s) + 2,
+            Shape::Icosphere(level) => 10 * (1 << (2 * level)) + 2,
+        }
+    }
+
+    /// Builds the mesh.
+    pub fn build(self) -> Result<Mesh, ShapeError> {
+        let embedded = |e: super::SceneError| ShapeError::BadParams(format!("embedded bunny: {e}"));
+        Ok(match self {
+            Shape::Plane => plane(),
+            Shape::Cube => cube(),
+            Shape::LPrism => l_prism(),
+            Shape::Wedge => wedge(),
+            Shape::Bunny => bunny().map_err(embedded)?,
+            Shape::BunnyOpen => open_base(&bunny().map_err(embedded)?, BUNNY_OPEN_BASE),
+            Shape::Sphere(s, k) => sphere(s, k),
+            Shape::RoundedBox(s, k) => rounded_box(s, k),
+            Shape::Torus(m, n) => torus(m, n),
+            Shape::TorusKnot(t, r) => torus_knot(t, r),
+            Shape::Cylinder(s) => cylinder(s),
+            Shape::Cone(s) => cone(s),
+            Shape::Icosphere(level) => icosphere(level),
+        })
     }
 }
 
@@ -119,7 +213,8 @@ fn none(base: &str, params: Option<&str>) -> Result<(), ShapeError> {
     match params {
         None => Ok(()),
         Some(p) => Err(ShapeError::BadParams(format!(
-            "`{base}` takes no parameters, found `:{p}`"
+            "`{base}` takes no parameters, found `:{}`",
+            super::shown(p)
         ))),
     }
 }
@@ -135,7 +230,8 @@ fn one(
     match p.trim().parse::<u32>() {
         Ok(n) if (min..=max).contains(&n) => Ok(n),
         _ => Err(ShapeError::BadParams(format!(
-            "`{base}:N` expects an integer N in {min}..={max}, found `{p}`"
+            "`{base}:N` expects an integer N in {min}..={max}, found `{}`",
+            super::shown(p)
         ))),
     }
 }
@@ -149,8 +245,11 @@ fn two(
     let Some(p) = params else { return Ok(default) };
     let bad = || {
         ShapeError::BadParams(format!(
-            "`{base}:AxB` expects two integers A in {}..={MAX_SEGMENTS} and B in {}..={MAX_SEGMENTS}, found `{p}`",
-            min.0, min.1
+            "`{base}:AxB` expects two integers A in {}..={MAX_SEGMENTS} and B in \
+             {}..={MAX_SEGMENTS} (MAX_SHAPE_SEGMENTS), found `{}`",
+            min.0,
+            min.1,
+            super::shown(p)
         ))
     };
     let (a, b) = p.split_once(['x', 'X']).ok_or_else(bad)?;
@@ -161,7 +260,8 @@ fn two(
     }
     if a as u64 * b as u64 > MAX_QUADS {
         return Err(ShapeError::BadParams(format!(
-            "`{base}:{a}x{b}` would have {} triangles: expected A·B at most {MAX_QUADS}",
+            "`{base}:{a}x{b}` would have {} triangles: expected A·B at most {MAX_QUADS} \
+             (MAX_SHAPE_QUADS, the budget of one shape)",
             2 * a as u64 * b as u64
         )));
     }
@@ -600,6 +700,46 @@ mod tests {
         assert_eq!(build("rounded-box:48x16").unwrap().triangles.len(), 1440);
         assert_eq!(build("cylinder:10").unwrap().triangles.len(), 40);
         assert_eq!(build("cone:10").unwrap().triangles.len(), 20);
+    }
+
+    #[test]
+    fn triangle_count_is_known_before_building() {
+        for name in [
+            "plane",
+            "cube",
+            "l-prism",
+            "wedge",
+            "bunny",
+            "sphere",
+            "sphere:3x2",
+            "sphere:17x9",
+            "rounded-box:5x4",
+            "torus:3x3",
+            "torus:7x5",
+            "torus-knot:8x3",
+            "torus-knot",
+            "cylinder:3",
+            "cylinder:31",
+            "cone:7",
+            "icosphere:0",
+            "icosphere:3",
+        ] {
+            let mesh = build(name).unwrap();
+            assert_eq!(
+                triangle_count(name).unwrap(),
+                mesh.triangles.len() as u64,
+                "{name}"
+            );
+            let shape = Shape::parse(name).unwrap();
+            assert_eq!(shape.vertices(), mesh.positions.len() as u64, "{name}");
+        }
+        let open = build("bunny-open").unwrap().triangles.len() as u64;
+        assert!(open <= triangle_count("bunny-open").unwrap());
+        // The largest shapes are counted, not built.
+        assert_eq!(triangle_count("sphere:2000x1000").unwrap(), 3_996_000);
+        assert_eq!(triangle_count("torus:2000x1000").unwrap(), 4_000_000);
+        assert_eq!(triangle_count("icosphere:7").unwrap(), 20 * 4u64.pow(7));
+        assert!(triangle_count("sphere:2001x1000").is_err());
     }
 
     #[test]

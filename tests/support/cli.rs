@@ -4,9 +4,12 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-/// `dbuffer`, built by cargo for this test run, on the CPU Vulkan adapter by default.
+/// `dbuffer`, built by cargo for this test run (or the binary `DBUFFER_TEST_BIN` names, to
+/// check that a test fails on an older build), on the CPU Vulkan adapter by default.
 pub fn dbuffer() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_dbuffer"));
+    let bin = std::env::var_os("DBUFFER_TEST_BIN")
+        .unwrap_or_else(|| env!("CARGO_BIN_EXE_dbuffer").into());
+    let mut c = Command::new(bin);
     c.env(
         "WGPU_BACKEND",
         std::env::var("WGPU_BACKEND").unwrap_or_else(|_| "vulkan".into()),

@@ -151,6 +151,9 @@ pub struct Knob {
     pub min: u32,
     pub max: u32,
     pub default: u32,
+    /// The resource-budget constant (`crate::budget`) `max` is, named in the error when a
+    /// value is over it.
+    pub max_name: Option<&'static str>,
 }
 
 /// At most this many distinct knobs over all methods (checked by a test).
@@ -228,8 +231,9 @@ impl Knobs {
         for k in all_knobs() {
             let v = self.get(k);
             if !(k.min..=k.max).contains(&v) {
+                let budget = k.max_name.map(|n| format!(" ({n})")).unwrap_or_default();
                 return Err(format!(
-                    "--{} expects {} to {}, found {v}",
+                    "--{} expects {} to {}{budget}, found {v}",
                     k.name, k.min, k.max
                 ));
             }

@@ -12,6 +12,7 @@ pub static RADIUS: Knob = Knob {
     min: 0,
     max: 8,
     default: 2,
+    max_name: None,
 };
 
 pub static PCF: MethodSpec = MethodSpec {

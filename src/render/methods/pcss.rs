@@ -13,6 +13,7 @@ pub static BLOCKER_TAPS: Knob = Knob {
     min: 1,
     max: POISSON_POINTS as u32,
     default: 16,
+    max_name: None,
 };
 
 pub static FILTER_TAPS: Knob = Knob {
@@ -21,6 +22,7 @@ pub static FILTER_TAPS: Knob = Knob {
     min: 1,
     max: POISSON_POINTS as u32,
     default: 32,
+    max_name: None,
 };
 
 pub static PCSS: MethodSpec = MethodSpec {

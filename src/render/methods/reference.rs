@@ -12,8 +12,8 @@ use crate::geometry::VtVariant;
 use crate::render::timer::Recorder;
 use crate::render::{texture_entry, view_entry, GpuContext, RenderError};
 
-/// The most disk samples per pixel.
-pub const MAX_SAMPLES: u32 = 65536;
+/// The most disk samples per pixel (the budget's).
+pub const MAX_SAMPLES: u32 = crate::budget::MAX_REFERENCE_SAMPLES;
 
 /// K, the disk samples per pixel.
 pub static SAMPLES: Knob = Knob {
@@ -22,6 +22,7 @@ pub static SAMPLES: Knob = Knob {
     min: 1,
     max: MAX_SAMPLES,
     default: crate::geometry::oracle::DEFAULT_SAMPLES as u32,
+    max_name: Some("MAX_REFERENCE_SAMPLES"),
 };
 
 pub static REFERENCE: MethodSpec = MethodSpec {

@@ -22,6 +22,7 @@ pub static LIGHTS: Knob = Knob {
     min: 1,
     max: MAX_LIGHTS,
     default: 16,
+    max_name: None,
 };
 
 pub static SAMPLED: MethodSpec = MethodSpec {
