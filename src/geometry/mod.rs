@@ -8,6 +8,7 @@
 
 pub mod adjacency;
 pub mod bvh;
+pub mod fused;
 pub mod classify;
 pub mod hull;
 pub mod light_view;
