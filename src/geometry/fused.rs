@@ -1,55 +1,56 @@
-//! `dbuffer-fused`: the D-buffer with every silhouette chord a receiver needs, combined through a
-//! mask of disk samples, so that parts of the disk hidden by different casters (or different
-//! parts of one caster) add up as they do in reality. This is its CPU twin; `docs/fused.md`
-//! explains the method and its GPU mapping.
+//! `dbuffer-fused`: the D-buffer with every silhouette chord a receiver needs, so that the parts
+//! of the disk hidden by different casters (or different parts of one caster) combine as they do
+//! in reality. This is its CPU twin, the model the GPU passes are to be tested against;
+//! `docs/fused.md` describes the method, its GPU mapping and what it still gets wrong.
 //!
 //! **The chord of an edge.** For a receiver `x` and an edge `e = (a, b)`, the plane through `x`
 //! and `e` meets the light's plane in a line: the exact chord that edge cuts from the disk as
 //! seen from `x`. Its normal is `m = (a − x) × (b − x)`; in unit-disk coordinates `(u, v)` of the
 //! point `c + r(u e₁ + v e₂)` the line is `m·(c − x) + u r (m·e₁) + v r (m·e₂) = 0` — no division,
-//! so edges parallel to the disk, or reaching past `x`, need no special case.
+//! so edges parallel to the disk, or reaching past `x`, need no special case ([`edge_chord`]).
 //!
 //! **Why chords add up.** Let `L(q)` be the number of surface layers the segment from `x` to a
-//! disk point `q` crosses (a closed caster contributes two per crossing, an open sheet one). `q` is
-//! hidden iff `L(q) > 0`. Seen from `x`, `L` is constant on the disk except across the projections
-//! of the edges that are silhouettes *from `x`* (one face front-facing to `x`, the other not): there
-//! it changes by the edge's layer count (2 between two faces, 1 on an open boundary), larger on the
-//! side where the edge's two faces project (they fold onto the same side). So, with `Δ(q)` the sum
-//! over those edges of ±layers for every projected edge the straight path from the disk centre `c`
-//! to `q` crosses (Laine et al. 2005 integrate depth complexity the same way),
-//! `L(q) = L(c) + Δ(q)`. The path from `c` to `q` crosses the projection of `e` iff `q` lies beyond
-//! the edge's chord (the far side from `c`) and inside the sector from `c` spanned by the projected
-//! end points: three half-planes of the disk, two of them through its centre.
+//! disk point `q` crosses (a closed caster contributes two per crossing, an open sheet one); `q`
+//! is hidden iff `L(q) > 0`. Seen from `x`, `L` changes only across the projections of the edges
+//! that are silhouettes *from `x`* (one face in front of `x`, the other not), by the edge's layer
+//! count, and is larger on the side where the edge's two faces project (they fold onto one side).
+//! So `L(q) = L(c) + Δ(q)`, where `Δ(q)` sums ±layers over the projected edges that the straight
+//! path from the disk centre `c` to `q` crosses (Laine et al. 2005 integrate depth complexity the
+//! same way). The path crosses edge `e` iff `q` lies beyond `e`'s chord (the far side from `c`) and
+//! inside the sector from `c` spanned by the projected end points: one chord and two lines through
+//! the centre. The camera pass adds this up per disk sample ([`mask_visibility`]).
 //!
-//! **The anchor.** `L(c)` is not stored anywhere. Where any sample is visible, the smallest
-//! `L(q) = 0`, so `L(c) = −min Δ` exactly; where the D-buffer says `x` is hidden from `c`,
-//! `L(c) ≥ 1`. The twin takes `L(c) = max(hidden ? 1 : 0, −min Δ)`: exact wherever a sample is
-//! visible, and right in the umbra unless more than one layer separates `x` from `c` there.
+//! **`L(c)`**, the layers between `x` and the centre: the light pass counts the caster surfaces
+//! along each D-buffer texel's ray; for a receiver beyond all of them, where the 3×3 texels around
+//! agree on the count, that count is `L(c)` ([`CasterCrossings`]). Elsewhere the anchor is
+//! `max(hidden from c ? 1 : 0, −min Δ)`: exact wherever a sample is visible.
 //!
-//! **Which edges.** Every edge that is a silhouette from `x` and whose projection from `x` meets
-//! the disk is a silhouette from some disk point (the line from `x` through it hits the disk at
-//! such a point), so its faces are not both all-frontfacing nor both none-frontfacing: those are the
-//! *candidate edges* ([`FusedEdge`]), computed from the face classes the D-buffer already has. Note
-//! that they are more than the umbra and penumbra silhouettes: an edge between two silhouette faces
-//! is on neither, yet it can be a silhouette from `x`.
+//! **Exact where one layer deep.** Where every sample sees either 0 or one layer's worth (a single
+//! convex caster, and most penumbrae), `V = 1 − (L(c) + ∫Δ)/layers` and `∫Δ` is a sum of exact
+//! areas, one per edge ([`region_area`]): no sampling error. Elsewhere V is the fraction of the
+//! `N` samples with `L ≤ 0`.
 //!
-//! **The light pass: per-texel edge lists.** A point `y` sees `e`'s projection meet the disk iff
-//! `y` lies in the edge's *wedge* (the region between its umbra and penumbra planes, beyond it).
-//! Along a ray from `c` the wedge, once entered, is never left (seen from `c`, the wedge at height
-//! `H` is the edge swept by a disk of radius `(1 − H_e/H) r`, which grows with `H`). So the texel
-//! needs the edges whose wedge holds the point of its ray at the farthest surface height `H_far`
-//! (the largest over the 3×3 texels around it, so a receiver anywhere in the texel is covered),
-//! grown by the texel's footprint. The light pass rasterises a conservative proxy of each
-//! candidate edge's wedge footprint and its fragment shader applies exactly [`edge_in_texel`];
-//! the list holds at most `cap` edges. **Overflow rule:** the pass counts every edge; when the
-//! count exceeds `cap`, the stored entries (whichever the GPU kept) are ignored and the camera pass
-//! falls back to the paper's `dbuffer` V for that pixel. Deterministic, so the twin matches.
+//! **Which edges.** An edge that is a silhouette from `x` and projects into the disk is a
+//! silhouette from some disk point (the line from `x` through it hits the disk there), so its faces
+//! are not both all-frontfacing nor both none-frontfacing: those are the *candidate edges*
+//! ([`candidate_edges`]), from the face classes the D-buffer already has. They are more than the
+//! umbra and penumbra silhouettes: an edge between two silhouette faces is on neither.
 //!
-//! **The camera pass.** For the receiver `x` under texel `T`: the paper's D-buffer decides lit
-//! (outside every penumbra: V = 1) and umbra (V = 0) as it does for `dbuffer`, so the boundaries
-//! stay the paper's boundary-correct ones; in its penumbra, V is the fraction of the `N` disk
-//! samples with `L(c) + Δ(q) ≤ 0` over the edges of `T`'s list, each chord computed exactly from
-//! `x` and the edge's end points.
+//! **The light pass: bounded per-texel edge lists** on a grid coarser than the D-buffer. A point
+//! sees `e`'s projection meet the disk iff it lies in `e`'s wedge; along a ray from `c` the wedge,
+//! once entered, is never left (seen from `c`, the wedge at height `H` is the edge swept by a disk
+//! of radius `(1 − H_e/H) r`, which grows with `H`). A list texel keeps the candidate edges whose
+//! wedge holds its ray at the farthest receiver and that can be silhouettes from one of its
+//! receivers (surfaces facing `c`, from the 3×3 texels around it): [`edge_in_texel`], the list
+//! pass's fragment test, conservative by construction (the tests check it against every edge).
+//! **Overflow rule:** the pass counts every edge that passes; when the count exceeds the cap, the
+//! stored entries (whichever the GPU kept) are ignored and the camera pass falls back to the
+//! paper's `dbuffer` V for that pixel. The set of edges, and so V, does not depend on the order in
+//! which a GPU appends them.
+//!
+//! **The camera pass.** The paper's D-buffer decides lit (outside every penumbra volume: V = 1),
+//! as for `dbuffer`; everywhere else V comes from the list. (Its umbra is not taken on trust:
+//! overlapping casters leave rays inside one caster's umbra volume after they are out of the umbra.)
 
 use glam::{Mat4, Vec2, Vec3};
 
@@ -73,7 +74,7 @@ pub const MAX_LUT_SAMPLES: usize = 256;
 pub const MAX_SAMPLES: usize = 4096;
 
 /// Default number of edges one list holds.
-pub const DEFAULT_CAP: usize = 64;
+pub const DEFAULT_CAP: usize = 128;
 
 /// Default size of the grid of edge lists (per side).
 pub const DEFAULT_LIST_SIZE: u32 = 512;
@@ -88,7 +89,7 @@ const CLIP: f32 = 1e-4;
 
 /// How far (in texel footprints) the first surface of a neighbouring texel may lie from this
 /// texel's and still count as the same patch of surface.
-const PATCH_TEXELS: f32 = 256.0;
+const PATCH_TEXELS: f32 = 64.0;
 
 /// Two receivers of neighbouring texels lie on one surface patch if their normals agree to
 /// this cosine (and they are within `PATCH_TEXELS` footprints).
@@ -104,7 +105,7 @@ const PATCH_BULGE: f32 = 0.5;
 const FACING_TOL: f32 = 16.0 * f32::EPSILON;
 
 /// A candidate silhouette edge: what the light pass rasterises and the camera pass reads, per edge
-/// (the GPU's storage-buffer record, 4 × `vec4<f32>`: see `docs/fused.md`).
+/// (the GPU's storage-buffer record, 5 × `vec4<f32>`: see `docs/fused.md`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FusedEdge {
     pub a: Vec3,
@@ -535,26 +536,58 @@ pub struct TexelList {
     pub overflow: bool,
 }
 
-/// The caster surfaces crossed by the rays of the 3×3 texels around one texel: what the light
-/// pass counts (additive blend) and how far the last one is (max blend), merged over the 3×3.
-/// A receiver beyond them all has `L(c)` = the count, if the 3×3 agree on it.
+/// The caster surfaces along a D-buffer texel's ray, for `L(c)`: what the light pass counts
+/// along the texel's centre ray (additive blend), and the largest height of a crossing over the
+/// 3×3 texels around it (max blend, then a 3×3 max).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CasterCrossings {
-    pub min_count: u32,
-    pub max_count: u32,
-    /// The largest height of a crossing (0 for none).
+    pub count: u32,
     pub far_height: f32,
+    /// Unit direction of the texel's centre ray.
+    pub dir: Vec3,
 }
 
 impl CasterCrossings {
-    /// `L(c)` for a receiver at height `h`, where the counts say it.
-    pub fn centre_layers(&self, h: f32, hidden: bool) -> CentreLayers {
-        if self.min_count == self.max_count && h > self.far_height * (1.0 + 1e-4) {
-            CentreLayers::Known(self.min_count as i32)
-        } else {
-            CentreLayers::Hidden(hidden)
+    /// `L(c)` for a receiver `x` beyond every crossing: the count along the texel's ray, plus
+    /// the layers gained or lost where the ray, swept sideways to `x`'s, passes an edge that is a
+    /// silhouette from `c` (an outline of the casters seen from `c`). Those edges are in `x`'s
+    /// list: seen from `x` they project next to the disk centre. `None` for a receiver among the
+    /// casters.
+    pub fn layers_at<'a>(
+        &self,
+        x: Vec3,
+        edges: impl IntoIterator<Item = &'a FusedEdge>,
+        light: &DiskLight,
+    ) -> Option<i32> {
+        if !(light.height_of(x) > self.far_height * (1.0 + 1e-4)) {
+            return None;
         }
+        let c = light.center;
+        let y = c + self.dir * (x - c).length();
+        let mut layers = self.count as i32;
+        for e in edges {
+            if !e.is_silhouette_from(c) {
+                continue;
+            }
+            let m = (e.a - c).cross(e.b - c);
+            let fold = m.dot(e.fold);
+            let (sx, sy) = (m.dot(x - c), m.dot(y - c));
+            // The edge is crossed when the sweep from y to x passes its plane through c within
+            // the edge: the segment a–b meets the triangle c, y, x.
+            if fold == 0.0 || (sx > 0.0) == (sy > 0.0) || !segment_meets_triangle(e.a, e.b, [c, y, x])
+            {
+                continue;
+            }
+            let gained = (sx > 0.0) == (fold > 0.0);
+            layers += if gained { e.layers as i32 } else { -(e.layers as i32) };
+        }
+        Some(layers)
     }
+}
+
+/// Whether the segment `a b` meets the triangle.
+fn segment_meets_triangle(a: Vec3, b: Vec3, tri: [Vec3; 3]) -> bool {
+    super::ray::intersect_triangle(a, b - a, &tri).is_some_and(|t| (0.0..=1.0).contains(&t))
 }
 
 /// How the fused twin is set up.
@@ -571,6 +604,8 @@ pub struct FusedParams {
     /// Disk samples in the mask.
     pub samples: usize,
     pub eval: MaskEval,
+    /// V(t) of the paper's method, where the fused one falls back to it (an overflowing list).
+    pub vt: VtVariant,
 }
 
 impl Default for FusedParams {
@@ -581,6 +616,7 @@ impl Default for FusedParams {
             cap: DEFAULT_CAP,
             samples: DEFAULT_SAMPLES,
             eval: MaskEval::Exact,
+            vt: VtVariant::Exact,
         }
     }
 }
@@ -999,22 +1035,20 @@ impl FusedTwin {
         (n, far * w.dot(self.light.normal))
     }
 
-    /// The caster crossings of the D-buffer texel `texel` and the 3×3 around it.
+    /// The caster crossings of the D-buffer texel `texel` (the count along its ray, the farthest
+    /// crossing over the 3×3 around it).
     pub fn crossings_of(&self, texel: [u32; 2]) -> CasterCrossings {
         let size = self.params.size;
-        let mut casters = CasterCrossings {
-            min_count: u32::MAX,
-            max_count: 0,
-            far_height: 0.0,
-        };
-        for [nx, ny] in neighbourhood(texel, size) {
-            let (w, _) = self.texel_ray([nx, ny], size);
-            let (n, far) = self.caster_crossings(w);
-            casters.min_count = casters.min_count.min(n);
-            casters.max_count = casters.max_count.max(n);
-            casters.far_height = casters.far_height.max(far);
+        let (dir, _) = self.texel_ray([i64::from(texel[0]), i64::from(texel[1])], size);
+        let (count, _) = self.caster_crossings(dir);
+        let far_height = neighbourhood(texel, size)
+            .map(|t| self.caster_crossings(self.texel_ray(t, size).0).1)
+            .fold(0.0, f32::max);
+        CasterCrossings {
+            count,
+            far_height,
+            dir,
         }
-        casters
     }
 
     /// The list texel's ray with its receivers, as the light pass and its 3×3 merge give it
@@ -1134,7 +1168,7 @@ impl FusedTwin {
     pub fn sample(&self, x: Vec3) -> FusedSample {
         let dbuffer = self.dbuffer.sample(x);
         let outside = FusedSample {
-            v: VtVariant::Exact.apply(dbuffer.t),
+            v: self.params.vt.apply(dbuffer.t),
             path: FusedPath::Outside,
             dbuffer,
             mask: None,
@@ -1167,11 +1201,13 @@ impl FusedTwin {
                 ..outside
             };
         }
-        let centre = self
-            .crossings_of(texel)
-            .centre_layers(self.light.height_of(x), dbuffer.hidden);
+        let edges = || list.edges.iter().map(|&k| &self.edges[k as usize]);
+        let centre = match self.crossings_of(texel).layers_at(x, edges(), &self.light) {
+            Some(k) => CentreLayers::Known(k),
+            None => CentreLayers::Hidden(dbuffer.hidden),
+        };
         let m = mask_visibility(
-            list.edges.iter().map(|&k| &self.edges[k as usize]),
+            edges(),
             x,
             centre,
             &self.light,
