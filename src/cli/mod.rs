@@ -5,8 +5,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::fused::{FusedParams, FusedPath, FusedTwin};
+use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
 use dbuffer::output;
 use dbuffer::render::offline::Offline;
@@ -320,7 +320,10 @@ fn compare_twin(
                 vt,
                 ..FusedParams::default()
             };
-            (None, Some(FusedTwin::new(scene, prepared, geometry, params)))
+            (
+                None,
+                Some(FusedTwin::new(scene, prepared, geometry, params)),
+            )
         }
     };
     let pixels = view::receivers(scene, oracle.bvh(), width, height);

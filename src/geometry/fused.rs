@@ -396,7 +396,7 @@ impl DiskMask {
         let len = (a * a + b * b).sqrt();
         // C < 0: the chord lies at ρ = −C/|(A, B)| > 0 from the centre.
         let rho = -c / len;
-        if !(len > 0.0) || !(rho < 1.0) || self.chords.is_empty() {
+        if len.is_nan() || len <= 0.0 || rho.is_nan() || rho >= 1.0 || self.chords.is_empty() {
             return Bits::default();
         }
         let j = ((rho * LUT_OFFSETS as f32) as usize).min(LUT_OFFSETS - 1);
@@ -559,7 +559,8 @@ impl CasterCrossings {
         edges: impl IntoIterator<Item = &'a FusedEdge>,
         light: &DiskLight,
     ) -> Option<i32> {
-        if !(light.height_of(x) > self.far_height * (1.0 + 1e-4)) {
+        let h = light.height_of(x);
+        if h.is_nan() || h <= self.far_height * (1.0 + 1e-4) {
             return None;
         }
         let c = light.center;
@@ -574,12 +575,18 @@ impl CasterCrossings {
             let (sx, sy) = (m.dot(x - c), m.dot(y - c));
             // The edge is crossed when the sweep from y to x passes its plane through c within
             // the edge: the segment a–b meets the triangle c, y, x.
-            if fold == 0.0 || (sx > 0.0) == (sy > 0.0) || !segment_meets_triangle(e.a, e.b, [c, y, x])
+            if fold == 0.0
+                || (sx > 0.0) == (sy > 0.0)
+                || !segment_meets_triangle(e.a, e.b, [c, y, x])
             {
                 continue;
             }
             let gained = (sx > 0.0) == (fold > 0.0);
-            layers += if gained { e.layers as i32 } else { -(e.layers as i32) };
+            layers += if gained {
+                e.layers as i32
+            } else {
+                -(e.layers as i32)
+            };
         }
         Some(layers)
     }
@@ -626,8 +633,8 @@ impl Default for FusedParams {
 pub enum FusedPath {
     /// Behind the light, or outside the light view: as the paper's camera pass.
     Outside,
-    /// The D-buffer says lit or umbra.
-    DBuffer,
+    /// The texel's list is empty: no chord crosses the disk, V is 1 or 0 as the centre is seen.
+    Uniform,
     /// The texel's list overflowed: the paper's V(t).
     Overflow,
     /// The mask over the texel's list.
@@ -668,7 +675,7 @@ impl EdgeBins {
                 for (s, t) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
                     let q = p + r * 1.01 * (s * e1 + t * e2);
                     let clip = *vp * q.extend(1.0);
-                    if !(clip.w > 1e-6) {
+                    if clip.w.is_nan() || clip.w <= 1e-6 {
                         everywhere = true;
                         continue;
                     }
@@ -703,6 +710,16 @@ impl EdgeBins {
         };
         &self.bins[(cell(ndc.y) * self.cells + cell(ndc.x)) as usize]
     }
+}
+
+/// The receivers (surfaces facing the light centre) along one ray, as the light pass keeps them:
+/// the first, the second and the last (points and normals), how many there are, and the height
+/// of the last one on a caster.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct ReceiverLayers {
+    points: [(Vec3, Vec3); 3],
+    count: u32,
+    last_on_caster: Option<(Vec3, Vec3)>,
 }
 
 /// A patch of receiver surface around one texel: a point on it, its unit normal, how far the
@@ -757,7 +774,7 @@ pub struct TexelRay {
 pub fn edge_in_texel(edge: &FusedEdge, ray: &TexelRay, light: &DiskLight) -> bool {
     let c = light.center;
     let along = ray.dir.dot(light.normal);
-    if !(along > 0.0) || !(ray.far > 0.0) {
+    if along.is_nan() || along <= 0.0 || ray.far.is_nan() || ray.far <= 0.0 {
         return false;
     }
     let y = c + ray.dir * ray.far;
@@ -905,6 +922,8 @@ pub struct FusedTwin {
     light: DiskLight,
     edges: Vec<FusedEdge>,
     surfaces: Bvh,
+    /// Whether each triangle of `surfaces` belongs to a caster.
+    is_caster: Vec<bool>,
     caster_bvh: Bvh,
     view: LightView,
     vp: Mat4,
@@ -942,6 +961,11 @@ impl FusedTwin {
             bins: EdgeBins::build(&edges, &scene.light, &vp, 64),
             edges,
             surfaces: Bvh::build(scene.all_triangles()),
+            is_caster: scene
+                .objects
+                .iter()
+                .flat_map(|o| std::iter::repeat_n(o.casts_shadow, o.mesh.triangles.len()))
+                .collect(),
             caster_bvh: Bvh::build(
                 scene
                     .casters()
@@ -981,7 +1005,7 @@ impl FusedTwin {
     /// camera pass), or `None` outside the light view.
     pub fn texel_of(&self, x: Vec3, size: u32) -> Option<[u32; 2]> {
         let clip = self.vp * x.extend(1.0);
-        if !(clip.w > 0.0) {
+        if clip.w.is_nan() || clip.w <= 0.0 {
             return None;
         }
         let ndc = Vec2::new(clip.x, clip.y) / clip.w;
@@ -990,7 +1014,9 @@ impl FusedTwin {
         }
         let size = size as f32;
         let uv = Vec2::new(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-        let t = (uv * size).floor().clamp(Vec2::ZERO, Vec2::splat(size - 1.0));
+        let t = (uv * size)
+            .floor()
+            .clamp(Vec2::ZERO, Vec2::splat(size - 1.0));
         Some([t.x as u32, t.y as u32])
     }
 
@@ -1006,14 +1032,20 @@ impl FusedTwin {
 
     /// The surfaces facing the light centre along the ray from `c` (the receivers): the first,
     /// second and last hit points and how many there are (what the light pass keeps per texel).
-    fn receiver_layers(&self, w: Vec3) -> Option<([(Vec3, Vec3); 3], u32)> {
+    fn receiver_layers(&self, w: Vec3) -> Option<ReceiverLayers> {
         let mut hits: Vec<(f32, Vec3)> = Vec::new();
+        let mut last_on_caster: Option<(f32, Vec3)> = None;
         self.surfaces
             .for_each_hit(self.light.center, w, 0.0, f32::INFINITY, |h| {
                 let [a, b, c] = self.surfaces.triangle(h.triangle as usize);
-                let n = (*b - *a).cross(*c - *a);
+                let n = (*b - *a).cross(*c - *a).normalize_or_zero();
                 if n.dot(w) < 0.0 {
-                    hits.push((h.t, n.normalize_or_zero()));
+                    hits.push((h.t, n));
+                    if self.is_caster[h.triangle as usize]
+                        && last_on_caster.is_none_or(|(t, _)| h.t > t)
+                    {
+                        last_on_caster = Some((h.t, n));
+                    }
                 }
             });
         hits.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -1021,7 +1053,11 @@ impl FusedTwin {
         let first = *hits.first()?;
         let last = *hits.last()?;
         let second = hits.get(1).copied().unwrap_or(last);
-        Some(([at(first), at(second), at(last)], hits.len() as u32))
+        Some(ReceiverLayers {
+            points: [at(first), at(second), at(last)],
+            count: hits.len() as u32,
+            last_on_caster: last_on_caster.map(at),
+        })
     }
 
     /// Caster surfaces crossed along the ray from `c`, and the largest height of one.
@@ -1056,8 +1092,8 @@ impl FusedTwin {
     pub fn texel_ray_of(&self, texel: [u32; 2]) -> Option<TexelRay> {
         let size = self.params.list_size;
         let (tx, ty) = (i64::from(texel[0]), i64::from(texel[1]));
-        let mut layers: Vec<([(Vec3, Vec3); 3], u32)> = Vec::new();
-        let mut centre: Option<([(Vec3, Vec3); 3], u32)> = None;
+        let mut layers: Vec<ReceiverLayers> = Vec::new();
+        let mut centre: Option<ReceiverLayers> = None;
         for [nx, ny] in neighbourhood(texel, size) {
             let (w, _) = self.texel_ray([nx, ny], size);
             if let Some(l) = self.receiver_layers(w) {
@@ -1071,11 +1107,14 @@ impl FusedTwin {
         let along = w.dot(self.light.normal);
         let half_slope = 0.5 * self.view_slope.length() / size as f32;
         let centre = centre.or_else(|| layers.first().copied());
-        let ray = centre.filter(|_| along > 1e-6).map(|(points, count)| {
+        let ray = centre.filter(|_| along > 1e-6).map(|centre| {
+            let (points, count) = (centre.points, centre.count);
             // Patches on the centre ray's first, second and last receivers (as many as it has):
             // a receiver of the 3×3 on the same surface (near, and facing the same way) widens
             // one. The others (across an outline), and the receivers between the second and the
-            // last of a ray that has more than three, join the deeper stretch.
+            // last of a ray that has more than three (on casters, so no deeper than the last
+            // receiver on a caster: a non-casting receiver between the casters and the last one
+            // would need one more layer), join the deeper stretch.
             let distinct = count.min(3) as usize;
             let centres: Vec<(Vec3, Vec3)> = match distinct {
                 1 => vec![points[0]],
@@ -1094,16 +1133,22 @@ impl FusedTwin {
                 .collect();
             let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
             let mut far = f32::NEG_INFINITY;
-            for &(pts, n) in &layers {
-                if n > 3 {
-                    let (ha, hb) = (
-                        self.light.height_of(pts[1].0),
-                        self.light.height_of(pts[2].0),
-                    );
-                    lo = lo.min(ha.min(hb));
-                    hi = hi.max(ha.max(hb));
+            // A receiver seen at `q` with normal `nq` by a ray of the 3×3: the same surface can
+            // reach into this texel's pyramid within about 1.5 texel diagonals sideways, which
+            // along a surface tilted away from the ray is a longer way, up or down.
+            let reach = |q: Vec3, nq: Vec3| 2.2 * base(q) / nq.dot(w).abs().max(0.05);
+            // Where the rays of the 3×3 see different numbers of receivers, a surface starts or
+            // ends between them (an outline seen from `c`): rays between them can meet it
+            // between the second receiver and the last on a caster.
+            let counts_differ = layers.iter().any(|l| l.count != centre.count);
+            for l in &layers {
+                if l.count > 3 || (counts_differ && l.count > 1) {
+                    let (p2, n2) = l.points[1];
+                    let (pc, nc) = l.last_on_caster.unwrap_or(l.points[1]);
+                    lo = lo.min(self.light.height_of(p2) - reach(p2, n2));
+                    hi = hi.max(self.light.height_of(pc) + reach(pc, nc));
                 }
-                for (q, nq) in pts {
+                for (q, nq) in l.points {
                     far = far.max(self.light.height_of(q));
                     let same = patches.iter_mut().find(|p| {
                         q.distance(p.point) <= PATCH_TEXELS * base(p.point)
@@ -1113,17 +1158,15 @@ impl FusedTwin {
                         Some(p) => {
                             let b = base(p.point);
                             p.radius = p.radius.max(q.distance(p.point) + b);
-                            p.bulge = p.bulge.max(p.normal.dot(q - p.point).abs() + b * PATCH_BULGE);
+                            p.bulge = p
+                                .bulge
+                                .max(p.normal.dot(q - p.point).abs() + b * PATCH_BULGE);
                         }
                         None => {
-                            // Across an outline: the same surface can reach into this texel's
-                            // pyramid within about 1.5 texel diagonals sideways, which along a
-                            // surface tilted away from the ray is a longer way.
-                            let slope = nq.dot(w).abs().max(0.05);
-                            let reach = 2.2 * base(q) / slope;
+                            // Across an outline.
                             let h = self.light.height_of(q);
-                            lo = lo.min(h - reach);
-                            hi = hi.max(h + reach);
+                            lo = lo.min(h - reach(q, nq));
+                            hi = hi.max(h + reach(q, nq));
                         }
                     }
                 }
@@ -1183,16 +1226,6 @@ impl FusedTwin {
         ) else {
             return FusedSample { v: 1.0, ..outside };
         };
-        // Outside every penumbra volume (the nearest entry): lit, as for `dbuffer`. Its umbra is
-        // not taken on trust: overlapping casters can leave a ray inside one caster's umbra
-        // volume long after it is out of the umbra (`overlap` has such pixels).
-        if dbuffer.branch == Branch::Lit {
-            return FusedSample {
-                v: 1.0,
-                path: FusedPath::DBuffer,
-                ..outside
-            };
-        }
         let list = self.texel_list(list_texel);
         if list.overflow {
             return FusedSample {
@@ -1206,13 +1239,19 @@ impl FusedTwin {
             Some(k) => CentreLayers::Known(k),
             None => CentreLayers::Hidden(dbuffer.hidden),
         };
-        let m = mask_visibility(
-            edges(),
-            x,
-            centre,
-            &self.light,
-            &self.mask,
-        );
+        if list.count == 0 {
+            // No chord crosses the disk: all of it is as the centre is.
+            let hidden = match centre {
+                CentreLayers::Known(k) => k > 0,
+                CentreLayers::Hidden(h) => h,
+            };
+            return FusedSample {
+                v: if hidden { 0.0 } else { 1.0 },
+                path: FusedPath::Uniform,
+                ..outside
+            };
+        }
+        let m = mask_visibility(edges(), x, centre, &self.light, &self.mask);
         FusedSample {
             v: m.v(),
             path: FusedPath::Mask,
@@ -1253,7 +1292,307 @@ impl FusedTwin {
         let d = self.light.center - x;
         let eps = super::oracle::SELF_EPS;
         let mut n = 0;
-        self.caster_bvh.for_each_hit(x, d, eps, 1.0 - eps, |_| n += 1);
+        self.caster_bvh
+            .for_each_hit(x, d, eps, 1.0 - eps, |_| n += 1);
         n
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::classify::classify;
+    use crate::geometry::oracle::Oracle;
+    use crate::geometry::visibility::disk_segment_fraction;
+    use crate::scene::{Camera, Mesh, Object};
+
+    fn light() -> DiskLight {
+        DiskLight {
+            center: Vec3::new(0.1, 4.0, -0.2),
+            normal: Vec3::new(0.05, -1.0, 0.1).normalize(),
+            radius: 0.7,
+            intensity: 1.0,
+        }
+    }
+
+    /// A box from its centre and half sizes, as a closed mesh.
+    fn slab(centre: Vec3, half: Vec3) -> Mesh {
+        let mut m = crate::scene::shapes::cube();
+        for p in &mut m.positions {
+            *p = centre + *p * 2.0 * half;
+        }
+        m
+    }
+
+    fn scene_of(casters: Vec<Mesh>, light: DiskLight) -> Scene {
+        let mut objects: Vec<Object> = casters
+            .into_iter()
+            .enumerate()
+            .map(|(i, mesh)| Object {
+                name: format!("caster {i}"),
+                mesh,
+                casts_shadow: true,
+            })
+            .collect();
+        objects.push(Object {
+            name: "ground".into(),
+            mesh: slab(Vec3::new(0.0, -0.5, 0.0), Vec3::new(10.0, 0.5, 10.0)),
+            casts_shadow: false,
+        });
+        Scene {
+            name: "test".into(),
+            camera: Camera {
+                eye: Vec3::new(0.0, 3.0, 5.0),
+                target: Vec3::ZERO,
+                fov_y_deg: 45.0,
+            },
+            light,
+            objects,
+        }
+    }
+
+    fn edges_of(scene: &Scene) -> Vec<FusedEdge> {
+        let prepared = PreparedCasters::new(scene);
+        prepared
+            .meshes
+            .iter()
+            .enumerate()
+            .flat_map(|(k, m)| candidate_edges(m, &classify(m, &scene.light), k as u32))
+            .collect()
+    }
+
+    /// The chord is where the edge projects from x: every projected point of the edge satisfies
+    /// the line's equation, and the chord's negative side holds the disk centre.
+    #[test]
+    fn chord_is_the_edge_seen_from_the_receiver() {
+        let l = light();
+        let (e1, e2) = l.basis();
+        let x = Vec3::new(0.3, 0.0, 0.4);
+        for (a, b) in [
+            (Vec3::new(-0.5, 1.5, 0.2), Vec3::new(0.9, 1.7, 0.5)),
+            (Vec3::new(0.2, 2.0, -0.4), Vec3::new(0.25, 1.0, 0.6)),
+        ] {
+            let n = (b - a).cross(x - a).normalize();
+            let edge = FusedEdge {
+                a,
+                b,
+                n0: n,
+                offset0: n.dot(a) + 1.0, // x behind face 0 ...
+                n1: -n,
+                offset1: -n.dot(a) - 1.0, // ... and in front of face 1: a silhouette from x
+                fold: n,
+                layers: 2,
+                caster: 0,
+            };
+            let ch = edge_chord(&edge, x, &l).expect("a silhouette from x");
+            let [ca, cb, cc] = ch.chord;
+            assert!(cc < 0.0);
+            for t in [0.0, 0.3, 0.7, 1.0] {
+                let p = a.lerp(b, t);
+                let q = x + (p - x) * (l.height_of(x) / (l.height_of(x) - l.height_of(p)));
+                let (u, v) = (
+                    (q - l.center).dot(e1) / l.radius,
+                    (q - l.center).dot(e2) / l.radius,
+                );
+                let value = ca * u + cb * v + cc;
+                assert!(
+                    value.abs() < 1e-4 * (ca.abs() + cb.abs() + cc.abs()),
+                    "{value}"
+                );
+            }
+        }
+    }
+
+    /// One straight edge parallel to the disk: the exact path gives the disk segment beyond the
+    /// chord, found by similar triangles.
+    #[test]
+    fn one_straight_edge_is_exact() {
+        let l = DiskLight {
+            center: Vec3::new(0.0, 4.0, 0.0),
+            normal: Vec3::NEG_Y,
+            radius: 0.5,
+            intensity: 1.0,
+        };
+        // A wide plate 2 below the light, its edge along z at x = 0, the plate toward −x.
+        let plate = slab(Vec3::new(-3.0, 2.0, 0.0), Vec3::new(3.0, 0.01, 3.0));
+        let scene = scene_of(vec![plate], l);
+        let edges = edges_of(&scene);
+        let mask = DiskMask::new(128, MaskEval::Exact);
+        for s in [-0.45f32, -0.2, -0.05, 0.1, 0.3, 0.45] {
+            let x = Vec3::new(s, 0.0, 0.0);
+            // The ray from x through the silhouette edge (the top one, y = 2.01, for s > 0; the
+            // bottom one, y = 1.99, for s < 0) meets the light plane at q = s − s·4/(4 − y); the
+            // plate hides the disk at x < q.
+            let (hx, he) = (4.0f64, if s < 0.0 { 4.0 - 1.99 } else { 4.0 - 2.01 });
+            let q = f64::from(s) + (0.0 - f64::from(s)) * hx / (hx - he);
+            // The plate hides the part of the disk at x < q (toward −x).
+            let expected = 1.0 - disk_segment_fraction(-q / f64::from(l.radius));
+            // The ray from x to the centre passes under the plate (two layers) when s < 0.
+            let lc = if s < 0.0 { 2 } else { 0 };
+            let m = mask_visibility(&edges, x, CentreLayers::Known(lc), &l, &mask);
+            let exact = m.exact.expect("one layer deep");
+            assert!(
+                (exact - expected).abs() < 2e-3,
+                "s = {s}: {exact} against {expected}"
+            );
+            assert!((m.v_samples() - expected).abs() < 0.04, "s = {s}: {m:?}");
+        }
+    }
+
+    /// Two bars at different heights crossing in the light's view: the method with the oracle's
+    /// own samples sees the same samples hidden, where each bar alone would hide a strip.
+    #[test]
+    fn two_crossing_bars_hide_the_union_of_their_strips() {
+        let l = light();
+        let scene = scene_of(
+            vec![
+                slab(Vec3::new(0.0, 2.4, 0.0), Vec3::new(1.5, 0.05, 0.12)),
+                slab(Vec3::new(0.1, 1.2, 0.0), Vec3::new(0.1, 0.05, 1.5)),
+            ],
+            l,
+        );
+        let edges = edges_of(&scene);
+        let oracle = Oracle::from_scene(&scene, 256);
+        let mask = DiskMask::new(256, MaskEval::Exact);
+        let casters = Bvh::build(
+            scene
+                .casters()
+                .flat_map(|o| o.mesh.triangle_corners())
+                .collect(),
+        );
+        let mut fused_points = 0;
+        for i in 0..21 {
+            for j in 0..21 {
+                let x = Vec3::new(-1.0 + 0.1 * i as f32, 0.0, -1.0 + 0.1 * j as f32);
+                let d = l.center - x;
+                let mut lc = 0;
+                casters.for_each_hit(x, d, 1e-4, 1.0 - 1e-4, |_| lc += 1);
+                let m = mask_visibility(&edges, x, CentreLayers::Known(lc), &l, &mask);
+                let v = f64::from(oracle.visibility(x));
+                assert!(
+                    (m.v_samples() - v).abs() <= 2.0 / 256.0,
+                    "{x}: {} samples visible, the oracle {v}",
+                    m.visible
+                );
+                fused_points += usize::from(m.exact.is_none() && v > 0.0 && v < 1.0);
+            }
+        }
+        assert!(
+            fused_points > 10,
+            "points where both bars hide the disk: {fused_points}"
+        );
+    }
+
+    /// `region_area` against a grid count of the same region.
+    #[test]
+    fn region_area_matches_a_grid_count() {
+        let n = 600;
+        for (p, q) in [
+            (Vec2::new(-1.5, 0.4), Vec2::new(1.5, 0.3)),
+            (Vec2::new(0.2, 0.1), Vec2::new(0.9, -0.6)),
+            (Vec2::new(-0.3, 0.5), Vec2::new(0.6, 2.0)),
+            (Vec2::new(0.5, 0.5), Vec2::new(0.5, -0.5)),
+            (Vec2::new(2.0, 2.0), Vec2::new(3.0, 1.0)),
+        ] {
+            let (a, b, c) = {
+                let n = (q - p).perp();
+                let n = if n.dot(-p) > 0.0 { -n } else { n };
+                (n.x, n.y, -n.dot(p))
+            };
+            let ch = EdgeChord {
+                chord: [a, b, c],
+                end_a: [p.y, -p.x],
+                end_b: [q.y, -q.x],
+                delta: 2,
+                area: 0.0,
+            };
+            let mut inside = 0usize;
+            for i in 0..n {
+                for j in 0..n {
+                    let u = Vec2::new(
+                        -1.0 + 2.0 * (i as f32 + 0.5) / n as f32,
+                        -1.0 + 2.0 * (j as f32 + 0.5) / n as f32,
+                    );
+                    inside += usize::from(u.length() <= 1.0 && ch.contains(u));
+                }
+            }
+            let grid = inside as f64 * 4.0 / (n * n) as f64 / std::f64::consts::PI;
+            let exact = region_area(p, q);
+            assert!(
+                (grid - exact).abs() < 2e-3,
+                "{p} {q}: {exact} against {grid}"
+            );
+        }
+    }
+
+    /// The look-up tables differ from the exact test only on samples next to a line.
+    #[test]
+    fn lut_masks_agree_with_the_exact_test() {
+        let (exact, lut) = (
+            DiskMask::new(128, MaskEval::Exact),
+            DiskMask::new(128, MaskEval::Lut),
+        );
+        let mut worst = 0;
+        for k in 0..200 {
+            let f = k as f32;
+            let phi = f * 2.399;
+            let rho = (f * 0.618).fract() * 0.95 + 0.02;
+            let (s, c) = phi.sin_cos();
+            let ch = EdgeChord {
+                chord: [c, s, -rho],
+                end_a: [(phi + 0.7).sin(), -(phi + 0.7).cos()],
+                end_b: [(phi - 1.1).sin(), -(phi - 1.1).cos()],
+                delta: 2,
+                area: 0.0,
+            };
+            let (mut a, mut b) = (vec![0; 128], vec![0; 128]);
+            exact.add_region(&ch, &mut a);
+            lut.add_region(&ch, &mut b);
+            worst = worst.max(a.iter().zip(&b).filter(|(x, y)| x != y).count());
+        }
+        assert!(worst <= 3, "{worst} samples differ");
+    }
+
+    /// A sphere under a light wider than itself: the edges between two silhouette faces are
+    /// candidates (they are silhouettes from some disk points) though neither the umbra nor the
+    /// penumbra silhouette; edges between two all-frontfacing faces are not.
+    #[test]
+    fn candidates_include_edges_between_silhouette_faces() {
+        let l = DiskLight {
+            radius: 1.5,
+            ..light()
+        };
+        let mut sphere = crate::scene::shapes::sphere(24, 12);
+        for p in &mut sphere.positions {
+            *p = *p * 0.6 + Vec3::new(0.0, 2.0, 0.0);
+        }
+        let mesh = CasterMesh::new("sphere", &sphere);
+        let classes = classify(&mesh, &l);
+        let edges = candidate_edges(&mesh, &classes, 0);
+        let (mut between_silhouette_faces, mut all_front) = (0, 0);
+        for e in &mesh.edges {
+            let (c0, c1) = (classes[e.faces[0] as usize], classes[e.faces[1] as usize]);
+            let a = mesh.position(e.v[0]);
+            let listed = edges
+                .iter()
+                .any(|f| f.a == a && f.b == mesh.position(e.v[1]));
+            if c0.is_silhouette_face() && c1.is_silhouette_face() {
+                between_silhouette_faces += 1;
+                assert!(listed);
+            }
+            if c0 == FaceClass::AllFront && c1 == FaceClass::AllFront {
+                all_front += 1;
+                assert!(!listed);
+            }
+        }
+        assert!(between_silhouette_faces > 20 && all_front > 20);
+    }
+
+    #[test]
+    fn counters_wrap_like_the_gpus() {
+        assert_eq!(wrap(15), 15);
+        assert_eq!(wrap(16), -16);
+        assert_eq!(wrap(-17), 15);
+        assert_eq!(wrap(3 - 4), -1);
     }
 }

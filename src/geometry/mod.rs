@@ -8,8 +8,8 @@
 
 pub mod adjacency;
 pub mod bvh;
-pub mod fused;
 pub mod classify;
+pub mod fused;
 pub mod hull;
 pub mod light_view;
 pub mod metrics;

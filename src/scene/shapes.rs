@@ -657,7 +657,10 @@ mod tests {
             .filter(|p| p.y.abs() < 0.02)
             .filter(|p| Vec2::new(p.x + apart, p.z).length() < big - small)
             .count();
-        assert!(inside > 0, "the upright ring passes through the flat one's hole");
+        assert!(
+            inside > 0,
+            "the upright ring passes through the flat one's hole"
+        );
     }
 
     #[test]
