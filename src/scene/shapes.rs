@@ -45,9 +45,9 @@ pub const NAMES: &[&str] = &[
     "wedge",
     "rounded-box",
     "torus-knot",
-    "links",
     "bunny",
     "bunny-open",
+    "links",
 ];
 
 /// Largest segment count accepted for one parameter (keeps a typo from allocating gigabytes).
