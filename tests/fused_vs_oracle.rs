@@ -12,7 +12,7 @@
 //!   for all but one receiver in 10 000. (The known exception: a sliver of receiver surface that
 //!   none of the 3×3 texel rays around meets, where a caster folds seen from the light's centre;
 //!   `PROPTEST_CASES=1000` found 3 of 650 185, on interpenetrating tori.)
-//! - **the bounded twin** (texel lists, cap, 128-sample mask, the D-buffer's lit test): penumbra
+//! - **the bounded twin** (texel lists, cap, 128-sample mask, the light pass's counts): penumbra
 //!   MAE at most 0.03 in every case with 20 penumbra receivers or more (not counting those whose
 //!   list overflowed: they get the paper's V); over all cases, overflow included, at most 0.015
 //!   with a 99th percentile of |ΔV| at most 0.08, and at most 3 % of the penumbra receivers on an

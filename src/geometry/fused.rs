@@ -48,9 +48,12 @@
 //! paper's `dbuffer` V for that pixel. The set of edges, and so V, does not depend on the order in
 //! which a GPU appends them.
 //!
-//! **The camera pass.** The paper's D-buffer decides lit (outside every penumbra volume: V = 1),
-//! as for `dbuffer`; everywhere else V comes from the list. (Its umbra is not taken on trust:
-//! overlapping casters leave rays inside one caster's umbra volume after they are out of the umbra.)
+//! **The camera pass.** An empty list means no chord crosses the disk: V is 1 or 0 as the centre
+//! is seen. Otherwise the mask (or the exact area) over the list's edges. The paper's D-buffer
+//! is used for its `|cx_o|` (hidden from the centre, where `L(c)` is not counted) and for the
+//! fallback on an overflowing list, nothing else: its penumbra and umbra volumes are not needed
+//! (and are not trusted: a large light close to a caster leaves penumbra outside them, and
+//! overlapping casters leave rays inside one caster's umbra volume after the umbra).
 
 use glam::{Mat4, Vec2, Vec3};
 
