@@ -79,7 +79,8 @@ pub const MAX_SAMPLES: usize = 4096;
 /// Default number of edges one list holds.
 pub const DEFAULT_CAP: usize = 128;
 
-/// Default size of the grid of edge lists (per side).
+/// Default size of the grid of edge lists (per side): with `DEFAULT_CAP` edges of 2 bytes, 64 MiB
+/// of list entries.
 pub const DEFAULT_LIST_SIZE: u32 = 512;
 
 /// Bit planes of the camera pass's per-sample layer counter (two's complement, wrapping): values
@@ -90,8 +91,8 @@ pub const COUNTER_BITS: u32 = 5;
 /// height: the part beyond cannot hide the light from `x` (the oracle ignores hits this close, too).
 const CLIP: f32 = 1e-4;
 
-/// How far (in texel footprints) the first surface of a neighbouring texel may lie from this
-/// texel's and still count as the same patch of surface.
+/// How far (in texel footprints) a receiver seen by a neighbouring texel's ray may lie from one of
+/// this texel's receiver patches and still widen it (rather than join the deeper stretch).
 const PATCH_TEXELS: f32 = 64.0;
 
 /// Two receivers of neighbouring texels lie on one surface patch if their normals agree to
