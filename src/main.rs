@@ -139,6 +139,9 @@ enum Command {
         /// V(t) variant for the comparison.
         #[arg(long, default_value = "exact")]
         vt: String,
+        /// Whose CPU twin to compare: dbuffer (the paper's method) or dbuffer-fused.
+        #[arg(long, default_value = "dbuffer")]
+        method: String,
         /// Also write the comparison as a PNG: method | reference | |ΔV| (0 … 0.25).
         #[arg(long)]
         out: Option<std::path::PathBuf>,
@@ -161,8 +164,9 @@ fn main() -> ExitCode {
             samples,
             size,
             vt,
+            method,
             out,
-        }) => cli::inspect(&scene, samples, &size, &vt, out.as_deref()),
+        }) => cli::inspect(&scene, samples, &size, &vt, &method, out.as_deref()),
         None => cli::gui(None),
         Some(Command::Gui { scene }) => cli::gui(scene),
         Some(Command::Render {

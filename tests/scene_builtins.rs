@@ -31,6 +31,8 @@ const CLOSED: &[&str] = &[
     "rounded-box:5x3",
     "torus-knot",
     "torus-knot:64x5",
+    "links",
+    "links:3x3",
 ];
 
 /// Shapes that must be convex polyhedra.
@@ -153,7 +155,11 @@ fn closed_shapes_are_closed_welded_outward_manifolds() {
     for name in CLOSED {
         let m = shape(name);
         let chi = assert_closed_manifold(name, &m);
-        let expected = if name.starts_with("torus") { 0 } else { 2 };
+        let expected = if name.starts_with("torus") || name.starts_with("links") {
+            0 // one torus, or two (links)
+        } else {
+            2
+        };
         assert_eq!(chi, expected, "{name}: Euler characteristic");
     }
 }
@@ -167,7 +173,7 @@ fn convex_shapes_are_convex() {
 
 #[test]
 fn concave_shapes_are_not_convex() {
-    for name in ["l-prism", "torus", "torus-knot"] {
+    for name in ["l-prism", "torus", "torus-knot", "links"] {
         let r = std::panic::catch_unwind(|| assert_convex(name, &shape(name)));
         assert!(r.is_err(), "{name} should be concave");
     }
@@ -189,6 +195,8 @@ fn triangle_counts_follow_the_documented_formulas() {
     assert_eq!(count("torus-knot:240x12"), 5760);
     assert_eq!(count("torus-knot"), 5760);
     assert_eq!(count("torus:24x20"), 960);
+    assert_eq!(count("links"), 1024);
+    assert_eq!(count("links:16x6"), 384);
     assert_eq!(count("icosphere:3"), 1280);
     assert_eq!(count("cylinder:10"), 40);
     assert_eq!(count("cone:10"), 20);
@@ -237,6 +245,9 @@ const EXPECTED_NAMES: &[&str] = &[
     "overlap",
     "no-umbra",
     "acute-corner",
+    "fusion-cross",
+    "fusion-links",
+    "fusion-many",
 ];
 
 fn scene(name: &str) -> Scene {

@@ -9,6 +9,7 @@ use dbuffer::budget::{
     MAX_DBUFFER_SIZE, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_INSPECT_PIXELS, MAX_ORACLE_TRIANGLES,
     MAX_REFERENCE_SAMPLES,
 };
+use dbuffer::geometry::fused::{FusedParams, FusedPath, FusedTwin};
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
 use dbuffer::output;
@@ -212,13 +213,35 @@ fn check_dbuffer_size(size: u32) -> Result<()> {
     Ok(())
 }
 
+/// Whose CPU twin `inspect` compares with the reference.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TwinMethod {
+    DBuffer,
+    Fused,
+}
+
+impl TwinMethod {
+    fn parse(text: &str) -> Result<TwinMethod> {
+        match text {
+            "dbuffer" => Ok(TwinMethod::DBuffer),
+            "dbuffer-fused" => Ok(TwinMethod::Fused),
+            _ => bail!(
+                "--method for inspect expects dbuffer or dbuffer-fused (the methods with a CPU \
+                 twin), found '{text}'"
+            ),
+        }
+    }
+}
+
 pub fn inspect(
     name: &str,
     samples: Option<usize>,
     size: &str,
     vt: &str,
+    method: &str,
     out: Option<&Path>,
 ) -> Result<()> {
+    let method = TwinMethod::parse(method)?;
     // Every flag is checked before the scene is loaded: nothing is computed for a run that
     // would be refused at the end.
     let comparison = match samples {
@@ -257,9 +280,10 @@ pub fn inspect(
     let t1 = Instant::now();
     let geometry = prepared.build(&scene.light, &params);
     let build_ms = t1.elapsed().as_secs_f64() * 1e3;
-    // The twin needs the geometry, not the prepared casters (welding and adjacency): give their
-    // memory back before the oracle builds its BVH.
-    drop(prepared);
+    // The paper's twin needs the geometry, not the prepared casters (welding and adjacency):
+    // give their memory back before the oracle builds its BVH. dbuffer-fused's twin reads the
+    // caster edges from them.
+    let prepared = (method == TwinMethod::Fused).then_some(prepared);
 
     let l = &scene.light;
     outln!("scene     {}", scene.name);
@@ -306,7 +330,15 @@ pub fn inspect(
     }
 
     if let Some((k, width, height, vt)) = comparison {
-        let frames = compare_twin(&scene, &geometry, k, width, height, vt);
+        let frames = compare_twin(
+            &scene,
+            prepared.as_ref(),
+            &geometry,
+            k,
+            (width, height),
+            vt,
+            method,
+        );
         if let Some(path) = out {
             write_comparison(path, &frames, width, height)?;
             outln!("wrote {}", path.display());
@@ -352,14 +384,25 @@ struct Frames {
 /// The CPU twin of the method against the oracle over the camera's view (design.md §4 metrics).
 fn compare_twin(
     scene: &scene::Scene,
+    prepared: Option<&PreparedCasters>,
     geometry: &dbuffer::geometry::SceneGeometry,
     k: usize,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
     vt: VtVariant,
+    method: TwinMethod,
 ) -> Frames {
     let oracle = Oracle::from_scene(scene, k);
-    let twin = DBufferTwin::new(scene, &geometry.casters);
+    let (paper, fused) = match method {
+        TwinMethod::DBuffer => (Some(DBufferTwin::new(scene, &geometry.casters)), None),
+        TwinMethod::Fused => {
+            let params = FusedParams {
+                vt,
+                ..FusedParams::default()
+            };
+            let fused = prepared.map(|p| FusedTwin::new(scene, p, geometry, params));
+            (None, fused)
+        }
+    };
     let pixels = view::receivers(scene, oracle.bvh(), width, height);
     let points: Vec<Vec3> = pixels
         .iter()
@@ -377,22 +420,36 @@ fn compare_twin(
         .collect();
     let oracle_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let method: Vec<f32> = points
+    // V, and for dbuffer-fused the length of the texel's list where the mask ran (None: it did
+    // not) and whether it overflowed.
+    let rows: Vec<(f32, Option<(usize, bool)>)> = points
         .par_iter()
         .zip(&mask)
-        .map(|(&x, &on)| {
-            if on {
-                twin.visibility(x, vt) as f32
-            } else {
-                0.0
+        .map(|(&x, &on)| match (on, &paper, &fused) {
+            (false, _, _) => (0.0, None),
+            (true, Some(t), _) => (t.visibility(x, vt) as f32, None),
+            (true, _, Some(t)) => {
+                let s = t.sample(x);
+                let list = match s.path {
+                    FusedPath::Mask => Some((s.list_count, false)),
+                    FusedPath::Overflow => Some((s.list_count, true)),
+                    _ => None,
+                };
+                (s.v as f32, list)
             }
+            (true, None, None) => (0.0, None),
         })
         .collect();
     let twin_s = t1.elapsed().as_secs_f64();
-    let m = metrics::compare(&reference, &method, &mask);
+    let method_v: Vec<f32> = rows.iter().map(|r| r.0).collect();
+    let m = metrics::compare(&reference, &method_v, &mask);
     let rays = mask.iter().filter(|&&m| m).count() * k;
+    let name = match method {
+        TwinMethod::DBuffer => "dbuffer",
+        TwinMethod::Fused => "dbuffer-fused",
+    };
     outln!(
-        "twin vs oracle ({width}x{height}, {} px facing the light, V(t) {vt}, K = {k}):",
+        "twin ({name}) vs oracle ({width}x{height}, {} px facing the light, V(t) {vt}, K = {k}):",
         m.pixels
     );
     outln!(
@@ -415,6 +472,17 @@ fn compare_twin(
             row[2]
         );
     }
+    let lists: Vec<(usize, bool)> = rows.iter().filter_map(|r| r.1).collect();
+    if !lists.is_empty() {
+        let longest = lists.iter().map(|l| l.0).max().unwrap_or(0);
+        let mean = lists.iter().map(|l| l.0).sum::<usize>() as f64 / lists.len() as f64;
+        let overflow = lists.iter().filter(|l| l.1).count();
+        outln!(
+            "  edge lists: {} px read one (mean {mean:.1} edges, longest {longest}); {overflow} px \
+             overflowed and fell back to dbuffer",
+            lists.len()
+        );
+    }
     outln!(
         "  oracle {:.0} ms ({:.1} M rays/s), twin {:.0} ms",
         oracle_s * 1e3,
@@ -422,7 +490,7 @@ fn compare_twin(
         twin_s * 1e3
     );
     Frames {
-        method,
+        method: method_v,
         reference,
         mask,
     }

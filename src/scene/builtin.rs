@@ -52,6 +52,18 @@ const SCENES: &[(&str, &str)] = &[
         "acute-corner",
         include_str!("../../assets/scenes/acute-corner.toml"),
     ),
+    (
+        "fusion-cross",
+        include_str!("../../assets/scenes/fusion-cross.toml"),
+    ),
+    (
+        "fusion-links",
+        include_str!("../../assets/scenes/fusion-links.toml"),
+    ),
+    (
+        "fusion-many",
+        include_str!("../../assets/scenes/fusion-many.toml"),
+    ),
 ];
 
 /// The names of the built-in scenes, in a fixed order.

@@ -17,6 +17,7 @@
 //! | `wedge`       | none                          | right-triangle footprint in XZ with a 15° corner, 1 long, height 0.5 along Y, centred | 8 |
 //! | `rounded-box` | `SxK` like `sphere` (`32x16`) | convex superellipsoid (exponent 0.3) in the unit cube | 2·S·(K−1) |
 //! | `torus-knot`  | `TxR` tubular × radial segments (`240x12`) | (2,3) knot in XZ, about 0.95 across | 2·T·R |
+//! | `links`       | `MxN` like `torus` (`32x8`)   | two interlocked rings (major radius 0.35, tube radius 0.08), one in XZ and one in XY, 0.35 apart along X: one mesh of two closed parts | 4·M·N |
 //! | `bunny`       | none                          | the Stanford bunny (`assets/bunny.obj`, embedded), ~10 units tall, feet at y ≈ 0; a decimated scan, closed (see `assets/README.md`) | 3674 |
 //! | `bunny-open`  | none                          | `bunny` opened at its base: the triangles in the bottom 3 % of its height removed, as a range scan leaves them | fewer |
 //!
@@ -46,6 +47,7 @@ pub const NAMES: &[&str] = &[
     "torus-knot",
     "bunny",
     "bunny-open",
+    "links",
 ];
 
 pub use crate::budget::{
@@ -112,6 +114,7 @@ pub enum Shape {
     RoundedBox(u32, u32),
     Torus(u32, u32),
     TorusKnot(u32, u32),
+    Links(u32, u32),
     Cylinder(u32),
     Cone(u32),
     Icosphere(u32),
@@ -147,6 +150,10 @@ impl Shape {
                 let (t, r) = two(base, params, (240, 12), (8, 3))?;
                 Shape::TorusKnot(t, r)
             }
+            "links" => {
+                let (m, n) = two(base, params, (32, 8), (3, 3))?;
+                Shape::Links(m, n)
+            }
             "cylinder" => Shape::Cylinder(one(base, params, 32, 3, MAX_SEGMENTS)?),
             "cone" => Shape::Cone(one(base, params, 32, 3, MAX_SEGMENTS)?),
             "icosphere" => Shape::Icosphere(one(base, params, 2, 0, MAX_ICOSPHERE_LEVEL)?),
@@ -165,6 +172,7 @@ impl Shape {
             Shape::Bunny | Shape::BunnyOpen => BUNNY_TRIANGLES,
             Shape::Sphere(s, k) | Shape::RoundedBox(s, k) => 2 * w(s) * (w(k) - 1),
             Shape::Torus(m, n) | Shape::TorusKnot(m, n) => 2 * w(m) * w(n),
+            Shape::Links(m, n) => 4 * w(m) * w(n),
             Shape::Cylinder(s) => 4 * w(s),
             Shape::Cone(s) => 2 * w(s),
             Shape::Icosphere(level) => 20 << (2 * level),
@@ -182,6 +190,7 @@ impl Shape {
             Shape::Bunny | Shape::BunnyOpen => BUNNY_VERTICES,
             Shape::Sphere(s, k) | Shape::RoundedBox(s, k) => w(s) * (w(k) - 1) + 2,
             Shape::Torus(m, n) | Shape::TorusKnot(m, n) => w(m) * w(n),
+            Shape::Links(m, n) => 2 * w(m) * w(n),
             Shape::Cylinder(s) => 2 * w(s) + 2,
             Shape::Cone(s) => w(s) + 2,
             Shape::Icosphere(level) => 10 * (1 << (2 * level)) + 2,
@@ -202,6 +211,7 @@ impl Shape {
             Shape::RoundedBox(s, k) => rounded_box(s, k),
             Shape::Torus(m, n) => torus(m, n),
             Shape::TorusKnot(t, r) => torus_knot(t, r),
+            Shape::Links(m, n) => links(m, n),
             Shape::Cylinder(s) => cylinder(s),
             Shape::Cone(s) => cone(s),
             Shape::Icosphere(level) => icosphere(level),
@@ -524,6 +534,28 @@ pub fn torus(ring: u32, tube: u32) -> Mesh {
     })
 }
 
+/// Two interlocked rings as one mesh (a chain's two links): major radius 0.35, tube radius 0.08;
+/// one in XZ centred at x = −0.175, the other in XY centred at x = +0.175, so each passes
+/// through the middle of the other's hole (0.27 wide around it) without touching: `4·ring·tube`
+/// triangles, two closed parts.
+pub fn links(ring: u32, tube: u32) -> Mesh {
+    let (big, small, apart) = (0.35, 0.08, 0.175);
+    let flat = torus_grid(ring, tube, |u, v| {
+        let w = big + small * v.cos();
+        Vec3::new(w * u.cos() - apart, small * v.sin(), w * u.sin())
+    });
+    let upright = torus_grid(ring, tube, |u, v| {
+        let w = big + small * v.cos();
+        Vec3::new(w * u.cos() + apart, w * u.sin(), small * v.sin())
+    });
+    let offset = flat.positions.len() as u32;
+    let mut positions = flat.positions;
+    positions.extend(upright.positions);
+    let mut triangles = flat.triangles;
+    triangles.extend(upright.triangles.iter().map(|t| t.map(|k| k + offset)));
+    Mesh::new(positions, triangles)
+}
+
 /// A (2,3) torus knot tube, about 0.95 across in XZ: `2·tubular·radial` triangles.
 pub fn torus_knot(tubular: u32, radial: u32) -> Mesh {
     const P: f32 = 2.0;
@@ -700,6 +732,42 @@ mod tests {
         assert_eq!(build("rounded-box:48x16").unwrap().triangles.len(), 1440);
         assert_eq!(build("cylinder:10").unwrap().triangles.len(), 40);
         assert_eq!(build("cone:10").unwrap().triangles.len(), 20);
+    }
+
+    /// Each ring of `links` passes through the other's hole without touching it: every vertex of
+    /// one lies farther than the tube radius from the other's core circle.
+    #[test]
+    fn links_interlock_without_touching() {
+        let m = links(48, 8);
+        let half = m.positions.len() / 2;
+        let (big, small, apart) = (0.35f32, 0.08f32, 0.175f32);
+        // Distance from p to the core circle of the flat ring (XZ, centre x = −apart).
+        let to_flat = |p: Vec3| {
+            let q = p + Vec3::X * apart;
+            let radial = Vec2::new(q.x, q.z).length() - big;
+            (radial * radial + q.y * q.y).sqrt()
+        };
+        let to_upright = |p: Vec3| {
+            let q = p - Vec3::X * apart;
+            let radial = Vec2::new(q.x, q.y).length() - big;
+            (radial * radial + q.z * q.z).sqrt()
+        };
+        let gap = m.positions[half..]
+            .iter()
+            .map(|&p| to_flat(p))
+            .chain(m.positions[..half].iter().map(|&p| to_upright(p)))
+            .fold(f32::INFINITY, f32::min);
+        assert!(gap > small * 1.2, "closest approach {gap}");
+        // Linked: the upright ring crosses the flat ring's plane inside its hole.
+        let inside = m.positions[half..]
+            .iter()
+            .filter(|p| p.y.abs() < 0.02)
+            .filter(|p| Vec2::new(p.x + apart, p.z).length() < big - small)
+            .count();
+        assert!(
+            inside > 0,
+            "the upright ring passes through the flat one's hole"
+        );
     }
 
     #[test]
