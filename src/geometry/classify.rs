@@ -8,7 +8,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::adjacency::{CasterMesh, Face};
+use super::adjacency::CasterMesh;
 use crate::scene::DiskLight;
 
 /// How a face sees the disk light.
@@ -74,21 +74,25 @@ pub fn classify_plane(normal: Vec3, offset: f32, light: &DiskLight) -> FaceClass
     }
 }
 
-pub fn classify_face(face: &Face, light: &DiskLight) -> FaceClass {
-    classify_plane(face.normal, face.offset, light)
+/// The class of face `f` of `mesh`.
+pub fn classify_face(mesh: &CasterMesh, f: u32, light: &DiskLight) -> FaceClass {
+    let (normal, offset) = mesh.plane(f);
+    classify_plane(normal, offset, light)
 }
 
 /// Classes of every face of the caster, in face order (in parallel for large meshes).
 pub fn classify(mesh: &CasterMesh, light: &DiskLight) -> Vec<FaceClass> {
     const PARALLEL_ABOVE: usize = 16 * 1024;
     if mesh.faces.len() > PARALLEL_ABOVE {
-        mesh.faces
-            .par_iter()
+        (0..mesh.faces.len() as u32)
+            .into_par_iter()
             .with_min_len(4096)
-            .map(|f| classify_face(f, light))
+            .map(|f| classify_face(mesh, f, light))
             .collect()
     } else {
-        mesh.faces.iter().map(|f| classify_face(f, light)).collect()
+        (0..mesh.faces.len() as u32)
+            .map(|f| classify_face(mesh, f, light))
+            .collect()
     }
 }
 

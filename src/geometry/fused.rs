@@ -147,7 +147,7 @@ pub fn candidate_edges(mesh: &CasterMesh, classes: &[FaceClass], caster: u32) ->
     let mut out = Vec::new();
     for e in &mesh.edges {
         let f0 = e.faces[0] as usize;
-        let (Some(face0), Some(&c0)) = (mesh.faces.get(f0), classes.get(f0)) else {
+        let (Some(_), Some(&c0)) = (mesh.faces.get(f0), classes.get(f0)) else {
             continue;
         };
         let boundary = e.faces[1] == NO_FACE;
@@ -169,21 +169,22 @@ pub fn candidate_edges(mesh: &CasterMesh, classes: &[FaceClass], caster: u32) ->
             (d - d.dot(along) * along).normalize_or_zero()
         };
         let d0 = inward(mesh.opposite_vertex(e.faces[0], e));
+        let plane0 = mesh.plane(e.faces[0]);
         let (n1, offset1, d1) = if boundary {
-            (-face0.normal, -face0.offset, d0)
+            (-plane0.0, -plane0.1, d0)
         } else {
-            let face1 = &mesh.faces[e.faces[1] as usize];
+            let (normal1, offset1) = mesh.plane(e.faces[1]);
             (
-                face1.normal,
-                face1.offset,
+                normal1,
+                offset1,
                 inward(mesh.opposite_vertex(e.faces[1], e)),
             )
         };
         out.push(FusedEdge {
             a,
             b,
-            n0: face0.normal,
-            offset0: face0.offset,
+            n0: plane0.0,
+            offset0: plane0.1,
             n1,
             offset1,
             fold: d0 + d1,

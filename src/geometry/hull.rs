@@ -118,9 +118,10 @@ mod tests {
         let caster = CasterMesh::new("hull", &m);
         assert!(caster.report.is_closed_manifold(), "{:?}", caster.report);
         // Outward: every point is on or behind every face plane.
-        for f in &caster.faces {
+        for f in 0..caster.faces.len() as u32 {
+            let (normal, offset) = caster.plane(f);
             for p in &pts {
-                assert!(f.normal.dot(*p) - f.offset < 1e-4);
+                assert!(normal.dot(*p) - offset < 1e-4);
             }
         }
     }

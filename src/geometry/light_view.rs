@@ -42,22 +42,27 @@ impl LightView {
     /// Fit to the scene's casters; with no caster, a 90° cone around the light normal.
     pub fn fit(scene: &Scene) -> LightView {
         let light = scene.light;
-        let mut vertices: Vec<Vec3> = scene
-            .casters()
-            .flat_map(|o| o.mesh.positions.iter().copied())
-            .filter(|p| p.is_finite())
-            .collect();
-        if vertices.is_empty() {
-            vertices.push(light.center + light.normal);
-        }
-        let all: Vec<Vec3> = scene
-            .objects
-            .iter()
-            .flat_map(|o| o.mesh.positions.iter().copied())
-            .filter(|p| p.is_finite())
-            .collect();
+        let vertices = || {
+            scene
+                .casters()
+                .flat_map(|o| o.mesh.positions.iter().copied())
+                .filter(|p| p.is_finite())
+        };
+        // Without a caster, a point in front of the light stands in for one.
+        let stand_in = vertices()
+            .next()
+            .is_none()
+            .then_some(light.center + light.normal);
+        let casters = || vertices().chain(stand_in);
+        let everything = || {
+            scene
+                .objects
+                .iter()
+                .flat_map(|o| o.mesh.positions.iter().copied())
+                .filter(|p| p.is_finite())
+        };
         let extrusion = crate::geometry::VolumeParams::for_scene(scene).far;
-        fit_directions(&light, &vertices, &all, extrusion)
+        fit_directions(&light, casters, everything, extrusion)
     }
 }
 
@@ -66,12 +71,18 @@ const RIM_SAMPLES: usize = 16;
 
 /// `extrusion`: how far volumes reach beyond the casters. The far plane must hold them: an umbra
 /// exit clipped away would count as "no exit" and lose the farthest-over-casters contest.
-fn fit_directions(
+/// `casters` and `everything` are walked (twice and once) rather than collected: a mesh of
+/// millions of vertices has 17 directions each (1.7 GB at 8M vertices if they were kept).
+fn fit_directions<C, E>(
     light: &DiskLight,
-    casters: &[Vec3],
-    everything: &[Vec3],
+    casters: impl Fn() -> C,
+    everything: impl Fn() -> E,
     extrusion: f32,
-) -> LightView {
+) -> LightView
+where
+    C: Iterator<Item = Vec3>,
+    E: Iterator<Item = Vec3>,
+{
     let c = light.center;
     let (u, w) = light.basis();
     let grow = 1.0 / (std::f32::consts::PI / RIM_SAMPLES as f32).cos();
@@ -81,25 +92,24 @@ fn fit_directions(
             c + light.radius * grow * (a.cos() * u + a.sin() * w)
         })
         .collect();
-    let mut dirs: Vec<Vec3> = Vec::with_capacity(casters.len() * (RIM_SAMPLES + 1));
-    for &v in casters {
-        if light.height_of(v) <= 0.0 {
-            continue; // behind the one-sided light: casts nothing
-        }
-        dirs.extend((v - c).try_normalize());
-        dirs.extend(rim.iter().filter_map(|&q| (v - q).try_normalize()));
-    }
-    // Directions pointing behind the light plane cannot hold a lit receiver.
-    dirs.retain(|d| d.dot(light.normal) > 1e-4);
-    if dirs.is_empty() {
-        dirs.push(light.normal);
-    }
-    let axis = dirs
-        .iter()
-        .copied()
-        .sum::<Vec3>()
-        .try_normalize()
-        .unwrap_or(light.normal);
+    // Every direction from the centre and the rim samples to a caster vertex in front of the
+    // light; directions pointing behind the light plane cannot hold a lit receiver.
+    let directions = || {
+        casters()
+            .filter(|&v| light.height_of(v) > 0.0) // behind the one-sided light: casts nothing
+            .flat_map(|v| {
+                std::iter::once(c)
+                    .chain(rim.iter().copied())
+                    .filter_map(move |q| (v - q).try_normalize())
+            })
+            .filter(|d| d.dot(light.normal) > 1e-4)
+    };
+    let (sum, any) = directions().fold((Vec3::ZERO, false), |(s, _), d| (s + d, true));
+    let axis = if any {
+        sum.try_normalize().unwrap_or(light.normal)
+    } else {
+        light.normal
+    };
     let up_hint = if axis.cross(Vec3::Y).length_squared() > 1e-6 {
         Vec3::Y
     } else {
@@ -109,8 +119,9 @@ fn fit_directions(
     let max_tan = MAX_HALF_ANGLE_DEG.to_radians().tan();
     let (mut l, mut r, mut b, mut t) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
     let mut clipped = false;
-    for d in &dirs {
-        let p = view.transform_vector3(*d);
+    let fallback = (!any).then_some(light.normal);
+    for d in directions().chain(fallback) {
+        let p = view.transform_vector3(d);
         // Looking down −Z: slopes x/(−z), y/(−z).
         let depth = -p.z;
         let (sx, sy) = if depth > 1e-6 {
@@ -131,7 +142,7 @@ fn fit_directions(
 
     let mut nearest = f32::MAX;
     let mut farthest = 0.0f32;
-    for &p in everything {
+    for p in everything() {
         let d = (p - c).length();
         nearest = nearest.min(d);
         farthest = farthest.max(d);

@@ -138,7 +138,7 @@ fn silhouette_edge(mesh: &CasterMesh, classes: &[FaceClass], i: usize) -> Option
     let mut inward = into_face(f0);
     if edge.faces[1] != NO_FACE {
         let f1 = edge.faces[1];
-        let normals = mesh.faces[f0 as usize].normal + mesh.faces[f1 as usize].normal;
+        let normals = mesh.plane(f0).0 + mesh.plane(f1).0;
         inward += into_face(f1) - normals;
     }
     let scale = (v[1] - v[0]).length();

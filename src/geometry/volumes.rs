@@ -159,6 +159,14 @@ impl VolumeMesh {
         }
         let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
         let flip = (normal.dot(c - corners[0]) > 0.0) != toward_c;
+        // Past what was reserved (the fans), grow by an eighth, not by doubling: a volume of
+        // millions of triangles must not hold twice its size for a few fan triangles more.
+        let spare = self.vertices.capacity() - self.vertices.len();
+        if spare < corners.len() {
+            let more = corners.len().max(self.vertices.len() / 8);
+            self.vertices.reserve_exact(more);
+            self.indices.reserve_exact(3 * more);
+        }
         let base = self.vertices.len() as u32;
         self.vertices
             .extend(corners.iter().map(|&position| VolumeVertex {
@@ -330,6 +338,10 @@ pub fn build_caster_within(
         };
     }
     let silhouettes = find_silhouettes(mesh, &classes);
+    // Room for what is known to come (the fans add a little): growing by doubling would hold
+    // up to twice the volumes at the peak (1.4M triangles: 436 MB instead of 218).
+    volumes.vertices.reserve(3 * at_least);
+    volumes.indices.reserve(3 * at_least);
 
     let extrude = |v: Vec3, p: Vec3| extrude_away(v, p, params.far);
     // Both ends of every extruded edge, for the fans.

@@ -6,7 +6,7 @@
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
-use super::SurfaceVertex;
+use super::{GpuContext, SurfaceVertex};
 use crate::scene::Scene;
 
 /// Albedo of casters and of receivers-only objects (the ground).
@@ -83,13 +83,15 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    pub fn new(device: &wgpu::Device, scene: &Scene) -> GpuScene {
+    pub fn new(ctx: &GpuContext, scene: &Scene) -> GpuScene {
+        let device = &ctx.device;
         let limit = CHUNK_BYTES.min(device.limits().max_buffer_size);
         let vertex_size = std::mem::size_of::<SurfaceVertex>() as u64;
         // A chunk of n triangles holds at most 3n vertices and 3n indices.
         let max_triangles = (limit / (3 * vertex_size.max(4))).max(1) as usize;
         let mut builder = ChunkBuilder {
             device,
+            queue: &ctx.queue,
             max_triangles,
             vertices: Vec::new(),
             indices: Vec::new(),
@@ -136,6 +138,7 @@ impl GpuScene {
 /// Packs objects' triangles into chunks, remapping vertex indices per chunk.
 struct ChunkBuilder<'a> {
     device: &'a wgpu::Device,
+    queue: &'a wgpu::Queue,
     max_triangles: usize,
     vertices: Vec<SurfaceVertex>,
     indices: Vec<u32>,
@@ -214,5 +217,10 @@ impl ChunkBuilder<'_> {
         });
         self.vertices.clear();
         self.indices.clear();
+        // Each buffer was filled through a staging copy that lives until a submission has
+        // carried it to the GPU: send it now, so a mesh of many chunks never holds more than one
+        // chunk's staging copies (16M triangles: 2.5 GB at the peak otherwise).
+        self.queue.submit(std::iter::empty());
+        let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
     }
 }

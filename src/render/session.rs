@@ -70,7 +70,7 @@ pub struct Session {
 
 impl Session {
     pub fn new(ctx: &GpuContext, scene: Scene) -> Session {
-        let surfaces = GpuScene::new(&ctx.device, &scene);
+        let surfaces = GpuScene::new(ctx, &scene);
         let light_view = LightView::fit(&scene);
         Session {
             shared: SharedMaps {
@@ -144,7 +144,7 @@ impl Session {
         if object.casts_shadow {
             self.prepared = OnceCell::new();
         }
-        self.surfaces = GpuScene::new(&ctx.device, &self.scene);
+        self.surfaces = GpuScene::new(ctx, &self.scene);
         self.meshes += 1;
         self.moved();
     }

@@ -167,42 +167,40 @@ impl DBuffer {
         } else {
             f32::MAX
         };
-        let mut penumbra = Vec::new();
-        let mut umbrae: Vec<Vec<VolumeVertex>> = geometry
+        // Each caster's umbra rectangle (from its volume's corners, before any ending), to
+        // know whether umbrae are merged over casters: only umbrae drawn straight into the
+        // target may end at the reach too.
+        let rects: Vec<[f32; 4]> = geometry
             .casters
             .iter()
             .map(|g| {
-                let (umbra, pen) = volume_vertices(g, &light);
-                penumbra.extend(end_at(&pen, &light, reach));
-                umbra
+                let corners = (0..g.volumes.triangle_count())
+                    .map(|i| g.volumes.triangle(i))
+                    .filter(|(_, attrs)| attrs.kind.is_umbra())
+                    .flat_map(|(corners, _)| corners);
+                light_view_rect(inputs.light_view, corners)
             })
             .collect();
-        // Nearest first: the depth test then turns the farther crossings away before shading.
-        for u in &mut umbrae {
-            sort_near_first(u, light.center);
-        }
-        sort_near_first(&mut penumbra, light.center);
-        let rects: Vec<[f32; 4]> = umbrae
-            .iter()
-            .map(|u| light_view_rect(inputs.light_view, u.iter().map(|v| Vec3::from(v.position))))
-            .collect();
-        // Umbrae drawn straight into the target (no merge over casters) may end at the reach too.
         let merged = disjoint_groups(&rects).len() > 1;
-        self.casters = umbrae
-            .into_iter()
+        let umbra_reach = (!merged).then_some(reach);
+        let mut penumbra = Vec::new();
+        self.casters = geometry
+            .casters
+            .iter()
             .zip(rects)
-            .map(|(umbra, rect)| {
-                let umbra = if merged {
-                    umbra
-                } else {
-                    end_at(&umbra, &light, reach)
-                };
+            .map(|(g, rect)| {
+                let (mut umbra, pen) = volume_vertices_within(g, &light, umbra_reach, Some(reach));
+                penumbra.extend(pen);
+                // Nearest first: the depth test then turns the farther crossings away before
+                // shading.
+                sort_near_first(&mut umbra, light.center);
                 CasterVolumes {
                     rect,
                     umbra: VertexChunks::new(device, "DBuffer::umbra", &umbra),
                 }
             })
             .collect();
+        sort_near_first(&mut penumbra, light.center);
         self.penumbra_rect = light_view_rect(
             inputs.light_view,
             penumbra.iter().map(|v| Vec3::from(v.position)),
@@ -328,21 +326,39 @@ pub fn volume_vertices(
     g: &CasterGeometry,
     light: &crate::scene::DiskLight,
 ) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
+    volume_vertices_within(g, light, None, None)
+}
+
+/// [`volume_vertices`], each volume ended at its reach when one is given ([`end_at`]), made in
+/// one pass: no full copy of a volume is held besides the one returned.
+pub fn volume_vertices_within(
+    g: &CasterGeometry,
+    light: &crate::scene::DiskLight,
+    umbra_reach: Option<f32>,
+    penumbra_reach: Option<f32>,
+) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
     let (c, n) = (light.center, light.normal);
-    let (mut umbra, mut penumbra) = (Vec::new(), Vec::new());
-    for i in 0..g.volumes.triangle_count() {
+    let triangles = g.volumes.triangle_count();
+    let umbrae = (0..triangles)
+        .filter(|&i| g.volumes.triangle(i).1.kind.is_umbra())
+        .count();
+    let (mut umbra, mut penumbra) = (
+        Vec::with_capacity(3 * umbrae),
+        Vec::with_capacity(3 * (triangles - umbrae)),
+    );
+    for i in 0..triangles {
         let (corners, attrs) = g.volumes.triangle(i);
         let [a, b] = attrs.edge;
         let p = attrs.extrusion;
         let along = (b - a).normalize_or_zero();
         let w = (p - a) - along * (p - a).dot(along);
         let ratio = w.length_squared() > 1e-12 * (p - a).length_squared().max(1e-30);
-        let out = if attrs.kind.is_umbra() {
-            &mut umbra
+        let (out, reach) = if attrs.kind.is_umbra() {
+            (&mut umbra, umbra_reach)
         } else {
-            &mut penumbra
+            (&mut penumbra, penumbra_reach)
         };
-        out.extend(corners.map(|q| {
+        let t = corners.map(|q| {
             let (base, num, den) = if ratio {
                 let k = (a - p).dot(w);
                 ((p - c).dot(n), (q - p).dot(n) * k, (q - p).dot(w))
@@ -356,7 +372,11 @@ pub fn volume_vertices(
                 num,
                 den,
             }
-        }));
+        });
+        match reach {
+            Some(r) => clip_into(t, light, r, out),
+            None => out.extend(t),
+        }
     }
     (umbra, penumbra)
 }
@@ -375,56 +395,69 @@ pub fn end_at(
     light: &crate::scene::DiskLight,
     reach: f32,
 ) -> Vec<VolumeVertex> {
-    let height = |v: &VolumeVertex| light.height_of(Vec3::from(v.position)) - reach;
     let mut out = Vec::with_capacity(volume.len());
     for t in volume.chunks_exact(3) {
-        let h = [height(&t[0]), height(&t[1]), height(&t[2])];
-        if h.iter().all(|&x| x <= 0.0) {
-            out.extend_from_slice(t);
-            continue;
-        }
-        if h.iter().all(|&x| x > 0.0) {
-            continue;
-        }
-        // Walk the edges, keeping inside corners and the crossings (Sutherland–Hodgman, one
-        // plane); num and den are affine, so they interpolate exactly.
-        let mut poly: Vec<VolumeVertex> = Vec::with_capacity(4);
-        for k in 0..3 {
-            let (p, q) = (t[k], t[(k + 1) % 3]);
-            let (hp, hq) = (h[k], h[(k + 1) % 3]);
-            if hp <= 0.0 {
-                poly.push(p);
-            }
-            if (hp <= 0.0) != (hq <= 0.0) {
-                let s = hp / (hp - hq);
-                let lerp = |a: f32, b: f32| a + (b - a) * s;
-                let (pp, qp) = (Vec3::from(p.position), Vec3::from(q.position));
-                poly.push(VolumeVertex {
-                    position: (pp + (qp - pp) * s).to_array(),
-                    num: lerp(p.num, q.num),
-                    den: lerp(p.den, q.den),
-                    ..t[0]
-                });
-            }
-        }
-        for k in 1..poly.len().saturating_sub(1) {
-            out.extend([poly[0], poly[k], poly[k + 1]]);
-        }
+        clip_into([t[0], t[1], t[2]], light, reach, &mut out);
     }
     out
 }
 
+/// Append the part of triangle `t` whose height below the light's plane is at most `reach`
+/// (none, all of it, a triangle or a quad as two) to `out`.
+fn clip_into(
+    t: [VolumeVertex; 3],
+    light: &crate::scene::DiskLight,
+    reach: f32,
+    out: &mut Vec<VolumeVertex>,
+) {
+    let height = |v: &VolumeVertex| light.height_of(Vec3::from(v.position)) - reach;
+    let h = [height(&t[0]), height(&t[1]), height(&t[2])];
+    if h.iter().all(|&x| x <= 0.0) {
+        out.extend_from_slice(&t);
+        return;
+    }
+    if h.iter().all(|&x| x > 0.0) {
+        return;
+    }
+    // Walk the edges, keeping inside corners and the crossings (Sutherland–Hodgman, one
+    // plane); num and den are affine, so they interpolate exactly.
+    let mut poly: [VolumeVertex; 4] = [t[0]; 4];
+    let mut n = 0;
+    for k in 0..3 {
+        let (p, q) = (t[k], t[(k + 1) % 3]);
+        let (hp, hq) = (h[k], h[(k + 1) % 3]);
+        if hp <= 0.0 {
+            poly[n] = p;
+            n += 1;
+        }
+        if (hp <= 0.0) != (hq <= 0.0) {
+            let s = hp / (hp - hq);
+            let lerp = |a: f32, b: f32| a + (b - a) * s;
+            let (pp, qp) = (Vec3::from(p.position), Vec3::from(q.position));
+            poly[n] = VolumeVertex {
+                position: (pp + (qp - pp) * s).to_array(),
+                num: lerp(p.num, q.num),
+                den: lerp(p.den, q.den),
+                ..t[0]
+            };
+            n += 1;
+        }
+    }
+    for k in 1..n.saturating_sub(1) {
+        out.extend([poly[0], poly[k], poly[k + 1]]);
+    }
+}
+
 /// Reorder the triangles of `volume` by the distance of their centroid from `c`, nearest first.
-fn sort_near_first(volume: &mut Vec<VolumeVertex>, c: Vec3) {
-    let mut tris: Vec<[VolumeVertex; 3]> =
-        volume.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+fn sort_near_first(volume: &mut [VolumeVertex], c: Vec3) {
+    // In place, by whole triangles (no copy: a 1.4M-triangle volume is 118 MB).
+    let whole = volume.len() / 3 * 3;
+    let tris: &mut [[VolumeVertex; 3]] = bytemuck::cast_slice_mut(&mut volume[..whole]);
     let key = |t: &[VolumeVertex; 3]| {
         let centroid = t.iter().map(|v| Vec3::from(v.position)).sum::<Vec3>() / 3.0;
         (centroid - c).length_squared()
     };
-    tris.sort_by(|a, b| key(a).total_cmp(&key(b)));
-    volume.clear();
-    volume.extend(tris.into_iter().flatten());
+    tris.sort_unstable_by(|a, b| key(a).total_cmp(&key(b)));
 }
 
 /// The part `[x0, y0, x1, y1]` of the light view's image (`[0, 1]²`, y down) that triangles
