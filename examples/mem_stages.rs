@@ -1,8 +1,9 @@
-//! Peak and current resident memory after each stage of one offline render (Linux):
+//! Peak and current resident memory, and dbuffer's own heap, after each stage of one offline
+//! render the way `dbuffer render` makes it (Linux):
 //!
 //!     cargo run --release --example mem_stages -- SCENE [WxH] [DBUFFER_SIZE]
 //!
-//! How the README's memory table of `dbuffer render` was broken down by stage.
+//! How the README's memory table of `dbuffer render` was measured and broken down by stage.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -88,24 +89,39 @@ fn main() -> anyhow::Result<()> {
         width: w,
         height: h,
         dbuffer_size: ds,
-        read_dbuffer: true,
+        read_dbuffer: false,
         ..FrameRequest::default()
     };
-    let frame = session.frame(&offline.ctx, &request)?;
+    // As `dbuffer render` does it: the frame, then the D-buffer streamed to its files in bands.
+    let (frame, report) =
+        dbuffer::render::offline::render_in(&offline.ctx, &mut session, &request, &mut |_, _| {})?;
     mark("frame read back");
-    let meta = dbuffer::output::render_meta(
+    let maps_of = session.prepare_maps(&offline.ctx, &request)?;
+    let size = session.light_maps(maps_of).map_or(0, |m| m.size);
+    let mut meta = dbuffer::output::render_meta(
         "mem",
         session.scene(),
         &request,
         &offline.ctx,
         &frame,
-        &Default::default(),
+        &report,
     );
-    let out = dbuffer::output::RenderOutputs::from_frame(&frame, meta);
-    mark("outputs converted");
-    drop(frame);
+    meta.dbuffer_size = size;
+    let ctx = &offline.ctx;
+    let band = ((16 << 20) / (20 * size.max(1))).max(1);
+    let mut rows = dbuffer::output::BandedRows::new(size, band, |first, n| {
+        session
+            .read_map_rows(ctx, maps_of, first..first + n)
+            .map(|b| dbuffer::output::dbuffer_texels(&b))
+            .map_err(|e| e.to_string())
+    });
     let dir = std::env::temp_dir().join("dbuffer-mem-stages");
-    dbuffer::output::write_render(&dir, &out)?;
+    dbuffer::output::write_render_parts(
+        &dir,
+        &meta,
+        &dbuffer::output::FramePixels(&frame),
+        &mut rows,
+    )?;
     mark("files written");
     Ok(())
 }

@@ -12,10 +12,17 @@
 //! | `classes.png` | width×height | 8-bit RGB, the colours of [`class_rgb`] and [`NOT_HIT_RGB`] |
 //! | `meta.json` | | [`RenderMeta`], pretty-printed |
 //!
-//! Every EXR is uncompressed, 32-bit float, row 0 at the top, and holds exactly the values given:
+//! Every EXR is 32-bit float, losslessly compressed (RLE, as the `image` crate writes them), row
+//! 0 at the top, and holds exactly the values given:
 //! they read back bit for bit ([`read_exr_rgba`]), infinity and NaN included. In particular a
 //! missing |cx_o| stays `+inf` in `dbuffer.exr` (the EXR format and the `image` crate's encoder
 //! both take it as it is; no large finite stand-in is needed).
+//!
+//! **Streamed.** Each file is encoded straight to disk, a PNG row or an EXR block at a time, from
+//! a [`PixelSource`] and the D-buffer's [`DBufferRows`]: `dbuffer render` writes from the frame
+//! it read back ([`FramePixels`], 16 bytes a pixel) and reads the D-buffer from the GPU in bands
+//! ([`BandedRows`]), so an 8192² image with an 8192² D-buffer is written without a second copy
+//! of either.
 //!
 //! **Never a half-written folder.** The files are first written (and flushed to disk) into a fresh
 //! hidden folder inside the output folder (`.dbuffer-render-PID-N`, [`TEMP_PREFIX`]). Only when
@@ -127,7 +134,7 @@ impl RenderOutputs {
     /// shadow classes by the thresholds of design.md §4, the D-buffer's "no surface" as `+inf`.
     /// A frame without its D-buffer gets an empty one (0×0).
     pub fn from_frame(frame: &Frame, meta: RenderMeta) -> RenderOutputs {
-        let hit: Vec<bool> = (0..frame.position.len()).map(|i| frame.hit(i)).collect();
+        let hit: Vec<bool> = (0..frame.len()).map(|i| frame.hit(i)).collect();
         let class = frame
             .visibility
             .iter()
@@ -157,7 +164,9 @@ impl RenderOutputs {
                 .collect(),
             visibility: frame.visibility.clone(),
             hit,
-            position: frame.position.iter().map(|p| [p[0], p[1], p[2]]).collect(),
+            position: (0..frame.len())
+                .map(|i| frame.position(i).map_or([0.0; 3], |p| p.to_array()))
+                .collect(),
             class,
             dbuffer_size: maps.map_or(0, |m| m.size),
             d_o: raw(0, 0)
@@ -412,9 +421,33 @@ fn write_render_with(
     fault: &mut Fault<'_>,
 ) -> Result<Vec<PathBuf>, OutputError> {
     validate(out)?;
+    write_parts_with(dir, &out.meta, out, &mut VecRows(out), fault)
+}
+
+/// Write a render's files from its parts, all or nothing (as [`write_render`]): the pixels,
+/// and the D-buffer a row at a time. Each file is streamed to disk as it is encoded, so the
+/// only memory this takes beyond what `pixels` holds is a few rows (an 8192² render's files
+/// are written without a second copy of the frame, and the D-buffer is never held whole when
+/// `dbuffer` reads it in bands).
+pub fn write_render_parts(
+    dir: &Path,
+    meta: &RenderMeta,
+    pixels: &dyn PixelSource,
+    dbuffer: &mut dyn DBufferRows,
+) -> Result<Vec<PathBuf>, OutputError> {
+    write_parts_with(dir, meta, pixels, dbuffer, &mut |_| Ok(()))
+}
+
+fn write_parts_with(
+    dir: &Path,
+    meta: &RenderMeta,
+    pixels: &dyn PixelSource,
+    dbuffer: &mut dyn DBufferRows,
+    fault: &mut Fault<'_>,
+) -> Result<Vec<PathBuf>, OutputError> {
     check_out_dir(dir, &FILE_NAMES)?;
     let created = NewDirs::create(dir).map_err(io_err(dir, "create the directory"))?;
-    let result = write_into(dir, out, fault);
+    let result = write_into(dir, meta, pixels, dbuffer, fault);
     if result.is_err() {
         // A folder this call made is not left behind (it is empty again by now).
         created.remove_if_empty();
@@ -424,12 +457,14 @@ fn write_render_with(
 
 fn write_into(
     dir: &Path,
-    out: &RenderOutputs,
+    meta: &RenderMeta,
+    pixels: &dyn PixelSource,
+    dbuffer: &mut dyn DBufferRows,
     fault: &mut Fault<'_>,
 ) -> Result<Vec<PathBuf>, OutputError> {
     let names: Vec<String> = FILE_NAMES.iter().map(|n| n.to_string()).collect();
     let temp = create_temp_dir(dir)?;
-    if let Err(e) = stage(dir, &temp, out, fault) {
+    if let Err(e) = stage(dir, &temp, meta, pixels, dbuffer, fault) {
         let _ = fs::remove_dir_all(&temp);
         return Err(e);
     }
@@ -835,96 +870,375 @@ fn create_temp_dir(dir: &Path) -> Result<PathBuf, OutputError> {
 fn stage(
     dir: &Path,
     temp: &Path,
-    out: &RenderOutputs,
+    meta: &RenderMeta,
+    pixels: &dyn PixelSource,
+    dbuffer: &mut dyn DBufferRows,
     fault: &mut Fault<'_>,
 ) -> Result<(), OutputError> {
     for (i, name) in FILE_NAMES.iter().enumerate() {
         let target = dir.join(name);
-        let bytes = encode(name, &target, out)?;
-        let result = fault(Step::Stage(i)).and_then(|()| {
-            let mut f = File::create(temp.join(name))?;
-            f.write_all(&bytes)?;
-            f.sync_all()
-        });
-        result.map_err(io_err(&target, "write"))?;
+        fault(Step::Stage(i)).map_err(io_err(&target, "write"))?;
+        let file = File::create(temp.join(name)).map_err(io_err(&target, "write"))?;
+        let mut out = io::BufWriter::with_capacity(1 << 20, file);
+        encode_into(name, &target, &mut out, meta, pixels, dbuffer)?;
+        let file = out
+            .into_inner()
+            .map_err(|e| io_err(&target, "write")(e.into_error()))?;
+        file.sync_all().map_err(io_err(&target, "write"))?;
     }
     Ok(())
 }
 
-/// The bytes of file `name`.
-fn encode(name: &str, target: &Path, out: &RenderOutputs) -> Result<Vec<u8>, OutputError> {
-    let (w, h, ds) = (out.width, out.height, out.dbuffer_size);
-    let alpha = |i: usize| if out.hit[i] { 1.0 } else { 0.0 };
-    let encoded = match name {
-        IMAGE_PNG => {
-            let bytes: Vec<u8> = out
-                .color
-                .iter()
-                .flat_map(|c| c.map(linear_to_srgb8))
-                .collect();
-            png_rgb8(w, h, &bytes)
+/// The pixels of a render, for its image files: row-major, row 0 at the top. `Sync`: the EXR
+/// encoder asks for pixels from several threads.
+pub trait PixelSource: Sync {
+    fn size(&self) -> (u32, u32);
+    /// The shaded colour, 8-bit sRGB.
+    fn srgb(&self, i: usize) -> [u8; 3];
+    fn visibility(&self, i: usize) -> f32;
+    /// Whether the pixel saw a surface.
+    fn hit(&self, i: usize) -> bool;
+    /// The world position the pixel saw (meaningful where hit).
+    fn position(&self, i: usize) -> [f32; 3];
+    /// The shadow class where hit: 0 lit, 1 penumbra, 2 umbra.
+    fn class(&self, i: usize) -> u8;
+}
+
+/// One texel of the light-view D-buffer: |cx_o| (`+inf` for no surface), |cx_uv|, |cx_pv|,
+/// |cx_s| umbra, |cx_s| penumbra.
+pub type DBufferTexel = [f32; 5];
+
+/// The D-buffer a row at a time (rows are asked for in increasing order, mostly).
+pub trait DBufferRows: Send {
+    /// Texels on a side.
+    fn size(&self) -> u32;
+    /// Row `y` into `out` (`size` texels).
+    fn row(&mut self, y: u32, out: &mut [DBufferTexel]) -> Result<(), OutputError>;
+}
+
+/// [`RenderOutputs`]' D-buffer, from memory.
+struct VecRows<'a>(&'a RenderOutputs);
+
+impl DBufferRows for VecRows<'_> {
+    fn size(&self) -> u32 {
+        self.0.dbuffer_size
+    }
+    fn row(&mut self, y: u32, out: &mut [DBufferTexel]) -> Result<(), OutputError> {
+        let o = self.0;
+        let start = y as usize * o.dbuffer_size as usize;
+        for (x, texel) in out.iter_mut().enumerate() {
+            let i = start + x;
+            let at = |v: &[f32]| v.get(i).copied().unwrap_or(0.0);
+            *texel = [at(&o.d_o), at(&o.d_u), at(&o.d_p), at(&o.s_u), at(&o.s_p)];
         }
-        VISIBILITY_EXR => exr_rgba32f(
-            w,
-            h,
-            out.visibility
-                .iter()
-                .enumerate()
-                .map(|(i, &v)| [v, v, v, alpha(i)]),
-        ),
-        POSITION_EXR => exr_rgba32f(
-            w,
-            h,
-            out.position
-                .iter()
-                .enumerate()
-                .map(|(i, p)| [p[0], p[1], p[2], alpha(i)]),
-        ),
-        DBUFFER_EXR => exr_rgba32f(
-            ds,
-            ds,
-            (0..out.d_o.len()).map(|i| [out.d_o[i], out.d_u[i], out.d_p[i], out.s_u[i]]),
-        ),
-        DBUFFER_S_EXR => exr_rgba32f(
-            ds,
-            ds,
-            (0..out.s_u.len()).map(|i| [out.s_u[i], out.s_p[i], 0.0, 1.0]),
-        ),
-        CLASSES_PNG => {
-            let bytes: Vec<u8> = (0..out.class.len())
-                .flat_map(|i| {
-                    // Checked in `validate`: a hit pixel's class is 0, 1 or 2.
-                    let class = ShadowClass::ALL.get(usize::from(out.class[i]));
-                    match (out.hit[i], class) {
-                        (true, Some(&c)) => class_rgb(c),
-                        _ => NOT_HIT_RGB,
+        Ok(())
+    }
+}
+
+impl PixelSource for RenderOutputs {
+    fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+    fn srgb(&self, i: usize) -> [u8; 3] {
+        self.color[i].map(linear_to_srgb8)
+    }
+    fn visibility(&self, i: usize) -> f32 {
+        self.visibility[i]
+    }
+    fn hit(&self, i: usize) -> bool {
+        self.hit[i]
+    }
+    fn position(&self, i: usize) -> [f32; 3] {
+        self.position[i]
+    }
+    fn class(&self, i: usize) -> u8 {
+        self.class[i]
+    }
+}
+
+/// A frame read back, as the image files see it (no copy of it is made).
+pub struct FramePixels<'a>(pub &'a Frame);
+
+impl PixelSource for FramePixels<'_> {
+    fn size(&self) -> (u32, u32) {
+        (self.0.width, self.0.height)
+    }
+    fn srgb(&self, i: usize) -> [u8; 3] {
+        let c = self.0.color[i];
+        [c[0], c[1], c[2]]
+    }
+    fn visibility(&self, i: usize) -> f32 {
+        self.0.visibility[i]
+    }
+    fn hit(&self, i: usize) -> bool {
+        self.0.hit(i)
+    }
+    fn position(&self, i: usize) -> [f32; 3] {
+        self.0.position(i).map_or([0.0; 3], |p| p.to_array())
+    }
+    fn class(&self, i: usize) -> u8 {
+        class_code(self.0.visibility[i])
+    }
+}
+
+/// The class code of V (design.md §4 thresholds): 0 lit, 1 penumbra, 2 umbra.
+fn class_code(v: f32) -> u8 {
+    match ShadowClass::of(f64::from(v)) {
+        ShadowClass::Lit => 0,
+        ShadowClass::Penumbra => 1,
+        ShadowClass::Umbra => 2,
+    }
+}
+
+/// A D-buffer read in bands of rows by `fetch(first row, rows)`, a band kept at a time. Bands
+/// start at multiples of their height, a multiple of 64 rows: the EXR encoder goes over a block
+/// of 64 rows once per channel, so a band boundary inside a block would read both bands again
+/// for every channel.
+pub struct BandedRows<F> {
+    size: u32,
+    band: u32,
+    fetch: F,
+    first: u32,
+    rows: Vec<DBufferTexel>,
+}
+
+impl<F> BandedRows<F>
+where
+    F: FnMut(u32, u32) -> Result<Vec<DBufferTexel>, String> + Send,
+{
+    /// `size`² texels, about `band` rows per fetch (rounded up to a multiple of 64).
+    pub fn new(size: u32, band: u32, fetch: F) -> Self {
+        BandedRows {
+            size,
+            band: band.max(1).div_ceil(64) * 64,
+            fetch,
+            first: 0,
+            rows: Vec::new(),
+        }
+    }
+}
+
+impl<F> DBufferRows for BandedRows<F>
+where
+    F: FnMut(u32, u32) -> Result<Vec<DBufferTexel>, String> + Send,
+{
+    fn size(&self) -> u32 {
+        self.size
+    }
+    fn row(&mut self, y: u32, out: &mut [DBufferTexel]) -> Result<(), OutputError> {
+        let width = self.size as usize;
+        let held = (self.rows.len() / width.max(1)) as u32;
+        if !(self.first..self.first + held).contains(&y) {
+            let first = y / self.band * self.band;
+            let n = self.band.min(self.size.saturating_sub(first));
+            self.rows = (self.fetch)(first, n).map_err(|e| OutputError::Encode {
+                path: PathBuf::from(DBUFFER_EXR),
+                error: image::ImageError::IoError(io::Error::other(e)),
+            })?;
+            self.first = first;
+        }
+        let start = (y - self.first) as usize * width;
+        match self.rows.get(start..start + width) {
+            Some(row) => {
+                out.copy_from_slice(row);
+                Ok(())
+            }
+            None => Err(OutputError::Length {
+                file: DBUFFER_EXR,
+                field: "row",
+                found: self.rows.len(),
+                expected: start + width,
+                width: self.size,
+                height: self.size,
+            }),
+        }
+    }
+}
+
+/// The D-buffer texels of light-space maps read back (all rows held, or a band): |cx_o| from
+/// slot 0 (`+inf` where no surface), |cx_uv| and its |cx_s| from slot 1, |cx_pv| and its
+/// |cx_s| from slot 2 — what [`RenderOutputs::from_frame`] takes apart.
+pub fn dbuffer_texels(maps: &crate::render::frame::LightMapsData) -> Vec<DBufferTexel> {
+    let (d_o, d_u, d_p, s_u, s_p) = (
+        maps.raw(0, 0),
+        maps.raw(1, 0),
+        maps.raw(2, 0),
+        maps.raw(1, 1),
+        maps.raw(2, 1),
+    );
+    let at = |v: &[f32], i: usize| v.get(i).copied().unwrap_or(0.0);
+    (0..d_o.len())
+        .map(|i| {
+            let o = at(&d_o, i);
+            let o = if f64::from(o) >= NO_SURFACE * 0.5 {
+                f32::INFINITY
+            } else {
+                o
+            };
+            [o, at(&d_u, i), at(&d_p, i), at(&s_u, i), at(&s_p, i)]
+        })
+        .collect()
+}
+
+/// Encode file `name` into `out`, streaming: PNG rows as they are made, EXR blocks as the
+/// encoder asks for pixels.
+fn encode_into(
+    name: &str,
+    target: &Path,
+    out: &mut io::BufWriter<File>,
+    meta: &RenderMeta,
+    pixels: &dyn PixelSource,
+    dbuffer: &mut dyn DBufferRows,
+) -> Result<(), OutputError> {
+    let (w, h) = pixels.size();
+    let ds = dbuffer.size();
+    let encode_err = |error: image::ImageError| OutputError::Encode {
+        path: target.to_path_buf(),
+        error,
+    };
+    let exr_err = |e: exr::error::Error| {
+        encode_err(image::ImageError::IoError(io::Error::other(e.to_string())))
+    };
+    let png_err = |e: png::EncodingError| {
+        encode_err(image::ImageError::IoError(io::Error::other(e.to_string())))
+    };
+    let alpha = |i: usize| if pixels.hit(i) { 1.0 } else { 0.0 };
+    let width = w as usize;
+    match name {
+        IMAGE_PNG => png_rows(out, w, h, |y, row| {
+            for (x, px) in row.chunks_exact_mut(3).enumerate() {
+                px.copy_from_slice(&pixels.srgb(y * width + x));
+            }
+        })
+        .map_err(png_err),
+        CLASSES_PNG => png_rows(out, w, h, |y, row| {
+            for (x, px) in row.chunks_exact_mut(3).enumerate() {
+                let i = y * width + x;
+                let class = ShadowClass::ALL.get(usize::from(pixels.class(i)));
+                px.copy_from_slice(&match (pixels.hit(i), class) {
+                    (true, Some(&c)) => class_rgb(c),
+                    _ => NOT_HIT_RGB,
+                });
+            }
+        })
+        .map_err(png_err),
+        VISIBILITY_EXR => exr_rows(out, w, h, true, |x, y| {
+            let i = y * width + x;
+            let v = pixels.visibility(i);
+            [v, v, v, alpha(i)]
+        })
+        .map_err(exr_err),
+        POSITION_EXR => exr_rows(out, w, h, true, |x, y| {
+            let i = y * width + x;
+            let p = pixels.position(i);
+            [p[0], p[1], p[2], alpha(i)]
+        })
+        .map_err(exr_err),
+        DBUFFER_EXR | DBUFFER_S_EXR => {
+            // One row at a time from `dbuffer`, which may be reading the GPU in bands: the
+            // encoder runs on this thread, rows in order.
+            let cursor = std::sync::Mutex::new((u32::MAX, vec![[0.0f32; 5]; ds as usize], None));
+            let rows = std::sync::Mutex::new(dbuffer);
+            let s_only = name == DBUFFER_S_EXR;
+            let result = exr_rows(out, ds, ds, false, |x, y| {
+                let Ok(mut c) = cursor.lock() else {
+                    return [f32::NAN; 4];
+                };
+                let (held, row, error) = &mut *c;
+                if *held != y as u32 {
+                    match rows.lock() {
+                        Ok(mut r) => {
+                            if let Err(e) = r.row(y as u32, row) {
+                                error.get_or_insert(e);
+                            }
+                        }
+                        Err(_) => {
+                            error.get_or_insert(OutputError::Length {
+                                file: DBUFFER_EXR,
+                                field: "row",
+                                found: 0,
+                                expected: ds as usize,
+                                width: ds,
+                                height: ds,
+                            });
+                        }
                     }
-                })
-                .collect();
-            png_rgb8(w, h, &bytes)
+                    *held = y as u32;
+                }
+                let t = row.get(x).copied().unwrap_or([0.0; 5]);
+                if s_only {
+                    [t[3], t[4], 0.0, 1.0]
+                } else {
+                    [t[0], t[1], t[2], t[3]]
+                }
+            });
+            let failed = cursor.into_inner().ok().and_then(|c| c.2);
+            if let Some(e) = failed {
+                return Err(e);
+            }
+            result.map_err(exr_err)
         }
         META_JSON => {
-            return out
-                .meta
-                .to_json_pretty()
-                .map(String::into_bytes)
-                .map_err(|error| OutputError::Json {
-                    path: target.to_path_buf(),
-                    error,
-                })
+            let json = meta.to_json_pretty().map_err(|error| OutputError::Json {
+                path: target.to_path_buf(),
+                error,
+            })?;
+            out.write_all(json.as_bytes())
+                .map_err(io_err(target, "write"))
         }
         other => {
             let msg = format!("{other} is not a render output file");
-            return Err(io_err(target, "encode")(io::Error::other(msg)));
+            Err(io_err(target, "encode")(io::Error::other(msg)))
         }
-    };
-    encoded.map_err(|error| OutputError::Encode {
-        path: target.to_path_buf(),
-        error,
-    })
+    }
 }
 
-/// A PNG of 8-bit RGB `bytes` (`3·w·h` of them, checked by `validate`).
+/// An 8-bit RGB PNG written a row at a time: `row(y, bytes)` fills row `y`.
+fn png_rows(
+    out: &mut io::BufWriter<File>,
+    w: u32,
+    h: u32,
+    mut row: impl FnMut(usize, &mut [u8]),
+) -> Result<(), png::EncodingError> {
+    let mut encoder = png::Encoder::new(out, w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header()?;
+    let mut stream = writer.stream_writer()?;
+    let mut bytes = vec![0u8; 3 * w as usize];
+    for y in 0..h as usize {
+        row(y, &mut bytes);
+        stream.write_all(&bytes)?;
+    }
+    stream.finish()?;
+    writer.finish()
+}
+
+/// An RGBA f32 EXR (the `image` crate's encoding: RLE, lossless) written block by block as the
+/// encoder asks `pixel(x, y)`; `parallel`: from several threads, in any order.
+fn exr_rows(
+    out: &mut io::BufWriter<File>,
+    w: u32,
+    h: u32,
+    parallel: bool,
+    pixel: impl Fn(usize, usize) -> [f32; 4] + Sync,
+) -> Result<(), exr::error::Error> {
+    use exr::prelude::{Image, SpecificChannels, Vec2, WritableImage};
+    let image = Image::from_channels(
+        (w as usize, h as usize),
+        SpecificChannels::rgba(|p: Vec2<usize>| {
+            let [r, g, b, a] = pixel(p.x(), p.y());
+            (r, g, b, a)
+        }),
+    );
+    let write = image.write();
+    if parallel {
+        write.to_buffered(out)
+    } else {
+        write.non_parallel().to_buffered(out)
+    }
+}
+
 pub fn png_rgb8(w: u32, h: u32, bytes: &[u8]) -> image::ImageResult<Vec<u8>> {
     let mut png = Vec::new();
     PngEncoder::new(&mut png).write_image(bytes, w, h, ExtendedColorType::Rgb8)?;
@@ -1135,6 +1449,67 @@ mod tests {
             .collect();
         entries.sort();
         entries
+    }
+
+    #[test]
+    fn a_dbuffer_read_in_bands_writes_the_same_files_and_reads_each_band_once_per_file() {
+        // 150 texels a side: bands of 64 rows cross the 64-row blocks of the EXR encoder only
+        // at their edges; values differ per texel so a misplaced row shows.
+        let (w, h, ds) = (5, 3, 150u32);
+        let mut out = outputs(w, h, ds, 0.5);
+        let nd = (ds * ds) as usize;
+        for i in 0..nd {
+            let f = i as f32;
+            out.d_o[i] = if i % 7 == 0 { f32::INFINITY } else { f };
+            out.d_u[i] = f + 0.25;
+            out.d_p[i] = f + 0.5;
+            out.s_u[i] = -f;
+            out.s_p[i] = f * 2.0;
+        }
+        let whole = temp_dir("whole");
+        write_render(&whole, &out).unwrap();
+        let banded = temp_dir("banded");
+        let fetches = std::sync::atomic::AtomicUsize::new(0);
+        let mut rows = BandedRows::new(ds, 1, |first, n| {
+            fetches.fetch_add(1, Ordering::Relaxed);
+            let texels = (first * ds..(first + n).min(ds) * ds)
+                .map(|i| {
+                    let i = i as usize;
+                    [out.d_o[i], out.d_u[i], out.d_p[i], out.s_u[i], out.s_p[i]]
+                })
+                .collect();
+            Ok(texels)
+        });
+        write_render_parts(&banded, &out.meta, &out, &mut rows).unwrap();
+        for name in [DBUFFER_EXR, DBUFFER_S_EXR, VISIBILITY_EXR, POSITION_EXR] {
+            let a = read_exr_rgba(&whole.join(name)).unwrap();
+            let b = read_exr_rgba(&banded.join(name)).unwrap();
+            assert_eq!((a.0, a.1), (b.0, b.1), "{name}");
+            let same =
+                a.2.iter()
+                    .zip(&b.2)
+                    .all(|(p, q)| p.iter().zip(q).all(|(x, y)| x.to_bits() == y.to_bits()));
+            assert!(same, "{name} differs");
+        }
+        for name in [IMAGE_PNG, CLASSES_PNG, META_JSON] {
+            assert_eq!(
+                image_or_bytes(&whole.join(name)),
+                image_or_bytes(&banded.join(name)),
+                "{name}"
+            );
+        }
+        // Three bands of 64 rows, once for each of the two D-buffer files.
+        assert_eq!(fetches.load(Ordering::Relaxed), 2 * 3);
+        let _ = fs::remove_dir_all(&whole);
+        let _ = fs::remove_dir_all(&banded);
+    }
+
+    /// A PNG's pixels, or a file's bytes.
+    fn image_or_bytes(path: &Path) -> Vec<u8> {
+        match image::open(path) {
+            Ok(img) => img.into_bytes(),
+            Err(_) => fs::read(path).unwrap(),
+        }
     }
 
     #[test]

@@ -28,8 +28,8 @@ impl Bench {
         let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), SIZE, SIZE);
         let mask = receivers
             .iter()
-            .zip(&reference.position)
-            .map(|(r, p)| p[3] > 0.5 && r.is_some_and(|r| r.faces_light))
+            .enumerate()
+            .map(|(i, r)| reference.hit(i) && r.is_some_and(|r| r.faces_light))
             .collect();
         Bench {
             offline,

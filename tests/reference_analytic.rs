@@ -122,11 +122,11 @@ fn lens_area(r1: f32, r2: f32, d: f32) -> f32 {
 /// error and how many pixels were in the penumbra.
 fn errors(frame: &Frame, exact: impl Fn(Vec3) -> f32) -> (f32, f32, usize) {
     let (mut worst, mut sum, mut n, mut penumbra) = (0.0f32, 0.0f32, 0usize, 0usize);
-    for (p, &v) in frame.position.iter().zip(&frame.visibility) {
-        if p[3] < 0.5 || p[1].abs() > 1e-3 {
+    for (i, &v) in frame.visibility.iter().enumerate() {
+        let Some(p) = frame.position(i).filter(|p| p.y.abs() <= 1e-3) else {
             continue;
-        }
-        let e = exact(Vec3::new(p[0], p[1], p[2]));
+        };
+        let e = exact(p);
         worst = worst.max((v - e).abs());
         sum += (v - e).abs();
         n += 1;
@@ -176,12 +176,13 @@ fn disk_under_the_disk_light() {
     assert!(worst <= 0.02, "max error {worst}");
     assert!(mean <= 0.004, "mean error {mean}");
     // The umbra: radius a·H/h − R projected back, ρ(H/h − 1) ≤ aH/h − R → ρ ≤ 0.6 here.
-    let centre = frame
-        .position
-        .iter()
-        .zip(&frame.visibility)
-        .filter(|(p, _)| p[3] > 0.5 && p[1].abs() < 1e-3 && p[0].hypot(p[2]) < 0.5)
-        .map(|(_, v)| *v)
+    let centre = (0..frame.len())
+        .filter(|&i| {
+            frame
+                .position(i)
+                .is_some_and(|p| p.y.abs() < 1e-3 && p.x.hypot(p.z) < 0.5)
+        })
+        .map(|i| frame.visibility[i])
         .fold(0.0f32, f32::max);
     assert!(
         centre == 0.0,

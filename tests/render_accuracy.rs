@@ -31,13 +31,11 @@ fn measure(offline: &mut Offline, name: &str) -> Metrics {
     let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), SIZE, SIZE);
     let mask: Vec<bool> = receivers
         .iter()
-        .zip(&frame.position)
-        .map(|(r, p)| p[3] > 0.5 && r.is_some_and(|r| r.faces_light))
+        .enumerate()
+        .map(|(i, r)| frame.hit(i) && r.is_some_and(|r| r.faces_light))
         .collect();
-    let points: Vec<Vec3> = frame
-        .position
-        .iter()
-        .map(|p| Vec3::new(p[0], p[1], p[2]))
+    let points: Vec<Vec3> = (0..frame.len())
+        .map(|i| frame.position(i).unwrap_or(Vec3::ZERO))
         .collect();
     let oracle = Oracle::from_scene(&scene, SAMPLES);
     let reference: Vec<f32> = points

@@ -8,7 +8,6 @@ use dbuffer::geometry::light_view::LightView;
 use dbuffer::geometry::{Branch, DBufferTwin, SceneGeometry, VtVariant};
 use dbuffer::render::{Frame, FrameRequest, GpuContext, Method, Session};
 use dbuffer::scene::{self, Scene};
-use glam::Vec3;
 
 const SIZE: u32 = 96;
 const DBUFFER: u32 = 1024;
@@ -82,10 +81,10 @@ fn gpu_agrees_with_the_cpu_twin() {
             / DBUFFER as f32;
         let (mut n, mut sum, mut far_from_boundary, mut shadowed) =
             (0usize, 0.0f64, Vec::new(), 0usize);
-        for (i, (v_gpu, p)) in frame.visibility.iter().zip(&frame.position).enumerate() {
-            if p[3] < 0.5 {
+        for (i, v_gpu) in frame.visibility.iter().enumerate() {
+            let Some(x) = frame.position(i) else {
                 continue;
-            }
+            };
             let Some(receiver) = receivers[i] else {
                 continue;
             };
@@ -93,7 +92,6 @@ fn gpu_agrees_with_the_cpu_twin() {
                 assert_eq!(*v_gpu, 0.0, "{name}: pixel {i} faces away from the light");
                 continue;
             }
-            let x = Vec3::new(p[0], p[1], p[2]);
             let s = twin.sample(x);
             let v_twin = VtVariant::Exact.apply(s.t);
             let dv = (f64::from(*v_gpu) - v_twin).abs();
@@ -137,12 +135,12 @@ fn hard_shadow_is_the_centre_test_alone() {
     let (scene, geometry, _, frame) = render(&ctx, "table1-960", Method::HARD);
     let twin = DBufferTwin::new(&scene, &geometry.casters);
     let (mut agree, mut n) = (0, 0);
-    for (&v, p) in frame.visibility.iter().zip(&frame.position) {
-        if p[3] < 0.5 {
+    for (i, &v) in frame.visibility.iter().enumerate() {
+        let Some(p) = frame.position(i) else {
             continue;
-        }
+        };
         assert!(v == 0.0 || v == 1.0, "hard shadows are binary, got {v}");
-        let s = twin.sample(Vec3::new(p[0], p[1], p[2]));
+        let s = twin.sample(p);
         n += 1;
         agree += usize::from((v == 0.0) == s.hidden);
     }

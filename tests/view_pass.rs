@@ -248,15 +248,12 @@ fn the_probe_reads_the_frame_and_the_fit_samples_the_twins_grid() {
     };
     let v = PixelValues::decode(pixel).expect("a pixel's values");
     assert_eq!(v.visibility, f.frame.visibility[i]);
-    assert_eq!(v.t, f.frame.t[i]);
-    assert_eq!(v.branch, f.frame.branch[i]);
+    assert_eq!(v.t, f.frame.t(i));
+    assert_eq!(v.branch, f.frame.branch(i));
     assert_eq!(v.reference, Some(f.reference[i]));
     let pos = v.position.expect("a surface");
-    let q = f.frame.position[i];
-    assert!(
-        (pos - glam::Vec3::new(q[0], q[1], q[2])).length() < 1e-4,
-        "{pos} vs {q:?}"
-    );
+    let q = f.frame.position(i).expect("a surface");
+    assert!((pos - q).length() < 1e-4, "{pos} vs {q}");
     // The texel under the point: the D-buffer's channels there, as read back.
     let ((tx, ty), texel) = v.texel.expect("the point is in the light view");
     let maps = f.frame.maps.as_ref().expect("the maps were read");

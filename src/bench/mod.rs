@@ -664,7 +664,7 @@ impl Samples {
                 None => self.passes.push((pass.clone(), vec![*ms])),
             }
         }
-        self.hit_pixels = (0..frame.position.len()).filter(|&i| frame.hit(i)).count();
+        self.hit_pixels = (0..frame.len()).filter(|&i| frame.hit(i)).count();
     }
 
     fn timing(self, case: &Case) -> Timing {

@@ -142,7 +142,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     output::check_out_dir(args.out, &output::FILE_NAMES).context("--out")?;
     let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
-    let mut offline = Offline::new()?;
+    let offline = Offline::new()?;
     if args.verbose {
         errln!("adapter   {}", offline.ctx.adapter_description());
     }
@@ -155,13 +155,23 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         knobs,
         read_dbuffer: true,
     };
-    if method.is_reference() {
-        offline.progress = Some(progress::reference_samples());
-    }
     let name = scene.name.clone();
     let mut session = offline.session(scene);
-    let (frame, report) = offline.render_in(&mut session, &request)?;
-    let meta = output::render_meta(
+    // The frame without its light-space maps: the D-buffer goes to its files a band of rows
+    // at a time, straight from the GPU (an 8192² D-buffer is 1.3 GB of floats).
+    let mut reference_progress = progress::reference_samples();
+    let (frame, report) = dbuffer::render::offline::render_in(
+        &offline.ctx,
+        &mut session,
+        &FrameRequest {
+            read_dbuffer: false,
+            ..request
+        },
+        &mut *reference_progress,
+    )?;
+    let maps_of = session.prepare_maps(&offline.ctx, &request)?;
+    let maps_size = session.light_maps(maps_of).map_or(0, |m| m.size);
+    let mut meta = output::render_meta(
         &name,
         session.scene(),
         &request,
@@ -169,6 +179,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         &frame,
         &report,
     );
+    meta.dbuffer_size = maps_size;
     for w in &meta.warnings {
         errln!("warning   {w}");
     }
@@ -180,9 +191,17 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             errln!("gpu ms    {pass:<20} {ms:8.3}");
         }
     }
-    let outputs = output::RenderOutputs::from_frame(&frame, meta);
-    drop(frame);
-    let written = output::write_render(args.out, &outputs)?;
+    let ctx = &offline.ctx;
+    // Bands of about 16 MB of texels.
+    let band = ((16 << 20) / (20 * maps_size.max(1))).max(1);
+    let mut dbuffer = output::BandedRows::new(maps_size, band, |first, n| {
+        session
+            .read_map_rows(ctx, maps_of, first..first + n)
+            .map(|band| output::dbuffer_texels(&band))
+            .map_err(|e| e.to_string())
+    });
+    let written =
+        output::write_render_parts(args.out, &meta, &output::FramePixels(&frame), &mut dbuffer)?;
     if args.verbose {
         for path in written {
             errln!("wrote     {}", path.display());

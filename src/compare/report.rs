@@ -173,8 +173,8 @@ pub fn write(dir: &Path, c: &Comparison) -> io::Result<Vec<PathBuf>> {
             r.frame
                 .visibility
                 .iter()
-                .zip(&r.frame.position)
-                .map(|(&v, p)| [v, v, v, p[3]]),
+                .enumerate()
+                .map(|(i, &v)| [v, v, v, if r.frame.hit(i) { 1.0 } else { 0.0 }]),
         )
         .map_err(encode)?;
         put(&visibility, exr)?;

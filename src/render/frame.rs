@@ -10,7 +10,7 @@ use super::methods::{Channel, FrameInputs, Knobs, LightMaps, Method, MethodState
 use super::passes::camera::{self, Camera, CameraTargets, CameraUniforms};
 use super::passes::probe::Probe;
 use super::passes::view::{ViewInputs, ViewParams, ViewTarget};
-use super::readback::{f32s, Readback, TextureRead};
+use super::readback::{f32s_of, Readback, TextureRead};
 use super::timer::Recorder;
 use super::{GpuContext, RenderError};
 use crate::geometry::VtVariant;
@@ -197,7 +197,9 @@ pub fn record_view(
         .record(ctx, rec, &inputs, params);
 }
 
-/// A rendered frame, read back. Images are row-major, row 0 at the top.
+/// A rendered frame, read back. Images are row-major, row 0 at the top. Per pixel it keeps what
+/// the camera pass wrote — 16 bytes, 1 GiB at 8192² — and derives the rest when asked: t and
+/// the branch from their packed sum, the world position from the depth.
 #[derive(Clone, Debug, Default)]
 pub struct Frame {
     pub width: u32,
@@ -206,12 +208,13 @@ pub struct Frame {
     pub color: Vec<[u8; 4]>,
     /// V per pixel.
     pub visibility: Vec<f32>,
-    /// t per pixel.
-    pub t: Vec<f32>,
-    /// Branch code per pixel ([`crate::geometry::Branch::code`]).
-    pub branch: Vec<u8>,
-    /// World position, and 1 where a surface was hit (0 elsewhere), from the depth.
-    pub position: Vec<[f32; 4]>,
+    /// t + 2 × branch code per pixel, as the camera pass stores them ([`Frame::t`],
+    /// [`Frame::branch`]).
+    pub t_branch: Vec<f32>,
+    /// Reversed depth per pixel: 0 where no surface was hit ([`Frame::position`]).
+    pub depth: Vec<f32>,
+    /// The camera's clip → world transform, to place a pixel from its depth.
+    pub inverse_view_proj: glam::Mat4,
     pub dbuffer_size: u32,
     /// The light-space maps, when they were asked for.
     pub maps: Option<LightMapsData>,
@@ -220,9 +223,50 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// Pixels in the frame.
+    pub fn len(&self) -> usize {
+        self.visibility.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.visibility.is_empty()
+    }
+
     /// Whether pixel `i` shows a surface.
     pub fn hit(&self, i: usize) -> bool {
-        self.position.get(i).is_some_and(|p| p[3] > 0.5)
+        self.depth.get(i).is_some_and(|&z| z > 0.0)
+    }
+
+    /// The branch code of pixel `i` ([`crate::geometry::Branch::code`]).
+    pub fn branch(&self, i: usize) -> u8 {
+        // Umbra 0, hidden [2, 2.5], visible [4.5, 5], lit 7: round((x − ½)/2) is the branch
+        // and the rest is t, both exact.
+        let x = self.t_branch.get(i).copied().unwrap_or(0.0);
+        ((x - 0.5) / 2.0).round().clamp(0.0, 3.0) as u8
+    }
+
+    /// t of pixel `i`.
+    pub fn t(&self, i: usize) -> f32 {
+        let x = self.t_branch.get(i).copied().unwrap_or(0.0);
+        x - 2.0 * f32::from(self.branch(i))
+    }
+
+    /// The world position pixel `i` shows, `None` where it shows no surface.
+    pub fn position(&self, i: usize) -> Option<glam::Vec3> {
+        let z = *self.depth.get(i)?;
+        if z <= 0.0 || self.width == 0 {
+            return None;
+        }
+        let (w, h) = (self.width as usize, self.height.max(1) as f32);
+        let (x, y) = ((i % w) as f32, (i / w) as f32);
+        let ndc = glam::Vec4::new(
+            (x + 0.5) / w as f32 * 2.0 - 1.0,
+            1.0 - (y + 0.5) / h * 2.0,
+            z,
+            1.0,
+        );
+        let p = self.inverse_view_proj * ndc;
+        Some(p.truncate() / p.w)
     }
 }
 
@@ -232,6 +276,8 @@ impl Frame {
 pub struct LightMapsData {
     pub size: u32,
     pub channels: &'static [Channel],
+    /// The rows held: all of them, or a band ([`read_light_map_rows`]).
+    pub rows: std::ops::Range<u32>,
     slots: [usize; 3],
     data: Vec<(usize, Vec<f32>)>,
 }
@@ -239,10 +285,10 @@ pub struct LightMapsData {
 impl LightMapsData {
     /// The three textures' RGBA at texel (`x`, `y`) (missing components 0).
     pub fn texel(&self, x: u32, y: u32) -> Option<[[f32; 4]; 3]> {
-        if x >= self.size || y >= self.size {
+        if x >= self.size || !self.rows.contains(&y) {
             return None;
         }
-        let i = (y * self.size + x) as usize;
+        let i = ((y - self.rows.start) * self.size + x) as usize;
         // As textureLoad reads a texture with fewer channels: missing G and B are 0, A is 1.
         let mut out = [[0.0, 0.0, 0.0, 1.0f32]; 3];
         for (slot, &d) in out.iter_mut().zip(&self.slots) {
@@ -259,7 +305,7 @@ impl LightMapsData {
         self.channels.get(c)?.value(&self.texel(x, y)?)
     }
 
-    /// Component `component` of texture slot `slot` over every texel, as stored.
+    /// Component `component` of texture slot `slot` over every texel held, as stored.
     pub fn raw(&self, slot: usize, component: usize) -> Vec<f32> {
         let Some((n, values)) = self.slots.get(slot).and_then(|&d| self.data.get(d)) else {
             return Vec::new();
@@ -315,68 +361,110 @@ pub fn read_frame(
             reads.push(TextureRead::color(t, 4 * components(t.format()) as u32));
         }
     }
-    let mut bytes = readback.read(ctx, &reads)?.into_iter();
-    let (Some(color), Some(data), Some(depth)) = (bytes.next(), bytes.next(), bytes.next()) else {
-        return Err(RenderError::Readback("a target did not come back".into()));
+    let (w, h) = (camera.width, camera.height);
+    let n = w as usize * h as usize;
+    let mut frame = Frame {
+        width: w,
+        height: h,
+        color: Vec::with_capacity(n),
+        visibility: Vec::with_capacity(n),
+        t_branch: Vec::with_capacity(n),
+        depth: Vec::with_capacity(n),
+        inverse_view_proj: rendered.view_proj.inverse(),
+        dbuffer_size: rendered.request.dbuffer_size,
+        maps: None,
+        gpu_ms: Vec::new(),
     };
-    let maps = maps.map(|m| LightMapsData {
+    let mut map_values: Vec<Vec<f32>> = distinct
+        .iter()
+        .map(|t| {
+            Vec::with_capacity(t.width() as usize * t.height() as usize * components(t.format()))
+        })
+        .collect();
+    // Every row straight into its place: no texture is ever held whole as raw bytes.
+    readback.read_rows(ctx, &reads, &mut |k, _, row| match k {
+        0 => frame
+            .color
+            .extend(row.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]])),
+        1 => {
+            let mut values = f32s_of(row);
+            while let (Some(v), Some(tb)) = (values.next(), values.next()) {
+                frame.visibility.push(v);
+                frame.t_branch.push(tb);
+            }
+        }
+        2 => frame.depth.extend(f32s_of(row)),
+        k => {
+            if let Some(m) = map_values.get_mut(k - 3) {
+                m.extend(f32s_of(row));
+            }
+        }
+    })?;
+    if frame.color.len() != n || frame.visibility.len() != n || frame.depth.len() != n {
+        return Err(RenderError::Readback(
+            "a target did not come back whole".into(),
+        ));
+    }
+    frame.maps = maps.map(|m| LightMapsData {
         size: m.size,
         channels: m.channels,
+        rows: 0..m.size,
         slots,
         data: distinct
             .iter()
-            .zip(bytes.by_ref())
-            .map(|(t, b)| (components(t.format()), f32s(&b)))
+            .zip(map_values)
+            .map(|(t, values)| (components(t.format()), values))
             .collect(),
     });
-    let (w, h) = (camera.width, camera.height);
-    let data = f32s(&data);
-    let (visibility, t_branch): (Vec<f32>, Vec<f32>) =
-        data.chunks_exact(2).map(|c| (c[0], c[1])).unzip();
-    // The shader stores t + 2·branch: umbra 0, hidden [2, 2.5], visible [4.5, 5], lit 7, so
-    // round((x − ½)/2) is the branch and the rest is t, both exact.
-    let branch: Vec<u8> = t_branch
-        .iter()
-        .map(|&x| ((x - 0.5) / 2.0).round().clamp(0.0, 3.0) as u8)
-        .collect();
-    let t = t_branch
-        .iter()
-        .zip(&branch)
-        .map(|(&x, &b)| x - 2.0 * f32::from(b))
-        .collect();
-    let inverse = rendered.view_proj.inverse();
-    let position = f32s(&depth)
-        .iter()
-        .enumerate()
-        .map(|(i, &z)| {
-            if z <= 0.0 {
-                return [0.0; 4];
+    Ok(frame)
+}
+
+/// Rows `rows` of the light-space maps `maps` (a band of them: a render's 8192² D-buffer is
+/// written to its files a band at a time, never held whole).
+pub fn read_light_map_rows(
+    ctx: &GpuContext,
+    readback: &mut Readback,
+    maps: &LightMaps<'_>,
+    rows: std::ops::Range<u32>,
+) -> Result<LightMapsData, RenderError> {
+    let mut slots = [0usize; 3];
+    let mut distinct: Vec<&wgpu::Texture> = Vec::new();
+    for (slot, raw) in slots.iter_mut().zip(maps.raw) {
+        *slot = match distinct.iter().position(|t| *t == raw) {
+            Some(k) => k,
+            None => {
+                distinct.push(raw);
+                distinct.len() - 1
             }
-            let (x, y) = ((i as u32 % w) as f32, (i as u32 / w) as f32);
-            let ndc = glam::Vec4::new(
-                (x + 0.5) / w as f32 * 2.0 - 1.0,
-                1.0 - (y + 0.5) / h as f32 * 2.0,
-                z,
-                1.0,
-            );
-            let p = inverse * ndc;
-            let p = p.truncate() / p.w;
-            [p.x, p.y, p.z, 1.0]
+        };
+    }
+    let reads: Vec<TextureRead<'_>> = distinct
+        .iter()
+        .map(|t| TextureRead::color(t, 4 * components(t.format()) as u32).rows(rows.clone()))
+        .collect();
+    let mut values: Vec<Vec<f32>> = reads
+        .iter()
+        .map(|r| {
+            Vec::with_capacity(
+                r.texture.width() as usize * r.rows.len() * components(r.texture.format()),
+            )
         })
         .collect();
-    Ok(Frame {
-        width: w,
-        height: h,
-        color: color
-            .chunks_exact(4)
-            .map(|c| [c[0], c[1], c[2], c[3]])
+    readback.read_rows(ctx, &reads, &mut |k, _, row| {
+        if let Some(v) = values.get_mut(k) {
+            v.extend(f32s_of(row));
+        }
+    })?;
+    let rows = reads.first().map_or(0..0, |r| r.rows.clone());
+    Ok(LightMapsData {
+        size: maps.size,
+        channels: maps.channels,
+        rows,
+        slots,
+        data: distinct
+            .iter()
+            .zip(values)
+            .map(|(t, v)| (components(t.format()), v))
             .collect(),
-        visibility,
-        t,
-        branch,
-        position,
-        dbuffer_size: rendered.request.dbuffer_size,
-        maps,
-        gpu_ms: Vec::new(),
     })
 }

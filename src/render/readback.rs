@@ -1,19 +1,25 @@
 //! Copying textures back to the CPU, only when a person or a file needs them: through persistent
 //! staging buffers (made once, reused while large enough), all the textures of one call in one
-//! submit and one wait. A texture larger than a staging buffer's cap is read in bands of rows, so
-//! an 8192² image needs no 512 MB buffer (rows padded to wgpu's 256-byte alignment on the way).
+//! submit and one wait per band. A texture larger than a staging buffer's cap is read in bands
+//! of rows, so an 8192² image needs no 512 MB buffer (rows padded to wgpu's 256-byte alignment
+//! on the way), and [`Readback::read_rows`] hands each row to the caller as it arrives, so
+//! nothing needs the whole texture in memory as raw bytes.
+
+use std::ops::Range;
 
 use super::{GpuContext, RenderError};
 
 /// The largest staging buffer one texture uses per round.
-pub const STAGING_CAP: u64 = 64 << 20;
+pub const STAGING_CAP: u64 = 32 << 20;
 
-/// A texture to read: which aspect (depth for a depth texture) and the bytes of one texel.
-#[derive(Clone, Copy)]
+/// A texture to read: which aspect (depth for a depth texture), the bytes of one texel, and
+/// which rows.
+#[derive(Clone)]
 pub struct TextureRead<'a> {
     pub texture: &'a wgpu::Texture,
     pub aspect: wgpu::TextureAspect,
     pub texel: u32,
+    pub rows: Range<u32>,
 }
 
 impl<'a> TextureRead<'a> {
@@ -22,6 +28,7 @@ impl<'a> TextureRead<'a> {
             texture,
             aspect: wgpu::TextureAspect::All,
             texel,
+            rows: 0..texture.height(),
         }
     }
 
@@ -30,7 +37,19 @@ impl<'a> TextureRead<'a> {
             texture,
             aspect: wgpu::TextureAspect::DepthOnly,
             texel: 4,
+            rows: 0..texture.height(),
         }
+    }
+
+    /// Only rows `rows` (clamped to the texture).
+    pub fn rows(mut self, rows: Range<u32>) -> Self {
+        let h = self.texture.height();
+        self.rows = rows.start.min(h)..rows.end.min(h);
+        self
+    }
+
+    fn bytes(&self) -> usize {
+        self.texture.width() as usize * self.rows.len() * self.texel as usize
     }
 }
 
@@ -57,12 +76,28 @@ fn padded_row(width: u32, texel: u32) -> u64 {
 }
 
 impl Readback {
-    /// The texels of every texture (mip 0, layer 0), rows unpadded, in `reads` order.
+    /// The texels of every texture's rows, unpadded, in `reads` order.
     pub fn read(
         &mut self,
         ctx: &GpuContext,
         reads: &[TextureRead<'_>],
     ) -> Result<Vec<Vec<u8>>, RenderError> {
+        let mut out: Vec<Vec<u8>> = reads
+            .iter()
+            .map(|r| Vec::with_capacity(r.bytes()))
+            .collect();
+        self.read_rows(ctx, reads, &mut |k, _, row| out[k].extend_from_slice(row))?;
+        Ok(out)
+    }
+
+    /// Read `reads`, handing every row to `sink` as `(index in reads, y, texels)`, each
+    /// texture's rows in increasing `y`.
+    pub fn read_rows(
+        &mut self,
+        ctx: &GpuContext,
+        reads: &[TextureRead<'_>],
+        sink: &mut dyn FnMut(usize, u32, &[u8]),
+    ) -> Result<(), RenderError> {
         let device = &ctx.device;
         let cap = STAGING_CAP.min(ctx.max_buffer_size());
         // Rows per round for each texture, and the staging size that takes.
@@ -70,7 +105,7 @@ impl Readback {
             .iter()
             .map(|r| {
                 let row = padded_row(r.texture.width(), r.texel);
-                let rows = (cap / row).clamp(1, u64::from(r.texture.height())) as u32;
+                let rows = (cap / row).clamp(1, u64::from(r.rows.len().max(1) as u32)) as u32;
                 (row, rows)
             })
             .collect();
@@ -83,33 +118,21 @@ impl Readback {
                 self.staging[k] = staging(device, need);
             }
         }
-        let mut out: Vec<Vec<u8>> = reads
-            .iter()
-            .map(|r| {
-                Vec::with_capacity(
-                    r.texture.width() as usize * r.texture.height() as usize * r.texel as usize,
-                )
-            })
-            .collect();
-        let mut done = vec![0u32; reads.len()];
+        let mut next: Vec<u32> = reads.iter().map(|r| r.rows.start).collect();
         self.last_bytes = 0;
         // One round reads the next band of every texture that has rows left.
-        while reads
-            .iter()
-            .zip(&done)
-            .any(|(r, &d)| d < r.texture.height())
-        {
+        while reads.iter().zip(&next).any(|(r, &y)| y < r.rows.end) {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("Readback::encoder"),
             });
             let mut bands = Vec::new();
             for (k, r) in reads.iter().enumerate() {
                 let (row, rows) = plans[k];
-                let y = done[k];
-                if y >= r.texture.height() {
+                let y = next[k];
+                if y >= r.rows.end {
                     continue;
                 }
-                let n = rows.min(r.texture.height() - y);
+                let n = rows.min(r.rows.end - y);
                 encoder.copy_texture_to_buffer(
                     wgpu::TexelCopyTextureInfo {
                         texture: r.texture,
@@ -131,35 +154,37 @@ impl Readback {
                         depth_or_array_layers: 1,
                     },
                 );
-                bands.push((k, n, row));
+                bands.push((k, y, n, row));
             }
             ctx.queue.submit([encoder.finish()]);
-            for &(k, n, row) in &bands {
+            for &(k, _, n, row) in &bands {
                 self.staging[k]
                     .slice(..row * u64::from(n))
                     .map_async(wgpu::MapMode::Read, |_| {});
             }
             map_now(device)?;
-            for (k, n, row) in bands {
+            for (k, y, n, row) in bands {
                 let width_bytes = reads[k].texture.width() as usize * reads[k].texel as usize;
                 let slice = self.staging[k].slice(..row * u64::from(n));
-                {
+                let result = (|| {
                     let view = slice
                         .get_mapped_range()
                         .map_err(|e| RenderError::Readback(e.to_string()))?;
-                    for line in view.chunks(row as usize).take(n as usize) {
+                    for (i, line) in view.chunks(row as usize).take(n as usize).enumerate() {
                         let Some(texels) = line.get(..width_bytes) else {
                             return Err(RenderError::Readback("short staging row".into()));
                         };
-                        out[k].extend_from_slice(texels);
+                        sink(k, y + i as u32, texels);
                     }
-                }
+                    Ok(())
+                })();
                 self.staging[k].unmap();
-                done[k] += n;
+                result?;
+                next[k] += n;
                 self.last_bytes += width_bytes as u64 * u64::from(n);
             }
         }
-        Ok(out)
+        Ok(())
     }
 }
 
@@ -174,8 +199,12 @@ fn staging(device: &wgpu::Device, size: u64) -> wgpu::Buffer {
 
 /// Little-endian `f32`s from bytes.
 pub fn f32s(bytes: &[u8]) -> Vec<f32> {
+    f32s_of(bytes).collect()
+}
+
+/// Little-endian `f32`s from bytes, as an iterator.
+pub fn f32s_of(bytes: &[u8]) -> impl Iterator<Item = f32> + '_ {
     bytes
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect()
 }

@@ -7,7 +7,10 @@
 use std::cell::OnceCell;
 use std::collections::HashMap;
 
-use super::frame::{read_frame, record_frame, Frame, FrameParts, FrameRequest, FrameTargets};
+use super::frame::{
+    read_frame, read_light_map_rows, record_frame, Frame, FrameParts, FrameRequest, FrameTargets,
+    LightMapsData,
+};
 use super::gpu_scene::GpuScene;
 use super::methods::{External, FrameInputs, LightMaps, Method, MethodState, SharedMaps};
 use super::passes::camera::Camera;
@@ -181,6 +184,40 @@ impl Session {
     }
 
     /// `method`'s light-space maps as they stand.
+    /// Make sure the light-space maps a frame of `request` is written with (those of
+    /// [`dbuffer_of`] its method) exist, as [`Session::frame`] with `read_dbuffer` does, without
+    /// reading them back. Returns the method whose maps they are.
+    pub fn prepare_maps(
+        &mut self,
+        ctx: &GpuContext,
+        request: &FrameRequest,
+    ) -> Result<Method, RenderError> {
+        let d = dbuffer_of(request.method);
+        if !self.methods.contains_key(&d) || d != request.method {
+            self.prepare_only(ctx, d, request)?;
+        }
+        Ok(d)
+    }
+
+    /// Rows `rows` of `method`'s light-space maps, read back (see [`read_light_map_rows`]).
+    pub fn read_map_rows(
+        &mut self,
+        ctx: &GpuContext,
+        method: Method,
+        rows: std::ops::Range<u32>,
+    ) -> Result<LightMapsData, RenderError> {
+        let Some(maps) = self
+            .methods
+            .get(&method)
+            .and_then(|m| m.light_maps(&self.shared))
+        else {
+            return Err(RenderError::Readback(format!(
+                "{method} has no light-space maps"
+            )));
+        };
+        read_light_map_rows(ctx, &mut self.readback, &maps, rows)
+    }
+
     pub fn light_maps(&self, method: Method) -> Option<LightMaps<'_>> {
         self.methods
             .get(&method)

@@ -97,7 +97,7 @@ pub fn scalar(frame: &Frame, reference: Option<&[f32]>, view: View, i: usize) ->
     }
     match view {
         View::Visibility => frame.visibility.get(i).copied(),
-        View::T => frame.t.get(i).copied(),
+        View::T => (i < frame.len()).then(|| frame.t(i)),
         View::Error => Some((frame.visibility.get(i)? - reference?.get(i)?).abs()),
         _ => None,
     }
@@ -133,7 +133,7 @@ pub fn render(
         }),
         View::Classes => camera(&|i| {
             if frame.hit(i) {
-                let b = frame.branch.get(i).copied().unwrap_or(0);
+                let b = frame.branch(i);
                 BRANCH_COLORS.get(usize::from(b)).map_or(NO_DATA, |c| c.0)
             } else {
                 NO_DATA
