@@ -173,6 +173,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/sampled.wgsl"),
     ),
     (
+        "methods/shadow_volume.wgsl",
+        include_str!("../shaders/methods/shadow_volume.wgsl"),
+    ),
+    (
         "passes/dbuffer_volumes.wgsl",
         include_str!("../shaders/passes/dbuffer_volumes.wgsl"),
     ),
@@ -193,6 +197,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/passes/shadow_map.wgsl"),
     ),
     (
+        "passes/stencil_volumes.wgsl",
+        include_str!("../shaders/passes/stencil_volumes.wgsl"),
+    ),
+    (
         "passes/view.wgsl",
         include_str!("../shaders/passes/view.wgsl"),
     ),
@@ -211,6 +219,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "shared/sample_lights.wgsl",
         include_str!("../shaders/shared/sample_lights.wgsl"),
+    ),
+    (
+        "shared/screen_v.wgsl",
+        include_str!("../shaders/shared/screen_v.wgsl"),
     ),
     (
         "shared/shadow_lookup.wgsl",

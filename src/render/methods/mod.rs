@@ -15,6 +15,7 @@ pub mod pcf;
 pub mod pcss;
 pub mod reference;
 pub mod sampled;
+pub mod shadow_volume;
 
 use std::cell::OnceCell;
 use std::fmt;
@@ -24,6 +25,7 @@ use std::sync::{Arc, OnceLock};
 use glam::Mat4;
 
 use super::gpu_scene::GpuScene;
+use super::passes::camera::ScreenView;
 use super::passes::shadow_map::ShadowMap;
 use super::timer::Recorder;
 use super::{GpuContext, RenderError};
@@ -39,6 +41,7 @@ pub const ALL: &[Method] = &[
     Method(&pcf::PCF),
     Method(&pcss::PCSS),
     Method(&sampled::SAMPLED),
+    Method(&shadow_volume::SHADOW_VOLUME),
     Method(&reference::REFERENCE),
 ];
 
@@ -255,6 +258,9 @@ pub struct FrameInputs<'a> {
     pub knobs: &'a Knobs,
     /// V per pixel handed in from outside (the ray-cast reference), if any.
     pub external: Option<External<'a>>,
+    /// The camera of this frame and its image size (screen-space methods draw before the camera
+    /// pass; a light-space method ignores it).
+    pub view: ScreenView,
 }
 
 impl FrameInputs<'_> {
@@ -418,6 +424,13 @@ pub trait MethodState: Send {
 
     /// Forget the light-space products: the next frame remakes them (to time them).
     fn invalidate(&mut self) {}
+
+    /// For a method that counts shadow volumes over the screen: the mean number of volume
+    /// fragments per pixel of its last frame (the fill it pays), measured with a pass of its
+    /// own; `None` for every other method.
+    fn stencil_fill(&self, _ctx: &GpuContext) -> Option<Result<f64, RenderError>> {
+        None
+    }
 }
 
 #[cfg(test)]
