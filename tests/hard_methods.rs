@@ -4,7 +4,7 @@
 //! (`cargo test --release --test hard_methods -- --nocapture`).
 
 use dbuffer::geometry::bvh::Bvh;
-use dbuffer::geometry::hard_volume::point_light;
+use dbuffer::geometry::hard_volume::centre_light;
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::view;
 use dbuffer::render::offline::Offline;
@@ -16,7 +16,7 @@ fn hard_truth(scene: &Scene, frame: &Frame) -> (Vec<f32>, Vec<bool>) {
     let (w, h) = (frame.width, frame.height);
     let bvh = Bvh::build(scene.all_triangles());
     let receivers = view::receivers(scene, &bvh, w, h);
-    let oracle = Oracle::new(scene.all_triangles(), point_light(scene.light.center), 1);
+    let oracle = Oracle::new(scene.all_triangles(), centre_light(&scene.light), 1);
     let truth = receivers
         .iter()
         .map(|r| r.map_or(0.0, |r| oracle.visibility(r.position)))
@@ -237,4 +237,140 @@ fn shadow_volume_on_the_24_bit_fallback() {
         );
         assert!(s.pct() <= EXACT_PCT, "{name}: {s:?}");
     }
+}
+
+/// A 40 m square occluder (a half-plane in view) 2 m above the ground, its edge on x = 0.5,
+/// under the light's centre at height 4: the exact hard shadow on the ground ends on the line
+/// x = 1 (the edge projected from the centre).
+const HALF_PLANE: &str = r#"
+[camera]
+eye = [1.0, 1.2, 3.0]
+target = [1.0, 0.0, 0.0]
+fov_y_deg = 60.0
+
+[light]
+center = [0.0, 4.0, 0.0]
+normal = [0.0, -1.0, 0.0]
+radius = 0.5
+
+[[object]]
+name = "ground"
+mesh = "plane"
+scale = 40.0
+casts_shadow = false
+
+[[object]]
+name = "half-plane"
+mesh = "plane"
+translate = [-19.5, 2.0, 0.0]
+scale = 40.0
+"#;
+
+#[test]
+fn reference_hard_puts_a_straight_edge_where_the_centre_projects_it() {
+    let scene = scene_from("half-plane", HALF_PLANE);
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let size = 96;
+    let frame = render(&mut offline, &scene, Method::REFERENCE_HARD, size, Knobs::default());
+    let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), size, size);
+    let (mut lit, mut dark) = (0, 0);
+    for (r, &v) in receivers.iter().zip(&frame.visibility) {
+        let Some(r) = r else { continue };
+        if r.position.y.abs() > 1e-4 || (r.position.x - 1.0).abs() < 1e-3 {
+            continue;
+        }
+        let expected = if r.position.x > 1.0 { 1.0 } else { 0.0 };
+        assert_eq!(v, expected, "ground point {}", r.position);
+        lit += usize::from(expected == 1.0);
+        dark += usize::from(expected == 0.0);
+    }
+    assert!(lit > 500 && dark > 500, "both sides in view: {lit} lit, {dark} dark");
+    // Nothing but 0 and 1.
+    assert!(frame.visibility.iter().all(|&v| v == 0.0 || v == 1.0));
+}
+
+#[test]
+fn compare_scores_hard_methods_against_reference_hard() {
+    use dbuffer::compare::{self, report::Report, CompareRequest};
+    use dbuffer::render::methods::reference::SAMPLES;
+    let scene = scene::load("fig7-concave").unwrap_or_else(|e| panic!("{e}"));
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let request = CompareRequest {
+        width: 64,
+        height: 64,
+        dbuffer_size: 256,
+        vt: dbuffer::geometry::VtVariant::Smoothstep,
+        knobs: Knobs::default().with(&SAMPLES, 16),
+    };
+    let c = compare::run(&mut offline, "fig7-concave", &scene, &request, |_| {})
+        .unwrap_or_else(|e| panic!("{e}"));
+    let report = Report::new(&c);
+    let row = |n: &str| {
+        report
+            .methods
+            .iter()
+            .find(|m| m.method == n)
+            .unwrap_or_else(|| panic!("{n} missing"))
+    };
+    for m in Method::all() {
+        assert_eq!(row(m.name()).hard.is_some(), m.is_hard(), "{m}");
+    }
+    let exact = row("reference-hard").hard.expect("scored");
+    assert_eq!(exact.mismatch_pct, 0.0);
+    let sv = row("shadow-volume").hard.expect("scored");
+    assert!(sv.mismatch_pct <= EXACT_PCT, "{sv:?}");
+    // A 256² shadow map loses pixels along the boundary, not inside.
+    let hard = row("hard").hard.expect("scored");
+    assert!(hard.mismatch_pct > sv.mismatch_pct, "{hard:?}");
+    assert!(hard.edge_px >= hard.interior_px, "{hard:?}");
+    assert!(report.markdown().contains("## Hard methods against `reference-hard`"));
+    assert!(report.hard_table().contains("| shadow-volume |"));
+}
+
+/// An open sheet turned away from the light (its front faces the ground), and the open-based
+/// bunny beside it.
+const OPEN: &str = r#"
+[camera]
+eye = [0.0, 3.0, 4.5]
+target = [0.0, 0.3, 0.0]
+fov_y_deg = 50.0
+
+[light]
+center = [0.3, 4.0, 0.2]
+normal = [0.0, -1.0, 0.0]
+radius = 0.5
+
+[[object]]
+name = "ground"
+mesh = "plane"
+scale = 10.0
+casts_shadow = false
+
+[[object]]
+name = "sheet"
+mesh = "plane"
+translate = [-0.9, 1.5, 0.0]
+rotate_deg = [180.0, 20.0, 0.0]
+scale = 1.0
+
+[[object]]
+name = "bunny"
+mesh = "bunny-open"
+translate = [0.9, 0.01, 0.0]
+scale = 0.1
+"#;
+
+#[test]
+fn shadow_volume_on_open_meshes_two_sided_exact_one_sided_misses_the_sheet() {
+    use dbuffer::render::methods::shadow_volume::OPEN as SV_OPEN;
+    let scene = scene_from("open", OPEN);
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let sv = method("shadow-volume");
+    let two = score(&mut offline, &scene, sv, 128, Knobs::default().with(&SV_OPEN, 1));
+    assert!(two.pct() <= EXACT_PCT, "two-sided: {two:?}");
+    // Crow's one-sided volumes: the sheet's faces all face away from the light, so it casts
+    // nothing; the truth has its shadow on the ground.
+    let one = score(&mut offline, &scene, sv, 128, Knobs::default().with(&SV_OPEN, 0));
+    assert!(one.dark < two.dark, "one-sided loses the sheet's shadow: {one:?}");
+    assert!(one.bad > 200, "{one:?}");
 }

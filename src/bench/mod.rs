@@ -721,8 +721,9 @@ fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: 
             }
             session.invalidate_light_maps();
             let t = Instant::now();
-            let frame = if config.cases[i].cpu_side() {
-                // The reference: one more sample per pixel, then its frame.
+            let frame = if config.cases[i].method.is_reference() {
+                // The reference: one more sample per pixel, then its frame (reference-hard, also
+                // CPU-side, casts its rays again in the frame: its image was invalidated).
                 session
                     .advance_reference(ctx, &requests[i], 1)
                     .and_then(|_| session.frame(ctx, &requests[i]))
@@ -738,7 +739,7 @@ fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: 
     }
     // The reference's ray casting alone: one more sample per pixel without a frame.
     for (i, case) in config.cases.iter().enumerate() {
-        if !case.cpu_side() || errors[i].is_some() {
+        if !case.method.is_reference() || errors[i].is_some() {
             continue;
         }
         for _ in 0..config.frames {

@@ -53,6 +53,11 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         r.vt
     );
     print!("{}", r.table());
+    let hard = r.hard_table();
+    if !hard.is_empty() {
+        println!("against reference-hard (lit iff V >= 0.5):");
+        print!("{hard}");
+    }
     eprintln!(
         "wrote     {} files into {}",
         written.len(),

@@ -95,6 +95,15 @@ pub fn point_light(p: Vec3) -> DiskLight {
     }
 }
 
+/// The light's centre as a point light: the disk with radius 0, its plane kept (the oracle's
+/// one-sided rule still holds). What `reference-hard` casts its rays to.
+pub fn centre_light(light: &DiskLight) -> DiskLight {
+    DiskLight {
+        radius: 0.0,
+        ..*light
+    }
+}
+
 /// Whether face `f` walks edge `a → b` in that direction (else `b → a`).
 fn walks(mesh: &CasterMesh, f: u32, a: u32, b: u32) -> bool {
     let v = mesh.faces[f as usize].v;

@@ -14,6 +14,7 @@ pub mod on_shadow_map;
 pub mod pcf;
 pub mod pcss;
 pub mod reference;
+pub mod reference_hard;
 pub mod sampled;
 pub mod shadow_volume;
 
@@ -43,6 +44,7 @@ pub const ALL: &[Method] = &[
     Method(&sampled::SAMPLED),
     Method(&shadow_volume::SHADOW_VOLUME),
     Method(&reference::REFERENCE),
+    Method(&reference_hard::REFERENCE_HARD),
 ];
 
 /// What a method is, for the registry.
@@ -55,6 +57,9 @@ pub struct MethodSpec {
     pub knobs: &'static [&'static Knob],
     /// V is computed on the CPU (the ray-cast reference): only wall time measures it.
     pub cpu_side: bool,
+    /// A hard shadow from the light's centre as a point light: `compare` scores it against
+    /// `reference-hard` too.
+    pub hard: bool,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
 }
@@ -72,6 +77,8 @@ impl Method {
     pub const HARD: Method = Method(&hard::HARD);
     /// The ray-cast ground truth.
     pub const REFERENCE: Method = Method(&reference::REFERENCE);
+    /// The exact hard shadow: one ray per pixel to the light centre.
+    pub const REFERENCE_HARD: Method = Method(&reference_hard::REFERENCE_HARD);
 
     pub fn all() -> &'static [Method] {
         ALL
@@ -100,6 +107,11 @@ impl Method {
 
     pub fn is_reference(self) -> bool {
         self == Method::REFERENCE
+    }
+
+    /// Whether it makes a hard shadow from the light's centre (scored against `reference-hard`).
+    pub fn is_hard(self) -> bool {
+        self.0.hard
     }
 }
 

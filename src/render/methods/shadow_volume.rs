@@ -48,6 +48,7 @@ pub static SHADOW_VOLUME: MethodSpec = MethodSpec {
     description: "stencil shadow volumes from the light centre (Crow 1977), z-fail with caps",
     knobs: &[&OPEN],
     cpu_side: false,
+    hard: true,
     new: |ctx| Box::new(ShadowVolume::new(ctx)),
 };
 
