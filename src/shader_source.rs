@@ -165,6 +165,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/pcss.wgsl"),
     ),
     (
+        "methods/planar.wgsl",
+        include_str!("../shaders/methods/planar.wgsl"),
+    ),
+    (
         "methods/reference.wgsl",
         include_str!("../shaders/methods/reference.wgsl"),
     ),
@@ -183,6 +187,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "passes/floor.wgsl",
         include_str!("../shaders/passes/floor.wgsl"),
+    ),
+    (
+        "passes/planar.wgsl",
+        include_str!("../shaders/passes/planar.wgsl"),
     ),
     (
         "passes/probe.wgsl",

@@ -271,7 +271,13 @@ fn reference_hard_puts_a_straight_edge_where_the_centre_projects_it() {
     let scene = scene_from("half-plane", HALF_PLANE);
     let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
     let size = 96;
-    let frame = render(&mut offline, &scene, Method::REFERENCE_HARD, size, Knobs::default());
+    let frame = render(
+        &mut offline,
+        &scene,
+        Method::REFERENCE_HARD,
+        size,
+        Knobs::default(),
+    );
     let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), size, size);
     let (mut lit, mut dark) = (0, 0);
     for (r, &v) in receivers.iter().zip(&frame.visibility) {
@@ -284,7 +290,10 @@ fn reference_hard_puts_a_straight_edge_where_the_centre_projects_it() {
         lit += usize::from(expected == 1.0);
         dark += usize::from(expected == 0.0);
     }
-    assert!(lit > 500 && dark > 500, "both sides in view: {lit} lit, {dark} dark");
+    assert!(
+        lit > 500 && dark > 500,
+        "both sides in view: {lit} lit, {dark} dark"
+    );
     // Nothing but 0 and 1.
     assert!(frame.visibility.iter().all(|&v| v == 0.0 || v == 1.0));
 }
@@ -323,7 +332,9 @@ fn compare_scores_hard_methods_against_reference_hard() {
     let hard = row("hard").hard.expect("scored");
     assert!(hard.mismatch_pct > sv.mismatch_pct, "{hard:?}");
     assert!(hard.edge_px >= hard.interior_px, "{hard:?}");
-    assert!(report.markdown().contains("## Hard methods against `reference-hard`"));
+    assert!(report
+        .markdown()
+        .contains("## Hard methods against `reference-hard`"));
     assert!(report.hard_table().contains("| shadow-volume |"));
 }
 
@@ -366,11 +377,139 @@ fn shadow_volume_on_open_meshes_two_sided_exact_one_sided_misses_the_sheet() {
     let scene = scene_from("open", OPEN);
     let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
     let sv = method("shadow-volume");
-    let two = score(&mut offline, &scene, sv, 128, Knobs::default().with(&SV_OPEN, 1));
+    let two = score(
+        &mut offline,
+        &scene,
+        sv,
+        128,
+        Knobs::default().with(&SV_OPEN, 1),
+    );
     assert!(two.pct() <= EXACT_PCT, "two-sided: {two:?}");
     // Crow's one-sided volumes: the sheet's faces all face away from the light, so it casts
     // nothing; the truth has its shadow on the ground.
-    let one = score(&mut offline, &scene, sv, 128, Knobs::default().with(&SV_OPEN, 0));
-    assert!(one.dark < two.dark, "one-sided loses the sheet's shadow: {one:?}");
+    let one = score(
+        &mut offline,
+        &scene,
+        sv,
+        128,
+        Knobs::default().with(&SV_OPEN, 0),
+    );
+    assert!(
+        one.dark < two.dark,
+        "one-sided loses the sheet's shadow: {one:?}"
+    );
     assert!(one.bad > 200, "{one:?}");
+}
+
+/// The ground tilted 20° about x, a box and a sphere above it; the sphere low enough to be in
+/// the box's shadow from the light's centre.
+const TILTED: &str = r#"
+[camera]
+eye = [0.5, 3.5, 5.0]
+target = [0.0, 0.3, 0.0]
+fov_y_deg = 45.0
+
+[light]
+center = [0.2, 4.0, 0.1]
+normal = [0.0, -1.0, 0.0]
+radius = 0.5
+
+[[object]]
+name = "ground"
+mesh = "plane"
+rotate_deg = [20.0, 0.0, 0.0]
+scale = 10.0
+casts_shadow = false
+
+[[object]]
+name = "box"
+mesh = "cube"
+translate = [0.1, 2.2, 0.0]
+rotate_deg = [0.0, 30.0, 0.0]
+scale = 0.7
+
+[[object]]
+name = "sphere"
+mesh = "sphere:24x12"
+translate = [0.0, 0.9, 0.1]
+scale = 0.6
+"#;
+
+/// The pixels whose surface (on the CPU) lies on the plane through the origin with normal `n`.
+fn on_plane(scene: &Scene, size: u32, n: glam::Vec3) -> Vec<bool> {
+    view::receivers(scene, &Bvh::build(scene.all_triangles()), size, size)
+        .iter()
+        .map(|r| r.is_some_and(|r| r.position.dot(n).abs() < 1e-4))
+        .collect()
+}
+
+#[test]
+fn planar_is_exact_on_a_tilted_receiver_and_shadows_nothing_else() {
+    let scene = scene_from("tilted", TILTED);
+    let size = 128;
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let frame = render(
+        &mut offline,
+        &scene,
+        method("planar"),
+        size,
+        Knobs::default(),
+    );
+    let (truth, mask) = hard_truth(&scene, &frame);
+    let tilt = 20f32.to_radians();
+    let ground = on_plane(&scene, size, glam::Vec3::new(0.0, tilt.cos(), tilt.sin()));
+    let on_ground: Vec<bool> = mask.iter().zip(&ground).map(|(m, g)| *m && *g).collect();
+    let elsewhere: Vec<bool> = mask.iter().zip(&ground).map(|(m, g)| *m && !*g).collect();
+    let (bad, n) = mismatch(&truth, &frame.visibility, &on_ground);
+    let dark = |m: &[bool], v: &[f32]| v.iter().zip(m).filter(|(v, m)| **m && **v < 0.5).count();
+    println!(
+        "tilted ground: planar {bad} of {n} mismatched; ground in shadow {} (truth {})",
+        dark(&on_ground, &frame.visibility),
+        dark(&on_ground, &truth)
+    );
+    assert!(100.0 * bad as f64 / n as f64 <= EXACT_PCT, "{bad} of {n}");
+    assert!(
+        dark(&on_ground, &truth) > 200,
+        "the box's shadow is on the ground"
+    );
+    // The limit: the sphere is in the box's shadow, and planar leaves it lit.
+    let (bad, n) = mismatch(&truth, &frame.visibility, &elsewhere);
+    println!("off the ground: planar {bad} of {n} mismatched");
+    assert!(dark(&elsewhere, &truth) > 50, "the box shadows the sphere");
+    assert_eq!(
+        dark(&elsewhere, &frame.visibility),
+        0,
+        "planar darkens nothing else"
+    );
+    assert!(bad >= dark(&elsewhere, &truth));
+}
+
+#[test]
+fn planar_stencil_darkens_each_pixel_once() {
+    use dbuffer::render::methods::planar::OPACITY;
+    let scene = scene_from("tilted", TILTED);
+    let size = 96;
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let frame = render(
+        &mut offline,
+        &scene,
+        method("planar"),
+        size,
+        Knobs::default().with(&OPACITY, 50),
+    );
+    let (truth, mask) = hard_truth(&scene, &frame);
+    let tilt = 20f32.to_radians();
+    let ground = on_plane(&scene, size, glam::Vec3::new(0.0, tilt.cos(), tilt.sin()));
+    // Every shadow pixel is under at least two projected triangles (the box's top and bottom
+    // and the sphere), and each reads 1 − 0.5 once: never 0.25.
+    let mut half = 0;
+    for i in 0..truth.len() {
+        if !(mask[i] && ground[i]) {
+            continue;
+        }
+        let v = frame.visibility[i];
+        assert!(v == 1.0 || v == 0.5, "pixel {i}: {v}");
+        half += usize::from(v == 0.5);
+    }
+    assert!(half > 200, "{half} darkened pixels");
 }

@@ -7,6 +7,7 @@ mod wgsl_layout;
 
 use dbuffer::geometry::{Branch, VtVariant};
 use dbuffer::render::passes::camera::CameraUniforms;
+use dbuffer::render::passes::planar::{PlanarUniforms, ReceiverUniform};
 use dbuffer::render::passes::probe::{FIT_GRID, PIXEL_FLOATS, PROBE_FIT, PROBE_PIXEL};
 use dbuffer::render::passes::sample_maps::{SampleLight, SampleLights, MAX_LIGHTS};
 use dbuffer::render::passes::shadow_map::{LightUniforms, ShadowUniforms};
@@ -98,6 +99,17 @@ fn uniforms_match_their_wgsl() {
         infinite_view_proj,
         eye,
         size
+    );
+    let planar = source("passes/planar.wgsl");
+    assert_wgsl_layout!(ReceiverUniform, &planar, "Receiver", projection, plane);
+    assert_wgsl_layout!(
+        PlanarUniforms,
+        &planar,
+        "PlanarUniforms",
+        infinite_view_proj,
+        shade,
+        eye,
+        receivers
     );
     for shader in [source("passes/view.wgsl"), source("passes/probe.wgsl")] {
         assert_wgsl_layout!(

@@ -14,6 +14,7 @@ pub mod hull;
 pub mod light_view;
 pub mod metrics;
 pub mod oracle;
+pub mod planar;
 pub mod progressive;
 pub mod ray;
 pub mod silhouette;

@@ -13,6 +13,7 @@ pub mod hard;
 pub mod on_shadow_map;
 pub mod pcf;
 pub mod pcss;
+pub mod planar;
 pub mod reference;
 pub mod reference_hard;
 pub mod sampled;
@@ -43,6 +44,7 @@ pub const ALL: &[Method] = &[
     Method(&pcss::PCSS),
     Method(&sampled::SAMPLED),
     Method(&shadow_volume::SHADOW_VOLUME),
+    Method(&planar::PLANAR),
     Method(&reference::REFERENCE),
     Method(&reference_hard::REFERENCE_HARD),
 ];
