@@ -157,6 +157,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/hard.wgsl"),
     ),
     (
+        "methods/hybrid.wgsl",
+        include_str!("../shaders/methods/hybrid.wgsl"),
+    ),
+    (
         "methods/pcf.wgsl",
         include_str!("../shaders/methods/pcf.wgsl"),
     ),
@@ -187,6 +191,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "passes/floor.wgsl",
         include_str!("../shaders/passes/floor.wgsl"),
+    ),
+    (
+        "passes/hybrid.wgsl",
+        include_str!("../shaders/passes/hybrid.wgsl"),
     ),
     (
         "passes/planar.wgsl",

@@ -513,3 +513,150 @@ fn planar_stencil_darkens_each_pixel_once() {
     }
     assert!(half > 200, "{half} darkened pixels");
 }
+
+/// Mismatched pixels of a frame against the truth, split like compare's table.
+fn hard_metrics(scene: &Scene, frame: &Frame) -> dbuffer::geometry::metrics::HardMetrics {
+    let (truth, mask) = hard_truth(scene, frame);
+    dbuffer::geometry::metrics::compare_hard(
+        &truth,
+        &frame.visibility,
+        &mask,
+        frame.width,
+        frame.height,
+    )
+}
+
+#[test]
+fn hybrid_loses_about_what_the_shadow_map_loses_and_at_its_edges() {
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let (mut hard_edges, mut hybrid_edges) = (0, 0);
+    for name in scene::builtin::names() {
+        let scene = scene::load(name).unwrap_or_else(|e| panic!("{e}"));
+        let hard = render(&mut offline, &scene, Method::HARD, 128, Knobs::default());
+        let hybrid = render(
+            &mut offline,
+            &scene,
+            method("hybrid"),
+            128,
+            Knobs::default(),
+        );
+        let (h, y) = (hard_metrics(&scene, &hard), hard_metrics(&scene, &hybrid));
+        println!(
+            "{name}: hard {:.3} % ({} edge, {} interior), hybrid {:.3} % ({} edge, {} interior)",
+            h.mismatch_pct, h.edge_px, h.interior_px, y.mismatch_pct, y.edge_px, y.interior_px
+        );
+        // Its acne (walls standing in front of lit faces the light grazes) stays small...
+        assert!(y.mismatch_pct <= 1.5, "{name}: {y:?}");
+        hard_edges += h.edge_px;
+        hybrid_edges += y.edge_px;
+    }
+    // ...and its boundaries are where the map's samples put them, as the shadow map's are.
+    assert!(
+        2 * hybrid_edges <= 3 * hard_edges,
+        "{hybrid_edges} edge pixels vs the map's {hard_edges}"
+    );
+}
+
+#[test]
+fn hybrid_with_the_camera_inside_a_volume_and_its_threshold() {
+    use dbuffer::render::methods::hybrid::THRESHOLD;
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    // The near cap: the eye is in the slab's shadow, every count starts at 1.
+    let scene = scene_from("camera-inside", INSIDE);
+    let hard = render(&mut offline, &scene, Method::HARD, 128, Knobs::default());
+    let hybrid = render(
+        &mut offline,
+        &scene,
+        method("hybrid"),
+        128,
+        Knobs::default(),
+    );
+    let (hard, hybrid) = (hard_metrics(&scene, &hard), hard_metrics(&scene, &hybrid));
+    println!("camera inside: hard {hard:?}, hybrid {hybrid:?}");
+    assert!(
+        hybrid.mismatch_pct <= hard.mismatch_pct + EXACT_PCT,
+        "{hybrid:?}"
+    );
+    // Too high a threshold misses the jump between the low sphere and the ground: its shadow
+    // leaks away from any true edge.
+    let scene = scene::load("overlap").unwrap_or_else(|e| panic!("{e}"));
+    let at = |offline: &mut Offline, t: u32| {
+        let k = Knobs::default().with(&THRESHOLD, t);
+        let m = hard_metrics(&scene, &render(offline, &scene, method("hybrid"), 128, k));
+        println!("overlap, threshold {t} per mille: {m:?}");
+        m
+    };
+    let (fine, coarse) = (at(&mut offline, 20), at(&mut offline, 500));
+    assert!(coarse.missed_shadow_px > 50, "{coarse:?}");
+    assert!(
+        coarse.interior_px > 10 * fine.interior_px.max(1),
+        "{coarse:?} vs {fine:?}"
+    );
+}
+
+#[test]
+fn hybrid_walls_on_the_gpu_are_the_cpu_twins() {
+    use dbuffer::geometry::hybrid::{wall_segments, WallSpace};
+    use dbuffer::geometry::VolumeParams;
+    use dbuffer::render::methods::hybrid::wall_params;
+    let scene = scene::load("fig7-concave").unwrap_or_else(|e| panic!("{e}"));
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let mut session = offline.session(scene.clone());
+    let hybrid = method("hybrid");
+    let request = FrameRequest {
+        width: 64,
+        height: 64,
+        dbuffer_size: 256,
+        method: hybrid,
+        ..FrameRequest::default()
+    };
+    // The walls come back for the overlay a frame or two after they were made.
+    let mut frame = None;
+    for _ in 0..4 {
+        frame = Some(
+            offline
+                .render_in(&mut session, &request)
+                .unwrap_or_else(|e| panic!("{e}"))
+                .0,
+        );
+    }
+    let frame = frame.expect("rendered");
+    let maps = frame
+        .maps
+        .as_ref()
+        .expect("the D-buffer's maps: |cx_o| is the shared map");
+    let distances = maps.raw(0, 0);
+    let params = wall_params(&Knobs::default(), VolumeParams::for_scene(&scene).far);
+    let space = WallSpace {
+        light: scene.light.center,
+        inv_view_proj: session.light_view().view_projection().inverse(),
+        size: maps.size,
+        top_bias: 0.5 * params.threshold,
+        bottom_margin: params.threshold,
+    };
+    let cpu: Vec<[glam::Vec3; 6]> =
+        wall_segments(&distances, maps.size, &params, |q, d| space.depth(q, d))
+            .iter()
+            .map(|s| space.quad(s))
+            .collect();
+    let gpu = session.geometry(hybrid).expect("the walls came back");
+    let tops: Vec<[glam::Vec3; 2]> = gpu.casters[0].silhouettes.iter().map(|s| s.v).collect();
+    println!("{} walls on the CPU, {} on the GPU", cpu.len(), tops.len());
+    assert!(cpu.len() > 50);
+    let diff = cpu.len().abs_diff(tops.len());
+    assert!(diff * 100 <= cpu.len(), "{} vs {}", cpu.len(), tops.len());
+    // Every CPU wall's top has a GPU twin within a millimetre (order-free).
+    let unmatched = cpu
+        .iter()
+        .filter(|q| {
+            !tops
+                .iter()
+                .any(|t| (t[0] - q[0]).length() < 1e-3 && (t[1] - q[1]).length() < 1e-3)
+        })
+        .count();
+    assert!(
+        unmatched * 100 <= cpu.len(),
+        "{unmatched} of {} unmatched",
+        cpu.len()
+    );
+}

@@ -7,6 +7,7 @@ mod wgsl_layout;
 
 use dbuffer::geometry::{Branch, VtVariant};
 use dbuffer::render::passes::camera::CameraUniforms;
+use dbuffer::render::passes::hybrid::HybridUniforms;
 use dbuffer::render::passes::planar::{PlanarUniforms, ReceiverUniform};
 use dbuffer::render::passes::probe::{FIT_GRID, PIXEL_FLOATS, PROBE_FIT, PROBE_PIXEL};
 use dbuffer::render::passes::sample_maps::{SampleLight, SampleLights, MAX_LIGHTS};
@@ -99,6 +100,19 @@ fn uniforms_match_their_wgsl() {
         infinite_view_proj,
         eye,
         size
+    );
+    assert_wgsl_layout!(
+        HybridUniforms,
+        &source("passes/hybrid.wgsl"),
+        "HybridUniforms",
+        inv_light_view_proj,
+        light_view_proj,
+        infinite_view_proj,
+        inv_infinite_view_proj,
+        light,
+        params,
+        limits,
+        screen
     );
     let planar = source("passes/planar.wgsl");
     assert_wgsl_layout!(ReceiverUniform, &planar, "Receiver", projection, plane);

@@ -11,6 +11,7 @@ pub mod bvh;
 pub mod classify;
 pub mod hard_volume;
 pub mod hull;
+pub mod hybrid;
 pub mod light_view;
 pub mod metrics;
 pub mod oracle;

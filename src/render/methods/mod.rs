@@ -10,6 +10,7 @@
 
 pub mod dbuffer;
 pub mod hard;
+pub mod hybrid;
 pub mod on_shadow_map;
 pub mod pcf;
 pub mod pcss;
@@ -45,6 +46,7 @@ pub const ALL: &[Method] = &[
     Method(&sampled::SAMPLED),
     Method(&shadow_volume::SHADOW_VOLUME),
     Method(&planar::PLANAR),
+    Method(&hybrid::HYBRID),
     Method(&reference::REFERENCE),
     Method(&reference_hard::REFERENCE_HARD),
 ];

@@ -7,6 +7,7 @@
 pub mod camera;
 pub mod dbuffer_volumes;
 pub mod floor;
+pub mod hybrid;
 pub mod planar;
 pub mod probe;
 pub mod sample_maps;
