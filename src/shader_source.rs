@@ -153,6 +153,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/dbuffer.wgsl"),
     ),
     (
+        "methods/extended_light_map.wgsl",
+        include_str!("../shaders/methods/extended_light_map.wgsl"),
+    ),
+    (
         "methods/hard.wgsl",
         include_str!("../shaders/methods/hard.wgsl"),
     ),
@@ -187,6 +191,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "passes/dbuffer_volumes.wgsl",
         include_str!("../shaders/passes/dbuffer_volumes.wgsl"),
+    ),
+    (
+        "passes/extended_light_map.wgsl",
+        include_str!("../shaders/passes/extended_light_map.wgsl"),
     ),
     (
         "passes/floor.wgsl",

@@ -660,3 +660,130 @@ fn hybrid_walls_on_the_gpu_are_the_cpu_twins() {
         cpu.len()
     );
 }
+
+#[test]
+fn extended_light_map_rgb_is_its_cpu_twin_and_its_depth_bits_show() {
+    use dbuffer::render::methods::extended_light_map::{elm_params, light_rgb, DEPTH_BITS};
+    use dbuffer::render::session::FrameJob;
+    use dbuffer::render::FrameTargets;
+    let scene = scene::load("table1-960").unwrap_or_else(|e| panic!("{e}"));
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let elm = method("extended-light-map");
+    let mut session = offline.session(scene.clone());
+    let request = FrameRequest {
+        width: 64,
+        height: 64,
+        dbuffer_size: 128,
+        method: elm,
+        ..FrameRequest::default()
+    };
+    let mut targets = FrameTargets::new();
+    session
+        .submit(
+            &offline.ctx,
+            &mut [FrameJob {
+                targets: &mut targets,
+                request,
+                view: None,
+                render: true,
+                probes: Vec::new(),
+            }],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    let frame = session
+        .read(&offline.ctx, &targets, Some(elm))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let maps = frame.maps.expect("the map's channels");
+    assert_eq!(maps.channels.len(), 4);
+    // The CPU twin's parameters, as the method makes them.
+    let view = *session.light_view();
+    let params = {
+        let knobs = Knobs::default();
+        let prepared = std::cell::OnceCell::new();
+        let inputs = dbuffer::render::methods::FrameInputs {
+            ctx: &offline.ctx,
+            scene: &scene,
+            surfaces: session.surfaces(),
+            prepared: &prepared,
+            light_view: &view,
+            revision: 1,
+            map_size: 128,
+            vt: dbuffer::geometry::VtVariant::Smoothstep,
+            knobs: &knobs,
+            external: None,
+            view: dbuffer::render::passes::camera::ScreenView::new(
+                &scene,
+                session.surfaces().bounds,
+                64,
+                64,
+            ),
+        };
+        elm_params(&inputs)
+    };
+    let inv = params.view_proj.inverse();
+    let mut checked = 0;
+    for y in 4..124 {
+        for x in 4..124 {
+            let texel = maps.texel(x, y).expect("in the map")[0];
+            // The ground (y = 0) under the texel centre, if that is what the map saw there.
+            let ndc = glam::Vec4::new(
+                (x as f32 + 0.5) / 64.0 - 1.0,
+                1.0 - (y as f32 + 0.5) / 64.0,
+                0.5,
+                1.0,
+            );
+            let q = inv * ndc;
+            let dir = (q.truncate() / q.w - params.light).normalize();
+            let t = -params.light.y / dir.y;
+            let ground = params.light + dir * t;
+            if t.is_nan() || t <= 0.0 || (t / params.far - texel[3]).abs() > 2.0 / params.levels() {
+                continue;
+            }
+            let want = light_rgb(&params, ground, glam::Vec3::Y);
+            assert!(
+                (want.x - texel[0]).abs() < 2e-3 && (texel[0] - texel[2]).abs() < 1e-6,
+                "texel ({x}, {y}): {want} vs {texel:?}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 5000, "{checked} ground texels checked");
+
+    // Against the exact hard shadow: 24 bits as good as the shadow map, 8 bits visibly not
+    // where a caster comes close to its receiver (the knot above the ground).
+    let scene = scene::load("fig8c-complex").unwrap_or_else(|e| panic!("{e}"));
+    let mut score_bits = |bits: u32| {
+        let f = render(
+            &mut offline,
+            &scene,
+            elm,
+            128,
+            Knobs::default().with(&DEPTH_BITS, bits),
+        );
+        let m = hard_metrics(&scene, &f);
+        println!("fig8c-complex, {bits}-bit distances: {m:?}");
+        m
+    };
+    let (b8, b16, b24) = (score_bits(8), score_bits(16), score_bits(24));
+    let hard = hard_metrics(
+        &scene,
+        &render(&mut offline, &scene, Method::HARD, 128, Knobs::default()),
+    );
+    println!("hard: {hard:?}");
+    assert!(
+        b24.mismatch_pct <= 1.5 * hard.mismatch_pct + EXACT_PCT,
+        "{b24:?} vs {hard:?}"
+    );
+    assert!(
+        b16.mismatch_pct <= 1.5 * hard.mismatch_pct + EXACT_PCT,
+        "{b16:?} vs {hard:?}"
+    );
+    assert!(
+        b8.mismatch_pct > 10.0 * b16.mismatch_pct.max(0.01),
+        "{b8:?} vs {b16:?}"
+    );
+    assert!(
+        b8.missed_shadow_px > b8.false_shadow_px,
+        "8 bits: light leaks {b8:?}"
+    );
+}

@@ -7,6 +7,7 @@ mod wgsl_layout;
 
 use dbuffer::geometry::{Branch, VtVariant};
 use dbuffer::render::passes::camera::CameraUniforms;
+use dbuffer::render::passes::extended_light_map::ElmUniforms;
 use dbuffer::render::passes::hybrid::HybridUniforms;
 use dbuffer::render::passes::planar::{PlanarUniforms, ReceiverUniform};
 use dbuffer::render::passes::probe::{FIT_GRID, PIXEL_FLOATS, PROBE_FIT, PROBE_PIXEL};
@@ -59,7 +60,7 @@ fn uniforms_match_their_wgsl() {
             light_intensity
         );
     }
-    for shader in ["hard", "pcf", "pcss", "dbuffer"] {
+    for shader in ["hard", "pcf", "pcss", "dbuffer", "extended_light_map"] {
         assert_wgsl_layout!(
             ShadowUniforms,
             &source(&format!("methods/{shader}.wgsl")),
@@ -113,6 +114,17 @@ fn uniforms_match_their_wgsl() {
         params,
         limits,
         screen
+    );
+    assert_wgsl_layout!(
+        ElmUniforms,
+        &source("passes/extended_light_map.wgsl"),
+        "ElmUniforms",
+        view_proj,
+        light,
+        axis,
+        spot,
+        emitter,
+        size
     );
     let planar = source("passes/planar.wgsl");
     assert_wgsl_layout!(ReceiverUniform, &planar, "Receiver", projection, plane);

@@ -9,6 +9,7 @@
 //! V(t), the targets — is the camera pass's ([`super::passes::camera`]).
 
 pub mod dbuffer;
+pub mod extended_light_map;
 pub mod hard;
 pub mod hybrid;
 pub mod on_shadow_map;
@@ -47,6 +48,7 @@ pub const ALL: &[Method] = &[
     Method(&shadow_volume::SHADOW_VOLUME),
     Method(&planar::PLANAR),
     Method(&hybrid::HYBRID),
+    Method(&extended_light_map::EXTENDED_LIGHT_MAP),
     Method(&reference::REFERENCE),
     Method(&reference_hard::REFERENCE_HARD),
 ];
