@@ -15,13 +15,17 @@ struct ElmUniforms {
     // xyz: the spot's axis; w: the light's intensity.
     axis: vec4<f32>,
     // x: cos of the spot's outer angle; y: of its inner one; z: depth levels (2^bits - 1);
-    // w: the pattern (0 spotlight, 1 projected texture, 2 uniform).
+    // w: unused (the pattern is the pipeline constant PATTERN).
     spot: vec4<f32>,
     // xyz: the emitter's normal (one-sided disk: its cosine); w: 1 to apply it; .. size below.
     emitter: vec4<f32>,
     // x: the map's side in texels.
     size: vec4<f32>,
 };
+
+// The pattern (0 spotlight, 1 projected texture, 2 uniform), fixed per pipeline: a CPU
+// rasteriser would run every pattern's arithmetic on every texel if it were a uniform.
+override PATTERN: u32 = 0u;
 
 @group(0) @binding(0) var<uniform> elm: ElmUniforms;
 @group(0) @binding(1) var pattern: texture_2d<f32>;
@@ -47,9 +51,10 @@ fn light_rgb(y: vec3<f32>, n: vec3<f32>, uv: vec2<f32>) -> vec3<f32> {
     let cos_axis = dot(dir, elm.axis.xyz);
     var spot = smoothstep(elm.spot.x, elm.spot.y, cos_axis);
     var gobo = vec3<f32>(1.0);
-    if elm.spot.w > 1.5 {
+    if PATTERN == 2u {
         spot = 1.0;
-    } else if elm.spot.w > 0.5 {
+    }
+    if PATTERN == 1u {
         gobo = textureSampleLevel(pattern, pattern_sampler, uv, 0.0).rgb;
     }
     let cos_receiver = abs(dot(n, dir));

@@ -2,10 +2,14 @@
 // twin of the extraction is geometry::hybrid (wall_segments, WallSpace::quad): keep the two
 // alike.
 //
-// 1. cs_extract: per cell of 2×2 texel centres of the light's distance map, the marching-squares
-//    template (or the star) of its discontinuous texel pairs, each segment written as a wall
-//    quad (two triangles) standing on the light's rays from the near texel's distance to the far
-//    one's; cs_finish turns the count into indirect draw arguments.
+// 1. cs_find: per cell of 2×2 texel centres of the light's distance map, a cheap test (a jump
+//    above the threshold between two of its texels) lists the cells worth a closer look;
+//    cs_dispatch sizes the next dispatch (a CPU adapter runs every path of a branch for every
+//    cell, so the costly part runs only over the listed ones). cs_extract: per listed cell, the
+//    marching-squares template (or the star) of its discontinuous texel pairs, each segment
+//    written as a wall quad (two triangles) standing on the light's rays from the near texel's
+//    plane to the far texel's distance; cs_finish turns the count into indirect draw
+//    arguments.
 // 2. vs_wall: the walls over the screen prepass, z-pass, one stencil bit inverted per wall in
 //    front of the surface (no fragment stage).
 // 3. fs_even / fs_odd: the resolve, one pipeline per value of the bit: the parity, and whether
@@ -30,7 +34,7 @@ struct HybridUniforms {
     // x: the walls' bottom margin; y: the most walls; z: the near-cap lookup's bias; w: 1 for
     // the slope test (a jump that either neighbour's slope predicts is no edge), 0 without.
     limits: vec4<f32>,
-    // xy: the camera image's width and height in pixels.
+    // xy: the camera image's width and height in pixels; z: the map copy's row stride in floats.
     screen: vec4<f32>,
 };
 
@@ -47,6 +51,18 @@ struct DrawArgs {
 @group(1) @binding(0) var<storage, read_write> walls: array<vec4<f32>>;
 @group(1) @binding(1) var<storage, read_write> wall_count: atomic<u32>;
 @group(1) @binding(2) var<storage, read_write> draw_args: DrawArgs;
+// The distance map copied into a buffer, rows `screen.z` floats apart (a CPU rasteriser reads a
+// buffer in a compute shader far faster than a texture).
+@group(1) @binding(3) var<storage, read> map_copy: array<f32>;
+
+fn texel(p: vec2<i32>) -> f32 {
+    return map_copy[u32(p.y) * u32(hybrid.screen.z) + u32(p.x)];
+}
+
+// The cells cs_find listed (x + y·65536), how many, and cs_extract's dispatch size.
+@group(1) @binding(4) var<storage, read_write> candidates: array<u32>;
+@group(1) @binding(5) var<storage, read_write> candidate_count: atomic<u32>;
+@group(1) @binding(6) var<storage, read_write> extract_args: array<u32, 3>;
 
 // The unit direction from the light through image point q (texel units).
 fn direction(q: vec2<f32>) -> vec3<f32> {
@@ -119,6 +135,9 @@ fn edge(t: vec4<f32>, w: vec4<f32>, mid: vec2<f32>) -> Edge {
         let limit = hybrid.params.y * min(w.y, w.z);
         e.flagged = !(predicts(w.x, w.y, w.z, limit) || predicts(w.w, w.z, w.y, limit));
     }
+    if !e.flagged {
+        return e;
+    }
     e.far = hi;
     if da <= db {
         e.near = wall_top(w.x, w.y, mid, lo, hi);
@@ -134,7 +153,7 @@ fn at(p: vec2<i32>) -> f32 {
     if any(p < vec2<i32>(0)) || any(p >= vec2<i32>(n)) {
         return 3.0e38;
     }
-    return textureLoad(distances, p, 0).x;
+    return texel(p);
 }
 
 // The light-view depth of texel p's surface point, 0 where it has none.
@@ -185,12 +204,54 @@ fn emit(a: vec2<f32>, b: vec2<f32>, near: vec2<f32>, far: vec2<f32>) {
     walls[k + 5u] = bottom_a;
 }
 
+// Whether the pair is worth a closer look: a jump above the threshold, or exactly one texel
+// without a surface (the slope test can only clear it).
+fn jumps(a: f32, b: f32) -> bool {
+    let na = a >= NO_SURFACE_AT;
+    let nb = b >= NO_SURFACE_AT;
+    return (na != nb) || (!na && abs(a - b) > hybrid.params.y * min(a, b));
+}
+
+// The most cells cs_find lists (render::passes::hybrid::MAX_CANDIDATES).
+const MAX_CANDIDATES: u32 = 262144u;
+
 @compute @workgroup_size(8, 8)
-fn cs_extract(@builtin(global_invocation_id) id: vec3<u32>) {
+fn cs_find(@builtin(global_invocation_id) id: vec3<u32>) {
     let n = u32(hybrid.params.x);
     if id.x + 1u >= n || id.y + 1u >= n {
         return;
     }
+    let i = vec2<i32>(id.xy);
+    let d00 = texel(i);
+    let d10 = texel(i + vec2<i32>(1, 0));
+    let d01 = texel(i + vec2<i32>(0, 1));
+    let d11 = texel(i + vec2<i32>(1, 1));
+    if jumps(d00, d10) || jumps(d10, d11) || jumps(d01, d11) || jumps(d00, d01) {
+        let k = atomicAdd(&candidate_count, 1u);
+        if k < MAX_CANDIDATES {
+            candidates[k] = id.x | (id.y << 16u);
+        }
+    }
+}
+
+@compute @workgroup_size(1)
+fn cs_dispatch() {
+    let n = min(atomicLoad(&candidate_count), MAX_CANDIDATES);
+    extract_args[0] = (n + 63u) / 64u;
+    extract_args[1] = 1u;
+    extract_args[2] = 1u;
+}
+
+@compute @workgroup_size(64)
+fn cs_extract(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= min(atomicLoad(&candidate_count), MAX_CANDIDATES) {
+        return;
+    }
+    let c = candidates[id.x];
+    extract_cell(vec2<u32>(c & 0xffffu, c >> 16u));
+}
+
+fn extract_cell(id: vec2<u32>) {
     let i = vec2<i32>(id.xy);
     let right = vec2<i32>(1, 0);
     let down = vec2<i32>(0, 1);

@@ -186,7 +186,7 @@ impl MethodState for HybridMethod {
         };
         if self.made != Some(made) {
             self.hybrid
-                .record_extract(ctx, rec, map.size, inputs.revision);
+                .record_extract(ctx, rec, &map.distance.texture, inputs.revision);
             self.made = Some(made);
         }
         self.screen.begin(ctx, &inputs.view);
@@ -228,5 +228,12 @@ impl MethodState for HybridMethod {
 
     fn invalidate(&mut self) {
         self.made = None;
+    }
+
+    fn stencil_fill(&self, ctx: &GpuContext) -> Option<Result<f64, RenderError>> {
+        Some(
+            self.screen
+                .measure_fill(ctx, &|pass| self.hybrid.draw_walls(pass)),
+        )
     }
 }

@@ -238,6 +238,9 @@ impl MethodState for ShadowVolume {
     }
 
     fn stencil_fill(&self, ctx: &GpuContext) -> Option<Result<f64, RenderError>> {
-        Some(self.screen.measure_fill(ctx, &self.volumes))
+        Some(
+            self.screen
+                .measure_fill(ctx, &|pass| self.volumes.draw(pass)),
+        )
     }
 }

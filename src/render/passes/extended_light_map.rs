@@ -52,7 +52,8 @@ pub struct ElmUniforms {
     pub light: [f32; 4],
     /// xyz: the spot's axis; w: the intensity.
     pub axis: [f32; 4],
-    /// cos outer, cos inner, depth levels, pattern code.
+    /// cos outer, cos inner, depth levels, the pattern code (for the record: the pipeline
+    /// constant `PATTERN` decides).
     pub spot: [f32; 4],
     /// xyz: the emitter's normal; w: 1 to apply its cosine.
     pub emitter: [f32; 4],
@@ -103,9 +104,12 @@ impl ElmUniforms {
     }
 }
 
-/// The pipeline, its layout and the projected texture, once per device.
+/// The pipelines (one per pattern, made on first use), their layout and the projected texture,
+/// once per device.
 pub struct ElmPass {
-    pipeline: wgpu::RenderPipeline,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipelines: [std::sync::OnceLock<wgpu::RenderPipeline>; 3],
     layout: wgpu::BindGroupLayout,
     gobo: wgpu::TextureView,
     sampler: wgpu::Sampler,
@@ -137,22 +141,10 @@ impl ElmPass {
                     },
                 ],
             });
-            let pipeline = crate::render::render_pipeline(
-                device,
-                &crate::render::PipelineSpec {
-                    label: "ElmPass::pipeline",
-                    module: &module,
-                    layout: &pipeline_layout(device, "ElmPass::pipeline_layout", &[&layout]),
-                    vs: "vs_main",
-                    fs: Some("fs_main"),
-                    buffers: &[Some(SurfaceVertex::layout())],
-                    targets: &[opaque(MAP_FORMAT)],
-                    cull: None,
-                    depth: depth_test(wgpu::CompareFunction::Less),
-                },
-            );
             ElmPass {
-                pipeline,
+                pipeline_layout: pipeline_layout(device, "ElmPass::pipeline_layout", &[&layout]),
+                module,
+                pipelines: Default::default(),
                 layout,
                 gobo: gobo_texture(device, &ctx.queue),
                 sampler: device.create_sampler(&wgpu::SamplerDescriptor {
@@ -162,6 +154,42 @@ impl ElmPass {
                     ..Default::default()
                 }),
             }
+        })
+    }
+}
+
+impl ElmPass {
+    /// The pipeline for `pattern`.
+    fn pipeline(&self, device: &wgpu::Device, pattern: Pattern) -> &wgpu::RenderPipeline {
+        self.pipelines[pattern.code() as usize].get_or_init(|| {
+            let constants = [("PATTERN", f64::from(pattern.code()))];
+            let options = wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            };
+            let targets = [opaque(MAP_FORMAT)];
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("ElmPass::pipeline"),
+                layout: Some(&self.pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &self.module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: options.clone(),
+                    buffers: &[Some(SurfaceVertex::layout())],
+                },
+                // Surfaces are two-sided.
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: depth_test(wgpu::CompareFunction::Less),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: options,
+                    targets: &targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
         })
     }
 }
@@ -305,7 +333,7 @@ impl ExtendedLightMap {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pass.pipeline);
+        pass.set_pipeline(self.pass.pipeline(&ctx.device, params.pattern));
         pass.set_bind_group(0, &self.bind_group, &[]);
         surfaces.draw(&mut pass);
     }

@@ -25,6 +25,10 @@ use crate::render::{
     view_entry, GpuContext, RenderError,
 };
 
+/// At most this many cells of the map are looked at closely (as the WGSL's MAX_CANDIDATES);
+/// maps up to 65536² (cells are packed in 16 + 16 bits).
+pub const MAX_CANDIDATES: u32 = 1 << 18;
+
 /// At most this many wall quads (96 bytes each); more are dropped and counted.
 pub const MAX_HYBRID_WALLS: u32 = 1 << 16;
 const WALL_BYTES: u64 = 6 * 16;
@@ -44,7 +48,7 @@ pub struct HybridUniforms {
     /// The walls' bottom margin, the most walls, the near cap's lookup bias, the slope test
     /// (1/0).
     pub limits: [f32; 4],
-    /// The camera image's width and height.
+    /// The camera image's width and height, the map copy's row stride in floats.
     pub screen: [f32; 4],
 }
 
@@ -84,7 +88,12 @@ impl HybridUniforms {
                 f.lookup_bias,
                 if f.walls.slope_test { 1.0 } else { 0.0 },
             ],
-            screen: [f.width as f32, f.height as f32, 0.0, 0.0],
+            screen: [
+                f.width as f32,
+                f.height as f32,
+                (padded_row(f.map_size) / 4) as f32,
+                0.0,
+            ],
         }
     }
 }
@@ -93,6 +102,9 @@ impl HybridUniforms {
 pub struct HybridPass {
     inputs_layout: wgpu::BindGroupLayout,
     walls_layout: wgpu::BindGroupLayout,
+    dispatch_layout: wgpu::BindGroupLayout,
+    find: wgpu::ComputePipeline,
+    dispatch: wgpu::ComputePipeline,
     extract: wgpu::ComputePipeline,
     finish: wgpu::ComputePipeline,
     wall: wgpu::RenderPipeline,
@@ -127,19 +139,44 @@ impl HybridPass {
                 },
                 count: None,
             };
+            let mut map_copy = storage(3);
+            map_copy.ty = wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            };
             let walls_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("HybridPass::walls"),
-                entries: &[storage(0), storage(1), storage(2)],
+                entries: &[
+                    storage(0),
+                    storage(1),
+                    storage(2),
+                    map_copy,
+                    storage(4),
+                    storage(5),
+                ],
             });
+            // cs_dispatch alone writes the indirect arguments of cs_extract: in a group of its
+            // own, so no dispatch that reads them indirectly has them bound as storage.
+            let dispatch_layout =
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("HybridPass::dispatch"),
+                    entries: &[storage(5), storage(6)],
+                });
             let compute_layout = pipeline_layout(
                 device,
                 "HybridPass::compute_layout",
                 &[&inputs_layout, &walls_layout],
             );
-            let compute = |label: &str, entry: &str| {
+            let dispatch_pipeline_layout = pipeline_layout(
+                device,
+                "HybridPass::dispatch_layout",
+                &[&inputs_layout, &dispatch_layout],
+            );
+            let compute = |label: &str, entry: &str, layout: &wgpu::PipelineLayout| {
                 device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(label),
-                    layout: Some(&compute_layout),
+                    layout: Some(layout),
                     module: &module,
                     entry_point: Some(entry),
                     compilation_options: Default::default(),
@@ -234,8 +271,15 @@ impl HybridPass {
             HybridPass {
                 inputs_layout,
                 walls_layout,
-                extract: compute("HybridPass::extract", "cs_extract"),
-                finish: compute("HybridPass::finish", "cs_finish"),
+                find: compute("HybridPass::find", "cs_find", &compute_layout),
+                dispatch: compute(
+                    "HybridPass::dispatch",
+                    "cs_dispatch",
+                    &dispatch_pipeline_layout,
+                ),
+                extract: compute("HybridPass::extract", "cs_extract", &compute_layout),
+                finish: compute("HybridPass::finish", "cs_finish", &compute_layout),
+                dispatch_layout,
                 wall,
                 even,
                 odd,
@@ -261,7 +305,15 @@ pub struct Hybrid {
     walls: wgpu::Buffer,
     count: wgpu::Buffer,
     args: wgpu::Buffer,
-    walls_group: wgpu::BindGroup,
+    candidates: wgpu::Buffer,
+    candidate_count: wgpu::Buffer,
+    extract_args: wgpu::Buffer,
+    dispatch_group: wgpu::BindGroup,
+    /// Group 1 over the walls and the map's copy, and the map size the copy holds.
+    walls_group: Option<(wgpu::BindGroup, u32)>,
+    /// The distance map copied into a buffer (rows padded to wgpu's copy alignment): lavapipe
+    /// reads a storage buffer in a compute shader far faster than a texture.
+    map_copy: Option<wgpu::Buffer>,
     /// Group 0 and the generation of the map it binds.
     inputs_group: Option<(wgpu::BindGroup, u64)>,
     copy: Copy,
@@ -287,13 +339,19 @@ impl Hybrid {
         );
         let count = buffer("Hybrid::count", 4, B::STORAGE | B::COPY_DST | B::COPY_SRC);
         let args = buffer("Hybrid::args", 16, B::STORAGE | B::INDIRECT);
-        let walls_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("Hybrid::walls_group"),
-            layout: &pass.walls_layout,
+        let candidates = buffer(
+            "Hybrid::candidates",
+            4 * u64::from(MAX_CANDIDATES),
+            B::STORAGE,
+        );
+        let candidate_count = buffer("Hybrid::candidate_count", 4, B::STORAGE | B::COPY_DST);
+        let extract_args = buffer("Hybrid::extract_args", 12, B::STORAGE | B::INDIRECT);
+        let dispatch_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("Hybrid::dispatch_group"),
+            layout: &pass.dispatch_layout,
             entries: &[
-                buffer_entry(0, &walls),
-                buffer_entry(1, &count),
-                buffer_entry(2, &args),
+                buffer_entry(5, &candidate_count),
+                buffer_entry(6, &extract_args),
             ],
         });
         Hybrid {
@@ -313,7 +371,12 @@ impl Hybrid {
             walls,
             count,
             args,
-            walls_group,
+            candidates,
+            candidate_count,
+            extract_args,
+            dispatch_group,
+            walls_group: None,
+            map_copy: None,
             inputs_group: None,
         }
     }
@@ -348,13 +411,57 @@ impl Hybrid {
         &mut self,
         ctx: &GpuContext,
         rec: &mut Recorder<'_>,
-        map_size: u32,
+        map: &wgpu::Texture,
         revision: u64,
     ) {
-        let Some((group, _)) = &self.inputs_group else {
+        let map_size = map.width();
+        let row = padded_row(map_size);
+        if self
+            .walls_group
+            .as_ref()
+            .is_none_or(|(_, size)| *size != map_size)
+        {
+            let copy = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("Hybrid::map_copy"),
+                size: row * u64::from(map_size.max(1)),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("Hybrid::walls_group"),
+                layout: &self.pass.walls_layout,
+                entries: &[
+                    buffer_entry(0, &self.walls),
+                    buffer_entry(1, &self.count),
+                    buffer_entry(2, &self.args),
+                    buffer_entry(3, &copy),
+                    buffer_entry(4, &self.candidates),
+                    buffer_entry(5, &self.candidate_count),
+                ],
+            });
+            self.map_copy = Some(copy);
+            self.walls_group = Some((group, map_size));
+        }
+        let (Some((group, _)), Some((walls_group, _)), Some(copy)) =
+            (&self.inputs_group, &self.walls_group, &self.map_copy)
+        else {
             return;
         };
+        rec.encoder.copy_texture_to_buffer(
+            map.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: copy,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row as u32),
+                    rows_per_image: Some(map_size),
+                },
+            },
+            map.size(),
+        );
         ctx.queue.write_buffer(&self.count, 0, &0u32.to_le_bytes());
+        ctx.queue
+            .write_buffer(&self.candidate_count, 0, &0u32.to_le_bytes());
         let span = rec.span("hybrid_extract");
         {
             let mut pass = rec
@@ -363,11 +470,17 @@ impl Hybrid {
                     label: Some("Hybrid::extract"),
                     timestamp_writes: span.compute_writes(rec.timer),
                 });
-            pass.set_pipeline(&self.pass.extract);
             pass.set_bind_group(0, group, &[]);
-            pass.set_bind_group(1, &self.walls_group, &[]);
+            pass.set_bind_group(1, walls_group, &[]);
             let groups = map_size.saturating_sub(1).div_ceil(8);
+            pass.set_pipeline(&self.pass.find);
             pass.dispatch_workgroups(groups, groups, 1);
+            pass.set_pipeline(&self.pass.dispatch);
+            pass.set_bind_group(1, &self.dispatch_group, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+            pass.set_bind_group(1, walls_group, &[]);
+            pass.set_pipeline(&self.pass.extract);
+            pass.dispatch_workgroups_indirect(&self.extract_args, 0);
             pass.set_pipeline(&self.pass.finish);
             pass.dispatch_workgroups(1, 1, 1);
         }
@@ -403,6 +516,13 @@ impl Hybrid {
         });
         pass.set_pipeline(&self.pass.wall);
         pass.set_bind_group(0, group, &[]);
+        pass.set_vertex_buffer(0, self.walls.slice(..));
+        pass.draw_indirect(&self.args, 0);
+    }
+
+    /// Draw the walls of the last extraction (vertex slot 0, indirect): for a pass of one's own
+    /// (the fill measure).
+    pub fn draw_walls(&self, pass: &mut wgpu::RenderPass<'_>) {
         pass.set_vertex_buffer(0, self.walls.slice(..));
         pass.draw_indirect(&self.args, 0);
     }
@@ -472,6 +592,12 @@ impl Hybrid {
         }
         Err(RenderError::Readback("no walls were extracted".into()))
     }
+}
+
+/// Bytes per row of the map's copy: R32Float rows padded to wgpu's copy alignment.
+fn padded_row(size: u32) -> u64 {
+    let align = u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    (u64::from(size) * 4).div_ceil(align) * align
 }
 
 /// The copy's layout: the count (u32, padded to 16 bytes), then the walls.

@@ -459,10 +459,11 @@ impl ScreenPass {
     /// The volumes' fill: how many volume fragments the rasteriser makes per pixel of the image,
     /// on average (every triangle over its whole screen footprint, no test): what a stencil
     /// method pays in fill rate. Its own submit and wait (untimed, for the bench and `compare`).
+    /// `draw` sets the volume vertices (homogeneous, [`volume_vertex_layout`]) and draws them.
     pub fn measure_fill(
         &self,
         ctx: &GpuContext,
-        volumes: &VertexChunks,
+        draw: &dyn Fn(&mut wgpu::RenderPass<'_>),
     ) -> Result<f64, RenderError> {
         let Some(t) = &self.targets else {
             return Err(RenderError::Request(
@@ -492,7 +493,7 @@ impl ScreenPass {
             });
             pass.set_pipeline(&self.pass.fill);
             pass.set_bind_group(0, &self.bind_group, &[]);
-            volumes.draw(&mut pass);
+            draw(&mut pass);
         }
         ctx.queue.submit([encoder.finish()]);
         let bytes = Readback::default().read(ctx, &[TextureRead::color(&counts.texture, 2)])?;
