@@ -190,6 +190,17 @@ impl Session {
         self.methods.get(&method)?.stencil_fill(ctx)
     }
 
+    /// Let every method pick up what the GPU handed back for its overlays since the last frame
+    /// (never waits); `true` while something is on its way or has just arrived.
+    pub fn poll_geometry(&mut self, ctx: &GpuContext) -> bool {
+        let _ = ctx.device.poll(wgpu::PollType::Poll);
+        let mut busy = false;
+        for m in self.methods.values_mut() {
+            busy |= m.poll_geometry();
+        }
+        busy
+    }
+
     /// `method`'s light-space maps as they stand.
     pub fn light_maps(&self, method: Method) -> Option<LightMaps<'_>> {
         self.methods

@@ -20,7 +20,7 @@ use super::{
 };
 use crate::geometry::hybrid::WallParams;
 use crate::geometry::silhouette::SilhouetteEdge;
-use crate::geometry::{CasterGeometry, SceneGeometry, VolumeParams, VtVariant};
+use crate::geometry::{CasterGeometry, GeometryStats, SceneGeometry, VolumeParams, VtVariant};
 use crate::render::passes::hybrid::{Hybrid, HybridFrame, HybridUniforms};
 use crate::render::passes::stencil_volumes::ScreenPass;
 use crate::render::timer::Recorder;
@@ -111,10 +111,11 @@ impl HybridMethod {
         }
     }
 
-    /// The walls copied back since the last frame, as the overlay's silhouette edges.
-    fn take_walls(&mut self) {
+    /// The walls copied back since the last frame, as the overlay's silhouette edges; `true`
+    /// when they arrived.
+    fn take_walls(&mut self) -> bool {
         let Some((_, walls, found)) = self.hybrid.poll_walls() else {
-            return;
+            return false;
         };
         let silhouettes = walls
             .iter()
@@ -134,16 +135,23 @@ impl HybridMethod {
                 walls.len()
             ));
         }
+        let stats = GeometryStats {
+            umbra_edges: walls.len(),
+            umbra_triangles: 2 * walls.len(),
+            ..GeometryStats::default()
+        };
         self.geometry = Some(SceneGeometry {
             casters: vec![CasterGeometry {
                 name: "depth-map silhouette".into(),
                 silhouettes,
+                stats,
                 warnings: warnings.clone(),
                 ..CasterGeometry::default()
             }],
-            stats: Default::default(),
+            stats,
             warnings,
         });
+        true
     }
 }
 
@@ -155,7 +163,7 @@ impl MethodState for HybridMethod {
         rec: &mut Recorder<'_>,
     ) -> Result<(), RenderError> {
         let ctx = inputs.ctx;
-        self.take_walls();
+        let _ = self.take_walls();
         shared.shadow_map.update(inputs, rec);
         let Some(map) = shared.shadow_map.targets() else {
             return Err(RenderError::Gpu("the shadow map was not made".into()));
@@ -228,6 +236,10 @@ impl MethodState for HybridMethod {
 
     fn invalidate(&mut self) {
         self.made = None;
+    }
+
+    fn poll_geometry(&mut self) -> bool {
+        self.take_walls() || self.hybrid.walls_pending()
     }
 
     fn stencil_fill(&self, ctx: &GpuContext) -> Option<Result<f64, RenderError>> {

@@ -449,6 +449,13 @@ pub trait MethodState: Send {
     fn stencil_fill(&self, _ctx: &GpuContext) -> Option<Result<f64, RenderError>> {
         None
     }
+
+    /// Pick up what the GPU hands back a frame or more later for the overlays (`hybrid`'s
+    /// walls), without waiting; `true` while something is on its way or has just arrived (a
+    /// window repaints then).
+    fn poll_geometry(&mut self) -> bool {
+        false
+    }
 }
 
 #[cfg(test)]

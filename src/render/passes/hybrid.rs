@@ -581,6 +581,11 @@ impl Hybrid {
         Some((self.copy.revision, out.0, out.1))
     }
 
+    /// Whether walls are being copied back (a later [`Hybrid::poll_walls`] returns them).
+    pub fn walls_pending(&self) -> bool {
+        self.copy.waiting || self.copy.mapping
+    }
+
     /// [`Hybrid::poll_walls`], waiting for the GPU (tests): everything submitted so far must
     /// include an extraction.
     pub fn read_walls(&mut self, ctx: &GpuContext) -> Result<(Vec<[Vec4; 6]>, u32), RenderError> {
