@@ -324,12 +324,12 @@ fn compare_scores_hard_methods_against_reference_hard() {
     for m in Method::all() {
         assert_eq!(row(m.name()).hard.is_some(), m.is_hard(), "{m}");
     }
-    let exact = row("reference-hard").hard.expect("scored");
+    let exact = row("reference-hard").hard.clone().expect("scored");
     assert_eq!(exact.mismatch_pct, 0.0);
-    let sv = row("shadow-volume").hard.expect("scored");
+    let sv = row("shadow-volume").hard.clone().expect("scored");
     assert!(sv.mismatch_pct <= EXACT_PCT, "{sv:?}");
     // A 256² shadow map loses pixels along the boundary, not inside.
-    let hard = row("hard").hard.expect("scored");
+    let hard = row("hard").hard.clone().expect("scored");
     assert!(hard.mismatch_pct > sv.mismatch_pct, "{hard:?}");
     assert!(hard.edge_px >= hard.interior_px, "{hard:?}");
     assert!(report

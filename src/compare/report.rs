@@ -57,7 +57,7 @@ pub struct MethodRow {
 }
 
 /// A hard method against the exact hard shadow (`reference-hard`), classes lit iff V ≥ ½.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct HardRow {
     pub mismatch_pct: f64,
     /// Mismatched pixels next to a change of the exact class (aliasing, a boundary moved).
@@ -68,6 +68,14 @@ pub struct HardRow {
     pub false_shadow_px: usize,
     /// Lit where the exact hard shadow is dark.
     pub missed_shadow_px: usize,
+    /// Where: the mismatched pixels over the method's image (red false, blue missed).
+    #[serde(default)]
+    pub image: String,
+}
+
+/// A hard method's mismatch against `reference-hard`, as an image.
+fn hard_file(method: Method) -> String {
+    format!("{}-hard-error.png", method.name())
 }
 
 fn files(method: Method) -> (String, String, Option<String>) {
@@ -120,7 +128,8 @@ impl Report {
                  centre). Classes: lit iff V ≥ ½. Edge px: mismatched pixels with a change of the \
                  exact class among their 8 neighbours (aliasing, staircases, a boundary moved); \
                  interior px: the others (acne, light leaks, shadows missing or false away from \
-                 any true boundary).\n\n",
+                 any true boundary). Where: red = a false shadow, blue = a missed one, over the \
+                 method's image.\n\n",
             );
             s.push_str(&hard);
         }
@@ -167,13 +176,19 @@ impl Report {
             return String::new();
         }
         let mut s = String::from(
-            "| method | mismatch % | edge px | interior px | false shadow px | missed shadow px |\n\
-             |---|---:|---:|---:|---:|---:|\n",
+            "| method | mismatch % | edge px | interior px | false shadow px | missed shadow px | where |\n\
+             |---|---:|---:|---:|---:|---:|---|\n",
         );
         for (name, h) in rows {
             s.push_str(&format!(
-                "| {name} | {:.3} | {} | {} | {} | {} |\n",
-                h.mismatch_pct, h.edge_px, h.interior_px, h.false_shadow_px, h.missed_shadow_px
+                "| {name} | {:.3} | {} | {} | {} | {} | [{}]({}) |\n",
+                h.mismatch_pct,
+                h.edge_px,
+                h.interior_px,
+                h.false_shadow_px,
+                h.missed_shadow_px,
+                h.image,
+                h.image
             ));
         }
         s
@@ -201,6 +216,7 @@ fn row(r: &MethodResult) -> MethodRow {
             interior_px: h.interior_px,
             false_shadow_px: h.false_shadow_px,
             missed_shadow_px: h.missed_shadow_px,
+            image: hard_file(r.method),
         }),
     }
 }
@@ -211,6 +227,11 @@ pub fn write(dir: &Path, c: &Comparison) -> io::Result<Vec<PathBuf>> {
     let report = Report::new(c);
     let (w, h) = (c.request.width, c.request.height);
     let reference = &c.reference().frame.visibility;
+    let exact = c
+        .results
+        .iter()
+        .find(|r| r.method == Method::REFERENCE_HARD)
+        .map(|r| &r.frame.visibility);
     let mut written = Vec::new();
     let mut put = |name: &str, bytes: Vec<u8>| -> io::Result<()> {
         let path = dir.join(name);
@@ -239,6 +260,14 @@ pub fn write(dir: &Path, c: &Comparison) -> io::Result<Vec<PathBuf>> {
         )
         .map_err(encode)?;
         put(&visibility, exr)?;
+        if let (Some(exact), Some(_)) = (exact, &r.hard) {
+            let img =
+                heatmap::hard_mismatch(exact, &r.frame.visibility, &c.mask, &r.frame.color, w, h);
+            put(
+                &hard_file(r.method),
+                output::png_rgb8(w, h, img.as_raw()).map_err(encode)?,
+            )?;
+        }
         if let Some(heat) = heat {
             let img = heatmap::render(reference, &r.frame.visibility, &c.mask, w, h);
             let (iw, ih) = img.dimensions();
