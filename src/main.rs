@@ -30,7 +30,8 @@ enum Command {
         /// Image size, WxH (at most 64 Mpixels, sides up to 16384).
         #[arg(long, default_value = "512x512")]
         size: String,
-        /// dbuffer, dbuffer-center, hard, pcf, pcss, sampled or reference.
+        /// dbuffer, dbuffer-center, hard, pcf, pcss, sampled, shadow-volume, planar, hybrid,
+        /// extended-light-map, reference or reference-hard.
         #[arg(long, default_value = "dbuffer")]
         method: String,
         /// V(t): smoothstep, sqrt, exact or linear.

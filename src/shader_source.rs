@@ -153,8 +153,16 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/dbuffer.wgsl"),
     ),
     (
+        "methods/extended_light_map.wgsl",
+        include_str!("../shaders/methods/extended_light_map.wgsl"),
+    ),
+    (
         "methods/hard.wgsl",
         include_str!("../shaders/methods/hard.wgsl"),
+    ),
+    (
+        "methods/hybrid.wgsl",
+        include_str!("../shaders/methods/hybrid.wgsl"),
     ),
     (
         "methods/pcf.wgsl",
@@ -165,6 +173,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/pcss.wgsl"),
     ),
     (
+        "methods/planar.wgsl",
+        include_str!("../shaders/methods/planar.wgsl"),
+    ),
+    (
         "methods/reference.wgsl",
         include_str!("../shaders/methods/reference.wgsl"),
     ),
@@ -173,12 +185,28 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/sampled.wgsl"),
     ),
     (
+        "methods/shadow_volume.wgsl",
+        include_str!("../shaders/methods/shadow_volume.wgsl"),
+    ),
+    (
         "passes/dbuffer_volumes.wgsl",
         include_str!("../shaders/passes/dbuffer_volumes.wgsl"),
     ),
     (
+        "passes/extended_light_map.wgsl",
+        include_str!("../shaders/passes/extended_light_map.wgsl"),
+    ),
+    (
         "passes/floor.wgsl",
         include_str!("../shaders/passes/floor.wgsl"),
+    ),
+    (
+        "passes/hybrid.wgsl",
+        include_str!("../shaders/passes/hybrid.wgsl"),
+    ),
+    (
+        "passes/planar.wgsl",
+        include_str!("../shaders/passes/planar.wgsl"),
     ),
     (
         "passes/probe.wgsl",
@@ -191,6 +219,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "passes/shadow_map.wgsl",
         include_str!("../shaders/passes/shadow_map.wgsl"),
+    ),
+    (
+        "passes/stencil_volumes.wgsl",
+        include_str!("../shaders/passes/stencil_volumes.wgsl"),
     ),
     (
         "passes/view.wgsl",
@@ -211,6 +243,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "shared/sample_lights.wgsl",
         include_str!("../shaders/shared/sample_lights.wgsl"),
+    ),
+    (
+        "shared/screen_v.wgsl",
+        include_str!("../shaders/shared/screen_v.wgsl"),
     ),
     (
         "shared/shadow_lookup.wgsl",

@@ -10,10 +10,12 @@ use egui_kittest::Harness;
 /// The lab in a test window. Values come back from the GPU a frame or more later (a probe, the
 /// reference's samples), and the window repaints until they have: on lavapipe that can take a
 /// few dozen quick test frames, hence the generous step limit.
+/// The window is tall enough for the left panel with every method of the registry and the
+/// view's range controls open (its last section, Selection, must stay clickable).
 fn lab(scene: Option<&str>) -> Harness<'static, LabApp> {
     let scene = scene.map(str::to_string);
     Harness::builder()
-        .with_size(egui::vec2(900.0, 640.0))
+        .with_size(egui::vec2(900.0, 720.0))
         .with_max_steps(500)
         .with_render_cursor(false)
         .wgpu()
@@ -202,6 +204,67 @@ fn snapshots() {
     h.snapshot("app-classes-volumes");
     click(&mut h, "|cx_pv|");
     h.snapshot("app-dbuffer-pv");
+}
+
+/// The hard-shadow techniques of issue 13 in the lab: Crow's volume and the centre's silhouettes
+/// over `shadow-volume`, the edges `hybrid` rebuilt from its depth map (they come back from the
+/// GPU a frame or more later), and the extended light map's channels.
+#[test]
+fn hard_methods_show_their_overlays_and_maps() {
+    let method = |n: &str| n.parse::<Method>().expect("a method");
+    let mut h = lab(Some("fig7-concave"));
+    h.run();
+    click(&mut h, "shadow-volume");
+    click(&mut h, "Umbra volume");
+    click(&mut h, "Silhouette edges");
+    let sides = |h: &Harness<'_, LabApp>, m: &str| {
+        h.state()
+            .core()
+            .and_then(|c| c.session.geometry(method(m)))
+            .map_or((0, 0), |g| {
+                let volume: usize = g.casters.iter().map(|c| c.volumes.indices.len() / 3).sum();
+                let edges: usize = g.casters.iter().map(|c| c.silhouettes.len()).sum();
+                (volume, edges)
+            })
+    };
+    let (volume, edges) = sides(&h, "shadow-volume");
+    assert!(
+        volume > 0 && edges > 0,
+        "{volume} volume triangles, {edges} edges"
+    );
+    assert_eq!(
+        h.state().shown().expect("shown").method,
+        method("shadow-volume")
+    );
+    h.snapshot("app-shadow-volume-volumes");
+
+    // Its edges come back from the GPU in real time: step until they have.
+    h.get_by_label("hybrid").click();
+    for _ in 0..500 {
+        h.step();
+        if sides(&h, "hybrid").1 > 0 {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let tops = sides(&h, "hybrid").1;
+    assert!(tops > 0, "{tops} reconstructed edges");
+    assert_eq!(h.state().shown().expect("shown").method, method("hybrid"));
+    h.run();
+    h.snapshot("app-hybrid-edges");
+
+    click(&mut h, "extended-light-map");
+    click(&mut h, "light R");
+    let app = h.state();
+    assert_eq!(app.settings.view, View::DBuffer);
+    let names: Vec<&str> = app
+        .core()
+        .and_then(|c| c.session.light_maps(method("extended-light-map")))
+        .map(|m| m.channels.iter().map(|c| c.name).collect())
+        .unwrap_or_default();
+    assert_eq!(names, ["light R", "light G", "light B", "distance (A)"]);
+    assert_ne!(app.status().1, Level::Error, "{:?}", app.status());
+    h.snapshot("app-elm-light-r");
 }
 
 #[test]

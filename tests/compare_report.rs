@@ -37,7 +37,10 @@ fn the_report_matches_the_written_files() {
     );
     let dir = std::env::temp_dir().join(format!("dbuffer-compare-test-{}", std::process::id()));
     let written = report::write(&dir, &comparison).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(written.len(), 3 * Method::all().len() - 1 + 2);
+    // Image, visibility and heatmap per method (none for the reference), a hard-error image per
+    // hard method, the two reports.
+    let hard = Method::all().iter().filter(|m| m.is_hard()).count();
+    assert_eq!(written.len(), 3 * Method::all().len() - 1 + hard + 2);
 
     let text = std::fs::read_to_string(dir.join(report::REPORT_JSON)).unwrap();
     let r: report::Report = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}"));

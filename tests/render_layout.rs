@@ -7,9 +7,13 @@ mod wgsl_layout;
 
 use dbuffer::geometry::{Branch, VtVariant};
 use dbuffer::render::passes::camera::CameraUniforms;
+use dbuffer::render::passes::extended_light_map::ElmUniforms;
+use dbuffer::render::passes::hybrid::HybridUniforms;
+use dbuffer::render::passes::planar::{PlanarUniforms, ReceiverUniform};
 use dbuffer::render::passes::probe::{FIT_GRID, PIXEL_FLOATS, PROBE_FIT, PROBE_PIXEL};
 use dbuffer::render::passes::sample_maps::{SampleLight, SampleLights, MAX_LIGHTS};
 use dbuffer::render::passes::shadow_map::{LightUniforms, ShadowUniforms};
+use dbuffer::render::passes::stencil_volumes::ScreenUniforms;
 use dbuffer::render::passes::view::{ColorMap, View, ViewUniforms, NO_FALLBACK};
 use dbuffer::render::{SurfaceVertex, VolumeVertex};
 use dbuffer::shader_source;
@@ -34,10 +38,15 @@ fn uniforms_match_their_wgsl() {
     }
     // Every method's shader includes the camera pass's half; the map methods the lookup.
     for method in dbuffer::render::Method::all() {
-        let shader = source(&format!(
-            "methods/{}.wgsl",
-            method.name().split('-').next().unwrap_or("")
-        ));
+        // `methods/NAME.wgsl` with `-` as `_`, or the family's (`dbuffer-center` → `dbuffer`).
+        let name = method.name();
+        let shader = shader_source::load(&format!("methods/{}.wgsl", name.replace('-', "_")))
+            .unwrap_or_else(|_| {
+                source(&format!(
+                    "methods/{}.wgsl",
+                    name.split('-').next().unwrap_or("")
+                ))
+            });
         assert_wgsl_layout!(
             CameraUniforms,
             &shader,
@@ -51,7 +60,7 @@ fn uniforms_match_their_wgsl() {
             light_intensity
         );
     }
-    for shader in ["hard", "pcf", "pcss", "dbuffer"] {
+    for shader in ["hard", "pcf", "pcss", "dbuffer", "extended_light_map"] {
         assert_wgsl_layout!(
             ShadowUniforms,
             &source(&format!("methods/{shader}.wgsl")),
@@ -85,6 +94,49 @@ fn uniforms_match_their_wgsl() {
             _pad2
         );
     }
+    assert_wgsl_layout!(
+        ScreenUniforms,
+        &source("passes/stencil_volumes.wgsl"),
+        "ScreenUniforms",
+        infinite_view_proj,
+        eye,
+        size
+    );
+    assert_wgsl_layout!(
+        HybridUniforms,
+        &source("passes/hybrid.wgsl"),
+        "HybridUniforms",
+        inv_light_view_proj,
+        light_view_proj,
+        infinite_view_proj,
+        inv_infinite_view_proj,
+        light,
+        params,
+        limits,
+        screen
+    );
+    assert_wgsl_layout!(
+        ElmUniforms,
+        &source("passes/extended_light_map.wgsl"),
+        "ElmUniforms",
+        view_proj,
+        light,
+        axis,
+        spot,
+        emitter,
+        size
+    );
+    let planar = source("passes/planar.wgsl");
+    assert_wgsl_layout!(ReceiverUniform, &planar, "Receiver", projection, plane);
+    assert_wgsl_layout!(
+        PlanarUniforms,
+        &planar,
+        "PlanarUniforms",
+        infinite_view_proj,
+        shade,
+        eye,
+        receivers
+    );
     for shader in [source("passes/view.wgsl"), source("passes/probe.wgsl")] {
         assert_wgsl_layout!(
             ViewUniforms,

@@ -45,6 +45,10 @@ struct Visibility {
     v: f32,
     t: f32,
     branch: f32,
+    // The light arriving at x before shadowing, when the method computes it itself (w = 1:
+    // extended-light-map reads it from its map, coloured); w = 0 (what `var` starts with, and
+    // `plain` keeps): the shared diffuse term of fs_main.
+    light: vec4<f32>,
 };
 
 // The visible fraction of the unit disk beyond a chord at signed distance h from its centre.
@@ -127,10 +131,11 @@ fn fs_main(f: SurfaceOut) -> Targets {
     let l = normalize(camera.light_center - f.world);
     let cos_receiver = max(dot(n, l), 0.0);
     let cos_emitter = max(dot(-l, camera.light_normal), 0.0);
-    let direct = camera.light_intensity * vis.v * cos_receiver * cos_emitter;
-    let shade = f.albedo * (camera.ambient + (1.0 - camera.ambient) * min(direct, 1.0));
+    let diffuse = vec3<f32>(camera.light_intensity * cos_receiver * cos_emitter);
+    let direct = select(diffuse, vis.light.xyz, vis.light.w > 0.5) * vis.v;
+    let shade = f.albedo * (camera.ambient + (1.0 - camera.ambient) * min(direct, vec3<f32>(1.0)));
     var out: Targets;
-    out.color = vec4<f32>(vec3<f32>(shade), 1.0);
+    out.color = vec4<f32>(shade, 1.0);
     out.data = vec2<f32>(vis.v, vis.t + 2.0 * vis.branch);
     return out;
 }

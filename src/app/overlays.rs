@@ -92,6 +92,18 @@ fn volume_edges(v: &VolumeMesh, umbra: bool, out: &mut Vec<[Vec3; 2]>, cap: usiz
     total
 }
 
+/// What the volume and silhouette overlays mean for a method that is not a D-buffer method, one
+/// line for the overlay notes; `None` for the D-buffer's own.
+pub fn method_overlay_note(method: Method) -> Option<&'static str> {
+    match method.name() {
+        "shadow-volume" => Some("shadow-volume: from the light centre; umbra volume = Crow's"),
+        "hybrid" => Some("hybrid: silhouette edges = rebuilt from the depth map"),
+        "planar" => Some("planar: shadows on flat objects only, no volumes"),
+        "extended-light-map" => Some("extended-light-map: its channels are in the View panel"),
+        _ => None,
+    }
+}
+
 impl LabApp {
     pub(super) fn draw_overlays(&mut self, painter: &Painter, rect: Rect) {
         let Some(core) = self.core.as_ref() else {
@@ -112,6 +124,11 @@ impl LabApp {
             || overlays.umbra_volume
             || overlays.penumbra_volume
             || overlays.silhouettes;
+        if wants_geometry {
+            if let Some(note) = method_overlay_note(shown) {
+                self.overlay_notes.push(note.to_string());
+            }
+        }
         let empty = crate::geometry::SceneGeometry::default();
         let geometry = match geometry {
             Some(g) => g,

@@ -351,6 +351,11 @@ impl LabApp {
         if let Some(timings) = core.session.poll_timings(&core.ctx) {
             self.stats.gpu(timings);
         }
+        // Overlay data some methods get back from the GPU a frame later (hybrid's walls): look
+        // again shortly, without spinning.
+        if core.session.poll_geometry(&core.ctx) {
+            ctx.request_repaint_after(std::time::Duration::from_millis(15));
+        }
         for (i, results) in core.probe_results().into_iter().enumerate() {
             if !results.is_empty() {
                 // The panels drawn before the viewport show them on the next frame.

@@ -308,6 +308,10 @@ pub struct Run {
     pub method: String,
     pub timing: Option<Timing>,
     pub error: Option<String>,
+    /// For a method that counts volumes in the stencil: volume fragments per pixel of its last
+    /// frame (`Session::stencil_fill`), the fill rate it pays.
+    #[serde(default)]
+    pub fill: Option<f64>,
 }
 
 /// A Table 1 scene and its geometry stage.
@@ -449,8 +453,13 @@ impl Report {
 
     /// `method`'s frame over the D-buffer's, the same scene and size, measured alike.
     pub fn ratio_to_dbuffer(&self, scene: &str, size: u32, method: Method) -> Option<f64> {
+        self.ratio_to(scene, size, method, Method::DBUFFER)
+    }
+
+    /// `method`'s frame over `base`'s, the same scene and size, measured alike.
+    pub fn ratio_to(&self, scene: &str, size: u32, method: Method, base: Method) -> Option<f64> {
         let m = self.timing(scene, size, method)?;
-        let d = self.timing(scene, size, Method::DBUFFER)?;
+        let d = self.timing(scene, size, base)?;
         let base = d.frame_by(m.frame_source)?.median;
         (base > 0.0).then(|| m.frame_ms.median / base)
     }
@@ -721,8 +730,9 @@ fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: 
             }
             session.invalidate_light_maps();
             let t = Instant::now();
-            let frame = if config.cases[i].cpu_side() {
-                // The reference: one more sample per pixel, then its frame.
+            let frame = if config.cases[i].method.is_reference() {
+                // The reference: one more sample per pixel, then its frame (reference-hard, also
+                // CPU-side, casts its rays again in the frame: its image was invalidated).
                 session
                     .advance_reference(ctx, &requests[i], 1)
                     .and_then(|_| session.frame(ctx, &requests[i]))
@@ -738,7 +748,7 @@ fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: 
     }
     // The reference's ray casting alone: one more sample per pixel without a frame.
     for (i, case) in config.cases.iter().enumerate() {
-        if !case.cpu_side() || errors[i].is_some() {
+        if !case.method.is_reference() || errors[i].is_some() {
             continue;
         }
         for _ in 0..config.frames {
@@ -760,6 +770,10 @@ fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: 
             label: case.label.clone(),
             method: case.method.name().to_string(),
             timing: error.is_none().then(|| samples.timing(case)),
+            fill: error
+                .is_none()
+                .then(|| session.stencil_fill(ctx, case.method)?.ok())
+                .flatten(),
             error,
         })
         .collect()

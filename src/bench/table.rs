@@ -73,6 +73,7 @@ pub fn markdown(r: &Report) -> String {
     table1(&mut out, r);
     display(&mut out, r);
     competition(&mut out, r);
+    hard_methods(&mut out, r);
     coherence(&mut out, r);
     scaling(&mut out, r);
     targets(&mut out, r);
@@ -281,6 +282,98 @@ fn competition(out: &mut String, r: &Report) {
     let _ = writeln!(out);
 }
 
+/// The methods that use the light's centre as a point light: frame as a ratio to the hard shadow
+/// map and to the D-buffer (medians over the scenes), and the stencil methods' fill per scene.
+fn hard_methods(out: &mut String, r: &Report) {
+    let sizes = r.sizes();
+    let hard: Vec<(String, Method)> = r
+        .labels()
+        .into_iter()
+        .filter_map(|(l, m)| Some((l, m.parse::<Method>().ok()?)))
+        .filter(|(_, m)| m.is_hard() && *m != Method::HARD)
+        .collect();
+    if hard.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "### Hard-shadow techniques: frame ms (× hard shadow map, × D-buffer), median over the scenes\n"
+    );
+    let mut header = "| method |".to_string();
+    let mut rule = "|---|".to_string();
+    for s in &sizes {
+        let _ = write!(header, " {s}² |");
+        rule.push_str("---:|");
+    }
+    let _ = writeln!(out, "{header}\n{rule}");
+    for (label, method) in &hard {
+        let mut row = format!("| {label} |");
+        for &size in &sizes {
+            let cells: Vec<(f64, f64, f64)> = r
+                .scenes
+                .iter()
+                .filter_map(|s| {
+                    let t = r.timing(&s.name, size, *method)?;
+                    Some((
+                        t.frame_ms.median,
+                        r.ratio_to(&s.name, size, *method, Method::HARD)?,
+                        r.ratio_to(&s.name, size, *method, Method::DBUFFER)?,
+                    ))
+                })
+                .collect();
+            if cells.is_empty() {
+                row.push_str(" n/a |");
+                continue;
+            }
+            let _ = write!(
+                row,
+                " {} ({:.2}× hard, {:.2}× D) |",
+                ms(median(cells.iter().map(|c| c.0).collect())),
+                median(cells.iter().map(|c| c.1).collect()),
+                median(cells.iter().map(|c| c.2).collect())
+            );
+        }
+        let _ = writeln!(out, "{row}");
+    }
+    let filled: Vec<&(String, Method)> = hard
+        .iter()
+        .filter(|(l, _)| r.runs.iter().any(|x| x.label == *l && x.fill.is_some()))
+        .collect();
+    if !filled.is_empty() {
+        let last = sizes.last().copied().unwrap_or(0);
+        let _ = writeln!(
+            out,
+            "\nStencil fill at {last}²: volume fragments per pixel (every volume triangle over its \
+             whole footprint, no test; what the stencil methods pay in fill rate)\n"
+        );
+        let mut header = "| scene |".to_string();
+        let mut rule = "|---|".to_string();
+        for (label, _) in &filled {
+            let _ = write!(header, " {label} |");
+            rule.push_str("---:|");
+        }
+        let _ = writeln!(out, "{header}\n{rule}");
+        for s in &r.scenes {
+            let mut row = format!("| `{}` |", s.name);
+            for (label, _) in &filled {
+                let fill = r
+                    .runs
+                    .iter()
+                    .find(|x| x.scene == s.name && x.size == last && x.label == *label)
+                    .and_then(|x| x.fill);
+                match fill {
+                    Some(f) => {
+                        let _ = write!(row, " {f:.2} |");
+                    }
+                    None => row.push_str(" – |"),
+                }
+            }
+            let _ = writeln!(out, "{row}");
+        }
+    }
+    let _ = writeln!(out);
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
@@ -436,6 +529,7 @@ mod tests {
                 .is_none()
                 .then(|| "the pcf method is not available yet".into()),
             timing,
+            fill: (method == "shadow-volume").then_some(2.5),
         }
     }
 
@@ -473,6 +567,7 @@ mod tests {
                     "reference",
                     Some(timing(20.0, 100.0, 8.0, FrameSource::FencedWall)),
                 ),
+                run("shadow-volume", Some(timing(15.0, 45.0, 4.0, gpu))),
             ],
             display: vec![DisplayRun {
                 scene: "table1-5760".into(),
@@ -572,6 +667,12 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("(reported)"));
+        assert!(
+            md.contains("| shadow-volume | 15.0 (1.50× hard, 0.75× D) |"),
+            "{md}"
+        );
+        assert!(md.contains("| scene | shadow-volume |"), "{md}");
+        assert!(md.contains("| `table1-5760` | 2.50 |"), "{md}");
         assert!(md.contains("PASS"));
         assert_eq!(thousands(1_048_576), "1,048,576");
     }

@@ -67,6 +67,11 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         r.vt
     );
     out!("{}", r.table());
+    let hard = r.hard_table();
+    if !hard.is_empty() {
+        outln!("against reference-hard (lit iff V >= 0.5):");
+        out!("{hard}");
+    }
     errln!(
         "wrote     {} files into {}",
         written.len(),

@@ -37,6 +37,40 @@ pub fn error_rgb(err: f32) -> [u8; 3] {
 
 const LEGEND_HEIGHT: u32 = 34;
 
+/// Where a hard method's class differs from the exact hard shadow's: darkened where the exact one
+/// is lit (a false shadow: acne, a shadow too large), lit where it is dark (a missed shadow: a
+/// leak, a shadow too small).
+pub const FALSE_SHADOW_RGB: [u8; 3] = [235, 45, 45];
+pub const MISSED_SHADOW_RGB: [u8; 3] = [40, 140, 255];
+
+/// A hard method against the exact hard shadow (classes lit iff V ≥ ½) over the method's own
+/// image `color` (sRGB RGBA, dimmed for orientation): [`FALSE_SHADOW_RGB`] and
+/// [`MISSED_SHADOW_RGB`] where the classes differ; masked pixels dark.
+pub fn hard_mismatch(
+    exact: &[f32],
+    method: &[f32],
+    mask: &[bool],
+    color: &[[u8; 4]],
+    width: u32,
+    height: u32,
+) -> RgbImage {
+    let mut img = RgbImage::from_pixel(width, height, Rgb(MASKED_RGB));
+    for (i, px) in img.pixels_mut().enumerate() {
+        if !mask.get(i).copied().unwrap_or(false) {
+            continue;
+        }
+        let (e, m) = (exact.get(i).copied(), method.get(i).copied());
+        let (Some(e), Some(m)) = (e, m) else { continue };
+        let grey = color.get(i).map_or(0, |c| c[0] / 3 + 20);
+        *px = match (e >= 0.5, m >= 0.5) {
+            (true, false) => Rgb(FALSE_SHADOW_RGB),
+            (false, true) => Rgb(MISSED_SHADOW_RGB),
+            _ => Rgb([grey, grey, grey]),
+        };
+    }
+    img
+}
+
 /// The heatmap of `|method − reference|` over `width`×`height`, with a legend strip below it.
 pub fn render(
     reference: &[f32],

@@ -11,7 +11,7 @@ pub mod report;
 use std::time::Instant;
 
 use crate::geometry::bvh::Bvh;
-use crate::geometry::metrics::{self, Metrics};
+use crate::geometry::metrics::{self, HardMetrics, Metrics};
 use crate::geometry::{view, VtVariant};
 use crate::render::methods::reference::SAMPLES;
 use crate::render::offline::Offline;
@@ -50,6 +50,9 @@ pub struct MethodResult {
     pub cpu_ms: f64,
     /// Wall milliseconds of the measured frame (readback included).
     pub wall_ms: f64,
+    /// For a hard method (one that uses the light's centre as a point light), measured against
+    /// `reference-hard` too.
+    pub hard: Option<HardMetrics>,
 }
 
 /// Every method against the reference.
@@ -121,6 +124,7 @@ pub fn run(
         cpu_ms: rays_ms,
         wall_ms: cpu(&ref_report.cpu_ms, "frame_and_readback"),
         frame: reference,
+        hard: None,
     }];
     for &method in Method::all() {
         if method.is_reference() {
@@ -143,7 +147,24 @@ pub fn run(
             cpu_ms: if builds > 0 { geometry_ms } else { 0.0 },
             wall_ms,
             frame,
+            hard: None,
         });
+    }
+    // Every hard method against the exact hard shadow as well.
+    let hard_reference = results
+        .iter()
+        .find(|r| r.method == Method::REFERENCE_HARD)
+        .map(|r| r.frame.visibility.clone());
+    if let Some(exact) = hard_reference {
+        for r in results.iter_mut().filter(|r| r.method.is_hard()) {
+            r.hard = Some(metrics::compare_hard(
+                &exact,
+                &r.frame.visibility,
+                &mask,
+                request.width,
+                request.height,
+            ));
+        }
     }
     Ok(Comparison {
         scene: name.to_string(),

@@ -51,6 +51,31 @@ pub struct MethodRow {
     pub visibility: String,
     /// Null for the reference itself.
     pub heatmap: Option<String>,
+    /// A hard method against `reference-hard`; null for the others.
+    #[serde(default)]
+    pub hard: Option<HardRow>,
+}
+
+/// A hard method against the exact hard shadow (`reference-hard`), classes lit iff V ≥ ½.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct HardRow {
+    pub mismatch_pct: f64,
+    /// Mismatched pixels next to a change of the exact class (aliasing, a boundary moved).
+    pub edge_px: usize,
+    /// The other mismatched pixels (acne, leaks, missing or false shadows).
+    pub interior_px: usize,
+    /// Darkened where the exact hard shadow is lit.
+    pub false_shadow_px: usize,
+    /// Lit where the exact hard shadow is dark.
+    pub missed_shadow_px: usize,
+    /// Where: the mismatched pixels over the method's image (red false, blue missed).
+    #[serde(default)]
+    pub image: String,
+}
+
+/// A hard method's mismatch against `reference-hard`, as an image.
+fn hard_file(method: Method) -> String {
+    format!("{}-hard-error.png", method.name())
 }
 
 fn files(method: Method) -> (String, String, Option<String>) {
@@ -95,6 +120,19 @@ impl Report {
             self.adapter
         );
         s.push_str(&self.table());
+        let hard = self.hard_table();
+        if !hard.is_empty() {
+            s.push_str(
+                "\n## Hard methods against `reference-hard`\n\nThe methods that use the light's \
+                 centre as a point light, against the exact hard shadow (one ray per pixel to the \
+                 centre). Classes: lit iff V ≥ ½. Edge px: mismatched pixels with a change of the \
+                 exact class among their 8 neighbours (aliasing, staircases, a boundary moved); \
+                 interior px: the others (acne, light leaks, shadows missing or false away from \
+                 any true boundary). Where: red = a false shadow, blue = a missed one, over the \
+                 method's image.\n\n",
+            );
+            s.push_str(&hard);
+        }
         s.push_str(
             "\nClass mismatch: pixels whose class (lit V ≥ 0.996, umbra V ≤ 0.004, penumbra \
              otherwise) differs from the reference's. MAE and p99 of |V − V_ref| over the pixels \
@@ -126,6 +164,37 @@ impl Report {
     }
 }
 
+impl Report {
+    /// The hard methods against `reference-hard` (empty when none was measured).
+    pub fn hard_table(&self) -> String {
+        let rows: Vec<(&str, &HardRow)> = self
+            .methods
+            .iter()
+            .filter_map(|m| m.hard.as_ref().map(|h| (m.method.as_str(), h)))
+            .collect();
+        if rows.is_empty() {
+            return String::new();
+        }
+        let mut s = String::from(
+            "| method | mismatch % | edge px | interior px | false shadow px | missed shadow px | where |\n\
+             |---|---:|---:|---:|---:|---:|---|\n",
+        );
+        for (name, h) in rows {
+            s.push_str(&format!(
+                "| {name} | {:.3} | {} | {} | {} | {} | [{}]({}) |\n",
+                h.mismatch_pct,
+                h.edge_px,
+                h.interior_px,
+                h.false_shadow_px,
+                h.missed_shadow_px,
+                h.image,
+                h.image
+            ));
+        }
+        s
+    }
+}
+
 fn row(r: &MethodResult) -> MethodRow {
     let (image, visibility, heatmap) = files(r.method);
     MethodRow {
@@ -141,6 +210,14 @@ fn row(r: &MethodResult) -> MethodRow {
         image,
         visibility,
         heatmap,
+        hard: r.hard.map(|h| HardRow {
+            mismatch_pct: h.mismatch_pct,
+            edge_px: h.edge_px,
+            interior_px: h.interior_px,
+            false_shadow_px: h.false_shadow_px,
+            missed_shadow_px: h.missed_shadow_px,
+            image: hard_file(r.method),
+        }),
     }
 }
 
@@ -150,6 +227,11 @@ pub fn write(dir: &Path, c: &Comparison) -> io::Result<Vec<PathBuf>> {
     let report = Report::new(c);
     let (w, h) = (c.request.width, c.request.height);
     let reference = &c.reference().frame.visibility;
+    let exact = c
+        .results
+        .iter()
+        .find(|r| r.method == Method::REFERENCE_HARD)
+        .map(|r| &r.frame.visibility);
     let mut written = Vec::new();
     let mut put = |name: &str, bytes: Vec<u8>| -> io::Result<()> {
         let path = dir.join(name);
@@ -178,6 +260,14 @@ pub fn write(dir: &Path, c: &Comparison) -> io::Result<Vec<PathBuf>> {
         )
         .map_err(encode)?;
         put(&visibility, exr)?;
+        if let (Some(exact), Some(_)) = (exact, &r.hard) {
+            let img =
+                heatmap::hard_mismatch(exact, &r.frame.visibility, &c.mask, &r.frame.color, w, h);
+            put(
+                &hard_file(r.method),
+                output::png_rgb8(w, h, img.as_raw()).map_err(encode)?,
+            )?;
+        }
         if let Some(heat) = heat {
             let img = heatmap::render(reference, &r.frame.visibility, &c.mask, w, h);
             let (iw, ih) = img.dimensions();

@@ -110,6 +110,87 @@ pub fn compare(reference: &[f32], method: &[f32], mask: &[bool]) -> Metrics {
     }
 }
 
+/// A hard shadow against the exact one (`reference-hard`): classes are binary, lit iff V ≥ ½
+/// (so a filtered hard shadow such as PCF still has one), and every mismatched pixel is either an
+/// *edge* pixel — the reference's class changes among its 8 neighbours that count: aliasing,
+/// staircases, a boundary a pixel off — or an *interior* one: acne, light leaks, a missing or a
+/// false shadow away from any true boundary.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HardMetrics {
+    /// Pixels compared.
+    pub pixels: usize,
+    pub mismatch_pct: f64,
+    /// Mismatched pixels next to a change of the reference's class.
+    pub edge_px: usize,
+    /// The other mismatched pixels.
+    pub interior_px: usize,
+    /// Mismatched pixels the method darkens where the reference is lit.
+    pub false_shadow_px: usize,
+    /// Mismatched pixels the method lights where the reference is dark.
+    pub missed_shadow_px: usize,
+}
+
+/// Compare a hard shadow `method` with the exact hard `reference` over the pixels where `mask`
+/// is set, both `width`×`height` row-major. Non-finite values of the method count as the wrong
+/// class.
+pub fn compare_hard(
+    reference: &[f32],
+    method: &[f32],
+    mask: &[bool],
+    width: u32,
+    height: u32,
+) -> HardMetrics {
+    let (w, h) = (width as usize, height as usize);
+    let lit = |v: f32| v >= 0.5;
+    let mut m = HardMetrics::default();
+    if reference.len() < w * h || method.len() < w * h || mask.len() < w * h {
+        return m;
+    }
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if !mask[i] {
+                continue;
+            }
+            m.pixels += 1;
+            let r = lit(reference[i]);
+            let v = method[i];
+            let mine = if v.is_finite() { lit(v) } else { !r };
+            if mine == r {
+                continue;
+            }
+            if mine {
+                m.missed_shadow_px += 1;
+            } else {
+                m.false_shadow_px += 1;
+            }
+            let mut edge = false;
+            for dy in -1i64..=1 {
+                for dx in -1i64..=1 {
+                    let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+                    if (dx, dy) == (0, 0) || nx < 0 || ny < 0 || nx >= w as i64 || ny >= h as i64 {
+                        continue;
+                    }
+                    let j = ny as usize * w + nx as usize;
+                    edge |= mask[j] && lit(reference[j]) != r;
+                }
+            }
+            if edge {
+                m.edge_px += 1;
+            } else {
+                m.interior_px += 1;
+            }
+        }
+    }
+    let bad = m.edge_px + m.interior_px;
+    m.mismatch_pct = if m.pixels > 0 {
+        100.0 * bad as f64 / m.pixels as f64
+    } else {
+        0.0
+    };
+    m
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -141,5 +222,34 @@ mod tests {
         let m = compare(&reference, &method, &[false, false, false, false, true]);
         assert_eq!((m.mae, m.class_mismatch_pct), (1.0, 100.0));
         assert_eq!(compare(&[], &[], &[]), Metrics::default());
+    }
+
+    #[test]
+    fn hard_metrics_by_hand() {
+        // 4×3, reference lit on the left two columns, dark on the right two.
+        let reference = [1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0];
+        // The boundary a pixel off at (2, 0) and (1, 1); a light leak at (3, 2), whose
+        // neighbours are all dark in the reference.
+        let method = [1.0, 1.0, 1.0, 0.0, 1.0, 0.4, 0.0, 0.0, 1.0, 1.0, 0.0, 0.9];
+        let mut mask = [true; 12];
+        let m = compare_hard(&reference, &method, &mask, 4, 3);
+        assert_eq!(m.pixels, 12);
+        // (2, 0) lit where dark: next to (1, 0), lit: edge. (1, 1) 0.4 dark where lit: edge.
+        // (3, 2) 0.9 lit where dark: its neighbours (2, 1), (3, 1), (2, 2) are all dark: interior.
+        assert_eq!((m.edge_px, m.interior_px), (2, 1));
+        assert_eq!((m.false_shadow_px, m.missed_shadow_px), (1, 2));
+        assert!((m.mismatch_pct - 25.0).abs() < 1e-9);
+        // Masked pixels do not count, and masked neighbours do not make an edge: without the
+        // lit (1, 0) and (1, 1), the error at (2, 0) is interior.
+        mask[1] = false;
+        mask[5] = false;
+        let m = compare_hard(&reference, &method, &mask, 4, 3);
+        assert_eq!((m.pixels, m.edge_px, m.interior_px), (10, 0, 2));
+        let nan = [f32::NAN; 12];
+        assert_eq!(
+            compare_hard(&reference, &nan, &[true; 12], 4, 3).mismatch_pct,
+            100.0
+        );
+        assert_eq!(compare_hard(&[], &[], &[], 4, 3), HardMetrics::default());
     }
 }

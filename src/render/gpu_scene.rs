@@ -67,9 +67,14 @@ impl VertexChunks {
 
     /// Draw every vertex, chunk by chunk, into vertex buffer slot 0.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        self.draw_instance(pass, 0);
+    }
+
+    /// [`VertexChunks::draw`] as instance `instance` (a shader may read its `instance_index`).
+    pub fn draw_instance(&self, pass: &mut wgpu::RenderPass<'_>, instance: u32) {
         for (buffer, count) in &self.chunks {
             pass.set_vertex_buffer(0, buffer.slice(..));
-            pass.draw(0..*count, 0..1);
+            pass.draw(0..*count, instance..instance + 1);
         }
     }
 }

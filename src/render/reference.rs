@@ -14,7 +14,10 @@ use std::time::Instant;
 
 use glam::Vec3;
 
+use rayon::prelude::*;
+
 use crate::geometry::bvh::Bvh;
+use crate::geometry::hard_volume::centre_light;
 use crate::geometry::oracle::Oracle;
 use crate::geometry::progressive::ProgressiveReference;
 use crate::geometry::view;
@@ -79,6 +82,24 @@ pub fn compute(
         rays_ms: t.elapsed().as_secs_f64() * 1e3,
         visibility: r.visibility().to_vec(),
         hit_pixels,
+    }
+}
+
+/// The exact hard shadow (`reference-hard`): one ray per pixel to the light's centre, V 1 or 0
+/// (0 behind the one-sided light, as the hard methods have it).
+pub fn compute_hard(scene: &Scene, width: u32, height: u32) -> Computed {
+    let oracle = Oracle::new(scene.all_triangles(), centre_light(&scene.light), 1);
+    let points = pixel_points(scene, oracle.bvh(), width, height);
+    let t = Instant::now();
+    let visibility = points
+        .par_iter()
+        .with_min_len(256)
+        .map(|p| p.map_or(0.0, |x| oracle.visibility(x)))
+        .collect();
+    Computed {
+        rays_ms: t.elapsed().as_secs_f64() * 1e3,
+        visibility,
+        hit_pixels: points.iter().filter(|p| p.is_some()).count(),
     }
 }
 

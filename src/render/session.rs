@@ -13,7 +13,7 @@ use super::frame::{
 };
 use super::gpu_scene::GpuScene;
 use super::methods::{External, FrameInputs, LightMaps, Method, MethodState, SharedMaps};
-use super::passes::camera::Camera;
+use super::passes::camera::{Camera, ScreenView};
 use super::passes::probe::ProbeRequest;
 use super::passes::shadow_map::ShadowMap;
 use super::passes::view::ViewParams;
@@ -181,6 +181,27 @@ impl Session {
         self.methods
             .get(&method)
             .map_or((0, 0.0), |m| m.geometry_builds())
+    }
+
+    /// The shadow volumes' fill (mean volume fragments per pixel) of `method`'s last frame, for
+    /// a method that counts volumes over the screen (an untimed pass of its own, one wait).
+    pub fn stencil_fill(
+        &self,
+        ctx: &GpuContext,
+        method: Method,
+    ) -> Option<Result<f64, RenderError>> {
+        self.methods.get(&method)?.stencil_fill(ctx)
+    }
+
+    /// Let every method pick up what the GPU handed back for its overlays since the last frame
+    /// (never waits); `true` while something is on its way or has just arrived.
+    pub fn poll_geometry(&mut self, ctx: &GpuContext) -> bool {
+        let _ = ctx.device.poll(wgpu::PollType::Poll);
+        let mut busy = false;
+        for m in self.methods.values_mut() {
+            busy |= m.poll_geometry();
+        }
+        busy
     }
 
     /// `method`'s light-space maps as they stand.
@@ -428,6 +449,12 @@ impl Session {
             vt: request.vt,
             knobs: &request.knobs,
             external,
+            view: ScreenView::new(
+                &self.scene,
+                self.surfaces.bounds,
+                request.width,
+                request.height,
+            ),
         };
         // The error view compares with the reference of exactly this view.
         let view_reference = reference
@@ -543,6 +570,12 @@ impl Session {
             vt: request.vt,
             knobs: &request.knobs,
             external: None,
+            view: ScreenView::new(
+                &self.scene,
+                self.surfaces.bounds,
+                request.width,
+                request.height,
+            ),
         };
         let mut encoder = ctx
             .device

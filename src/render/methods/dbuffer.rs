@@ -32,6 +32,7 @@ pub static DBUFFER: MethodSpec = MethodSpec {
     description: "D-buffer soft shadows (Jakobsen et al. 2004)",
     knobs: &[],
     cpu_side: false,
+    hard: false,
     new: |ctx| Box::new(DBuffer::new(ctx, false)),
 };
 
@@ -40,6 +41,7 @@ pub static DBUFFER_CENTER: MethodSpec = MethodSpec {
     description: "D-buffer with silhouettes from the light centre only",
     knobs: &[],
     cpu_side: false,
+    hard: false,
     new: |ctx| Box::new(DBuffer::new(ctx, true)),
 };
 

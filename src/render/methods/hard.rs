@@ -9,6 +9,7 @@ pub static HARD: MethodSpec = MethodSpec {
     description: "hard shadow map from the light centre",
     knobs: &[],
     cpu_side: false,
+    hard: true,
     new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
 };
 

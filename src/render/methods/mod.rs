@@ -9,12 +9,17 @@
 //! V(t), the targets — is the camera pass's ([`super::passes::camera`]).
 
 pub mod dbuffer;
+pub mod extended_light_map;
 pub mod hard;
+pub mod hybrid;
 pub mod on_shadow_map;
 pub mod pcf;
 pub mod pcss;
+pub mod planar;
 pub mod reference;
+pub mod reference_hard;
 pub mod sampled;
+pub mod shadow_volume;
 
 use std::cell::OnceCell;
 use std::fmt;
@@ -24,6 +29,7 @@ use std::sync::{Arc, OnceLock};
 use glam::Mat4;
 
 use super::gpu_scene::GpuScene;
+use super::passes::camera::ScreenView;
 use super::passes::shadow_map::ShadowMap;
 use super::timer::Recorder;
 use super::{GpuContext, RenderError};
@@ -39,7 +45,12 @@ pub const ALL: &[Method] = &[
     Method(&pcf::PCF),
     Method(&pcss::PCSS),
     Method(&sampled::SAMPLED),
+    Method(&shadow_volume::SHADOW_VOLUME),
+    Method(&planar::PLANAR),
+    Method(&hybrid::HYBRID),
+    Method(&extended_light_map::EXTENDED_LIGHT_MAP),
     Method(&reference::REFERENCE),
+    Method(&reference_hard::REFERENCE_HARD),
 ];
 
 /// What a method is, for the registry.
@@ -52,6 +63,9 @@ pub struct MethodSpec {
     pub knobs: &'static [&'static Knob],
     /// V is computed on the CPU (the ray-cast reference): only wall time measures it.
     pub cpu_side: bool,
+    /// A hard shadow from the light's centre as a point light: `compare` scores it against
+    /// `reference-hard` too.
+    pub hard: bool,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
 }
@@ -69,6 +83,8 @@ impl Method {
     pub const HARD: Method = Method(&hard::HARD);
     /// The ray-cast ground truth.
     pub const REFERENCE: Method = Method(&reference::REFERENCE);
+    /// The exact hard shadow: one ray per pixel to the light centre.
+    pub const REFERENCE_HARD: Method = Method(&reference_hard::REFERENCE_HARD);
 
     pub fn all() -> &'static [Method] {
         ALL
@@ -97,6 +113,11 @@ impl Method {
 
     pub fn is_reference(self) -> bool {
         self == Method::REFERENCE
+    }
+
+    /// Whether it makes a hard shadow from the light's centre (scored against `reference-hard`).
+    pub fn is_hard(self) -> bool {
+        self.0.hard
     }
 }
 
@@ -259,6 +280,9 @@ pub struct FrameInputs<'a> {
     pub knobs: &'a Knobs,
     /// V per pixel handed in from outside (the ray-cast reference), if any.
     pub external: Option<External<'a>>,
+    /// The camera of this frame and its image size (screen-space methods draw before the camera
+    /// pass; a light-space method ignores it).
+    pub view: ScreenView,
 }
 
 impl FrameInputs<'_> {
@@ -422,6 +446,20 @@ pub trait MethodState: Send {
 
     /// Forget the light-space products: the next frame remakes them (to time them).
     fn invalidate(&mut self) {}
+
+    /// For a method that counts shadow volumes over the screen: the mean number of volume
+    /// fragments per pixel of its last frame (the fill it pays), measured with a pass of its
+    /// own; `None` for every other method.
+    fn stencil_fill(&self, _ctx: &GpuContext) -> Option<Result<f64, RenderError>> {
+        None
+    }
+
+    /// Pick up what the GPU hands back a frame or more later for the overlays (`hybrid`'s
+    /// walls), without waiting; `true` while something is on its way or has just arrived (a
+    /// window repaints then).
+    fn poll_geometry(&mut self) -> bool {
+        false
+    }
 }
 
 #[cfg(test)]

@@ -20,6 +20,7 @@ pub static PCF: MethodSpec = MethodSpec {
     description: "percentage-closer filtering of the shadow map",
     knobs: &[&RADIUS],
     cpu_side: false,
+    hard: true,
     new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
 };
 

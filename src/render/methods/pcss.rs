@@ -30,6 +30,7 @@ pub static PCSS: MethodSpec = MethodSpec {
     description: "percentage-closer soft shadows (Fernando 2005)",
     knobs: &[&BLOCKER_TAPS, &FILTER_TAPS],
     cpu_side: false,
+    hard: false,
     new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
 };
 

@@ -30,6 +30,7 @@ pub static REFERENCE: MethodSpec = MethodSpec {
     description: "ray-cast ground truth (K disk samples per pixel)",
     knobs: &[&SAMPLES],
     cpu_side: true,
+    hard: false,
     new: |ctx| Box::new(Reference::new(ctx)),
 };
 

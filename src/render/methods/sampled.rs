@@ -30,6 +30,7 @@ pub static SAMPLED: MethodSpec = MethodSpec {
     description: "N shadow maps from points on the disk, averaged",
     knobs: &[&LIGHTS],
     cpu_side: false,
+    hard: false,
     new: |ctx| Box::new(Sampled::new(ctx)),
 };
 

@@ -6,10 +6,14 @@
 
 pub mod camera;
 pub mod dbuffer_volumes;
+pub mod extended_light_map;
 pub mod floor;
+pub mod hybrid;
+pub mod planar;
 pub mod probe;
 pub mod sample_maps;
 pub mod shadow_map;
+pub mod stencil_volumes;
 pub mod view;
 pub mod view_twin;
 

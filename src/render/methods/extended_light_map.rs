@@ -1,0 +1,261 @@
+//! `extended-light-map`: Brabec, Heidrich and Seidel's extended light maps (2000): do as much as
+//! possible in the light's pass. One pass from the light's centre writes the light each surface
+//! gets in RGB (a spotlight's falloff, or the spotlight through a projected texture from
+//! `assets/gobo.png`, with the cosines) and its distance from the light in A
+//! (`passes::extended_light_map`); the camera pass takes light and shadow from that one lookup
+//! (`shaders/methods/extended_light_map.wgsl`). The map's four channels are the lab's light maps,
+//! like the D-buffer's.
+//!
+//! Its errors are the shadow map's (aliasing at texel size, the bias), the alpha channel's
+//! precision (`--elm-depth-bits 8` is the 2000 hardware's: acne or light leaking by up to a
+//! level of the far distance), and lighting computed at the map's resolution for the surface the
+//! light sees (blocky under magnification, wrong beside silhouettes where a texel belongs to
+//! another surface).
+
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3, Vec4};
+
+use super::{
+    CameraBindings, Channel, Empty, FrameInputs, Knob, Knobs, LightMaps, MethodPipeline,
+    MethodSpec, MethodState, SharedMaps,
+};
+use crate::geometry::light_view::LightView;
+use crate::geometry::VtVariant;
+use crate::render::passes::extended_light_map::{ElmParams, ExtendedLightMap, Pattern};
+use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
+use crate::render::timer::Recorder;
+use crate::render::{buffer_entry, uniform_buffer, view_entry, GpuContext, RenderError};
+
+/// Bits of the distance in the alpha channel.
+pub static DEPTH_BITS: Knob = Knob {
+    name: "elm-depth-bits",
+    help: "extended-light-map: bits of the light's distance in the map's alpha channel (8 = the \
+           2000 hardware's alpha channel)",
+    min: 8,
+    max: 24,
+    default: 16,
+    max_name: None,
+};
+
+/// What the RGB holds.
+pub static PATTERN: Knob = Knob {
+    name: "elm-pattern",
+    help: "extended-light-map: the light in RGB: 0 = a spotlight's falloff, 1 = the spotlight \
+           through the projected texture assets/gobo.png, 2 = uniform",
+    min: 0,
+    max: 2,
+    default: 0,
+    max_name: None,
+};
+
+pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec {
+    name: "extended-light-map",
+    description: "extended light map (Brabec et al. 2000): light colour in RGB, distance in A",
+    knobs: &[&DEPTH_BITS, &PATTERN],
+    cpu_side: false,
+    hard: true,
+    new: |ctx| Box::new(ElmMethod::new(ctx)),
+};
+
+const SHADER: &str = "methods/extended_light_map.wgsl";
+
+/// The inner cone of the spot, as a share of its outer one.
+pub const INNER_SHARE: f32 = 0.6;
+
+/// The map's channels: the light's colour and the distance.
+pub const CHANNELS: &[Channel] = &[
+    Channel {
+        name: "light R",
+        texture: 0,
+        component: 0,
+        empty: Empty::NonPositive,
+        or: None,
+    },
+    Channel {
+        name: "light G",
+        texture: 0,
+        component: 1,
+        empty: Empty::NonPositive,
+        or: None,
+    },
+    Channel {
+        name: "light B",
+        texture: 0,
+        component: 2,
+        empty: Empty::NonPositive,
+        or: None,
+    },
+    Channel {
+        name: "distance (A)",
+        texture: 0,
+        component: 3,
+        empty: Empty::Far,
+        or: None,
+    },
+];
+
+/// The pattern the knob asks for.
+pub fn pattern(knobs: &Knobs) -> Pattern {
+    match knobs.get(&PATTERN) {
+        1 => Pattern::Texture,
+        2 => Pattern::Uniform,
+        _ => Pattern::Spot,
+    }
+}
+
+/// The largest angle between `axis` and a direction the light view covers (its four corners).
+pub fn half_angle(view: &LightView, apex: Vec3, axis: Vec3) -> f32 {
+    let inv = view.view_projection().inverse();
+    let mut widest = 0.0f32;
+    for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+        let p = inv * Vec4::new(x, y, 0.5, 1.0);
+        let dir = (p.truncate() / p.w - apex).normalize_or_zero();
+        widest = widest.max(dir.dot(axis).clamp(-1.0, 1.0).acos());
+    }
+    widest
+}
+
+/// What the map of this frame is made from.
+pub fn elm_params(inputs: &FrameInputs<'_>) -> ElmParams {
+    let light = inputs.scene.light;
+    let view = inputs.light_view;
+    let outer = half_angle(view, light.center, light.normal);
+    ElmParams {
+        view_proj: view.view_projection(),
+        light: light.center,
+        far: view.far,
+        axis: light.normal,
+        intensity: light.intensity,
+        outer,
+        inner: INNER_SHARE * outer,
+        bits: inputs.knobs.get(&DEPTH_BITS),
+        pattern: pattern(inputs.knobs),
+        emitter: Some(light.normal),
+        size: inputs.map_size,
+    }
+}
+
+/// The map's RGB at world point `y` with unit normal `n` for a spotlight or uniform pattern: the
+/// CPU twin of `light_rgb` in `shaders/passes/extended_light_map.wgsl` (the projected texture
+/// aside).
+pub fn light_rgb(p: &ElmParams, y: Vec3, n: Vec3) -> Vec3 {
+    let dir = (y - p.light).normalize_or_zero();
+    let smoothstep = |e0: f32, e1: f32, x: f32| {
+        let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
+        t * t * (3.0 - 2.0 * t)
+    };
+    let spot = match p.pattern {
+        Pattern::Uniform => 1.0,
+        _ => smoothstep(p.outer.cos(), p.inner.cos(), dir.dot(p.axis)),
+    };
+    let cos_receiver = n.dot(dir).abs();
+    let cos_emitter = p.emitter.map_or(1.0, |e| dir.dot(e).max(0.0));
+    Vec3::splat(p.intensity * spot * cos_receiver * cos_emitter)
+}
+
+/// What the map was made from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Made {
+    revision: u64,
+    bits: u32,
+    pattern: Pattern,
+    size: u32,
+}
+
+pub struct ElmMethod {
+    elm: ExtendedLightMap,
+    pipeline: Arc<MethodPipeline>,
+    uniforms: wgpu::Buffer,
+    made: Option<Made>,
+    view_proj: Mat4,
+    /// The bind group and the map generation it binds.
+    bind_group: Option<(wgpu::BindGroup, u64)>,
+}
+
+impl ElmMethod {
+    pub fn new(ctx: &GpuContext) -> ElmMethod {
+        ElmMethod {
+            elm: ExtendedLightMap::new(ctx),
+            pipeline: MethodPipeline::get(ctx, SHADER, &lookup_entries()),
+            uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "ElmMethod::uniforms"),
+            made: None,
+            view_proj: Mat4::IDENTITY,
+            bind_group: None,
+        }
+    }
+}
+
+impl MethodState for ElmMethod {
+    fn prepare(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        _shared: &mut SharedMaps,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), RenderError> {
+        let ctx = inputs.ctx;
+        let params = elm_params(inputs);
+        let made = Made {
+            revision: inputs.revision,
+            bits: params.bits,
+            pattern: params.pattern,
+            size: params.size,
+        };
+        if self.made != Some(made) {
+            self.elm.record(ctx, rec, &params, inputs.surfaces);
+            self.view_proj = params.view_proj;
+            self.made = Some(made);
+        }
+        let Some(map) = self.elm.targets() else {
+            return Err(RenderError::Gpu(
+                "the extended light map was not made".into(),
+            ));
+        };
+        let uniforms = ShadowUniforms::new(
+            inputs.light_view,
+            map.size,
+            [1.0 / params.far, params.levels(), 0.0, 0.0],
+        );
+        ctx.queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+        if self
+            .bind_group
+            .as_ref()
+            .is_none_or(|(_, g)| *g != map.generation)
+        {
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("ElmMethod::bind_group"),
+                layout: &self.pipeline.layout,
+                entries: &[
+                    buffer_entry(0, &self.uniforms),
+                    view_entry(1, &map.map.view),
+                ],
+            });
+            self.bind_group = Some((group, map.generation));
+        }
+        Ok(())
+    }
+
+    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
+        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
+            pipeline: self.pipeline.pipeline(device, vt),
+            bind_group: g,
+        })
+    }
+
+    fn light_maps<'a>(&'a self, _shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
+        let t = self.elm.targets().filter(|_| self.made.is_some())?;
+        Some(LightMaps {
+            size: t.size,
+            view_proj: self.view_proj,
+            textures: [&t.map.view, &t.map.view, &t.map.view],
+            raw: [&t.map.texture, &t.map.texture, &t.map.texture],
+            channels: CHANNELS,
+            generation: t.generation,
+        })
+    }
+
+    fn invalidate(&mut self) {
+        self.made = None;
+    }
+}

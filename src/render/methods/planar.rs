@@ -1,0 +1,175 @@
+//! `planar`: planar projected shadows (Blinn 1988, "Me and my (fake) shadow"). Every flat object
+//! of the scene is a receiver plane (`geometry::planar::planar_receivers`, at most eight); the
+//! casters are flattened onto each plane from the light's centre by one matrix and drawn over
+//! that receiver's pixels, a stencil keeping each pixel from being darkened twice
+//! (`passes::planar`, after the screen prepass of `passes::stencil_volumes`).
+//!
+//! Its limits are the method and are not hidden: only planar receivers get shadows (no shadow on
+//! the casters themselves or on any curved object), a caster poking through a receiver casts a
+//! false shadow on it from below, and a receiver's plane is infinite for the projection (the
+//! stencil alone keeps the shadow on the receiver's own pixels). `--planar-opacity` below 100
+//! darkens instead of blacking out, which shows the stencil at work: where projected triangles
+//! overlap the pixel is still darkened once.
+
+use std::sync::Arc;
+
+use super::shadow_volume::screen_v_entries;
+use super::{
+    CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec, MethodState, SharedMaps,
+};
+use crate::geometry::planar::{planar_receivers, PlanarReceiver};
+use crate::geometry::VtVariant;
+use crate::render::gpu_scene::VertexChunks;
+use crate::render::passes::planar::{Planar, PlanarUniforms, ReceiverDraws};
+use crate::render::passes::stencil_volumes::ScreenPass;
+use crate::render::timer::Recorder;
+use crate::render::{view_entry, GpuContext, RenderError};
+
+/// How much light a projected shadow takes, in percent.
+pub static OPACITY: Knob = Knob {
+    name: "planar-opacity",
+    help: "planar: the light a projected shadow takes, percent (100: all); below 100 shows that \
+           the stencil darkens each pixel once where projected triangles overlap",
+    min: 0,
+    max: 100,
+    default: 100,
+    max_name: None,
+};
+
+pub static PLANAR: MethodSpec = MethodSpec {
+    name: "planar",
+    description: "planar projected shadows (Blinn 1988) onto the flat receivers, stencilled",
+    knobs: &[&OPACITY],
+    cpu_side: false,
+    hard: true,
+    new: |ctx| Box::new(PlanarShadows::new(ctx)),
+};
+
+const SHADER: &str = "methods/planar.wgsl";
+
+pub struct PlanarShadows {
+    screen: ScreenPass,
+    planar: Planar,
+    pipeline: Arc<MethodPipeline>,
+    receivers: Vec<PlanarReceiver>,
+    draws: Vec<ReceiverDraws>,
+    warnings: Vec<String>,
+    built_for: Option<u64>,
+    /// The bind group and the generation of the screen targets it binds.
+    bind_group: Option<(wgpu::BindGroup, u64)>,
+}
+
+impl PlanarShadows {
+    pub fn new(ctx: &GpuContext) -> PlanarShadows {
+        let screen = ScreenPass::new(ctx);
+        let planar = Planar::new(ctx, screen.pass.format);
+        PlanarShadows {
+            screen,
+            planar,
+            pipeline: MethodPipeline::get(ctx, SHADER, &screen_v_entries()),
+            receivers: Vec::new(),
+            draws: Vec::new(),
+            warnings: Vec::new(),
+            built_for: None,
+            bind_group: None,
+        }
+    }
+
+    /// The receiver planes found for the last light (the lab's notes, tests).
+    pub fn receivers(&self) -> &[PlanarReceiver] {
+        &self.receivers
+    }
+
+    fn build(&mut self, inputs: &FrameInputs<'_>) {
+        let scene = inputs.scene;
+        let device = &inputs.ctx.device;
+        let (receivers, warnings) = planar_receivers(scene, scene.light.center);
+        let triangles = |i: usize| -> Vec<[f32; 4]> {
+            scene.objects[i]
+                .mesh
+                .triangle_corners()
+                .flatten()
+                .map(|p| p.extend(1.0).to_array())
+                .collect()
+        };
+        let casters: Vec<(usize, Arc<VertexChunks>)> = scene
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.casts_shadow)
+            .map(|(i, _)| {
+                (
+                    i,
+                    Arc::new(VertexChunks::new(device, "Planar::caster", &triangles(i))),
+                )
+            })
+            .collect();
+        self.draws = receivers
+            .iter()
+            .map(|r| ReceiverDraws {
+                surface: VertexChunks::new(device, "Planar::receiver", &triangles(r.object)),
+                // Never onto its own plane.
+                casters: casters
+                    .iter()
+                    .filter(|(i, _)| *i != r.object)
+                    .map(|(_, c)| c.clone())
+                    .collect(),
+            })
+            .collect();
+        self.receivers = receivers;
+        self.warnings = warnings;
+        self.built_for = Some(inputs.revision);
+    }
+}
+
+impl MethodState for PlanarShadows {
+    fn prepare(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        _shared: &mut SharedMaps,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), RenderError> {
+        let ctx = inputs.ctx;
+        if self.built_for != Some(inputs.revision) {
+            self.build(inputs);
+        }
+        self.screen.begin(ctx, &inputs.view);
+        let Some(targets) = self.screen.targets() else {
+            return Err(RenderError::Gpu("the screen targets were not made".into()));
+        };
+        self.screen.record_prepass(rec, inputs.surfaces);
+        let shadow_v = 1.0 - inputs.knobs.get(&OPACITY) as f32 / 100.0;
+        let uniforms = PlanarUniforms::new(
+            inputs.view.infinite_view_proj,
+            inputs.view.eye,
+            inputs.scene.light.center,
+            &self.receivers,
+            shadow_v,
+        );
+        self.planar
+            .record(ctx, rec, targets, &uniforms, &self.draws);
+        let Some(shade) = self.planar.shade() else {
+            return Err(RenderError::Gpu("the planar shadows were not drawn".into()));
+        };
+        if self
+            .bind_group
+            .as_ref()
+            .is_none_or(|(_, g)| *g != targets.generation)
+        {
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("PlanarShadows::bind_group"),
+                layout: &self.pipeline.layout,
+                entries: &[view_entry(0, &shade.view)],
+            });
+            self.bind_group = Some((group, targets.generation));
+        }
+        Ok(())
+    }
+
+    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
+        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
+            pipeline: self.pipeline.pipeline(device, vt),
+            bind_group: g,
+        })
+    }
+}
