@@ -213,7 +213,7 @@ fn dragging_the_light_moves_the_shadow() {
     assert_eq!(h.state().selection, Selection::Light);
     h.key_press(egui::Key::F);
     h.run();
-    let start = h.state().scene().expect("scene").light.center;
+    let start = h.state().scene().expect("scene").light.center();
     let at = h
         .state()
         .light_screen_pos()
@@ -238,7 +238,7 @@ fn dragging_the_light_moves_the_shadow() {
     }
     h.drop_at(at + egui::vec2(150.0, 0.0));
     h.run();
-    let moved = h.state().scene().expect("scene").light.center;
+    let moved = h.state().scene().expect("scene").light.center();
     assert!((moved - start).length() > 0.5, "light {start} → {moved}");
     let after = v_at(&mut h, x, y);
     assert!(after > before + 0.5, "V at ({x}, {y}): {before} → {after}");
@@ -249,7 +249,7 @@ fn dragging_the_light_moves_the_shadow() {
     // One drag, one undo step.
     h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
     h.run();
-    assert_eq!(h.state().scene().expect("scene").light.center, start);
+    assert_eq!(h.state().scene().expect("scene").light.center(), start);
     assert!((v_at(&mut h, x, y) - before).abs() < 1e-6);
 }
 

@@ -64,7 +64,7 @@ fn scene(name: &str, caster: Mesh) -> Scene {
             target: Vec3::new(0.0, 0.0, 0.0),
             fov_y_deg: 50.0,
         },
-        light: light(),
+        light: light().into(),
         objects: vec![
             Object {
                 name: "ground".into(),

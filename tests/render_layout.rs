@@ -48,7 +48,11 @@ fn uniforms_match_their_wgsl() {
             light_center,
             light_radius,
             light_normal,
-            light_intensity
+            light_intensity,
+            light_kind,
+            _pad0,
+            _pad1,
+            _pad2
         );
     }
     for shader in ["hard", "pcf", "pcss", "dbuffer"] {
@@ -135,6 +139,9 @@ fn codes_match_their_wgsl() {
         "CLASS_EPSILON",
         dbuffer::geometry::metrics::CLASS_EPS as f32 as f64,
     ));
+    use dbuffer::render::passes::camera::{LIGHT_DISK, LIGHT_LINE};
+    pairs.push(("LIGHT_DISK", f64::from(LIGHT_DISK)));
+    pairs.push(("LIGHT_LINE", f64::from(LIGHT_LINE)));
     wgsl_layout::assert_consts(&camera, "shared/camera.wgsl", &pairs);
 
     let view = source("passes/view.wgsl");

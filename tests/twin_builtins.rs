@@ -15,8 +15,10 @@ const SAMPLES: usize = 256;
 
 fn measure(name: &str) -> Metrics {
     let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let geometry =
-        PreparedCasters::new(&scene).build(&scene.light, &VolumeParams::for_scene(&scene));
+    let geometry = PreparedCasters::new(&scene).build(
+        scene.light.as_disk().expect("a disk light"),
+        &VolumeParams::for_scene(&scene),
+    );
     let oracle = Oracle::from_scene(&scene, SAMPLES);
     let twin = DBufferTwin::new(&scene, &geometry.casters);
     let pixels = view::receivers(&scene, oracle.bvh(), SIZE, SIZE);
@@ -91,7 +93,10 @@ fn volume_surfaces_are_closed() {
     for name in scene::builtin::names() {
         let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
         let prepared = PreparedCasters::new(&scene);
-        let geometry = prepared.build(&scene.light, &VolumeParams::for_scene(&scene));
+        let geometry = prepared.build(
+            scene.light.as_disk().expect("a disk light"),
+            &VolumeParams::for_scene(&scene),
+        );
         for (g, mesh) in geometry.casters.iter().zip(&prepared.meshes) {
             let on_caster: HashSet<[u32; 3]> = mesh.positions.iter().map(|&v| key(v)).collect();
             for umbra in [true, false] {

@@ -57,8 +57,18 @@ pub struct LabOptions {
 pub enum Selection {
     #[default]
     None,
+    /// The whole light (a line light moves as a segment).
     Light,
+    /// One end of a line light: 0 is `a`, 1 is `b`.
+    LightEnd(usize),
     Object(usize),
+}
+
+impl Selection {
+    /// The light or one of its ends.
+    pub fn is_light(self) -> bool {
+        matches!(self, Selection::Light | Selection::LightEnd(_))
+    }
 }
 
 /// How serious a status line is.
@@ -365,8 +375,8 @@ impl LabApp {
     pub fn frame_all(&mut self) {
         let Some(scene) = self.scene() else { return };
         let light = scene.light;
-        let mut lo = light.center - glam::Vec3::splat(light.radius);
-        let mut hi = light.center + glam::Vec3::splat(light.radius);
+        let mut lo = light.center() - glam::Vec3::splat(light.half_extent());
+        let mut hi = light.center() + glam::Vec3::splat(light.half_extent());
         for o in scene.casters() {
             if let Some((a, b)) = o.mesh.bounds() {
                 lo = lo.min(a);

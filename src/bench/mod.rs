@@ -598,9 +598,10 @@ fn scene_info(scene: &Scene, runs: usize) -> SceneInfo {
     let params = VolumeParams::for_scene(scene);
     let mut samples = Vec::with_capacity(runs);
     let mut last = None;
-    for _ in 0..runs.max(1) {
+    // The geometry stage is the D-buffer's: a disk light's (none for a line light).
+    for light in std::iter::repeat_n(scene.light.as_disk(), runs.max(1)).flatten() {
         let t = Instant::now();
-        let g = prepared.build(&scene.light, &params);
+        let g = prepared.build(light, &params);
         samples.push(ms_since(t));
         last = Some(std::hint::black_box(g));
     }
@@ -783,10 +784,7 @@ fn time_display(ctx: &GpuContext, scene: &Scene, config: &Config, size: u32) -> 
             // The light a centimetre to one side or the other: everything light-space is redone.
             nudge += 1;
             let dx = if nudge.is_multiple_of(2) { 0.01 } else { -0.01 };
-            session.set_light(DiskLight {
-                center: base.center + Vec3::new(dx, 0.0, 0.0),
-                ..base
-            });
+            session.set_light(base.with_center(base.center() + Vec3::new(dx, 0.0, 0.0)));
         }
         let t = Instant::now();
         let job = FrameJob {
@@ -939,7 +937,8 @@ pub fn scaling_scene(triangles: u32) -> Scene {
             normal: Vec3::new(0.1, -1.0, 0.05).normalize(),
             radius: 0.6,
             intensity: 1.0,
-        },
+        }
+        .into(),
         objects: vec![Object {
             name: "sphere".into(),
             mesh,
@@ -956,9 +955,9 @@ fn scaling_point(triangles: u32, runs: usize) -> ScalingPoint {
     let params = VolumeParams::for_scene(&scene);
     let mut samples = Vec::new();
     let mut volume_triangles = 0;
-    for _ in 0..runs.max(1) {
+    for light in std::iter::repeat_n(scene.light.as_disk(), runs.max(1)).flatten() {
         let t = Instant::now();
-        let g = prepared.build(&scene.light, &params);
+        let g = prepared.build(light, &params);
         samples.push(ms_since(t));
         volume_triangles = g.stats.umbra_triangles + g.stats.penumbra_triangles;
         drop(std::hint::black_box(g));

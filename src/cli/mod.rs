@@ -183,15 +183,21 @@ pub fn inspect(
     out: Option<&Path>,
 ) -> Result<()> {
     let scene = scene::load(name).with_context(|| format!("cannot load scene '{name}'"))?;
+    let Some(&l) = scene.light.as_disk() else {
+        bail!(
+            "inspect shows the D-buffer's geometry stage, which needs a disk light, and the \
+             light of '{name}' is a line (kind = \"line\"); use `dbuffer render` or `dbuffer \
+             compare` for a line light"
+        );
+    };
     let t0 = Instant::now();
     let prepared = PreparedCasters::new(&scene);
     let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
     let params = VolumeParams::for_scene(&scene);
     let t1 = Instant::now();
-    let geometry = prepared.build(&scene.light, &params);
+    let geometry = prepared.build(&l, &params);
     let build_ms = t1.elapsed().as_secs_f64() * 1e3;
 
-    let l = &scene.light;
     println!("scene     {}", scene.name);
     println!(
         "light     centre {} normal {} radius {}",

@@ -2,6 +2,11 @@
 //! penumbrae can be, so texels are spent where shadows fall (design.md §2, "fit it to their
 //! bounds").
 //!
+//! A line light's view looks from its midpoint, fitted the same way with the segment's two end
+//! points in place of the rim (a point in any segment point's shadow of a caster vertex `v` lies
+//! in the cone of `v − a` and `v − b`); its axis is the mean of those directions, since a line
+//! has no normal and emits all around.
+//!
 //! A point in a caster's penumbra sees some disk point `q` through the caster, so it lies on a ray
 //! `v + s(v − q)` from a caster point `v` away from a rim point. Seen from `c`, such points lie in
 //! the cone spanned by the directions `v − c` and, for far points, `v − q`. The frustum is fitted
@@ -10,7 +15,7 @@
 
 use glam::{Mat4, Vec3};
 
-use crate::scene::{DiskLight, Scene};
+use crate::scene::{Light, Scene};
 
 /// The largest angle between the frustum axis and a direction it must cover. Wider penumbrae are
 /// clipped to it (and reported), since a perspective projection cannot reach 90°.
@@ -48,7 +53,7 @@ impl LightView {
             .filter(|p| p.is_finite())
             .collect();
         if vertices.is_empty() {
-            vertices.push(light.center + light.normal);
+            vertices.push(light.center() + default_axis(&light));
         }
         let all: Vec<Vec3> = scene
             .objects
@@ -64,42 +69,67 @@ impl LightView {
 /// Number of rim samples; the sample polygon is grown by `1/cos(π/n)` to cover the circle.
 const RIM_SAMPLES: usize = 16;
 
+/// The axis of a view with nothing to fit: the disk's normal; straight down for a line (or,
+/// for a vertical line, along +X).
+fn default_axis(light: &Light) -> Vec3 {
+    match light {
+        Light::Disk(d) => d.normal,
+        Light::Line(l) => {
+            let along = (l.b - l.a).normalize_or_zero();
+            (Vec3::NEG_Y - along * along.dot(Vec3::NEG_Y))
+                .try_normalize()
+                .unwrap_or(Vec3::X)
+        }
+    }
+}
+
 /// `extrusion`: how far volumes reach beyond the casters. The far plane must hold them: an umbra
 /// exit clipped away would count as "no exit" and lose the farthest-over-casters contest.
 fn fit_directions(
-    light: &DiskLight,
+    light: &Light,
     casters: &[Vec3],
     everything: &[Vec3],
     extrusion: f32,
 ) -> LightView {
-    let c = light.center;
-    let (u, w) = light.basis();
-    let grow = 1.0 / (std::f32::consts::PI / RIM_SAMPLES as f32).cos();
-    let rim: Vec<Vec3> = (0..RIM_SAMPLES)
-        .map(|k| {
-            let a = k as f32 / RIM_SAMPLES as f32 * std::f32::consts::TAU;
-            c + light.radius * grow * (a.cos() * u + a.sin() * w)
-        })
-        .collect();
-    let mut dirs: Vec<Vec3> = Vec::with_capacity(casters.len() * (RIM_SAMPLES + 1));
+    let c = light.center();
+    // The points of the light whose directions to a caster vertex bound its shadows: the disk's
+    // rim (grown so the polygon covers the circle), a segment's two ends.
+    let (extreme, normal): (Vec<Vec3>, Option<Vec3>) = match light {
+        Light::Disk(d) => {
+            let (u, w) = d.basis();
+            let grow = 1.0 / (std::f32::consts::PI / RIM_SAMPLES as f32).cos();
+            let rim = (0..RIM_SAMPLES)
+                .map(|k| {
+                    let a = k as f32 / RIM_SAMPLES as f32 * std::f32::consts::TAU;
+                    c + d.radius * grow * (a.cos() * u + a.sin() * w)
+                })
+                .collect();
+            (rim, Some(d.normal))
+        }
+        Light::Line(l) => (vec![l.a, l.b], None),
+    };
+    let mut dirs: Vec<Vec3> = Vec::with_capacity(casters.len() * (extreme.len() + 1));
     for &v in casters {
-        if light.height_of(v) <= 0.0 {
+        if normal.is_some_and(|n| n.dot(v - c) <= 0.0) {
             continue; // behind the one-sided light: casts nothing
         }
         dirs.extend((v - c).try_normalize());
-        dirs.extend(rim.iter().filter_map(|&q| (v - q).try_normalize()));
+        dirs.extend(extreme.iter().filter_map(|&q| (v - q).try_normalize()));
     }
     // Directions pointing behind the light plane cannot hold a lit receiver.
-    dirs.retain(|d| d.dot(light.normal) > 1e-4);
+    if let Some(n) = normal {
+        dirs.retain(|d| d.dot(n) > 1e-4);
+    }
+    let fallback = default_axis(light);
     if dirs.is_empty() {
-        dirs.push(light.normal);
+        dirs.push(fallback);
     }
     let axis = dirs
         .iter()
         .copied()
         .sum::<Vec3>()
         .try_normalize()
-        .unwrap_or(light.normal);
+        .unwrap_or(fallback);
     let up_hint = if axis.cross(Vec3::Y).length_squared() > 1e-6 {
         Vec3::Y
     } else {
@@ -189,8 +219,11 @@ mod tests {
             };
             let view = LightView::fit(&scene);
             let vp = view.view_projection();
+            let Some(disk) = scene.light.as_disk() else {
+                continue; // the D-buffer twin needs a disk
+            };
             let geometry =
-                PreparedCasters::new(&scene).build(&scene.light, &VolumeParams::for_scene(&scene));
+                PreparedCasters::new(&scene).build(disk, &VolumeParams::for_scene(&scene));
             let twin = crate::geometry::DBufferTwin::new(&scene, &geometry.casters);
             let mut shadowed = 0;
             for i in 0..60 {

@@ -21,7 +21,7 @@ use super::{GpuContext, RenderError, Texture};
 use crate::geometry::light_view::LightView;
 use crate::geometry::progressive::ProgressiveReference;
 use crate::geometry::{PreparedCasters, SceneGeometry};
-use crate::scene::{Camera as SceneCamera, DiskLight, Mesh, Scene};
+use crate::scene::{Camera as SceneCamera, Light, Mesh, Scene};
 
 /// One frame to record: into which targets, what, and (for a window) how to show it.
 pub struct FrameJob<'a> {
@@ -118,8 +118,10 @@ impl Session {
         self.revision
     }
 
-    /// Move the light; light-space work is redone on the next frame if it changed.
-    pub fn set_light(&mut self, light: DiskLight) {
+    /// Move the light (or change it, disk or line); light-space work is redone on the next
+    /// frame if it changed.
+    pub fn set_light(&mut self, light: impl Into<Light>) {
+        let light = light.into();
         if light != self.scene.light {
             self.scene.light = light;
             self.moved();
@@ -359,6 +361,9 @@ impl Session {
         let request = job.request;
         request.validate(ctx)?;
         let method = request.method;
+        if let Some(why) = method.refuses(self.scene.light.kind()) {
+            return Err(RenderError::Request(why));
+        }
         let state = self
             .methods
             .entry(method)

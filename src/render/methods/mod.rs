@@ -29,7 +29,7 @@ use super::timer::Recorder;
 use super::{GpuContext, RenderError};
 use crate::geometry::light_view::LightView;
 use crate::geometry::{PreparedCasters, SceneGeometry, VtVariant};
-use crate::scene::Scene;
+use crate::scene::{DiskLight, LightKind, Scene};
 
 /// Every method, in the order pickers, `compare` and `bench` list them. The registry.
 pub const ALL: &[Method] = &[
@@ -98,7 +98,57 @@ impl Method {
     pub fn is_reference(self) -> bool {
         self == Method::REFERENCE
     }
+
+    /// The kind of light the method needs, if it cannot take both (design.md §7).
+    pub fn needs(self) -> Option<LightKind> {
+        if DISK_ONLY.contains(&self.name()) {
+            Some(LightKind::Disk)
+        } else if LINE_ONLY.contains(&self.name()) {
+            Some(LightKind::Line)
+        } else {
+            None
+        }
+    }
+
+    /// Whether the method can render with a `light` light.
+    pub fn takes(self, light: LightKind) -> bool {
+        self.needs().is_none_or(|k| k == light)
+    }
+
+    /// `None` when the method can render with a `light` light; else the one-line reason it
+    /// refuses, naming the method, both kinds and the methods that take this one. `render`
+    /// exits with it, `compare` and `bench` list the method as not applicable, the lab greys
+    /// its picker entry: a disk-only method never draws a line light's scene as something else.
+    pub fn refuses(self, light: LightKind) -> Option<String> {
+        let needs = self.needs().filter(|k| *k != light)?;
+        let this = match light {
+            LightKind::Line => "a line (kind = \"line\")",
+            LightKind::Disk => "a disk",
+        };
+        let others: Vec<&str> = ALL
+            .iter()
+            .filter(|m| m.takes(light))
+            .map(|m| m.name())
+            .collect();
+        Some(format!(
+            "method '{self}' needs a {needs} light, and this scene's light is {this}; \
+             for a {light} light use {}",
+            others.join(", ")
+        ))
+    }
 }
+
+/// The methods that need a disk light (design.md §7): the D-buffer family (its volumes are
+/// the disk's), `wedges` (the coverage of a disk) and `pcss` (a blocker search over a disk).
+const DISK_ONLY: &[&str] = &[
+    "dbuffer",
+    "dbuffer-center",
+    "dbuffer-fused",
+    "wedges",
+    "pcss",
+];
+/// The methods that need a line light: seed 003's soft shadow maps.
+const LINE_ONLY: &[&str] = &["linear-ssm"];
 
 impl Default for Method {
     fn default() -> Self {
@@ -263,6 +313,16 @@ impl FrameInputs<'_> {
     pub fn prepared(&self) -> &PreparedCasters {
         self.prepared
             .get_or_init(|| PreparedCasters::new(self.scene))
+    }
+
+    /// The scene's disk light, for a method that needs one; an error naming `method` for a
+    /// line light (the session refuses such a frame before it gets here).
+    pub fn disk(&self, method: &str) -> Result<&DiskLight, RenderError> {
+        self.scene.light.as_disk().ok_or_else(|| {
+            RenderError::Request(format!(
+                "method '{method}' needs a disk light, and this scene's light is a line"
+            ))
+        })
     }
 }
 
