@@ -11,6 +11,7 @@ pub mod bvh;
 pub mod classify;
 pub mod hull;
 pub mod light_view;
+pub mod line_light;
 pub mod metrics;
 pub mod oracle;
 pub mod progressive;
