@@ -231,7 +231,10 @@ fn line_light_over_an_edge_matches_the_closed_form() {
                     "light {li}, edge {ei}, K = {k}: worst |V_K − V| {worst} > {bound}"
                 );
                 if ei < 2 {
-                    assert!(penumbra > 20, "light {li}, edge {ei}: {penumbra} penumbra points");
+                    assert!(
+                        penumbra > 20,
+                        "light {li}, edge {ei}: {penumbra} penumbra points"
+                    );
                 }
             }
         }
@@ -249,7 +252,11 @@ fn a_line_light_lights_every_side() {
         intensity: 1.0,
     };
     let o = Oracle::new(Vec::new(), light, 32);
-    for p in [Vec3::ZERO, Vec3::new(0.0, 8.0, 0.0), Vec3::new(3.0, 4.0, 0.0)] {
+    for p in [
+        Vec3::ZERO,
+        Vec3::new(0.0, 8.0, 0.0),
+        Vec3::new(3.0, 4.0, 0.0),
+    ] {
         assert_eq!(o.visibility(p), 1.0, "{p}");
     }
     assert_eq!(o.visibility(Vec3::new(f32::NAN, 0.0, 0.0)), 0.0);

@@ -2,7 +2,7 @@
 //! triangle counts, convexity, placement under the light, the property each scene is for).
 
 use dbuffer::geometry::ray::intersect_triangle;
-use dbuffer::scene::{builtin, load, shapes, DiskLight, Mesh, Scene};
+use dbuffer::scene::{builtin, load, shapes, DiskLight, Light, Mesh, Scene};
 use glam::Vec3;
 use std::collections::{HashMap, HashSet};
 
@@ -237,6 +237,12 @@ const EXPECTED_NAMES: &[&str] = &[
     "overlap",
     "no-umbra",
     "acute-corner",
+    "line-fig2",
+    "line-fig3-tilted",
+    "line-fig6-gap",
+    "line-fig8-overlap",
+    "line-fig9",
+    "line-bar",
 ];
 
 fn scene(name: &str) -> Scene {
@@ -281,15 +287,29 @@ fn every_builtin_scene_loads_and_is_well_formed() {
             "{name}: ground ~10 wide"
         );
 
-        assert!(disk(&s).normal.is_normalized());
-        assert!(disk(&s).normal.y < -0.9, "{name}: light points down");
         assert!(s.casters().count() >= 1);
+        // Every caster between the light and the ground: below a disk's plane (which points
+        // down), below both ends of a line light.
+        let height = |p: Vec3| match s.light {
+            Light::Disk(d) => {
+                assert!(d.normal.is_normalized());
+                assert!(d.normal.y < -0.9, "{name}: light points down");
+                d.height_of(p)
+            }
+            Light::Line(l) => {
+                assert!(
+                    l.length() >= 1.0,
+                    "{name}: a line light a metre or more long"
+                );
+                l.a.y.min(l.b.y) - p.y
+            }
+        };
         for o in s.casters() {
             for &p in &o.mesh.positions {
-                let h = disk(&s).height_of(p);
+                let h = height(p);
                 assert!(
                     h > 0.05,
-                    "{name}/{}: vertex {p} at {h} from the light plane",
+                    "{name}/{}: vertex {p} at {h} below the light",
                     o.name
                 );
                 assert!(p.y > lo.y, "{name}/{}: caster above the ground", o.name);
@@ -350,8 +370,21 @@ fn concave_scenes_are_concave() {
 
 /// Bounds (in XZ) of a convex caster's penumbra on the ground plane y = 0 under a horizontal
 /// disk light: each vertex q projects from light point p to p + (q − p)·t, t = p.y/(p.y − q.y),
-/// which over the disk is a disk of centre c + (q − c)·t and radius r·|1 − t|.
+/// which over the disk is a disk of centre c + (q − c)·t and radius r·|1 − t|. Under a line
+/// light, the projections of every vertex from both ends (the shadow from any point between).
 fn penumbra_bounds(s: &Scene, m: &Mesh) -> (glam::Vec2, glam::Vec2) {
+    if let Light::Line(l) = s.light {
+        let mut lo = glam::Vec2::splat(f32::INFINITY);
+        let mut hi = -lo;
+        for &q in &m.positions {
+            for p in [l.a, l.b] {
+                let g = p + (q - p) * (p.y / (p.y - q.y));
+                lo = lo.min(glam::Vec2::new(g.x, g.z));
+                hi = hi.max(glam::Vec2::new(g.x, g.z));
+            }
+        }
+        return (lo, hi);
+    }
     let c = disk(s).center;
     let r = disk(s).radius;
     let mut lo = glam::Vec2::splat(f32::INFINITY);

@@ -92,6 +92,9 @@ fn volume_surfaces_are_closed() {
     };
     for name in scene::builtin::names() {
         let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        if scene.light.as_disk().is_none() {
+            continue; // the D-buffer's geometry is a disk light's
+        }
         let prepared = PreparedCasters::new(&scene);
         let geometry = prepared.build(
             scene.light.as_disk().expect("a disk light"),

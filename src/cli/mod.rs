@@ -107,6 +107,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let knobs = args.knobs.knobs()?;
     let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
+    // Before the GPU starts: a disk-only method under a line light (or the reverse) says why.
+    if let Some(why) = method.refuses(scene.light.kind()) {
+        bail!("{why}");
+    }
     let mut offline = Offline::new()?;
     if args.verbose {
         eprintln!("adapter   {}", offline.ctx.adapter_description());

@@ -133,7 +133,10 @@ mod tests {
             assert!((v - expect).abs() < 1e-6, "x = {x}: {v} vs {expect}");
         }
         // Receivers above the occluder see everything; an edge parallel to the light is hard.
-        assert_eq!(half_plane_visibility(&l, &h, Vec3::new(-0.3, 3.0, 0.0)), 1.0);
+        assert_eq!(
+            half_plane_visibility(&l, &h, Vec3::new(-0.3, 3.0, 0.0)),
+            1.0
+        );
         let parallel = HalfPlane {
             origin: Vec3::new(0.0, 2.0, 0.0),
             along: Vec3::X,
@@ -154,12 +157,10 @@ mod tests {
             state ^= state << 17;
             (state >> 11) as f32 / (1u64 << 53) as f32
         };
-        let mut unit = || {
-            loop {
-                let v = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 2.0;
-                if let Some(u) = v.try_normalize() {
-                    return u;
-                }
+        let mut unit = || loop {
+            let v = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 2.0;
+            if let Some(u) = v.try_normalize() {
+                return u;
             }
         };
         let mut worst = 0.0f64;

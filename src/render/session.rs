@@ -21,7 +21,7 @@ use super::{GpuContext, RenderError, Texture};
 use crate::geometry::light_view::LightView;
 use crate::geometry::progressive::ProgressiveReference;
 use crate::geometry::{PreparedCasters, SceneGeometry};
-use crate::scene::{Camera as SceneCamera, Light, Mesh, Scene};
+use crate::scene::{Camera as SceneCamera, Light, LightKind, Mesh, Scene};
 
 /// One frame to record: into which targets, what, and (for a window) how to show it.
 pub struct FrameJob<'a> {
@@ -454,7 +454,9 @@ impl Session {
         request: &FrameRequest,
     ) -> Result<Frame, RenderError> {
         let mut own = std::mem::take(&mut self.own);
-        let dbuffer = request.read_dbuffer.then(|| dbuffer_of(request.method));
+        let dbuffer = request
+            .read_dbuffer
+            .then(|| dbuffer_of(request.method, self.scene.light.kind()));
         let submitted = (|| {
             self.submit(
                 ctx,
@@ -545,10 +547,13 @@ impl Session {
     }
 }
 
-/// Which method's D-buffer `dbuffer.exr` holds for a frame of `method`: its own if it is a
-/// D-buffer method, else the paper's.
-pub fn dbuffer_of(method: Method) -> Method {
-    if method == Method::DBUFFER_CENTER {
+/// Which method's D-buffer `dbuffer.exr` holds for a frame of `method` under a `light` light:
+/// its own if it is a D-buffer method, else the paper's; under a line light (which the D-buffer
+/// refuses), the hard shadow map from the midpoint (its `|cx_o|` channel alone).
+pub fn dbuffer_of(method: Method, light: LightKind) -> Method {
+    if light == LightKind::Line {
+        Method::HARD
+    } else if method == Method::DBUFFER_CENTER {
         method
     } else {
         Method::DBUFFER
