@@ -149,31 +149,15 @@ impl LightSpec {
         }
     }
 
-    /// The same place as a light of `kind`: a disk becomes the segment across it (through its
-    /// centre, as long as its diameter, along the first vector of its plane's basis); a
-    /// segment becomes a disk as wide as it is long, centred on its midpoint, facing down (or
-    /// sideways under a vertical segment). Intensity stays.
+    /// The same place as a light of `kind` ([`Light::converted`]).
     pub fn converted(&self, kind: LightKind) -> LightSpec {
         if kind == self.kind() {
             return self.clone();
         }
         let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
-        let mut out = match self.light() {
-            Light::Disk(d) => {
-                let (u, _) = d.basis();
-                LightSpec::line(f(d.center - u * d.radius), f(d.center + u * d.radius))
-            }
-            Light::Line(l) => {
-                let along = (l.b - l.a).normalize_or_zero();
-                let down = (Vec3::NEG_Y - along * along.dot(Vec3::NEG_Y))
-                    .try_normalize()
-                    .unwrap_or(Vec3::X);
-                LightSpec::disk(
-                    f(l.midpoint()),
-                    f(down),
-                    f64::from(0.5 * l.length()).max(0.01),
-                )
-            }
+        let mut out = match self.light().converted(kind) {
+            Light::Disk(d) => LightSpec::disk(f(d.center), f(d.normal), f64::from(d.radius)),
+            Light::Line(l) => LightSpec::line(f(l.a), f(l.b)),
         };
         out.intensity = self.intensity;
         out

@@ -192,6 +192,37 @@ impl Light {
         }
     }
 
+    /// The same place as a light of `kind`: a disk becomes the segment across it (through its
+    /// centre, as long as its diameter, along the first vector of its plane's basis); a segment
+    /// becomes a disk as wide as it is long (at least 1 cm), centred on its midpoint, facing
+    /// down (sideways under a vertical segment). Intensity stays. The bench times the methods
+    /// of one kind on the other kind's scenes this way.
+    pub fn converted(&self, kind: LightKind) -> Light {
+        match (*self, kind) {
+            (Light::Disk(d), LightKind::Line) => {
+                let (u, _) = d.basis();
+                Light::Line(LineLight {
+                    a: d.center - u * d.radius,
+                    b: d.center + u * d.radius,
+                    intensity: d.intensity,
+                })
+            }
+            (Light::Line(l), LightKind::Disk) => {
+                let along = (l.b - l.a).normalize_or_zero();
+                let down = (Vec3::NEG_Y - along * along.dot(Vec3::NEG_Y))
+                    .try_normalize()
+                    .unwrap_or(Vec3::X);
+                Light::Disk(DiskLight {
+                    center: l.midpoint(),
+                    normal: down,
+                    radius: (0.5 * l.length()).max(0.01),
+                    intensity: l.intensity,
+                })
+            }
+            (same, _) => same,
+        }
+    }
+
     /// The light translated so its [`Light::center`] is at `to`.
     pub fn with_center(&self, to: Vec3) -> Light {
         let d = to - self.center();
