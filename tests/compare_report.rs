@@ -145,15 +145,24 @@ fn a_line_light_scene_lists_the_disk_only_methods_as_not_applicable() {
                 let n = na.unwrap_or_else(|| panic!("{m} must be not applicable"));
                 assert!(!drawn, "{m} drawn under a line light");
                 assert_eq!(n.needs, "disk");
-                assert!(n.reason.contains(m.name()) && n.reason.contains("line"), "{n:?}");
+                assert!(
+                    n.reason.contains(m.name()) && n.reason.contains("line"),
+                    "{n:?}"
+                );
             }
             _ => assert!(drawn && na.is_none(), "{m} must be drawn"),
         }
     }
     let table = r.table();
-    assert!(table.contains("| dbuffer | n/a — needs a disk light |"), "{table}");
+    assert!(
+        table.contains("| dbuffer | n/a — needs a disk light |"),
+        "{table}"
+    );
     // The hard shadow from the midpoint is far from the line reference; sampled much closer.
     let row = |m: &str| r.methods.iter().find(|row| row.method == m).unwrap();
-    assert!(row("sampled").penumbra_mae < row("hard").penumbra_mae, "{table}");
+    assert!(
+        row("sampled").penumbra_mae < row("hard").penumbra_mae,
+        "{table}"
+    );
     assert!(row("hard").penumbra_pixels > 50, "{table}");
 }

@@ -35,7 +35,7 @@ use self::stats::Stats;
 pub use self::viewport::Shown;
 use crate::geometry::bvh::Bvh;
 pub use crate::render::passes::view::View;
-use crate::render::GpuContext;
+use crate::render::{GpuContext, Method};
 use crate::scene::Camera;
 
 /// How the lab starts.
@@ -248,6 +248,28 @@ impl LabApp {
 
     /// Open a built-in scene name, a `.toml` scene or an `.obj`; on failure the error goes to
     /// the status line and the current scene stays.
+    /// After the light's kind changed: a shown method that cannot take it is replaced by the
+    /// method made for that kind (the D-buffer for a disk, `linear-ssm` for a line); returns
+    /// what was switched, to say so.
+    fn suit_methods_to_the_light(&mut self) -> Option<String> {
+        let kind = self.doc.file.light.kind();
+        let fallback = Method::all()
+            .iter()
+            .copied()
+            .find(|m| m.needs() == Some(kind))
+            .or_else(|| Method::all().iter().copied().find(|m| m.takes(kind)))?;
+        let mut said = Vec::new();
+        for name in [&mut self.settings.method, &mut self.settings.split_method] {
+            if let Ok(m) = name.parse::<Method>() {
+                if !m.takes(kind) {
+                    said.push(format!("{m} needs a {} light", m.needs()?.name()));
+                    *name = fallback.name().to_string();
+                }
+            }
+        }
+        (!said.is_empty()).then(|| format!("{}: showing {fallback}", said.join(", ")))
+    }
+
     pub fn open_scene(&mut self, name_or_path: &str) {
         match SceneDoc::open(name_or_path) {
             Ok((doc, scene)) => {
@@ -264,7 +286,9 @@ impl LabApp {
                 if !SceneDoc::is_builtin(name_or_path) {
                     self.settings.push_recent(name_or_path);
                 }
-                let warnings = self.scene_warnings();
+                let switched = self.suit_methods_to_the_light();
+                let mut warnings = self.scene_warnings();
+                warnings.extend(switched);
                 match warnings.first() {
                     Some(w) => {
                         self.set_status(format!("opened {}: {w}", self.doc.label), Level::Warning)

@@ -215,11 +215,18 @@ impl LabApp {
     fn method_section(&mut self, ui: &mut egui::Ui) {
         ui.heading("Method");
         let current = self.settings.method();
+        // Methods that cannot take the scene's light are greyed, their reason on hover.
+        let light = self.doc.file.light.kind();
         ui.horizontal_wrapped(|ui| {
             for &m in Method::all() {
+                let refused = m.refuses(light);
                 if ui
-                    .selectable_label(current == m, m.name())
+                    .add_enabled(
+                        refused.is_none(),
+                        egui::Button::selectable(current == m, m.name()),
+                    )
                     .on_hover_text(m.description())
+                    .on_disabled_hover_text(refused.unwrap_or_default())
                     .clicked()
                 {
                     self.settings.method = m.name().into();
@@ -242,7 +249,15 @@ impl LabApp {
                 .selected_text(format!("right: {}", split.name()))
                 .show_ui(ui, |ui| {
                     for &m in Method::all() {
-                        if ui.selectable_label(split == m, m.name()).clicked() {
+                        let refused = m.refuses(light);
+                        if ui
+                            .add_enabled(
+                                refused.is_none(),
+                                egui::Button::selectable(split == m, m.name()),
+                            )
+                            .on_disabled_hover_text(refused.unwrap_or_default())
+                            .clicked()
+                        {
                             self.settings.split_method = m.name().into();
                         }
                     }
@@ -396,7 +411,8 @@ impl LabApp {
                 .on_hover_text("a linear light: a segment from a to b, emitting all around");
         });
         let mut changed = false;
-        if kind != light.kind() {
+        let kind_changed = kind != light.kind();
+        if kind_changed {
             light = light.converted(kind);
             changed = true;
         }
@@ -454,6 +470,11 @@ impl LabApp {
         }
         if changed {
             self.edit_scene(|e| e.light = light);
+        }
+        if kind_changed {
+            if let Some(switched) = self.suit_methods_to_the_light() {
+                self.set_status(switched, Level::Info);
+            }
         }
     }
 

@@ -240,6 +240,15 @@ impl LabApp {
                 self.viewport.views[i] = None;
                 continue;
             };
+            // A method that cannot take this light draws nothing and says why (never a
+            // picture made with another light).
+            if let Some(why) = method.refuses(core.session.scene().light.kind()) {
+                self.viewport.shown[i] = None;
+                self.viewport.keys[i] = None;
+                self.viewport.views[i] = None;
+                errors.push(why);
+                continue;
+            }
             let request = FrameRequest { method, ..base };
             if method.is_reference() && !reference_ready {
                 let shown = self.viewport.shown[i].get_or_insert_with(|| Shown {
