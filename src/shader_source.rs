@@ -165,6 +165,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/pcss.wgsl"),
     ),
     (
+        "methods/linear_ssm.wgsl",
+        include_str!("../shaders/methods/linear_ssm.wgsl"),
+    ),
+    (
         "methods/reference.wgsl",
         include_str!("../shaders/methods/reference.wgsl"),
     ),
@@ -193,6 +197,14 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/passes/shadow_map.wgsl"),
     ),
     (
+        "passes/ssm_skins.wgsl",
+        include_str!("../shaders/passes/ssm_skins.wgsl"),
+    ),
+    (
+        "passes/ssm_visibility.wgsl",
+        include_str!("../shaders/passes/ssm_visibility.wgsl"),
+    ),
+    (
         "passes/view.wgsl",
         include_str!("../shaders/passes/view.wgsl"),
     ),
@@ -215,6 +227,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "shared/shadow_lookup.wgsl",
         include_str!("../shaders/shared/shadow_lookup.wgsl"),
+    ),
+    (
+        "shared/ssm_sample.wgsl",
+        include_str!("../shaders/shared/ssm_sample.wgsl"),
     ),
     (
         "shared/surface.wgsl",

@@ -487,6 +487,22 @@ fn box_edges(lo: Vec3, hi: Vec3) -> Vec<(Vec3, Vec3)> {
     edges
 }
 
+/// The points on a line light the shown method samples (its shadow maps' origins), to draw on
+/// the segment: `sampled`'s stratum centres, `linear-ssm`'s evenly spaced samples with both ends.
+fn line_sample_points(line: &LineLight, method: Method, knobs: &Knobs) -> Vec<Vec3> {
+    use crate::render::methods::{linear_ssm, sampled};
+    match method.name() {
+        "sampled" => {
+            let n = knobs.get(&sampled::LIGHTS).max(1);
+            (0..n)
+                .map(|i| line.at((i as f32 + 0.5) / n as f32))
+                .collect()
+        }
+        "linear-ssm" => linear_ssm::sample_points(line, knobs.get(&linear_ssm::SAMPLES)),
+        _ => Vec::new(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -517,20 +533,5 @@ mod tests {
     #[test]
     fn a_box_has_twelve_edges() {
         assert_eq!(box_edges(Vec3::ZERO, Vec3::ONE).len(), 12);
-    }
-}
-
-/// The points on a line light the shown method samples (its shadow maps' origins), to draw on
-/// the segment: `sampled`'s stratum centres.
-fn line_sample_points(line: &LineLight, method: Method, knobs: &Knobs) -> Vec<Vec3> {
-    use crate::render::methods::sampled;
-    match method.name() {
-        "sampled" => {
-            let n = knobs.get(&sampled::LIGHTS).max(1);
-            (0..n)
-                .map(|i| line.at((i as f32 + 0.5) / n as f32))
-                .collect()
-        }
-        _ => Vec::new(),
     }
 }

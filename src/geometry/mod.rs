@@ -17,6 +17,7 @@ pub mod oracle;
 pub mod progressive;
 pub mod ray;
 pub mod silhouette;
+pub mod ssm;
 pub mod twin;
 pub mod view;
 pub mod visibility;

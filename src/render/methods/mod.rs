@@ -10,6 +10,7 @@
 
 pub mod dbuffer;
 pub mod hard;
+pub mod linear_ssm;
 pub mod on_shadow_map;
 pub mod pcf;
 pub mod pcss;
@@ -39,6 +40,7 @@ pub const ALL: &[Method] = &[
     Method(&pcf::PCF),
     Method(&pcss::PCSS),
     Method(&sampled::SAMPLED),
+    Method(&linear_ssm::LINEAR_SSM),
     Method(&reference::REFERENCE),
 ];
 

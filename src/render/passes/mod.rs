@@ -10,6 +10,7 @@ pub mod floor;
 pub mod probe;
 pub mod sample_maps;
 pub mod shadow_map;
+pub mod ssm;
 pub mod view;
 pub mod view_twin;
 

@@ -142,6 +142,8 @@ impl SampleMapsPass {
 pub struct SampleTargets {
     pub size: u32,
     pub layers: u32,
+    /// The array texture (`linear-ssm` copies its layers out).
+    pub texture: wgpu::Texture,
     /// The whole array, for the camera pass.
     pub array_view: wgpu::TextureView,
     layer_views: Vec<wgpu::TextureView>,
@@ -201,7 +203,7 @@ impl SampleMaps {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: DISTANCE_FORMAT,
-            usage: U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
+            usage: U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
             view_formats: &[],
         });
         let depth = device.create_texture(&wgpu::TextureDescriptor {
@@ -233,6 +235,7 @@ impl SampleMaps {
         self.targets = Some(SampleTargets {
             size,
             layers,
+            texture,
             array_view,
             layer_views,
             depth: depth.create_view(&wgpu::TextureViewDescriptor::default()),
