@@ -62,7 +62,19 @@ impl LightView {
             .filter(|p| p.is_finite())
             .collect();
         let extrusion = crate::geometry::VolumeParams::for_scene(scene).far;
-        fit_directions(&light, &vertices, &all, extrusion)
+        // The near plane from the nearest point of any triangle (a large one passes much closer
+        // to the light than its corners), less the light's half extent: the frustum is moved to
+        // every point of the light (`sampled`, `linear-ssm`) and must not cut what they see.
+        let c = light.center();
+        let nearest = scene
+            .objects
+            .iter()
+            .flat_map(|o| o.mesh.triangle_corners())
+            .map(|t| (closest_on_triangle(c, t) - c).length())
+            .filter(|d| d.is_finite())
+            .fold(f32::MAX, f32::min)
+            - light.half_extent();
+        fit_directions(&light, &vertices, &all, extrusion, nearest)
     }
 }
 
@@ -85,11 +97,13 @@ fn default_axis(light: &Light) -> Vec3 {
 
 /// `extrusion`: how far volumes reach beyond the casters. The far plane must hold them: an umbra
 /// exit clipped away would count as "no exit" and lose the farthest-over-casters contest.
+/// `nearest`: how close a surface comes to any point of the light (the near plane is half of it).
 fn fit_directions(
     light: &Light,
     casters: &[Vec3],
     everything: &[Vec3],
     extrusion: f32,
+    nearest: f32,
 ) -> LightView {
     let c = light.center();
     // The points of the light whose directions to a caster vertex bound its shadows: the disk's
@@ -159,13 +173,10 @@ fn fit_directions(
     let pad = 0.01 * (r - l).max(t - b).max(1e-3);
     let (l, r, b, t) = (l - pad, r + pad, b - pad, t + pad);
 
-    let mut nearest = f32::MAX;
-    let mut farthest = 0.0f32;
-    for &p in everything {
-        let d = (p - c).length();
-        nearest = nearest.min(d);
-        farthest = farthest.max(d);
-    }
+    let farthest = everything
+        .iter()
+        .map(|&p| (p - c).length())
+        .fold(0.0f32, f32::max);
     let far = (farthest * 2.0 + extrusion).max(1.0);
     let near = (nearest * 0.5).clamp(far * 1e-6, far * 1e-2).max(1e-4);
     LightView {
@@ -175,6 +186,42 @@ fn fit_directions(
         far,
         clipped,
     }
+}
+
+/// The point of triangle `t` nearest `p` (Ericson, Real-Time Collision Detection §5.1.5).
+fn closest_on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> Vec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = va + vb + vc;
+    if denom.abs() < f32::MIN_POSITIVE {
+        return a; // a degenerate triangle: its corner will do
+    }
+    a + ab * (vb / denom) + ac * (vc / denom)
 }
 
 /// A right-handed perspective looking down −Z with the image spanning slopes `[l, r] × [b, t]`,
@@ -194,6 +241,25 @@ pub fn off_center_perspective(l: f32, r: f32, b: f32, t: f32, near: f32, far: f3
 mod tests {
     use super::*;
     use crate::geometry::{PreparedCasters, VolumeParams};
+
+    #[test]
+    fn closest_points_on_a_triangle() {
+        let t = [Vec3::ZERO, Vec3::X * 2.0, Vec3::Z * 2.0];
+        let near = |p: Vec3, q: Vec3| (closest_on_triangle(p, t) - q).length() < 1e-6;
+        assert!(
+            near(Vec3::new(0.5, 3.0, 0.5), Vec3::new(0.5, 0.0, 0.5)),
+            "inside"
+        );
+        assert!(near(Vec3::new(-1.0, 1.0, -1.0), Vec3::ZERO), "a corner");
+        assert!(
+            near(Vec3::new(1.0, -2.0, -3.0), Vec3::new(1.0, 0.0, 0.0)),
+            "an edge"
+        );
+        assert!(
+            near(Vec3::new(2.0, 0.0, 2.0), Vec3::new(1.0, 0.0, 1.0)),
+            "the far edge"
+        );
+    }
 
     #[test]
     fn off_center_perspective_maps_its_bounds() {
