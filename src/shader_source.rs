@@ -177,6 +177,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/sampled.wgsl"),
     ),
     (
+        "methods/shadow_volume.wgsl",
+        include_str!("../shaders/methods/shadow_volume.wgsl"),
+    ),
+    (
         "passes/dbuffer_volumes.wgsl",
         include_str!("../shaders/passes/dbuffer_volumes.wgsl"),
     ),
@@ -205,6 +209,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/passes/ssm_visibility.wgsl"),
     ),
     (
+        "passes/stencil_volumes.wgsl",
+        include_str!("../shaders/passes/stencil_volumes.wgsl"),
+    ),
+    (
         "passes/view.wgsl",
         include_str!("../shaders/passes/view.wgsl"),
     ),
@@ -223,6 +231,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "shared/sample_lights.wgsl",
         include_str!("../shaders/shared/sample_lights.wgsl"),
+    ),
+    (
+        "shared/screen_v.wgsl",
+        include_str!("../shaders/shared/screen_v.wgsl"),
     ),
     (
         "shared/shadow_lookup.wgsl",

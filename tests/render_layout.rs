@@ -10,6 +10,7 @@ use dbuffer::render::passes::camera::CameraUniforms;
 use dbuffer::render::passes::probe::{FIT_GRID, PIXEL_FLOATS, PROBE_FIT, PROBE_PIXEL};
 use dbuffer::render::passes::sample_maps::{SampleLight, SampleLights, MAX_LIGHTS};
 use dbuffer::render::passes::shadow_map::{LightUniforms, ShadowUniforms};
+use dbuffer::render::passes::stencil_volumes::ScreenUniforms;
 use dbuffer::render::passes::view::{ColorMap, View, ViewUniforms, NO_FALLBACK};
 use dbuffer::render::{SurfaceVertex, VolumeVertex};
 use dbuffer::shader_source;
@@ -34,10 +35,15 @@ fn uniforms_match_their_wgsl() {
     }
     // Every method's shader includes the camera pass's half; the map methods the lookup.
     for method in dbuffer::render::Method::all() {
-        let shader = source(&format!(
-            "methods/{}.wgsl",
-            method.name().split('-').next().unwrap_or("")
-        ));
+        // `methods/NAME.wgsl` with `-` as `_`, or the family's (`dbuffer-center` → `dbuffer`).
+        let name = method.name();
+        let shader = shader_source::load(&format!("methods/{}.wgsl", name.replace('-', "_")))
+            .unwrap_or_else(|_| {
+                source(&format!(
+                    "methods/{}.wgsl",
+                    name.split('-').next().unwrap_or("")
+                ))
+            });
         assert_wgsl_layout!(
             CameraUniforms,
             &shader,
@@ -89,6 +95,14 @@ fn uniforms_match_their_wgsl() {
             _pad2
         );
     }
+    assert_wgsl_layout!(
+        ScreenUniforms,
+        &source("passes/stencil_volumes.wgsl"),
+        "ScreenUniforms",
+        infinite_view_proj,
+        eye,
+        size
+    );
     for shader in [source("passes/view.wgsl"), source("passes/probe.wgsl")] {
         assert_wgsl_layout!(
             ViewUniforms,

@@ -9,6 +9,7 @@
 pub mod adjacency;
 pub mod bvh;
 pub mod classify;
+pub mod hard_volume;
 pub mod hull;
 pub mod light_view;
 pub mod line_light;

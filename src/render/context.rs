@@ -41,9 +41,11 @@ pub fn wanted_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     }
 }
 
-/// The features the render core uses when the adapter has them.
+/// The features the render core uses when the adapter has them: timestamps (pass timings) and
+/// a float depth-stencil format (the stencil shadow methods' precision; they fall back on
+/// `Depth24PlusStencil8` without it).
 pub fn wanted_features(adapter: wgpu::Features) -> wgpu::Features {
-    adapter & wgpu::Features::TIMESTAMP_QUERY
+    adapter & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::DEPTH32FLOAT_STENCIL8)
 }
 
 impl GpuContext {

@@ -7,7 +7,7 @@ use glam::{Mat4, Vec3};
 
 use super::gpu_scene::GpuScene;
 use super::methods::{Channel, FrameInputs, Knobs, LightMaps, Method, MethodState, SharedMaps};
-use super::passes::camera::{self, Camera, CameraTargets, CameraUniforms};
+use super::passes::camera::{Camera, CameraTargets, CameraUniforms};
 use super::passes::probe::Probe;
 use super::passes::view::{ViewInputs, ViewParams, ViewTarget};
 use super::readback::{f32s, Readback, TextureRead};
@@ -135,7 +135,7 @@ pub fn record_frame(
     let Some(bindings) = method.camera(&ctx.device, request.vt) else {
         return Err(RenderError::Gpu("the method has no camera pipeline".into()));
     };
-    let view_proj = camera::view_projection(scene, surfaces.bounds, request.width, request.height);
+    let view_proj = inputs.view.view_proj;
     let uniforms = CameraUniforms::new(scene, view_proj);
     let FrameTargets {
         camera: camera_targets,

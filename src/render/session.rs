@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use super::frame::{read_frame, record_frame, Frame, FrameParts, FrameRequest, FrameTargets};
 use super::gpu_scene::GpuScene;
 use super::methods::{External, FrameInputs, LightMaps, Method, MethodState, SharedMaps};
-use super::passes::camera::Camera;
+use super::passes::camera::{Camera, ScreenView};
 use super::passes::probe::ProbeRequest;
 use super::passes::shadow_map::ShadowMap;
 use super::passes::view::ViewParams;
@@ -180,6 +180,16 @@ impl Session {
         self.methods
             .get(&method)
             .map_or((0, 0.0), |m| m.geometry_builds())
+    }
+
+    /// The shadow volumes' fill (mean volume fragments per pixel) of `method`'s last frame, for
+    /// a method that counts volumes over the screen (an untimed pass of its own, one wait).
+    pub fn stencil_fill(
+        &self,
+        ctx: &GpuContext,
+        method: Method,
+    ) -> Option<Result<f64, RenderError>> {
+        self.methods.get(&method)?.stencil_fill(ctx)
     }
 
     /// `method`'s light-space maps as they stand.
@@ -396,6 +406,12 @@ impl Session {
             vt: request.vt,
             knobs: &request.knobs,
             external,
+            view: ScreenView::new(
+                &self.scene,
+                self.surfaces.bounds,
+                request.width,
+                request.height,
+            ),
         };
         // The error view compares with the reference of exactly this view.
         let view_reference = reference
@@ -513,6 +529,12 @@ impl Session {
             vt: request.vt,
             knobs: &request.knobs,
             external: None,
+            view: ScreenView::new(
+                &self.scene,
+                self.surfaces.bounds,
+                request.width,
+                request.height,
+            ),
         };
         let mut encoder = ctx
             .device

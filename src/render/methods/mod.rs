@@ -16,6 +16,7 @@ pub mod pcf;
 pub mod pcss;
 pub mod reference;
 pub mod sampled;
+pub mod shadow_volume;
 
 use std::cell::OnceCell;
 use std::fmt;
@@ -25,6 +26,7 @@ use std::sync::{Arc, OnceLock};
 use glam::Mat4;
 
 use super::gpu_scene::GpuScene;
+use super::passes::camera::ScreenView;
 use super::passes::shadow_map::ShadowMap;
 use super::timer::Recorder;
 use super::{GpuContext, RenderError};
@@ -41,6 +43,7 @@ pub const ALL: &[Method] = &[
     Method(&pcss::PCSS),
     Method(&sampled::SAMPLED),
     Method(&linear_ssm::LINEAR_SSM),
+    Method(&shadow_volume::SHADOW_VOLUME),
     Method(&reference::REFERENCE),
 ];
 
@@ -307,6 +310,9 @@ pub struct FrameInputs<'a> {
     pub knobs: &'a Knobs,
     /// V per pixel handed in from outside (the ray-cast reference), if any.
     pub external: Option<External<'a>>,
+    /// The camera of this frame and its image size (screen-space methods draw before the camera
+    /// pass; a light-space method ignores it).
+    pub view: ScreenView,
 }
 
 impl FrameInputs<'_> {
@@ -480,6 +486,13 @@ pub trait MethodState: Send {
 
     /// Forget the light-space products: the next frame remakes them (to time them).
     fn invalidate(&mut self) {}
+
+    /// For a method that counts shadow volumes over the screen: the mean number of volume
+    /// fragments per pixel of its last frame (the fill it pays), measured with a pass of its
+    /// own; `None` for every other method.
+    fn stencil_fill(&self, _ctx: &GpuContext) -> Option<Result<f64, RenderError>> {
+        None
+    }
 }
 
 #[cfg(test)]

@@ -67,6 +67,49 @@ pub fn view_projection(scene: &Scene, bounds: (Vec3, Vec3), width: u32, height: 
     scene.camera.projection(aspect, far, near) * scene.camera.view()
 }
 
+/// The camera a frame is drawn from, as the methods see it while they record: screen-space
+/// methods (stencil volumes, planar shadows) draw their own passes over the camera's pixels
+/// before the camera pass, so they need its transform and its image size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScreenView {
+    /// The camera pass's world → clip transform (reversed depth, finite far plane).
+    pub view_proj: Mat4,
+    /// The same camera with its far plane at infinity, reversed depth `ε + (1 − ε)·near/D` at view
+    /// distance D (so `1` at the near plane and [`INFINITE_EPSILON`] at infinity): its x, y and w
+    /// rows equal `view_proj`'s, so both cover the same pixels. Shadow volumes extruded to
+    /// infinity (w = 0) are drawn with it and never clipped (Everitt and Kilgard's infinite
+    /// projection, §1.3 of the design for issue 13, with the depth reversed for float precision).
+    pub infinite_view_proj: Mat4,
+    pub eye: Vec3,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Depth of a point at infinity under [`ScreenView::infinite_view_proj`]: strictly inside the
+/// clip volume and behind every finite surface (16 steps of 24-bit depth).
+pub const INFINITE_EPSILON: f32 = 1.0 / (1 << 20) as f32;
+
+impl ScreenView {
+    /// The view of a `width`×`height` image of `scene` (whose surfaces span `bounds`).
+    pub fn new(scene: &Scene, bounds: (Vec3, Vec3), width: u32, height: u32) -> ScreenView {
+        let aspect = width as f32 / height.max(1) as f32;
+        let (near, _) = camera_range(scene.camera.eye, bounds);
+        // clip.z = ε·clip.w + (1 − ε)·near·w: depth ε + (1 − ε)·near/D for a point, ε for a
+        // direction (w = 0).
+        let mut infinite =
+            Mat4::perspective_infinite_rh(scene.camera.fov_y_deg.to_radians(), aspect, near);
+        infinite.z_axis.z = -INFINITE_EPSILON;
+        infinite.w_axis.z = (1.0 - INFINITE_EPSILON) * near;
+        ScreenView {
+            view_proj: view_projection(scene, bounds, width, height),
+            infinite_view_proj: infinite * scene.camera.view(),
+            eye: scene.camera.eye,
+            width,
+            height,
+        }
+    }
+}
+
 impl CameraUniforms {
     pub fn new(scene: &Scene, view_proj: Mat4) -> CameraUniforms {
         let light = scene.light;

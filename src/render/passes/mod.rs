@@ -11,6 +11,7 @@ pub mod probe;
 pub mod sample_maps;
 pub mod shadow_map;
 pub mod ssm;
+pub mod stencil_volumes;
 pub mod view;
 pub mod view_twin;
 
