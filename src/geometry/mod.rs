@@ -23,6 +23,7 @@ pub mod twin;
 pub mod view;
 pub mod visibility;
 pub mod volumes;
+pub mod wedges;
 
 pub use adjacency::{CasterMesh, MeshReport};
 pub use classify::FaceClass;
