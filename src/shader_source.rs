@@ -169,6 +169,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/linear_ssm.wgsl"),
     ),
     (
+        "methods/wedges.wgsl",
+        include_str!("../shaders/methods/wedges.wgsl"),
+    ),
+    (
         "methods/reference.wgsl",
         include_str!("../shaders/methods/reference.wgsl"),
     ),
@@ -211,6 +215,14 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "passes/stencil_volumes.wgsl",
         include_str!("../shaders/passes/stencil_volumes.wgsl"),
+    ),
+    (
+        "passes/wedges.wgsl",
+        include_str!("../shaders/passes/wedges.wgsl"),
+    ),
+    (
+        "passes/wedges_resolve.wgsl",
+        include_str!("../shaders/passes/wedges_resolve.wgsl"),
     ),
     (
         "passes/view.wgsl",

@@ -78,6 +78,7 @@ fn uniforms_match_their_wgsl() {
     for shader in [
         source("methods/sampled.wgsl"),
         source("passes/sample_maps.wgsl"),
+        source("methods/linear_ssm.wgsl"),
     ] {
         assert_wgsl_layout!(SampleLight, &shader, "SampleLight", view_proj, point, _pad);
         assert_wgsl_layout!(
@@ -95,14 +96,57 @@ fn uniforms_match_their_wgsl() {
             _pad2
         );
     }
+    for shader in ["passes/stencil_volumes.wgsl", "passes/wedges.wgsl"] {
+        assert_wgsl_layout!(
+            ScreenUniforms,
+            &source(shader),
+            "ScreenUniforms",
+            infinite_view_proj,
+            eye,
+            size
+        );
+    }
+    use dbuffer::render::passes::ssm::{SkinVertex, SsmSample};
+    use dbuffer::render::passes::wedges::WedgeDisk;
     assert_wgsl_layout!(
-        ScreenUniforms,
-        &source("passes/stencil_volumes.wgsl"),
-        "ScreenUniforms",
-        infinite_view_proj,
-        eye,
-        size
+        WedgeDisk,
+        &source("passes/wedges.wgsl"),
+        "WedgeDisk",
+        center,
+        normal,
+        u,
+        w
     );
+    for shader in ["passes/ssm_skins.wgsl", "passes/ssm_visibility.wgsl"] {
+        assert_wgsl_layout!(
+            SsmSample,
+            &source(shader),
+            "SsmSample",
+            view_proj,
+            inv_view_proj,
+            point,
+            layer,
+            size,
+            capacity,
+            far,
+            tau,
+            weight,
+            skin_bias,
+            pitch,
+            _pad1
+        );
+        assert_wgsl_layout!(
+            SkinVertex,
+            &source(shader),
+            "SkinVertex",
+            position,
+            value,
+            cell,
+            corner,
+            _pad0,
+            _pad1
+        );
+    }
     for shader in [source("passes/view.wgsl"), source("passes/probe.wgsl")] {
         assert_wgsl_layout!(
             ViewUniforms,
@@ -126,6 +170,23 @@ fn uniforms_match_their_wgsl() {
 
 #[test]
 fn codes_match_their_wgsl() {
+    // The CPU twins' thresholds, as the GPU halves spell them.
+    wgsl_layout::assert_consts(
+        &source("passes/ssm_skins.wgsl"),
+        "shared/ssm_sample.wgsl",
+        &[(
+            "SSM_NO_SURFACE_AT",
+            f64::from(dbuffer::geometry::ssm::NO_SURFACE_AT),
+        )],
+    );
+    wgsl_layout::assert_consts(
+        &source("passes/wedges.wgsl"),
+        "passes/wedges.wgsl",
+        &[(
+            "SLAB_EPS",
+            dbuffer::geometry::wedges::SLAB_EPS as f32 as f64,
+        )],
+    );
     let camera = source("methods/hard.wgsl");
     // VT_VARIANT is a pipeline constant (render::passes::camera::CameraPass::method_pipeline
     // sets it to VtVariant::code()); the branches of v_of_t compare it with these.

@@ -12,6 +12,9 @@
 //! V(x) = clamp(1 − H(x) − Σ_edges c_i(x), 0, 1),   H = 1 where the centre's count is not 0
 //! ```
 //!
+//! (and `H = 1` on a side of a caster turned away from the centre, which the centre cannot see:
+//! [`WedgeTwin::surface_visibility`]).
+//!
 //! **The coverage.** Project the edge from `x` onto the light's plane (after clipping it to the
 //! slab between the light's plane and `x`'s parallel plane: parts beyond `x` cannot occlude,
 //! parts behind the one-sided light cannot either) and express it in disk units. With `p0`, `p1`
@@ -53,7 +56,8 @@ pub const SLAB_EPS: f64 = 1e-4;
 pub fn edge_coverage_2d(a: DVec2, b: DVec2) -> f64 {
     let d = b - a;
     let len = d.length();
-    if !(len > 0.0) {
+    // Also false for NaN: a degenerate or broken segment covers nothing.
+    if len.is_nan() || len <= 0.0 {
         return 0.0;
     }
     let dh = d / len;
@@ -110,7 +114,7 @@ impl DiskFrame {
         let (x, e0, e1) = (x.as_dvec3(), e0.as_dvec3(), e1.as_dvec3());
         let c = self.center;
         let tx = self.normal.dot(x - c);
-        if !(tx > 0.0) || !(self.radius > 0.0) {
+        if tx.is_nan() || tx <= 0.0 || self.radius.is_nan() || self.radius <= 0.0 {
             return 0.0;
         }
         let (t0, t1) = (self.normal.dot(e0 - c), self.normal.dot(e1 - c));
@@ -213,10 +217,24 @@ pub fn wedge_reach(scene: &crate::scene::Scene) -> f32 {
     }
 }
 
-/// The whole method on the CPU: the hard volumes from the centre and their silhouette edges.
+/// The edges whose wedges a scene's casters get: the sides of the casters' hard volumes from
+/// the centre closed by their lit faces (Crow's one-sided volumes: each silhouette once, so the
+/// loops wind once around what they hide). For a closed mesh these are the sides of any closing;
+/// for an open one the two-sided count (`H`) counts both faces at a silhouette, but its wedges
+/// must be summed once.
+pub fn wedge_edges(casters: &PreparedCasters, center: Vec3) -> Vec<[Vec3; 2]> {
+    scene_volumes(casters, center, OpenMeshes::OneSided)
+        .into_iter()
+        .flat_map(|(_, _, v)| v.sides)
+        .collect()
+}
+
+/// The whole method on the CPU: the hard volumes from the centre (for `H`, closed as the
+/// method's `open` says) and the wedges' edges.
 pub struct WedgeTwin {
     pub frame: DiskFrame,
     pub volumes: Vec<HardVolume>,
+    pub edges: Vec<[Vec3; 2]>,
 }
 
 impl WedgeTwin {
@@ -227,19 +245,24 @@ impl WedgeTwin {
                 .into_iter()
                 .map(|(_, _, v)| v)
                 .collect(),
+            edges: wedge_edges(casters, light.center),
         }
     }
 
-    /// `H(x)`: whether the centre's hard volumes hold `x` (the stencil count is not 0).
+    /// `H(x)`: whether the centre's hard volumes hold `x` (the stencil count is not 0). For a
+    /// point on a caster, its own face's volume starts at the point itself: it is counted from
+    /// a hair (1e-4 of the way) toward the centre, as the GPU's volumes are pushed that much
+    /// away from it.
     pub fn hard(&self, x: Vec3) -> bool {
+        let c = self.frame.center.as_vec3();
+        let x = x + (c - x) * 1e-4;
         self.volumes.iter().map(|v| v.count(x)).sum::<i32>() != 0
     }
 
-    /// `Σ c_i(x)` over every silhouette edge.
+    /// `Σ c_i(x)` over every wedge's edge.
     pub fn coverage_sum(&self, x: Vec3) -> f64 {
-        self.volumes
+        self.edges
             .iter()
-            .flat_map(|v| v.sides.iter())
             .map(|&[e0, e1]| self.frame.edge_coverage(x, e0, e1))
             .sum()
     }
@@ -248,6 +271,18 @@ impl WedgeTwin {
     pub fn visibility(&self, x: Vec3) -> f64 {
         let h = if self.hard(x) { 1.0 } else { 0.0 };
         (1.0 - h - self.coverage_sum(x)).clamp(0.0, 1.0)
+    }
+
+    /// V at a surface point `x` with normal `n` (toward the viewer): on a side turned away from
+    /// the centre, the centre is hidden by that surface itself (`H = 1`, as Crow's volume from
+    /// the centre has it), so `V = clamp(−Σc)`; elsewhere [`WedgeTwin::visibility`].
+    pub fn surface_visibility(&self, x: Vec3, n: Vec3) -> f64 {
+        let c = self.frame.center;
+        if n.as_dvec3().dot(c - x.as_dvec3()) <= 0.0 {
+            (-self.coverage_sum(x)).clamp(0.0, 1.0)
+        } else {
+            self.visibility(x)
+        }
     }
 }
 

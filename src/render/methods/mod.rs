@@ -17,6 +17,7 @@ pub mod pcss;
 pub mod reference;
 pub mod sampled;
 pub mod shadow_volume;
+pub mod wedges;
 
 use std::cell::OnceCell;
 use std::fmt;
@@ -44,6 +45,7 @@ pub const ALL: &[Method] = &[
     Method(&sampled::SAMPLED),
     Method(&linear_ssm::LINEAR_SSM),
     Method(&shadow_volume::SHADOW_VOLUME),
+    Method(&wedges::WEDGES),
     Method(&reference::REFERENCE),
 ];
 

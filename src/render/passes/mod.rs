@@ -14,6 +14,7 @@ pub mod ssm;
 pub mod stencil_volumes;
 pub mod view;
 pub mod view_twin;
+pub mod wedges;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
