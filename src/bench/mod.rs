@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::{PreparedCasters, VolumeParams, VtVariant};
 use crate::render::methods::reference::{MAX_SAMPLES, SAMPLES};
-use crate::render::methods::{pcss, sampled};
+use crate::render::methods::{linear_ssm, pcss, sampled};
 use crate::render::passes::floor::Floor;
 use crate::render::passes::view::{Mapping, View, ViewParams};
 use crate::render::readback::map_now;
@@ -82,6 +82,10 @@ impl Case {
             "sampled" => (
                 "sampled 16".to_string(),
                 defaults.with(&sampled::LIGHTS, 16),
+            ),
+            "linear-ssm" => (
+                "linear-ssm 2".to_string(),
+                defaults.with(&linear_ssm::SAMPLES, 2),
             ),
             // Each timed frame takes one more sample per pixel, of a budget that never ends.
             "reference" => (
@@ -449,8 +453,13 @@ impl Report {
 
     /// `method`'s frame over the D-buffer's, the same scene and size, measured alike.
     pub fn ratio_to_dbuffer(&self, scene: &str, size: u32, method: Method) -> Option<f64> {
+        self.ratio_to(scene, size, method, Method::DBUFFER)
+    }
+
+    /// `method`'s frame over `base`'s, the same scene and size, measured alike.
+    pub fn ratio_to(&self, scene: &str, size: u32, method: Method, base: Method) -> Option<f64> {
         let m = self.timing(scene, size, method)?;
-        let d = self.timing(scene, size, Method::DBUFFER)?;
+        let d = self.timing(scene, size, base)?;
         let base = d.frame_by(m.frame_source)?.median;
         (base > 0.0).then(|| m.frame_ms.median / base)
     }
@@ -502,7 +511,12 @@ pub fn run(ctx: &GpuContext, config: &Config, progress: Progress) -> Result<Repo
         let mut sessions: Vec<Session> = config
             .cases
             .iter()
-            .map(|_| Session::new(ctx, scene.clone()))
+            .map(|case| Session::new(ctx, scene_for(case.method, scene)))
+            .collect();
+        // Cases timed under the other kind of light (see `scene_for`) say so in their label.
+        let converted: Vec<bool> = sessions
+            .iter()
+            .map(|s| s.scene().light.kind() != scene.light.kind())
             .collect();
         for &size in &config.sizes {
             progress(&format!(
@@ -524,7 +538,7 @@ pub fn run(ctx: &GpuContext, config: &Config, progress: Progress) -> Result<Repo
                 config.cases.len(),
                 config.warmup + config.frames,
             ));
-            runs.extend(time_size(ctx, &mut sessions, config, size));
+            runs.extend(time_size(ctx, &mut sessions, &converted, config, size));
             done += 1;
         }
     }
@@ -707,7 +721,27 @@ impl Samples {
 /// Every timed frame makes its light-space maps again (`Session::invalidate_light_maps`): Table 1
 /// times the whole frame, light pass and camera pass. `sessions[i]` renders `config.cases[i]`; a
 /// method that fails is dropped from the rounds and its row says why.
-fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: u32) -> Vec<Run> {
+/// The scene `method` is timed on: `scene` itself, or, for a method that refuses its light, the
+/// same scene under the light converted to the kind the method takes (`Light::converted`: a
+/// disk's diameter as a segment, a segment's length as a disk), so every method of the registry
+/// has a frame on the same casters at the same size to compare with the D-buffer's.
+pub fn scene_for(method: Method, scene: &Scene) -> Scene {
+    match method.needs() {
+        Some(kind) if kind != scene.light.kind() => Scene {
+            light: scene.light.converted(kind),
+            ..scene.clone()
+        },
+        _ => scene.clone(),
+    }
+}
+
+fn time_size(
+    ctx: &GpuContext,
+    sessions: &mut [Session],
+    converted: &[bool],
+    config: &Config,
+    size: u32,
+) -> Vec<Run> {
     let requests: Vec<FrameRequest> = config
         .cases
         .iter()
@@ -753,12 +787,16 @@ fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: 
     config
         .cases
         .iter()
-        .zip(sessions.iter())
+        .zip(sessions.iter().zip(converted))
         .zip(samples.into_iter().zip(errors))
-        .map(|((case, session), (samples, error))| Run {
+        .map(|((case, (session, &converted)), (samples, error))| Run {
             scene: session.scene().name.clone(),
             size,
-            label: case.label.clone(),
+            label: if converted {
+                format!("{} ({} light)", case.label, session.scene().light.kind())
+            } else {
+                case.label.clone()
+            },
             method: case.method.name().to_string(),
             timing: error.is_none().then(|| samples.timing(case)),
             error,

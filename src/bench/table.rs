@@ -73,6 +73,7 @@ pub fn markdown(r: &Report) -> String {
     table1(&mut out, r);
     display(&mut out, r);
     competition(&mut out, r);
+    against_dbuffer_and_hard(&mut out, r);
     coherence(&mut out, r);
     scaling(&mut out, r);
     targets(&mut out, r);
@@ -279,6 +280,69 @@ fn competition(out: &mut String, r: &Report) {
         );
     }
     let _ = writeln!(out);
+}
+
+/// Every method's frame at the largest size as a ratio to the D-buffer's and to the hard shadow
+/// map's (the yardsticks issues 13 and 14 name), median over the scenes.
+fn against_dbuffer_and_hard(out: &mut String, r: &Report) {
+    let Some(&size) = r.sizes().last() else {
+        return;
+    };
+    let _ = writeln!(
+        out,
+        "### Every method at {size}²: frame as a ratio to the D-buffer and to the hard shadow \
+         map\n\n| method | frame ms | × dbuffer | × hard |\n|---|---:|---:|---:|"
+    );
+    for (label, method) in r.labels() {
+        let Ok(method) = method.parse::<Method>() else {
+            continue;
+        };
+        let cells: Vec<(f64, Option<f64>, Option<f64>)> = r
+            .scenes
+            .iter()
+            .filter_map(|s| {
+                let run = r
+                    .runs
+                    .iter()
+                    .find(|x| x.scene == s.name && x.size == size && x.label == label)?;
+                Some((
+                    run.timing.as_ref()?.frame_ms.median,
+                    r.ratio_to(&s.name, size, method, Method::DBUFFER),
+                    r.ratio_to(&s.name, size, method, Method::HARD),
+                ))
+            })
+            .collect();
+        if cells.is_empty() {
+            let err = r
+                .runs
+                .iter()
+                .find(|x| x.size == size && x.label == label)
+                .and_then(|x| x.error.clone());
+            let _ = writeln!(out, "| {label} | {} | | |", na(&err));
+            continue;
+        }
+        let ratio = |pick: fn(&(f64, Option<f64>, Option<f64>)) -> Option<f64>| {
+            let v: Vec<f64> = cells.iter().filter_map(pick).collect();
+            if v.is_empty() {
+                "–".to_string()
+            } else {
+                format!("{:.2}×", median(v))
+            }
+        };
+        let _ = writeln!(
+            out,
+            "| {label} | {} | {} | {} |",
+            ms(median(cells.iter().map(|c| c.0).collect())),
+            ratio(|c| c.1),
+            ratio(|c| c.2)
+        );
+    }
+    let _ = writeln!(
+        out,
+        "\nA method that cannot take a scene's light (`linear-ssm` needs a line) is timed on the same \
+         scene with the light converted, its label saying which (a disk's diameter as a segment: the \
+         same casters, the same extent); ratios are per scene, then the median over the scenes.\n"
+    );
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
