@@ -94,9 +94,19 @@ fn starts_on_the_default_scene_with_soft_shadows() {
 
 #[test]
 fn every_method_and_variant_switches_and_shows_at_once() {
+    use egui_kittest::kittest::NodeT;
     let mut h = lab(None);
     h.run();
+    let light = h.state().scene().expect("scene").light.kind();
     for &m in Method::all() {
+        if m.refuses(light).is_some() {
+            // Greyed for this scene's light (linear-ssm under the default disk).
+            assert!(
+                h.get_by_label(m.name()).accesskit_node().is_disabled(),
+                "{m}"
+            );
+            continue;
+        }
         click(&mut h, m.name());
         if m.is_reference() {
             until_reference_done(&mut h);
@@ -325,4 +335,67 @@ fn the_window_keeps_making_frames_while_the_reference_converges() {
         .expect("the reference is on the GPU");
     assert!(done > 0 && done < total, "{done}/{total}: still converging");
     assert!(app.window_frames() > 10);
+}
+
+/// A scene with a line light: the disk-only methods are greyed (their reason on hover) and the
+/// lab shows the method made for a line; an end of the segment drags alone.
+#[test]
+fn a_line_light_greys_the_disk_methods_and_its_ends_drag() {
+    use egui_kittest::kittest::NodeT;
+    let mut h = lab(Some("line-fig2"));
+    h.run();
+    let linear: Method = "linear-ssm".parse().unwrap();
+    assert_eq!(
+        h.state().settings.method(),
+        linear,
+        "dbuffer cannot take a line light"
+    );
+    assert_ne!(
+        h.state().status().1,
+        Level::Error,
+        "{}",
+        h.state().status().0
+    );
+    for disk_only in ["dbuffer", "dbuffer-center", "pcss", "wedges"] {
+        assert!(
+            h.get_by_label(disk_only).accesskit_node().is_disabled(),
+            "{disk_only} must be greyed under a line light"
+        );
+    }
+    assert!(!h.get_by_label("linear-ssm").accesskit_node().is_disabled());
+    // A soft shadow: some pixels strictly between lit and umbra.
+    let f = shown_frame(&mut h, false);
+    let soft = (0..f.visibility.len())
+        .filter(|&i| f.hit(i) && f.visibility[i] > 0.1 && f.visibility[i] < 0.9)
+        .count();
+    assert!(soft > 100, "{soft} penumbra pixels");
+
+    click(&mut h, "light");
+    h.key_press(egui::Key::F);
+    h.run();
+    let line = *h
+        .state()
+        .scene()
+        .expect("scene")
+        .light
+        .as_line()
+        .expect("a line light");
+    let b = h.state().screen_pos(line.b).expect("end b in view");
+    h.drag_at(b);
+    h.step();
+    for k in 1..=4 {
+        h.hover_at(b + egui::vec2(0.0, 15.0 * k as f32));
+        h.step();
+    }
+    h.drop_at(b + egui::vec2(0.0, 60.0));
+    h.run();
+    assert_eq!(h.state().selection, Selection::LightEnd(1));
+    let moved = *h.state().scene().expect("scene").light.as_line().unwrap();
+    assert!(
+        (moved.b - line.b).length() > 0.1,
+        "b {} → {}",
+        line.b,
+        moved.b
+    );
+    assert_eq!(moved.a, line.a, "a stays");
 }

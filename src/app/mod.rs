@@ -163,8 +163,12 @@ impl LabApp {
             overlay_notes: Vec::new(),
             deterministic: options.deterministic,
         };
+        let switched = app.suit_methods_to_the_light();
         if app.status.0.is_empty() {
             app.status = (app.opened_message(), Level::Info);
+            if let Some(s) = switched {
+                app.status.0 = format!("{}: {s}", app.status.0);
+            }
         }
         app
     }
