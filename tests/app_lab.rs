@@ -214,6 +214,27 @@ fn snapshots() {
     h.snapshot("app-dbuffer-pv");
 }
 
+/// The new methods' overlays: the wedges (in the penumbra volume's outline, beside the hard
+/// volume's sides) and a line light with its two ends and linear-ssm's samples.
+#[test]
+fn overlay_snapshots_of_wedges_and_a_line_light() {
+    let mut h = lab(Some("table1-224"));
+    h.run();
+    click(&mut h, "wedges");
+    click(&mut h, "Umbra volume");
+    click(&mut h, "Penumbra volume");
+    h.snapshot("app-wedges-overlay");
+    h.state_mut().open_scene("line-fig9");
+    h.run();
+    click(&mut h, "light");
+    click(&mut h, "Umbra volume");
+    click(&mut h, "Penumbra volume");
+    // Frame the casters and the light: the segment and its handles in view.
+    h.key_press(egui::Key::F);
+    h.run();
+    h.snapshot("app-line-light");
+}
+
 #[test]
 fn dragging_the_light_moves_the_shadow() {
     let mut h = lab(None);
