@@ -297,22 +297,23 @@ fn against_dbuffer_and_hard(out: &mut String, r: &Report) {
         let Ok(method) = method.parse::<Method>() else {
             continue;
         };
-        let cells: Vec<(f64, Option<f64>, Option<f64>)> = r
-            .scenes
-            .iter()
-            .filter_map(|s| {
-                let run = r
-                    .runs
-                    .iter()
-                    .find(|x| x.scene == s.name && x.size == size && x.label == label)?;
-                Some((
-                    run.timing.as_ref()?.frame_ms.median,
-                    r.ratio_to(&s.name, size, method, Method::DBUFFER),
-                    r.ratio_to(&s.name, size, method, Method::HARD),
-                ))
-            })
-            .collect();
-        if cells.is_empty() {
+        // Per scene: the frame, and its ratios to the D-buffer and to the hard shadow map.
+        let mut frames = Vec::new();
+        let (mut to_dbuffer, mut to_hard) = (Vec::new(), Vec::new());
+        for s in &r.scenes {
+            let Some(t) = r
+                .runs
+                .iter()
+                .find(|x| x.scene == s.name && x.size == size && x.label == label)
+                .and_then(|run| run.timing.as_ref())
+            else {
+                continue;
+            };
+            frames.push(t.frame_ms.median);
+            to_dbuffer.extend(r.ratio_to(&s.name, size, method, Method::DBUFFER));
+            to_hard.extend(r.ratio_to(&s.name, size, method, Method::HARD));
+        }
+        if frames.is_empty() {
             let err = r
                 .runs
                 .iter()
@@ -321,8 +322,7 @@ fn against_dbuffer_and_hard(out: &mut String, r: &Report) {
             let _ = writeln!(out, "| {label} | {} | | |", na(&err));
             continue;
         }
-        let ratio = |pick: fn(&(f64, Option<f64>, Option<f64>)) -> Option<f64>| {
-            let v: Vec<f64> = cells.iter().filter_map(pick).collect();
+        let ratio = |v: Vec<f64>| {
             if v.is_empty() {
                 "–".to_string()
             } else {
@@ -332,9 +332,9 @@ fn against_dbuffer_and_hard(out: &mut String, r: &Report) {
         let _ = writeln!(
             out,
             "| {label} | {} | {} | {} |",
-            ms(median(cells.iter().map(|c| c.0).collect())),
-            ratio(|c| c.1),
-            ratio(|c| c.2)
+            ms(median(frames)),
+            ratio(to_dbuffer),
+            ratio(to_hard)
         );
     }
     let _ = writeln!(
