@@ -44,7 +44,11 @@ fn compare_writes_the_report_and_prints_the_table() {
         );
         // A method that needs the other kind of light is listed, not drawn.
         let drawn = method.needs() != Some(dbuffer::scene::LightKind::Line);
-        assert_eq!(dir.join(format!("{method}.png")).is_file(), drawn, "{method}");
+        assert_eq!(
+            dir.join(format!("{method}.png")).is_file(),
+            drawn,
+            "{method}"
+        );
         assert_eq!(
             dir.join(format!("{method}-visibility.exr")).is_file(),
             drawn,
@@ -242,7 +246,9 @@ fn a_disk_method_refuses_a_line_light_in_one_line() {
     ] {
         let dir = temp_dir(&format!("refused-{method}"));
         let out = dbuffer()
-            .args(["render", scene, "--size", "40x32", "--method", method, "--out"])
+            .args([
+                "render", scene, "--size", "40x32", "--method", method, "--out",
+            ])
             .arg(&dir)
             .output()
             .expect("the binary runs");
