@@ -30,10 +30,10 @@ enum Command {
         /// Image size, WxH (at most 64 Mpixels, sides up to 16384).
         #[arg(long, default_value = "512x512")]
         size: String,
-        /// dbuffer, dbuffer-center, hard, pcf, pcss, sampled, shadow-volume, planar, hybrid,
-        /// extended-light-map, reference or reference-hard.
-        #[arg(long, default_value = "dbuffer")]
-        method: String,
+        /// The shadow method, as in the README's list (an unknown name prints them; default:
+        /// dbuffer for a disk light, linear-ssm for a line light).
+        #[arg(long)]
+        method: Option<String>,
         /// V(t): smoothstep, sqrt, exact or linear.
         #[arg(long, default_value = "smoothstep")]
         vt: String,
@@ -87,9 +87,10 @@ enum Command {
         /// Image size, WxH.
         #[arg(long, default_value = "480x360")]
         size: String,
-        /// The shadow method (as for render).
-        #[arg(long, default_value = "dbuffer")]
-        method: String,
+        /// The shadow method (as for render; default: dbuffer for a disk light, linear-ssm for
+        /// a line light).
+        #[arg(long)]
+        method: Option<String>,
         /// V(t): smoothstep, sqrt, exact or linear.
         #[arg(long, default_value = "smoothstep")]
         vt: String,
@@ -183,7 +184,7 @@ fn main() -> ExitCode {
             scene: &scene,
             out: &out,
             size: &size,
-            method: &method,
+            method: method.as_deref(),
             vt: &vt,
             dbuffer_size,
             knobs: &knobs,
@@ -222,7 +223,7 @@ fn main() -> ExitCode {
             orbit: &orbit,
             fps,
             size: &size,
-            method: &method,
+            method: method.as_deref(),
             vt: &vt,
             dbuffer_size,
             knobs: &knobs,

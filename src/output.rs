@@ -24,6 +24,9 @@
 //! ([`BandedRows`]), so an 8192² image with an 8192² D-buffer is written without a second copy
 //! of either.
 //!
+//! Under a line light (which the D-buffer refuses), `dbuffer.exr` holds the hard shadow map from
+//! the segment's midpoint as its `|cx_o|` and 0 (no crossing) in the volume channels.
+//!
 //! **Never a half-written folder.** The files are first written (and flushed to disk) into a fresh
 //! hidden folder inside the output folder (`.dbuffer-render-PID-N`, [`TEMP_PREFIX`]). Only when
 //! all seven are there does each previous file of the same name get a hard link (or a copy) in
@@ -146,8 +149,17 @@ impl RenderOutputs {
             })
             .collect();
         let maps = frame.maps.as_ref();
-        let raw =
-            |slot: usize, component: usize| maps.map_or_else(Vec::new, |m| m.raw(slot, component));
+        // A map with one channel (a line light's: the midpoint's shadow map) has no volume
+        // channels: they read "no crossing" (0).
+        let raw = |slot: usize, component: usize| {
+            maps.map_or_else(Vec::new, |m| {
+                if slot > 0 && m.channels.len() < 4 {
+                    vec![0.0; m.size as usize * m.size as usize]
+                } else {
+                    m.raw(slot, component)
+                }
+            })
+        };
         RenderOutputs {
             width: frame.width,
             height: frame.height,

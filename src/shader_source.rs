@@ -177,6 +177,14 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/planar.wgsl"),
     ),
     (
+        "methods/linear_ssm.wgsl",
+        include_str!("../shaders/methods/linear_ssm.wgsl"),
+    ),
+    (
+        "methods/wedges.wgsl",
+        include_str!("../shaders/methods/wedges.wgsl"),
+    ),
+    (
         "methods/reference.wgsl",
         include_str!("../shaders/methods/reference.wgsl"),
     ),
@@ -221,8 +229,24 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/passes/shadow_map.wgsl"),
     ),
     (
+        "passes/ssm_skins.wgsl",
+        include_str!("../shaders/passes/ssm_skins.wgsl"),
+    ),
+    (
+        "passes/ssm_visibility.wgsl",
+        include_str!("../shaders/passes/ssm_visibility.wgsl"),
+    ),
+    (
         "passes/stencil_volumes.wgsl",
         include_str!("../shaders/passes/stencil_volumes.wgsl"),
+    ),
+    (
+        "passes/wedges.wgsl",
+        include_str!("../shaders/passes/wedges.wgsl"),
+    ),
+    (
+        "passes/wedges_resolve.wgsl",
+        include_str!("../shaders/passes/wedges_resolve.wgsl"),
     ),
     (
         "passes/view.wgsl",
@@ -251,6 +275,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "shared/shadow_lookup.wgsl",
         include_str!("../shaders/shared/shadow_lookup.wgsl"),
+    ),
+    (
+        "shared/ssm_sample.wgsl",
+        include_str!("../shaders/shared/ssm_sample.wgsl"),
     ),
     (
         "shared/surface.wgsl",

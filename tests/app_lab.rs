@@ -96,9 +96,19 @@ fn starts_on_the_default_scene_with_soft_shadows() {
 
 #[test]
 fn every_method_and_variant_switches_and_shows_at_once() {
+    use egui_kittest::kittest::NodeT;
     let mut h = lab(None);
     h.run();
+    let light = h.state().scene().expect("scene").light.kind();
     for &m in Method::all() {
+        if m.refuses(light).is_some() {
+            // Greyed for this scene's light (linear-ssm under the default disk).
+            assert!(
+                h.get_by_label(m.name()).accesskit_node().is_disabled(),
+                "{m}"
+            );
+            continue;
+        }
         click(&mut h, m.name());
         if m.is_reference() {
             until_reference_done(&mut h);
@@ -267,6 +277,27 @@ fn hard_methods_show_their_overlays_and_maps() {
     h.snapshot("app-elm-light-r");
 }
 
+/// The new methods' overlays: the wedges (in the penumbra volume's outline, beside the hard
+/// volume's sides) and a line light with its two ends and linear-ssm's samples.
+#[test]
+fn overlay_snapshots_of_wedges_and_a_line_light() {
+    let mut h = lab(Some("table1-224"));
+    h.run();
+    click(&mut h, "wedges");
+    click(&mut h, "Umbra volume");
+    click(&mut h, "Penumbra volume");
+    h.snapshot("app-wedges-overlay");
+    h.state_mut().open_scene("line-fig9");
+    h.run();
+    click(&mut h, "light");
+    click(&mut h, "Umbra volume");
+    click(&mut h, "Penumbra volume");
+    // Frame the casters and the light: the segment and its handles in view.
+    h.key_press(egui::Key::F);
+    h.run();
+    h.snapshot("app-line-light");
+}
+
 #[test]
 fn dragging_the_light_moves_the_shadow() {
     let mut h = lab(None);
@@ -276,7 +307,7 @@ fn dragging_the_light_moves_the_shadow() {
     assert_eq!(h.state().selection, Selection::Light);
     h.key_press(egui::Key::F);
     h.run();
-    let start = h.state().scene().expect("scene").light.center;
+    let start = h.state().scene().expect("scene").light.center();
     let at = h
         .state()
         .light_screen_pos()
@@ -301,7 +332,7 @@ fn dragging_the_light_moves_the_shadow() {
     }
     h.drop_at(at + egui::vec2(150.0, 0.0));
     h.run();
-    let moved = h.state().scene().expect("scene").light.center;
+    let moved = h.state().scene().expect("scene").light.center();
     assert!((moved - start).length() > 0.5, "light {start} → {moved}");
     let after = v_at(&mut h, x, y);
     assert!(after > before + 0.5, "V at ({x}, {y}): {before} → {after}");
@@ -312,7 +343,7 @@ fn dragging_the_light_moves_the_shadow() {
     // One drag, one undo step.
     h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
     h.run();
-    assert_eq!(h.state().scene().expect("scene").light.center, start);
+    assert_eq!(h.state().scene().expect("scene").light.center(), start);
     assert!((v_at(&mut h, x, y) - before).abs() < 1e-6);
 }
 
@@ -498,4 +529,67 @@ fn record_orbit_writes_the_frames_and_an_apng_of_the_current_view() {
     assert_ne!(frames[0], frames[1], "the light moved between frames");
     assert_eq!(apng_frames(&dir.join("animation.png")), (3, w, h_px));
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A scene with a line light: the disk-only methods are greyed (their reason on hover) and the
+/// lab shows the method made for a line; an end of the segment drags alone.
+#[test]
+fn a_line_light_greys_the_disk_methods_and_its_ends_drag() {
+    use egui_kittest::kittest::NodeT;
+    let mut h = lab(Some("line-fig2"));
+    h.run();
+    let linear: Method = "linear-ssm".parse().unwrap();
+    assert_eq!(
+        h.state().settings.method(),
+        linear,
+        "dbuffer cannot take a line light"
+    );
+    assert_ne!(
+        h.state().status().1,
+        Level::Error,
+        "{}",
+        h.state().status().0
+    );
+    for disk_only in ["dbuffer", "dbuffer-center", "pcss", "wedges"] {
+        assert!(
+            h.get_by_label(disk_only).accesskit_node().is_disabled(),
+            "{disk_only} must be greyed under a line light"
+        );
+    }
+    assert!(!h.get_by_label("linear-ssm").accesskit_node().is_disabled());
+    // A soft shadow: some pixels strictly between lit and umbra.
+    let f = shown_frame(&mut h, false);
+    let soft = (0..f.visibility.len())
+        .filter(|&i| f.hit(i) && f.visibility[i] > 0.1 && f.visibility[i] < 0.9)
+        .count();
+    assert!(soft > 100, "{soft} penumbra pixels");
+
+    click(&mut h, "light");
+    h.key_press(egui::Key::F);
+    h.run();
+    let line = *h
+        .state()
+        .scene()
+        .expect("scene")
+        .light
+        .as_line()
+        .expect("a line light");
+    let b = h.state().screen_pos(line.b).expect("end b in view");
+    h.drag_at(b);
+    h.step();
+    for k in 1..=4 {
+        h.hover_at(b + egui::vec2(0.0, 15.0 * k as f32));
+        h.step();
+    }
+    h.drop_at(b + egui::vec2(0.0, 60.0));
+    h.run();
+    assert_eq!(h.state().selection, Selection::LightEnd(1));
+    let moved = *h.state().scene().expect("scene").light.as_line().unwrap();
+    assert!(
+        (moved.b - line.b).length() > 0.1,
+        "b {} → {}",
+        line.b,
+        moved.b
+    );
+    assert_eq!(moved.a, line.a, "a stays");
 }

@@ -37,10 +37,16 @@ fn the_report_matches_the_written_files() {
     );
     let dir = std::env::temp_dir().join(format!("dbuffer-compare-test-{}", std::process::id()));
     let written = report::write(&dir, &comparison).unwrap_or_else(|e| panic!("{e}"));
-    // Image, visibility and heatmap per method (none for the reference), a hard-error image per
-    // hard method, the two reports.
-    let hard = Method::all().iter().filter(|m| m.is_hard()).count();
-    assert_eq!(written.len(), 3 * Method::all().len() - 1 + hard + 2);
+    // Three files a method drawn (the reference has no heatmap), a hard-error image per hard
+    // method drawn, and the two reports.
+    let drawn = comparison.results.len();
+    let hard = comparison
+        .results
+        .iter()
+        .filter(|r| r.method.is_hard())
+        .count();
+    assert_eq!(drawn + comparison.not_applicable.len(), Method::all().len());
+    assert_eq!(written.len(), 3 * drawn - 1 + hard + 2);
 
     let text = std::fs::read_to_string(dir.join(report::REPORT_JSON)).unwrap();
     let r: report::Report = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}"));
@@ -50,7 +56,13 @@ fn the_report_matches_the_written_files() {
     let methods: Vec<&str> = r.methods.iter().map(|m| m.method.as_str()).collect();
     assert_eq!(methods[0], "reference");
     for m in Method::all() {
-        assert!(methods.contains(&m.name()), "{m} missing from the report");
+        let skipped = r.not_applicable.iter().any(|n| n.method == m.name());
+        assert!(
+            methods.contains(&m.name()) != skipped,
+            "{m}: in the report once, drawn or not applicable"
+        );
+        // A disk scene: only a method that needs a line light is left out.
+        assert_eq!(skipped, m.refuses(scene.light.kind()).is_some(), "{m}");
     }
     let md = std::fs::read_to_string(dir.join(report::REPORT_MD)).unwrap();
 
@@ -112,4 +124,51 @@ fn the_report_matches_the_written_files() {
     assert_eq!(row("reference").mae, 0.0);
     assert!(row("dbuffer").penumbra_mae < 0.5 * row("hard").penumbra_mae);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Under a line light, the disk-only methods are listed as not applicable with their reason,
+/// never drawn; the others are measured against the line reference.
+#[test]
+fn a_line_light_scene_lists_the_disk_only_methods_as_not_applicable() {
+    let name = "line-fig2";
+    let scene = scene::load(name).unwrap_or_else(|e| panic!("{e}"));
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let request = CompareRequest {
+        width: 48,
+        height: 40,
+        dbuffer_size: 256,
+        vt: VtVariant::Smoothstep,
+        knobs: Knobs::default().with(&SAMPLES, 64),
+    };
+    let comparison = compare::run(&mut offline, name, &scene, &request, |_| {})
+        .unwrap_or_else(|e| panic!("{e}"));
+    let r = report::Report::new(&comparison);
+    for m in Method::all() {
+        let drawn = r.methods.iter().any(|row| row.method == m.name());
+        let na = r.not_applicable.iter().find(|n| n.method == m.name());
+        match m.needs() {
+            Some(dbuffer::scene::LightKind::Disk) => {
+                let n = na.unwrap_or_else(|| panic!("{m} must be not applicable"));
+                assert!(!drawn, "{m} drawn under a line light");
+                assert_eq!(n.needs, "disk");
+                assert!(
+                    n.reason.contains(m.name()) && n.reason.contains("line"),
+                    "{n:?}"
+                );
+            }
+            _ => assert!(drawn && na.is_none(), "{m} must be drawn"),
+        }
+    }
+    let table = r.table();
+    assert!(
+        table.contains("| dbuffer | n/a — needs a disk light |"),
+        "{table}"
+    );
+    // The hard shadow from the midpoint is far from the line reference; sampled much closer.
+    let row = |m: &str| r.methods.iter().find(|row| row.method == m).unwrap();
+    assert!(
+        row("sampled").penumbra_mae < row("hard").penumbra_mae,
+        "{table}"
+    );
+    assert!(row("hard").penumbra_pixels > 50, "{table}");
 }

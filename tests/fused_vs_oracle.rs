@@ -154,7 +154,7 @@ fn scene_of(case: &Case) -> Option<Scene> {
             target: Vec3::new(0.0, 0.5, 0.0),
             fov_y_deg: 50.0,
         },
-        light,
+        light: light.into(),
         objects,
     })
 }
@@ -176,7 +176,10 @@ fn check(case: &Case, totals: &RefCell<Totals>) -> Result<(), TestCaseError> {
         return Ok(());
     };
     let prepared = PreparedCasters::new(&scene);
-    let geometry = prepared.build(&scene.light, &VolumeParams::for_scene(&scene));
+    let geometry = prepared.build(
+        &scene.light.disk_or_centre(),
+        &VolumeParams::for_scene(&scene),
+    );
     let twin = FusedTwin::new(&scene, &prepared, &geometry, FusedParams::default());
     let oracle = Oracle::from_scene(&scene, SAMPLES);
     let same_samples = DiskMask::new(SAMPLES, MaskEval::Exact);
@@ -215,7 +218,7 @@ fn check(case: &Case, totals: &RefCell<Totals>) -> Result<(), TestCaseError> {
         };
         let list = twin.texel_list(texel);
         let missing = twin.edges().iter().enumerate().any(|(k, e)| {
-            edge_chord(e, x, &scene.light).is_some_and(|ch| ch.area > 1e-9)
+            edge_chord(e, x, &scene.light.disk_or_centre()).is_some_and(|ch| ch.area > 1e-9)
                 && !list.edges.contains(&(k as u32))
         });
         t.lists_missing += usize::from(missing);

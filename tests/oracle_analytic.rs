@@ -164,3 +164,100 @@ fn behind_the_light_is_dark_and_an_empty_scene_is_lit() {
         assert_eq!(empty.visibility(p), 1.0, "{p}");
     }
 }
+
+/// A line light over one straight edge: the oracle's stratified segment samples against the
+/// closed form of `geometry::line_light` (an infinite edge, modelled by a 200 m quad). One
+/// interval of the segment is hidden, so the K-sample estimate is within 2/K of the truth (one
+/// straddling stratum at each end).
+#[test]
+fn line_light_over_an_edge_matches_the_closed_form() {
+    use dbuffer::geometry::line_light::{half_plane_visibility, HalfPlane};
+    use dbuffer::scene::LineLight;
+    let lights = [
+        // Parallel to the ground, along x.
+        LineLight {
+            a: Vec3::new(-1.0, 4.0, 0.0),
+            b: Vec3::new(1.0, 4.0, 0.0),
+            intensity: 1.0,
+        },
+        // Tilted (not parallel to the receiver) and skew to the axes.
+        LineLight {
+            a: Vec3::new(-0.8, 3.2, -0.4),
+            b: Vec3::new(1.1, 4.6, 0.5),
+            intensity: 1.0,
+        },
+    ];
+    let edges = [
+        // Perpendicular to the first light, then oblique, then parallel to it (a hard edge).
+        HalfPlane {
+            origin: Vec3::new(0.0, 2.0, 0.0),
+            along: Vec3::Z,
+            into: Vec3::NEG_X,
+        },
+        HalfPlane {
+            origin: Vec3::new(0.1, 2.0, 0.2),
+            along: Vec3::new(0.6, 0.0, 0.8),
+            into: Vec3::new(0.8, 0.0, -0.6),
+        },
+        HalfPlane {
+            origin: Vec3::new(0.0, 1.5, 0.0),
+            along: Vec3::X,
+            into: Vec3::NEG_Z,
+        },
+    ];
+    for (li, light) in lights.iter().enumerate() {
+        for (ei, edge) in edges.iter().enumerate() {
+            let tris = edge.quad(100.0, 100.0).to_vec();
+            for k in [64usize, 1024] {
+                let oracle = Oracle::new(tris.clone(), *light, k);
+                let mut worst = 0.0f64;
+                let mut penumbra = 0;
+                for i in 0..300 {
+                    // A grid over the ground around the shadow's edge (off the grazing
+                    // plane of the parallel edge, where a ray exactly touches it).
+                    let p = Vec3::new(
+                        -2.0 + 4.0 * ((i % 20) as f32 + 0.37) / 20.0,
+                        0.0,
+                        -2.0 + 4.0 * ((i / 20) as f32 + 0.37) / 15.0,
+                    );
+                    let exact = half_plane_visibility(light, edge, p);
+                    let v = f64::from(oracle.visibility(p));
+                    worst = worst.max((v - exact).abs());
+                    penumbra += usize::from(exact > 0.01 && exact < 0.99);
+                }
+                let bound = 2.0 / k as f64 + 1e-4;
+                assert!(
+                    worst <= bound,
+                    "light {li}, edge {ei}, K = {k}: worst |V_K − V| {worst} > {bound}"
+                );
+                if ei < 2 {
+                    assert!(
+                        penumbra > 20,
+                        "light {li}, edge {ei}: {penumbra} penumbra points"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// A line light emits all around: a point below, beside or above the segment is lit with no
+/// occluder, unlike a one-sided disk.
+#[test]
+fn a_line_light_lights_every_side() {
+    use dbuffer::scene::LineLight;
+    let light = LineLight {
+        a: Vec3::new(-1.0, 4.0, 0.0),
+        b: Vec3::new(1.0, 4.0, 0.0),
+        intensity: 1.0,
+    };
+    let o = Oracle::new(Vec::new(), light, 32);
+    for p in [
+        Vec3::ZERO,
+        Vec3::new(0.0, 8.0, 0.0),
+        Vec3::new(3.0, 4.0, 0.0),
+    ] {
+        assert_eq!(o.visibility(p), 1.0, "{p}");
+    }
+    assert_eq!(o.visibility(Vec3::new(f32::NAN, 0.0, 0.0)), 0.0);
+}

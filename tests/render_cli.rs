@@ -42,8 +42,24 @@ fn compare_writes_the_report_and_prints_the_table() {
             stdout.contains(&format!("| {method} |")),
             "{method} row: {stdout}"
         );
-        assert!(dir.join(format!("{method}.png")).is_file());
-        assert!(dir.join(format!("{method}-visibility.exr")).is_file());
+        // A method that needs the other kind of light is listed, not drawn.
+        let drawn = method.needs() != Some(dbuffer::scene::LightKind::Line);
+        assert_eq!(
+            dir.join(format!("{method}.png")).is_file(),
+            drawn,
+            "{method}"
+        );
+        assert_eq!(
+            dir.join(format!("{method}-visibility.exr")).is_file(),
+            drawn,
+            "{method}"
+        );
+        if !drawn {
+            assert!(
+                stdout.contains(&format!("| {method} | n/a — needs a line light |")),
+                "{stdout}"
+            );
+        }
     }
     assert!(dir.join("pcss-error.png").is_file());
     assert!(dir.join("report.md").is_file() && dir.join("report.json").is_file());
@@ -54,8 +70,14 @@ fn compare_writes_the_report_and_prints_the_table() {
 fn every_method_renders_from_the_command_line() {
     for method in dbuffer::render::Method::all() {
         let dir = temp_dir(&format!("method-{method}"));
+        // Each on a scene with a light it takes.
+        let scene = if method.takes(dbuffer::scene::LightKind::Disk) {
+            "table1-224"
+        } else {
+            "line-fig2"
+        };
         let out = dbuffer()
-            .args(["render", "table1-224", "--size", "40x32", "--samples", "8"])
+            .args(["render", scene, "--size", "40x32", "--samples", "8"])
             .args(["--method", method.name(), "--out"])
             .arg(&dir)
             .output()
@@ -71,6 +93,43 @@ fn every_method_renders_from_the_command_line() {
         assert_eq!(meta["method"], method.name());
         let _ = std::fs::remove_dir_all(&dir);
     }
+}
+
+/// Without `--method` a scene gets the method made for its light: the D-buffer under a disk,
+/// `linear-ssm` under a line (a named disk-only method is still refused there).
+#[test]
+fn the_default_method_follows_the_light() {
+    for (scene, expected) in [("table1-224", "dbuffer"), ("line-fig2", "linear-ssm")] {
+        let dir = temp_dir(&format!("default-{scene}"));
+        let out = dbuffer()
+            .args(["render", scene, "--size", "40x32", "--out"])
+            .arg(&dir)
+            .output()
+            .expect("the binary runs");
+        assert!(
+            out.status.success(),
+            "{scene}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let meta: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("meta.json")).expect("meta.json"))
+                .expect("json");
+        assert_eq!(meta["method"], expected, "{scene}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let dir = temp_dir("default-refused");
+    fails_with(
+        &[
+            "render",
+            "line-fig2",
+            "--size",
+            "40x32",
+            "--method",
+            "dbuffer",
+        ],
+        &dir,
+        "needs a disk light",
+    );
 }
 
 #[test]
@@ -210,4 +269,37 @@ fn bad_input_is_refused_with_a_reason() {
         "radius",
     );
     let _ = std::fs::remove_file(&bad_scene);
+}
+
+/// A method that cannot take the scene's light exits non-zero with one line naming the method
+/// and the light kind, and writes nothing.
+#[test]
+fn a_disk_method_refuses_a_line_light_in_one_line() {
+    for (scene, method, needs) in [
+        ("line-fig2", "dbuffer", "needs a disk light"),
+        ("line-fig2", "wedges", "needs a disk light"),
+        ("line-fig2", "pcss", "needs a disk light"),
+        ("table1-224", "linear-ssm", "needs a line light"),
+    ] {
+        let dir = temp_dir(&format!("refused-{method}"));
+        let out = dbuffer()
+            .args([
+                "render", scene, "--size", "40x32", "--method", method, "--out",
+            ])
+            .arg(&dir)
+            .output()
+            .expect("the binary runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{method} on {scene} must fail");
+        assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
+        assert!(
+            err.contains(&format!("method '{method}'")) && err.contains(needs),
+            "{err}"
+        );
+        assert!(
+            !dir.join("image.png").exists(),
+            "nothing written for a refused method"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

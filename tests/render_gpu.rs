@@ -100,7 +100,7 @@ fn gpu_agrees_with_the_cpu_twin() {
             shadowed += usize::from(s.branch != Branch::Lit);
             if dv > 0.1 {
                 // Near a boundary? Probe the twin two texel footprints around x.
-                let w = (x - scene.light.center).normalize();
+                let w = (x - scene.light.center()).normalize();
                 let (a, b) = w.any_orthonormal_pair();
                 let reach = 2.0 * slope * s.d;
                 let near_boundary = [a, -a, b, -b, a + b, a - b, -a + b, -a - b]

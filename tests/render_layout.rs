@@ -57,7 +57,11 @@ fn uniforms_match_their_wgsl() {
             light_center,
             light_radius,
             light_normal,
-            light_intensity
+            light_intensity,
+            light_kind,
+            _pad0,
+            _pad1,
+            _pad2
         );
     }
     for shader in ["hard", "pcf", "pcss", "dbuffer", "extended_light_map"] {
@@ -77,6 +81,7 @@ fn uniforms_match_their_wgsl() {
     for shader in [
         source("methods/sampled.wgsl"),
         source("passes/sample_maps.wgsl"),
+        source("methods/linear_ssm.wgsl"),
     ] {
         assert_wgsl_layout!(SampleLight, &shader, "SampleLight", view_proj, point, _pad);
         assert_wgsl_layout!(
@@ -94,13 +99,26 @@ fn uniforms_match_their_wgsl() {
             _pad2
         );
     }
+    for shader in ["passes/stencil_volumes.wgsl", "passes/wedges.wgsl"] {
+        assert_wgsl_layout!(
+            ScreenUniforms,
+            &source(shader),
+            "ScreenUniforms",
+            infinite_view_proj,
+            eye,
+            size
+        );
+    }
+    use dbuffer::render::passes::ssm::{SkinVertex, SsmSample};
+    use dbuffer::render::passes::wedges::WedgeDisk;
     assert_wgsl_layout!(
-        ScreenUniforms,
-        &source("passes/stencil_volumes.wgsl"),
-        "ScreenUniforms",
-        infinite_view_proj,
-        eye,
-        size
+        WedgeDisk,
+        &source("passes/wedges.wgsl"),
+        "WedgeDisk",
+        center,
+        normal,
+        u,
+        w
     );
     assert_wgsl_layout!(
         HybridUniforms,
@@ -137,6 +155,36 @@ fn uniforms_match_their_wgsl() {
         eye,
         receivers
     );
+    for shader in ["passes/ssm_skins.wgsl", "passes/ssm_visibility.wgsl"] {
+        assert_wgsl_layout!(
+            SsmSample,
+            &source(shader),
+            "SsmSample",
+            view_proj,
+            inv_view_proj,
+            point,
+            layer,
+            size,
+            capacity,
+            far,
+            tau,
+            weight,
+            skin_bias,
+            pitch,
+            _pad1
+        );
+        assert_wgsl_layout!(
+            SkinVertex,
+            &source(shader),
+            "SkinVertex",
+            position,
+            value,
+            cell,
+            corner,
+            _pad0,
+            _pad1
+        );
+    }
     for shader in [source("passes/view.wgsl"), source("passes/probe.wgsl")] {
         assert_wgsl_layout!(
             ViewUniforms,
@@ -160,6 +208,23 @@ fn uniforms_match_their_wgsl() {
 
 #[test]
 fn codes_match_their_wgsl() {
+    // The CPU twins' thresholds, as the GPU halves spell them.
+    wgsl_layout::assert_consts(
+        &source("passes/ssm_skins.wgsl"),
+        "shared/ssm_sample.wgsl",
+        &[(
+            "SSM_NO_SURFACE_AT",
+            f64::from(dbuffer::geometry::ssm::NO_SURFACE_AT),
+        )],
+    );
+    wgsl_layout::assert_consts(
+        &source("passes/wedges.wgsl"),
+        "passes/wedges.wgsl",
+        &[(
+            "SLAB_EPS",
+            dbuffer::geometry::wedges::SLAB_EPS as f32 as f64,
+        )],
+    );
     let camera = source("methods/hard.wgsl");
     // VT_VARIANT is a pipeline constant (render::passes::camera::CameraPass::method_pipeline
     // sets it to VtVariant::code()); the branches of v_of_t compare it with these.
@@ -187,6 +252,9 @@ fn codes_match_their_wgsl() {
         "CLASS_EPSILON",
         dbuffer::geometry::metrics::CLASS_EPS as f32 as f64,
     ));
+    use dbuffer::render::passes::camera::{LIGHT_DISK, LIGHT_LINE};
+    pairs.push(("LIGHT_DISK", f64::from(LIGHT_DISK)));
+    pairs.push(("LIGHT_LINE", f64::from(LIGHT_LINE)));
     wgsl_layout::assert_consts(&camera, "shared/camera.wgsl", &pairs);
 
     let view = source("passes/view.wgsl");

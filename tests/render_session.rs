@@ -77,8 +77,7 @@ fn geometry_and_light_pass_run_only_when_something_moved() {
         "setting the same light is no change"
     );
 
-    let mut moved = light;
-    moved.center += Vec3::new(1.0, 0.0, 0.0);
+    let moved = light.with_center(light.center() + Vec3::new(1.0, 0.0, 0.0));
     session.set_light(moved);
     let fourth = session
         .frame(&ctx, &request)
@@ -187,8 +186,7 @@ fn the_reference_converges_and_restarts_when_the_view_changes() {
     );
 
     // Moving the light or the camera starts it over, and the old one is not shaded.
-    let mut moved = light;
-    moved.center.x += 0.5;
+    let moved = light.with_center(light.center() + Vec3::new(0.5, 0.0, 0.0));
     session.set_light(moved);
     assert!(session.frame(&ctx, &request).is_err(), "a stale reference");
     assert_eq!(
@@ -264,8 +262,7 @@ fn a_moved_light_leaves_nothing_of_the_old_d_buffer() {
         .into_iter()
         .enumerate()
         {
-            let mut moved = light;
-            moved.center += offset;
+            let moved = light.with_center(light.center() + offset);
             session.set_light(moved);
             let kept = session
                 .frame(&ctx, &request)

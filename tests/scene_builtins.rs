@@ -2,7 +2,7 @@
 //! triangle counts, convexity, placement under the light, the property each scene is for).
 
 use dbuffer::geometry::ray::intersect_triangle;
-use dbuffer::scene::{builtin, load, shapes, Mesh, Scene};
+use dbuffer::scene::{builtin, load, shapes, DiskLight, Light, Mesh, Scene};
 use glam::Vec3;
 use std::collections::{HashMap, HashSet};
 
@@ -248,10 +248,23 @@ const EXPECTED_NAMES: &[&str] = &[
     "fusion-cross",
     "fusion-links",
     "fusion-many",
+    "line-fig2",
+    "line-fig3-tilted",
+    "line-fig6-gap",
+    "line-fig8-overlap",
+    "line-fig9",
+    "line-bar",
 ];
 
 fn scene(name: &str) -> Scene {
     load(name).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// The disk light of a built-in that has one.
+fn disk(s: &Scene) -> DiskLight {
+    *s.light
+        .as_disk()
+        .unwrap_or_else(|| panic!("{}: a disk light", s.name))
 }
 
 #[test]
@@ -285,15 +298,29 @@ fn every_builtin_scene_loads_and_is_well_formed() {
             "{name}: ground ~10 wide"
         );
 
-        assert!(s.light.normal.is_normalized());
-        assert!(s.light.normal.y < -0.9, "{name}: light points down");
         assert!(s.casters().count() >= 1);
+        // Every caster between the light and the ground: below a disk's plane (which points
+        // down), below both ends of a line light.
+        let height = |p: Vec3| match s.light {
+            Light::Disk(d) => {
+                assert!(d.normal.is_normalized());
+                assert!(d.normal.y < -0.9, "{name}: light points down");
+                d.height_of(p)
+            }
+            Light::Line(l) => {
+                assert!(
+                    l.length() >= 1.0,
+                    "{name}: a line light a metre or more long"
+                );
+                l.a.y.min(l.b.y) - p.y
+            }
+        };
         for o in s.casters() {
             for &p in &o.mesh.positions {
-                let h = s.light.height_of(p);
+                let h = height(p);
                 assert!(
                     h > 0.05,
-                    "{name}/{}: vertex {p} at {h} from the light plane",
+                    "{name}/{}: vertex {p} at {h} below the light",
                     o.name
                 );
                 assert!(p.y > lo.y, "{name}/{}: caster above the ground", o.name);
@@ -354,10 +381,23 @@ fn concave_scenes_are_concave() {
 
 /// Bounds (in XZ) of a convex caster's penumbra on the ground plane y = 0 under a horizontal
 /// disk light: each vertex q projects from light point p to p + (q − p)·t, t = p.y/(p.y − q.y),
-/// which over the disk is a disk of centre c + (q − c)·t and radius r·|1 − t|.
+/// which over the disk is a disk of centre c + (q − c)·t and radius r·|1 − t|. Under a line
+/// light, the projections of every vertex from both ends (the shadow from any point between).
 fn penumbra_bounds(s: &Scene, m: &Mesh) -> (glam::Vec2, glam::Vec2) {
-    let c = s.light.center;
-    let r = s.light.radius;
+    if let Light::Line(l) = s.light {
+        let mut lo = glam::Vec2::splat(f32::INFINITY);
+        let mut hi = -lo;
+        for &q in &m.positions {
+            for p in [l.a, l.b] {
+                let g = p + (q - p) * (p.y / (p.y - q.y));
+                lo = lo.min(glam::Vec2::new(g.x, g.z));
+                hi = hi.max(glam::Vec2::new(g.x, g.z));
+            }
+        }
+        return (lo, hi);
+    }
+    let c = disk(s).center;
+    let r = disk(s).radius;
     let mut lo = glam::Vec2::splat(f32::INFINITY);
     let mut hi = -lo;
     for &q in &m.positions {
@@ -377,7 +417,7 @@ fn boxes_overlap(a: (glam::Vec2, glam::Vec2), b: (glam::Vec2, glam::Vec2)) -> bo
 #[test]
 fn fig8a_spheres_at_three_heights_with_separate_penumbrae() {
     let s = scene("fig8a-distance");
-    assert_eq!(s.light.normal, Vec3::NEG_Y);
+    assert_eq!(disk(&s).normal, Vec3::NEG_Y);
     let casters: Vec<_> = s.casters().collect();
     assert_eq!(casters.len(), 3);
     let heights: Vec<f32> = casters
@@ -414,11 +454,11 @@ fn sees(s: &Scene, x: Vec3, p: Vec3) -> bool {
 }
 
 fn rim(s: &Scene, n: usize) -> Vec<Vec3> {
-    let (u, v) = s.light.basis();
+    let (u, v) = disk(s).basis();
     (0..n)
         .map(|i| {
             let a = std::f32::consts::TAU * i as f32 / n as f32;
-            s.light.center + s.light.radius * (a.cos() * u + a.sin() * v)
+            disk(s).center + disk(s).radius * (a.cos() * u + a.sin() * v)
         })
         .collect()
 }
@@ -471,7 +511,7 @@ fn no_umbra_reaches_the_ground() {
     }
     assert!(partly > 0, "the caster shadows something");
     assert!(
-        hi.x - lo.x < s.light.radius,
+        hi.x - lo.x < disk(&s).radius,
         "caster smaller than the light"
     );
 }
@@ -481,14 +521,14 @@ fn fig1_caster_is_much_smaller_than_the_light() {
     let s = scene("fig1-large-light");
     let (lo, hi) = s.casters().next().unwrap().mesh.bounds().unwrap();
     // Light diameter at least three times the caster's largest extent.
-    assert!(3.0 * (hi - lo).max_element() < 2.0 * s.light.radius);
+    assert!(3.0 * (hi - lo).max_element() < 2.0 * disk(&s).radius);
 }
 
 #[test]
 fn acute_corner_has_a_15_degree_corner_and_tilted_light() {
     let s = scene("acute-corner");
     assert!(
-        s.light.normal.x.abs() > 0.05,
+        disk(&s).normal.x.abs() > 0.05,
         "the one scene with a tilted light"
     );
     assert_eq!(s.casters().count(), 1);
@@ -548,8 +588,10 @@ fn bunny_scene_caster_is_open() {
     let prepared = dbuffer::geometry::CasterMesh::new(&caster.name, &caster.mesh);
     assert!(prepared.report.boundary_edges > 20, "{:?}", prepared.report);
     assert_eq!(prepared.report.non_manifold_edges, 0);
-    let geometry = dbuffer::geometry::PreparedCasters::new(&s)
-        .build(&s.light, &dbuffer::geometry::VolumeParams::for_scene(&s));
+    let geometry = dbuffer::geometry::PreparedCasters::new(&s).build(
+        s.light.as_disk().expect("a disk light"),
+        &dbuffer::geometry::VolumeParams::for_scene(&s),
+    );
     let open: Vec<_> = geometry
         .warnings
         .iter()

@@ -65,7 +65,7 @@ fn a_good_file_loads_with_defaults() {
     assert_eq!(s.objects.len(), 2);
     assert_eq!(s.objects[1].name, "sphere:16x8");
     assert!(s.objects[1].casts_shadow);
-    assert_eq!(s.light.intensity, 1.0);
+    assert_eq!(s.light.intensity(), 1.0);
     assert_eq!(s.caster_triangle_count(), 224);
     let (lo, hi) = s.objects[1].mesh.bounds().unwrap();
     assert!((hi.y - lo.y - 2.0).abs() < 1e-5 && (lo.y - 0.0).abs() < 1e-5);
@@ -97,7 +97,8 @@ fn unknown_key() {
 fn missing_required_key() {
     let light = LIGHT.replace("radius = 0.5\n", "");
     let msg = parse_err(&format!("{CAMERA}\n{light}"));
-    assert_has(&msg, &["my.toml", "missing field `radius`", "in `light`"]);
+    // The light's keys depend on its kind, so the scene checks them (not toml).
+    assert_has(&msg, &["my.toml", "light.radius", "found nothing"]);
     let msg = parse_err(CAMERA);
     assert_has(&msg, &["my.toml", "missing field `light`"]);
     let msg = parse_err(&format!("{CAMERA}\n{LIGHT}\n[[object]]\nname = \"x\"\n"));
@@ -215,7 +216,8 @@ fn zero_normal_and_normalisation() {
     )
     .unwrap();
     let s = f.build(Path::new("."), "ok.toml").unwrap();
-    assert!((s.light.normal - glam::Vec3::new(0.0, -0.6, 0.8)).length() < 1e-6);
+    let normal = s.light.as_disk().unwrap().normal;
+    assert!((normal - glam::Vec3::new(0.0, -0.6, 0.8)).length() < 1e-6);
 }
 
 #[test]
@@ -472,7 +474,7 @@ fn a_bare_obj_gets_a_default_scene() {
     let (lo, hi) = s.objects[1].mesh.bounds().unwrap();
     assert!(lo.y.abs() < 1e-5, "stands on the ground");
     assert!(((hi - lo).max_element() - 1.5).abs() < 1e-4);
-    assert!(s.light.height_of(hi) > 0.0);
+    assert!(s.light.as_disk().unwrap().height_of(hi) > 0.0);
     // The generated file is saveable: it round-trips and builds from another directory.
     let (f, p) = load_file(&path.display().to_string()).unwrap();
     assert_eq!(p.as_deref(), Some(path.as_path()));
@@ -559,4 +561,158 @@ proptest! {
             let _ = f.build(Path::new("."), "fuzz.toml");
         }
     }
+}
+
+// Line lights (design.md §7): `kind = "line"` with end points `a` and `b`.
+
+const LINE: &str = "[light]\nkind = \"line\"\na = [-1.0, 4.0, 0.0]\nb = [1.0, 4.0, 0.5]\n";
+
+fn line_scene(light: &str) -> String {
+    format!("{CAMERA}\n{light}\n{GROUND}\n[[object]]\nmesh = \"cube\"\ntranslate = [0, 1, 0]\n")
+}
+
+#[test]
+fn a_line_light_loads_and_round_trips() {
+    use dbuffer::scene::{Light, LightKind};
+    let f = SceneFile::parse(&line_scene(LINE), "line.toml").unwrap();
+    assert_eq!(f.light.kind(), LightKind::Line);
+    let s = f.build(Path::new("."), "line.toml").unwrap();
+    let Light::Line(l) = s.light else {
+        panic!("a line light, got {:?}", s.light)
+    };
+    assert_eq!(l.a, glam::Vec3::new(-1.0, 4.0, 0.0));
+    assert_eq!(l.b, glam::Vec3::new(1.0, 4.0, 0.5));
+    assert_eq!(l.intensity, 1.0, "intensity defaults to 1");
+    assert_eq!(s.light.center(), glam::Vec3::new(0.0, 4.0, 0.25));
+    let text = f.to_toml();
+    assert!(
+        text.contains("kind = \"line\"") && !text.contains("center") && !text.contains("radius"),
+        "{text}"
+    );
+    assert_eq!(SceneFile::parse(&text, "again.toml").unwrap(), f);
+    // An explicit intensity, and kind = "disk" spelled out, load too.
+    let bright = LINE.replace("kind", "intensity = 2.5\nkind");
+    let s = load_ok(&line_scene(&bright));
+    assert_eq!(s.light.intensity(), 2.5);
+    let explicit = SceneFile::parse(
+        &format!(
+            "{CAMERA}\n{}",
+            LIGHT.replace("[light]\n", "[light]\nkind = \"disk\"\n")
+        ),
+        "disk.toml",
+    )
+    .unwrap();
+    assert_eq!(explicit.light.kind(), LightKind::Disk);
+}
+
+fn load_ok(text: &str) -> dbuffer::scene::Scene {
+    SceneFile::parse(text, "ok.toml")
+        .and_then(|f| f.build(Path::new("."), "ok.toml"))
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn a_disk_file_without_kind_writes_back_exactly_its_keys() {
+    let f = SceneFile::parse(&scene_with("mesh = \"cube\""), "d.toml").unwrap();
+    let text = f.to_toml();
+    let light = &text[text.find("[light]").unwrap()..];
+    let light = &light[..light.find("\n\n").unwrap_or(light.len())];
+    assert_eq!(
+        light,
+        "[light]\ncenter = [0.0, 4.0, 0.0]\nnormal = [0.0, -1.0, 0.0]\nradius = 0.5\nintensity = 1.0",
+        "{text}"
+    );
+    // Every built-in with a disk light writes back as it reads.
+    for name in builtin::names() {
+        let f = builtin::file(name).unwrap().unwrap();
+        assert_eq!(SceneFile::parse(&f.to_toml(), name).unwrap(), f, "{name}");
+    }
+}
+
+#[test]
+fn bad_line_lights_name_the_key_and_what_was_expected() {
+    let cases: &[(String, &[&str])] = &[
+        // Zero length: a = b (and shorter than the minimum).
+        (
+            LINE.replace("[1.0, 4.0, 0.5]", "[-1.0, 4.0, 0.0]"),
+            &["light.b", "zero length", "0.0001 m", "[-1, 4, 0]"],
+        ),
+        (
+            LINE.replace("[1.0, 4.0, 0.5]", "[-1.0, 4.00001, 0.0]"),
+            &["light.b", "zero length"],
+        ),
+        // NaN and infinity, in either end.
+        (
+            LINE.replace("[-1.0, 4.0, 0.0]", "[nan, 4.0, 0.0]"),
+            &["light.a", "finite", "NaN"],
+        ),
+        (
+            LINE.replace("[1.0, 4.0, 0.5]", "[1.0, inf, 0.5]"),
+            &["light.b", "finite", "inf"],
+        ),
+        // Missing ends.
+        (
+            LINE.replace("b = [1.0, 4.0, 0.5]\n", ""),
+            &["light.b", "second end point", "line light", "nothing"],
+        ),
+        (
+            LINE.replace("a = [-1.0, 4.0, 0.0]\n", ""),
+            &["light.a", "first end point"],
+        ),
+        // A disk's keys on a line light, a line's keys on a disk.
+        (
+            format!("{LINE}radius = 0.5\n"),
+            &["light.radius", "line light", "kind = \"line\""],
+        ),
+        (
+            format!("{LINE}center = [0.0, 4.0, 0.0]\n"),
+            &["light.center", "line light"],
+        ),
+        (
+            format!("{LIGHT}a = [0.0, 4.0, 0.0]\n"),
+            &["light.a", "disk light", "kind = \"line\""],
+        ),
+        // A line's ends without kind = "line" are a disk missing its keys... after the foreign
+        // key: the message points at `a`.
+        (
+            LINE.replace("kind = \"line\"\n", ""),
+            &["light.a", "disk light"],
+        ),
+        // An unknown kind: toml's own message, with the line and the kinds there are (not the
+        // value written: errors never quote the file).
+        (
+            LINE.replace("\"line\"", "\"sphere\""),
+            &["kind", "disk", "line", "line 7"],
+        ),
+    ];
+    for (light, parts) in cases {
+        let msg = parse_err(&line_scene(light));
+        assert_has(&msg, &["my.toml"]);
+        assert_has(&msg, parts);
+        // The scene's own messages are one line (toml's quote the offending line).
+        assert!(
+            msg.contains("TOML parse error") || !msg.contains('\n'),
+            "one line: {msg}"
+        );
+    }
+    // Through `load`, the path is named too.
+    let (msg, path) = load_err(
+        &line_scene(&LINE.replace("[1.0, 4.0, 0.5]", "[-1.0, 4.0, 0.0]")),
+        &[],
+    );
+    assert_has(&msg, &[&path, "light.b", "zero length"]);
+}
+
+#[test]
+fn a_disk_missing_its_keys_says_which() {
+    let msg = parse_err(&format!(
+        "{CAMERA}\n{}",
+        LIGHT.replace("radius = 0.5\n", "")
+    ));
+    assert_has(&msg, &["my.toml", "light.radius", "radius", "nothing"]);
+    let msg = parse_err(&format!(
+        "{CAMERA}\n{}",
+        LIGHT.replace("center = [0.0, 4.0, 0.0]\n", "")
+    ));
+    assert_has(&msg, &["my.toml", "light.center"]);
 }

@@ -16,8 +16,10 @@ const SAMPLES: usize = 256;
 
 fn measure(name: &str) -> Metrics {
     let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let geometry =
-        PreparedCasters::new(&scene).build(&scene.light, &VolumeParams::for_scene(&scene));
+    let geometry = PreparedCasters::new(&scene).build(
+        scene.light.as_disk().expect("a disk light"),
+        &VolumeParams::for_scene(&scene),
+    );
     let oracle = Oracle::from_scene(&scene, SAMPLES);
     let twin = DBufferTwin::new(&scene, &geometry.casters);
     let pixels = view::receivers(&scene, oracle.bvh(), SIZE, SIZE);
@@ -91,8 +93,14 @@ fn volume_surfaces_are_closed() {
     };
     for name in scene::builtin::names() {
         let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        if scene.light.as_disk().is_none() {
+            continue; // the D-buffer's geometry is a disk light's
+        }
         let prepared = PreparedCasters::new(&scene);
-        let geometry = prepared.build(&scene.light, &VolumeParams::for_scene(&scene));
+        let geometry = prepared.build(
+            scene.light.as_disk().expect("a disk light"),
+            &VolumeParams::for_scene(&scene),
+        );
         for (g, mesh) in geometry.casters.iter().zip(&prepared.meshes) {
             let on_caster: HashSet<[u32; 3]> = mesh.positions.iter().map(|&v| key(v)).collect();
             for umbra in [true, false] {
@@ -180,8 +188,14 @@ fn fused_twin_on_every_built_in() {
     use dbuffer::geometry::fused::{FusedParams, FusedTwin};
     for name in scene::builtin::names() {
         let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        if scene.light.as_disk().is_none() {
+            continue; // a line light: the D-buffer family refuses it
+        }
         let prepared = PreparedCasters::new(&scene);
-        let geometry = prepared.build(&scene.light, &VolumeParams::for_scene(&scene));
+        let geometry = prepared.build(
+            &scene.light.disk_or_centre(),
+            &VolumeParams::for_scene(&scene),
+        );
         let oracle = Oracle::from_scene(&scene, SAMPLES);
         let paper = DBufferTwin::new(&scene, &geometry.casters);
         let fused = FusedTwin::new(&scene, &prepared, &geometry, FusedParams::default());

@@ -109,7 +109,7 @@ fn scene_with(caster: Mesh, light: DiskLight) -> Scene {
             target: Vec3::ZERO,
             fov_y_deg: 45.0,
         },
-        light,
+        light: light.into(),
         objects: vec![
             Object {
                 name: "hull".into(),

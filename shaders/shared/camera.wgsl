@@ -1,5 +1,6 @@
 // The camera pass every method shares (src/render/passes/camera.rs): every surface from the
-// camera, V per pixel from the method, diffuse shading from the disk times V. A method's shader
+// camera, V per pixel from the method, diffuse shading from the light's centre (a disk's, a line
+// light's midpoint) times V. A method's shader
 // (shaders/methods/NAME.wgsl) includes this file and defines
 //     fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
 // for the shaded point x, its normal n (turned toward the camera) and the pixel's centre, with
@@ -16,10 +17,19 @@ struct CameraUniforms {
     // The disk centre c.
     light_center: vec3<f32>,
     light_radius: f32,
-    // The unit normal n_c, toward the emitting side.
+    // The unit normal n_c, toward the emitting side (zero for a line light).
     light_normal: vec3<f32>,
     light_intensity: f32,
+    // LIGHT_DISK or LIGHT_LINE. A line light emits all around its segment: no one-sided test,
+    // no emitter cosine; light_center is its midpoint, light_radius 0.
+    light_kind: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 };
+
+const LIGHT_DISK: u32 = 0u;
+const LIGHT_LINE: u32 = 1u;
 
 @group(0) @binding(0) var<uniform> camera: CameraUniforms;
 
@@ -84,9 +94,9 @@ fn plain(v: f32) -> Visibility {
     return out;
 }
 
-// Whether x lies on the emitting side of the one-sided light.
+// Whether x lies on the emitting side of the one-sided disk (every point, for a line light).
 fn in_front_of_light(x: vec3<f32>) -> bool {
-    return dot(x - camera.light_center, camera.light_normal) > 0.0;
+    return camera.light_kind == LIGHT_LINE || dot(x - camera.light_center, camera.light_normal) > 0.0;
 }
 
 // Whether the side of the surface the camera sees faces the light centre (else it is its own
@@ -130,7 +140,7 @@ fn fs_main(f: SurfaceOut) -> Targets {
     let vis = method_visibility(f.world, n, f.clip.xy);
     let l = normalize(camera.light_center - f.world);
     let cos_receiver = max(dot(n, l), 0.0);
-    let cos_emitter = max(dot(-l, camera.light_normal), 0.0);
+    let cos_emitter = select(max(dot(-l, camera.light_normal), 0.0), 1.0, camera.light_kind == LIGHT_LINE);
     let diffuse = vec3<f32>(camera.light_intensity * cos_receiver * cos_emitter);
     let direct = select(diffuse, vis.light.xyz, vis.light.w > 0.5) * vis.v;
     let shade = f.albedo * (camera.ambient + (1.0 - camera.ambient) * min(direct, vec3<f32>(1.0)));

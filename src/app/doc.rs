@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use crate::scene::file::{LightSpec, ObjectSpec};
-use crate::scene::{self, builtin, Camera, DiskLight, Mesh, Object, Scene, SceneError, SceneFile};
+use crate::scene::{self, builtin, Camera, Light, Mesh, Object, Scene, SceneError, SceneFile};
 
 pub struct SceneDoc {
     pub file: SceneFile,
@@ -76,12 +76,7 @@ impl SceneDoc {
                     target: [0.0, 0.5, 0.0],
                     fov_y_deg: 45.0,
                 }),
-                light: LightSpec {
-                    center: [0.0, 4.0, 0.0],
-                    normal: [0.0, -1.0, 0.0],
-                    radius: 0.5,
-                    intensity: 1.0,
-                },
+                light: LightSpec::disk([0.0, 4.0, 0.0], [0.0, -1.0, 0.0], 0.5),
                 objects: Vec::new(),
             },
             path: None,
@@ -143,14 +138,8 @@ impl SceneDoc {
         }
     }
 
-    pub fn light(&self) -> DiskLight {
-        let l = &self.file.light;
-        DiskLight {
-            center: v3(l.center),
-            normal: v3(l.normal).try_normalize().unwrap_or(Vec3::NEG_Y),
-            radius: l.radius as f32,
-            intensity: l.intensity as f32,
-        }
+    pub fn light(&self) -> Light {
+        self.file.light.light()
     }
 
     pub fn edit(&self) -> Edit {
@@ -238,10 +227,6 @@ fn same_path(a: &Path, b: &Path) -> bool {
         (Ok(a), Ok(b)) => a == b,
         _ => a == b,
     }
-}
-
-fn v3(a: [f64; 3]) -> Vec3 {
-    Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32)
 }
 
 pub fn f3(v: Vec3) -> [f64; 3] {
@@ -415,11 +400,11 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("edited.toml");
         let (mut doc, _) = SceneDoc::open("fig7-concave").unwrap();
-        doc.file.light.radius = 0.75;
+        doc.file.light.radius = Some(0.75);
         let camera = doc.camera();
         doc.save(&path, &camera).unwrap();
         let (again, scene) = SceneDoc::open(path.to_str().unwrap()).unwrap();
-        assert_eq!(scene.light.radius, 0.75);
+        assert_eq!(scene.light.half_extent(), 0.75);
         assert_eq!(again.toml_path(), Some(path.as_path()));
         let _ = std::fs::remove_dir_all(&dir);
     }

@@ -112,7 +112,7 @@ impl LabApp {
         ));
         rows.push((
             "|cx|".into(),
-            format!("{:.5}", (x - shown.light.center).length()),
+            format!("{:.5}", (x - shown.light.center()).length()),
         ));
         map_rows(&mut rows);
         rows.push(("branch".into(), branch_name(p.branch).into()));

@@ -36,7 +36,7 @@ use self::stats::Stats;
 pub use self::viewport::Shown;
 use crate::geometry::bvh::Bvh;
 pub use crate::render::passes::view::View;
-use crate::render::GpuContext;
+use crate::render::{GpuContext, Method};
 use crate::scene::Camera;
 
 /// How the lab starts.
@@ -58,8 +58,18 @@ pub struct LabOptions {
 pub enum Selection {
     #[default]
     None,
+    /// The whole light (a line light moves as a segment).
     Light,
+    /// One end of a line light: 0 is `a`, 1 is `b`.
+    LightEnd(usize),
     Object(usize),
+}
+
+impl Selection {
+    /// The light or one of its ends.
+    pub fn is_light(self) -> bool {
+        matches!(self, Selection::Light | Selection::LightEnd(_))
+    }
 }
 
 /// How serious a status line is.
@@ -157,8 +167,12 @@ impl LabApp {
             overlay_notes: Vec::new(),
             deterministic: options.deterministic,
         };
+        let switched = app.suit_methods_to_the_light();
         if app.status.0.is_empty() {
             app.status = (app.opened_message(), Level::Info);
+            if let Some(s) = switched {
+                app.status.0 = format!("{}: {s}", app.status.0);
+            }
         }
         app
     }
@@ -242,6 +256,24 @@ impl LabApp {
 
     /// Open a built-in scene name, a `.toml` scene, an `.obj` or a `.glb`/`.gltf`; on failure the error goes to
     /// the status line and the current scene stays.
+    /// After the light's kind changed: a shown method that cannot take it is replaced by the
+    /// method made for that kind (the D-buffer for a disk, `linear-ssm` for a line); returns
+    /// what was switched, to say so.
+    fn suit_methods_to_the_light(&mut self) -> Option<String> {
+        let kind = self.doc.file.light.kind();
+        let fallback = Method::made_for(kind);
+        let mut said = Vec::new();
+        for name in [&mut self.settings.method, &mut self.settings.split_method] {
+            if let Ok(m) = name.parse::<Method>() {
+                if !m.takes(kind) {
+                    said.push(format!("{m} needs a {} light", m.needs()?.name()));
+                    *name = fallback.name().to_string();
+                }
+            }
+        }
+        (!said.is_empty()).then(|| format!("{}: showing {fallback}", said.join(", ")))
+    }
+
     pub fn open_scene(&mut self, name_or_path: &str) {
         match SceneDoc::open(name_or_path) {
             Ok((doc, scene)) => {
@@ -258,7 +290,9 @@ impl LabApp {
                 if !SceneDoc::is_builtin(name_or_path) {
                     self.settings.push_recent(name_or_path);
                 }
-                let warnings = self.scene_warnings();
+                let switched = self.suit_methods_to_the_light();
+                let mut warnings = self.scene_warnings();
+                warnings.extend(switched);
                 match warnings.first() {
                     Some(w) => {
                         self.set_status(format!("opened {}: {w}", self.doc.label), Level::Warning)
@@ -369,8 +403,8 @@ impl LabApp {
     pub fn frame_all(&mut self) {
         let Some(scene) = self.scene() else { return };
         let light = scene.light;
-        let mut lo = light.center - glam::Vec3::splat(light.radius);
-        let mut hi = light.center + glam::Vec3::splat(light.radius);
+        let mut lo = light.center() - glam::Vec3::splat(light.half_extent());
+        let mut hi = light.center() + glam::Vec3::splat(light.half_extent());
         for o in scene.casters() {
             if let Some((a, b)) = o.mesh.bounds() {
                 lo = lo.min(a);

@@ -13,7 +13,8 @@ use super::{LabApp, Selection};
 use crate::geometry::{FaceClass, VolumeMesh};
 use crate::render::passes::view::View;
 use crate::render::passes::view_twin::BRANCH_COLORS;
-use crate::render::Method;
+use crate::render::{Knobs, Method};
+use crate::scene::{Light, LineLight};
 
 /// At most this many lines per volume overlay and triangles of class faces: volumes of big
 /// meshes have hundreds of thousands, which would make the window crawl. The legend says when
@@ -227,9 +228,53 @@ impl LabApp {
             }
         }
 
-        let selected_light = self.selection == Selection::Light;
-        if overlays.light_disk || selected_light {
-            let light = scene.light;
+        let selected_light = self.selection.is_light();
+        if let (Light::Line(line), true) = (scene.light, overlays.light_disk || selected_light) {
+            let color = if selected_light {
+                HIGHLIGHT
+            } else {
+                LIGHT_COLOR
+            };
+            if let Some(s) = projector.segment(line.a, line.b) {
+                painter.line_segment(
+                    s,
+                    Stroke::new(if selected_light { 3.0 } else { 2.0 }, color),
+                );
+            }
+            // Both ends as handles (the selected one filled), and the method's sample points.
+            for (k, end) in [line.a, line.b].into_iter().enumerate() {
+                if let Some(p) = projector.point(end) {
+                    let filled = self.selection == Selection::LightEnd(k);
+                    painter.circle(
+                        p,
+                        5.0,
+                        if filled {
+                            HIGHLIGHT
+                        } else {
+                            Color32::TRANSPARENT
+                        },
+                        Stroke::new(1.5, color),
+                    );
+                    painter.text(
+                        p + egui::vec2(7.0, -7.0),
+                        egui::Align2::LEFT_BOTTOM,
+                        if k == 0 { "a" } else { "b" },
+                        egui::FontId::proportional(12.0),
+                        color,
+                    );
+                }
+            }
+            for q in line_sample_points(
+                &line,
+                self.settings.method(),
+                &self.base_request(1, 1).knobs,
+            ) {
+                if let Some(p) = projector.point(q) {
+                    painter.circle_filled(p, 2.5, color);
+                }
+            }
+        }
+        if let (Light::Disk(light), true) = (scene.light, overlays.light_disk || selected_light) {
             let (u, v) = light.basis();
             let rim: Vec<Pos2> = (0..=64)
                 .filter_map(|k| {
@@ -459,6 +504,22 @@ fn box_edges(lo: Vec3, hi: Vec3) -> Vec<(Vec3, Vec3)> {
     edges
 }
 
+/// The points on a line light the shown method samples (its shadow maps' origins), to draw on
+/// the segment: `sampled`'s stratum centres, `linear-ssm`'s evenly spaced samples with both ends.
+fn line_sample_points(line: &LineLight, method: Method, knobs: &Knobs) -> Vec<Vec3> {
+    use crate::render::methods::{linear_ssm, sampled};
+    match method.name() {
+        "sampled" => {
+            let n = knobs.get(&sampled::LIGHTS).max(1);
+            (0..n)
+                .map(|i| line.at((i as f32 + 0.5) / n as f32))
+                .collect()
+        }
+        "linear-ssm" => linear_ssm::sample_points(line, knobs.get(&linear_ssm::SAMPLES)),
+        _ => Vec::new(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -467,8 +528,10 @@ mod tests {
     #[test]
     fn volume_outlines_leave_out_quad_diagonals() {
         let scene = crate::scene::load("table1-224").unwrap();
-        let geometry =
-            PreparedCasters::new(&scene).build(&scene.light, &VolumeParams::for_scene(&scene));
+        let geometry = PreparedCasters::new(&scene).build(
+            scene.light.as_disk().expect("a disk light"),
+            &VolumeParams::for_scene(&scene),
+        );
         let c = &geometry.casters[0];
         let mut umbra = Vec::new();
         let n = volume_edges(&c.volumes, true, &mut umbra, usize::MAX);

@@ -17,7 +17,7 @@ use crate::render::passes::view::{Mapping, View, ViewParams};
 use crate::render::passes::view_twin::NO_DATA;
 use crate::render::session::FrameJob;
 use crate::render::{FrameRequest, Knobs, Method};
-use crate::scene::Camera;
+use crate::scene::{Camera, Light};
 
 /// Everything that decides a frame's pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,7 +43,7 @@ pub struct Shown {
     pub method: Method,
     pub request: FrameRequest,
     /// The light the frame was rendered with.
-    pub light: crate::scene::DiskLight,
+    pub light: crate::scene::Light,
     /// Reference samples (done, total) on the GPU when the frame was shown, if any.
     pub reference: Option<(u32, u32)>,
     /// Why the view cannot be drawn as asked (e.g. no reference yet).
@@ -240,6 +240,15 @@ impl LabApp {
                 self.viewport.views[i] = None;
                 continue;
             };
+            // A method that cannot take this light draws nothing and says why (never a
+            // picture made with another light).
+            if let Some(why) = method.refuses(core.session.scene().light.kind()) {
+                self.viewport.shown[i] = None;
+                self.viewport.keys[i] = None;
+                self.viewport.views[i] = None;
+                errors.push(why);
+                continue;
+            }
             let request = FrameRequest { method, ..base };
             if method.is_reference() && !reference_ready {
                 let shown = self.viewport.shown[i].get_or_insert_with(|| Shown {
@@ -545,7 +554,9 @@ impl LabApp {
                     if let Some(hit) = hit {
                         let to = f3(start_anchor + (hit - start_hit));
                         self.edit_scene(|e| match target {
-                            Selection::Light => e.light.center = to,
+                            Selection::Light => e.light.set_center(to),
+                            Selection::LightEnd(0) => e.light.a = Some(to),
+                            Selection::LightEnd(_) => e.light.b = Some(to),
                             Selection::Object(i) => {
                                 if let Some(o) = e.objects.get_mut(i) {
                                     o.translate = to;
@@ -577,11 +588,23 @@ impl LabApp {
             return None;
         }
         let (origin, dir) = camera::ray_at(&self.camera, rect, press)?;
-        if self.pick(origin, dir) != self.selection {
+        let picked = self.pick(origin, dir);
+        if picked.is_light() && self.selection.is_light() {
+            // A line light selected: the press decides whether an end or the whole segment moves.
+            self.selection = picked;
+        } else if picked != self.selection {
             return None;
         }
         let anchor = match self.selection {
-            Selection::Light => self.doc.light().center,
+            Selection::Light => self.doc.light().center(),
+            Selection::LightEnd(k) => {
+                let l = *self.doc.light().as_line()?;
+                if k == 0 {
+                    l.a
+                } else {
+                    l.b
+                }
+            }
             Selection::Object(i) => {
                 let t = self.doc.file.objects.get(i)?.translate;
                 Vec3::new(t[0] as f32, t[1] as f32, t[2] as f32)
@@ -608,10 +631,28 @@ impl LabApp {
         let Some(core) = self.core.as_ref() else {
             return Selection::None;
         };
-        let light = core.scene().light;
-        if let Some(p) = camera::ray_plane(origin, dir, light.center, light.normal) {
-            if (p - light.center).length() <= light.radius * 1.15 {
-                best = ((p - origin).length(), Selection::Light);
+        match core.scene().light {
+            Light::Disk(light) => {
+                if let Some(p) = camera::ray_plane(origin, dir, light.center, light.normal) {
+                    if (p - light.center).length() <= light.radius * 1.15 {
+                        best = ((p - origin).length(), Selection::Light);
+                    }
+                }
+            }
+            Light::Line(line) => {
+                // The point of the segment nearest the ray, within a few pixels' width (a
+                // hundredth of its distance): an end (its outer fifth) or the whole segment.
+                let (t, s, gap) = ray_segment(origin, dir, line.a, line.b);
+                if t > 0.0 && gap <= 0.015 * t + 0.02 {
+                    let pick = if s < 0.2 {
+                        Selection::LightEnd(0)
+                    } else if s > 0.8 {
+                        Selection::LightEnd(1)
+                    } else {
+                        Selection::Light
+                    };
+                    best = (t, pick);
+                }
             }
         }
         let objects = &core.scene().objects;
@@ -631,7 +672,7 @@ impl LabApp {
     /// The light centre's screen position in the viewport, if it is in front of the camera.
     pub fn light_screen_pos(&self) -> Option<Pos2> {
         let rect = self.viewport.rect?;
-        Projector::new(&self.camera, rect).point(self.doc.light().center)
+        Projector::new(&self.camera, rect).point(self.doc.light().center())
     }
 
     /// Where world point `p` is drawn in the viewport.
@@ -639,4 +680,21 @@ impl LabApp {
         let rect = self.viewport.rect?;
         Projector::new(&self.camera, rect).point(p)
     }
+}
+
+/// The closest approach of the ray `origin + t·dir` (unit `dir`) to the segment `a`–`b`: the
+/// ray's `t`, the segment's parameter `s` ∈ [0, 1], and the distance between the two points.
+fn ray_segment(origin: Vec3, dir: Vec3, a: Vec3, b: Vec3) -> (f32, f32, f32) {
+    let e = b - a;
+    let w = origin - a;
+    let (ee, de, dw, ew) = (e.dot(e), dir.dot(e), dir.dot(w), e.dot(w));
+    let denom = ee - de * de;
+    let s = if denom > 1e-12 * ee.max(1e-12) {
+        ((ew - de * dw) / denom).clamp(0.0, 1.0)
+    } else {
+        0.5
+    };
+    let q = a + e * s;
+    let t = (q - origin).dot(dir);
+    (t, s, (origin + dir * t - q).length())
 }

@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::{PreparedCasters, VolumeParams, VtVariant};
 use crate::render::methods::reference::{MAX_SAMPLES, SAMPLES};
-use crate::render::methods::{pcss, sampled};
+use crate::render::methods::{linear_ssm, pcss, sampled};
 use crate::render::passes::floor::Floor;
 use crate::render::passes::view::{Mapping, View, ViewParams};
 use crate::render::readback::map_now;
@@ -82,6 +82,10 @@ impl Case {
             "sampled" => (
                 "sampled 16".to_string(),
                 defaults.with(&sampled::LIGHTS, 16),
+            ),
+            "linear-ssm" => (
+                "linear-ssm 2".to_string(),
+                defaults.with(&linear_ssm::SAMPLES, 2),
             ),
             // Each timed frame takes one more sample per pixel, of a budget that never ends.
             "reference" => (
@@ -511,7 +515,12 @@ pub fn run(ctx: &GpuContext, config: &Config, progress: Progress) -> Result<Repo
         let mut sessions: Vec<Session> = config
             .cases
             .iter()
-            .map(|_| Session::new(ctx, scene.clone()))
+            .map(|case| Session::new(ctx, scene_for(case.method, scene)))
+            .collect();
+        // Cases timed under the other kind of light (see `scene_for`) say so in their label.
+        let converted: Vec<bool> = sessions
+            .iter()
+            .map(|s| s.scene().light.kind() != scene.light.kind())
             .collect();
         for &size in &config.sizes {
             progress(&format!(
@@ -533,7 +542,7 @@ pub fn run(ctx: &GpuContext, config: &Config, progress: Progress) -> Result<Repo
                 config.cases.len(),
                 config.warmup + config.frames,
             ));
-            runs.extend(time_size(ctx, &mut sessions, config, size));
+            runs.extend(time_size(ctx, &mut sessions, &converted, config, size));
             done += 1;
         }
     }
@@ -607,9 +616,10 @@ fn scene_info(scene: &Scene, runs: usize) -> SceneInfo {
     let params = VolumeParams::for_scene(scene);
     let mut samples = Vec::with_capacity(runs);
     let mut last = None;
-    for _ in 0..runs.max(1) {
+    // The geometry stage is the D-buffer's: a disk light's (none for a line light).
+    for light in std::iter::repeat_n(scene.light.as_disk(), runs.max(1)).flatten() {
         let t = Instant::now();
-        let g = prepared.build(&scene.light, &params);
+        let g = prepared.build(light, &params);
         samples.push(ms_since(t));
         last = Some(std::hint::black_box(g));
     }
@@ -715,7 +725,27 @@ impl Samples {
 /// Every timed frame makes its light-space maps again (`Session::invalidate_light_maps`): Table 1
 /// times the whole frame, light pass and camera pass. `sessions[i]` renders `config.cases[i]`; a
 /// method that fails is dropped from the rounds and its row says why.
-fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: u32) -> Vec<Run> {
+/// The scene `method` is timed on: `scene` itself, or, for a method that refuses its light, the
+/// same scene under the light converted to the kind the method takes (`Light::converted`: a
+/// disk's diameter as a segment, a segment's length as a disk), so every method of the registry
+/// has a frame on the same casters at the same size to compare with the D-buffer's.
+pub fn scene_for(method: Method, scene: &Scene) -> Scene {
+    match method.needs() {
+        Some(kind) if kind != scene.light.kind() => Scene {
+            light: scene.light.converted(kind),
+            ..scene.clone()
+        },
+        _ => scene.clone(),
+    }
+}
+
+fn time_size(
+    ctx: &GpuContext,
+    sessions: &mut [Session],
+    converted: &[bool],
+    config: &Config,
+    size: u32,
+) -> Vec<Run> {
     let requests: Vec<FrameRequest> = config
         .cases
         .iter()
@@ -762,12 +792,16 @@ fn time_size(ctx: &GpuContext, sessions: &mut [Session], config: &Config, size: 
     config
         .cases
         .iter()
-        .zip(sessions.iter())
+        .zip(sessions.iter().zip(converted))
         .zip(samples.into_iter().zip(errors))
-        .map(|((case, session), (samples, error))| Run {
+        .map(|((case, (session, &converted)), (samples, error))| Run {
             scene: session.scene().name.clone(),
             size,
-            label: case.label.clone(),
+            label: if converted {
+                format!("{} ({} light)", case.label, session.scene().light.kind())
+            } else {
+                case.label.clone()
+            },
             method: case.method.name().to_string(),
             timing: error.is_none().then(|| samples.timing(case)),
             fill: error
@@ -797,10 +831,7 @@ fn time_display(ctx: &GpuContext, scene: &Scene, config: &Config, size: u32) -> 
             // The light a centimetre to one side or the other: everything light-space is redone.
             nudge += 1;
             let dx = if nudge.is_multiple_of(2) { 0.01 } else { -0.01 };
-            session.set_light(DiskLight {
-                center: base.center + Vec3::new(dx, 0.0, 0.0),
-                ..base
-            });
+            session.set_light(base.with_center(base.center() + Vec3::new(dx, 0.0, 0.0)));
         }
         let t = Instant::now();
         let job = FrameJob {
@@ -953,7 +984,8 @@ pub fn scaling_scene(triangles: u32) -> Scene {
             normal: Vec3::new(0.1, -1.0, 0.05).normalize(),
             radius: 0.6,
             intensity: 1.0,
-        },
+        }
+        .into(),
         objects: vec![Object {
             name: "sphere".into(),
             mesh,
@@ -970,9 +1002,9 @@ fn scaling_point(triangles: u32, runs: usize) -> ScalingPoint {
     let params = VolumeParams::for_scene(&scene);
     let mut samples = Vec::new();
     let mut volume_triangles = 0;
-    for _ in 0..runs.max(1) {
+    for light in std::iter::repeat_n(scene.light.as_disk(), runs.max(1)).flatten() {
         let t = Instant::now();
-        let g = prepared.build(&scene.light, &params);
+        let g = prepared.build(light, &params);
         samples.push(ms_since(t));
         volume_triangles = g.stats.umbra_triangles + g.stats.penumbra_triangles;
         drop(std::hint::black_box(g));

@@ -74,6 +74,7 @@ pub fn markdown(r: &Report) -> String {
     display(&mut out, r);
     competition(&mut out, r);
     hard_methods(&mut out, r);
+    against_dbuffer_and_hard(&mut out, r);
     coherence(&mut out, r);
     scaling(&mut out, r);
     targets(&mut out, r);
@@ -372,6 +373,69 @@ fn hard_methods(out: &mut String, r: &Report) {
         }
     }
     let _ = writeln!(out);
+}
+
+/// Every method's frame at the largest size as a ratio to the D-buffer's and to the hard shadow
+/// map's (the yardsticks issues 13 and 14 name), median over the scenes.
+fn against_dbuffer_and_hard(out: &mut String, r: &Report) {
+    let Some(&size) = r.sizes().last() else {
+        return;
+    };
+    let _ = writeln!(
+        out,
+        "### Every method at {size}²: frame as a ratio to the D-buffer and to the hard shadow \
+         map\n\n| method | frame ms | × dbuffer | × hard |\n|---|---:|---:|---:|"
+    );
+    for (label, method) in r.labels() {
+        let Ok(method) = method.parse::<Method>() else {
+            continue;
+        };
+        // Per scene: the frame, and its ratios to the D-buffer and to the hard shadow map.
+        let mut frames = Vec::new();
+        let (mut to_dbuffer, mut to_hard) = (Vec::new(), Vec::new());
+        for s in &r.scenes {
+            let Some(t) = r
+                .runs
+                .iter()
+                .find(|x| x.scene == s.name && x.size == size && x.label == label)
+                .and_then(|run| run.timing.as_ref())
+            else {
+                continue;
+            };
+            frames.push(t.frame_ms.median);
+            to_dbuffer.extend(r.ratio_to(&s.name, size, method, Method::DBUFFER));
+            to_hard.extend(r.ratio_to(&s.name, size, method, Method::HARD));
+        }
+        if frames.is_empty() {
+            let err = r
+                .runs
+                .iter()
+                .find(|x| x.size == size && x.label == label)
+                .and_then(|x| x.error.clone());
+            let _ = writeln!(out, "| {label} | {} | | |", na(&err));
+            continue;
+        }
+        let ratio = |v: Vec<f64>| {
+            if v.is_empty() {
+                "–".to_string()
+            } else {
+                format!("{:.2}×", median(v))
+            }
+        };
+        let _ = writeln!(
+            out,
+            "| {label} | {} | {} | {} |",
+            ms(median(frames)),
+            ratio(to_dbuffer),
+            ratio(to_hard)
+        );
+    }
+    let _ = writeln!(
+        out,
+        "\nA method that cannot take a scene's light (`linear-ssm` needs a line) is timed on the same \
+         scene with the light converted, its label saying which (a disk's diameter as a segment: the \
+         same casters, the same extent); ratios are per scene, then the median over the scenes.\n"
+    );
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

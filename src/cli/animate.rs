@@ -23,7 +23,8 @@ pub struct AnimateArgs<'a> {
     pub orbit: &'a str,
     pub fps: u32,
     pub size: &'a str,
-    pub method: &'a str,
+    /// `None`: the method made for the scene's light ([`Method::made_for`]).
+    pub method: Option<&'a str>,
     pub vt: &'a str,
     pub dbuffer_size: u32,
     pub knobs: &'a MethodFlags,
@@ -32,10 +33,10 @@ pub struct AnimateArgs<'a> {
 pub fn animate(args: &AnimateArgs) -> Result<()> {
     let (width, height) = parse_size(args.size)?;
     let orbit: Orbit = args.orbit.parse().map_err(anyhow::Error::msg)?;
-    let method: Method = args.method.parse().map_err(anyhow::Error::msg)?;
+    let named = super::parse_method(args.method)?;
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
-    let spec = AnimationSpec {
+    let mut spec = AnimationSpec {
         frames: args.frames,
         fps: args.fps,
         orbit,
@@ -43,7 +44,7 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
             width,
             height,
             dbuffer_size: args.dbuffer_size,
-            method,
+            method: named.unwrap_or_default(),
             vt,
             knobs: args.knobs.knobs()?,
             read_dbuffer: false,
@@ -52,6 +53,12 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
     spec.validate()?;
     let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
+    let method = named.unwrap_or_else(|| Method::made_for(scene.light.kind()));
+    // Before the GPU starts: a disk-only method under a line light (or the reverse) says why.
+    if let Some(why) = method.refuses(scene.light.kind()) {
+        anyhow::bail!("{why}");
+    }
+    spec.request.method = method;
     let name = scene.name.clone();
     let offline = Offline::new()?;
     // One session for the whole orbit: meshes uploaded and casters prepared once, only the

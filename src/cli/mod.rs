@@ -125,16 +125,23 @@ pub struct RenderArgs<'a> {
     pub scene: &'a str,
     pub out: &'a Path,
     pub size: &'a str,
-    pub method: &'a str,
+    /// `None`: the method made for the scene's light ([`Method::made_for`]).
+    pub method: Option<&'a str>,
     pub vt: &'a str,
     pub dbuffer_size: u32,
     pub knobs: &'a MethodFlags,
     pub verbose: bool,
 }
 
+/// `--method` if given (an unknown name lists the methods).
+pub(crate) fn parse_method(name: Option<&str>) -> Result<Option<Method>> {
+    name.map(|n| n.parse::<Method>().map_err(anyhow::Error::msg))
+        .transpose()
+}
+
 pub fn render(args: &RenderArgs) -> Result<()> {
     let (width, height) = parse_size(args.size)?;
-    let method: Method = args.method.parse().map_err(anyhow::Error::msg)?;
+    let named = parse_method(args.method)?;
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
     let knobs = args.knobs.knobs()?;
@@ -142,6 +149,11 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     output::check_out_dir(args.out, &output::FILE_NAMES).context("--out")?;
     let scene =
         scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
+    let method = named.unwrap_or_else(|| Method::made_for(scene.light.kind()));
+    // Before the GPU starts: a disk-only method under a line light (or the reverse) says why.
+    if let Some(why) = method.refuses(scene.light.kind()) {
+        bail!("{why}");
+    }
     let offline = Offline::new()?;
     if args.verbose {
         errln!("adapter   {}", offline.ctx.adapter_description());
@@ -292,19 +304,25 @@ pub fn inspect(
              --samples, or compare it on the GPU with `dbuffer compare`"
         );
     }
+    let Some(&l) = scene.light.as_disk() else {
+        bail!(
+            "inspect shows the D-buffer's geometry stage, which needs a disk light, and the \
+             light of '{name}' is a line (kind = \"line\"); use `dbuffer render` or `dbuffer \
+             compare` for a line light"
+        );
+    };
     let t0 = Instant::now();
     let prepared = PreparedCasters::new(&scene);
     let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
     let params = VolumeParams::for_scene(&scene);
     let t1 = Instant::now();
-    let geometry = prepared.build(&scene.light, &params);
+    let geometry = prepared.build(&l, &params);
     let build_ms = t1.elapsed().as_secs_f64() * 1e3;
     // The paper's twin needs the geometry, not the prepared casters (welding and adjacency):
     // give their memory back before the oracle builds its BVH. dbuffer-fused's twin reads the
     // caster edges from them.
     let prepared = (method == TwinMethod::Fused).then_some(prepared);
 
-    let l = &scene.light;
     outln!("scene     {}", scene.name);
     outln!(
         "light     centre {} normal {} radius {}",

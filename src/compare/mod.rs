@@ -4,6 +4,10 @@
 //!
 //! Which pixels count: those where the GPU hit a surface that faces the light (the CPU's view of
 //! the same pixels decides "faces the light", as in the accuracy tests).
+//!
+//! Under a line light the reference casts rays to stratified points on the segment, and the
+//! methods that need a disk (the D-buffer family, `wedges`, `pcss`) are listed as not
+//! applicable with their reason instead of being drawn (and `linear-ssm` under a disk).
 
 pub mod heatmap;
 pub mod report;
@@ -63,8 +67,12 @@ pub struct Comparison {
     pub request: CompareRequest,
     /// The pixels that count.
     pub mask: Vec<bool>,
-    /// The reference first, then every other method in registry order.
+    /// The reference first, then every other method in registry order that takes the scene's
+    /// light.
     pub results: Vec<MethodResult>,
+    /// The methods that refuse the scene's light (a disk-only method under a line light, or
+    /// the reverse), each with its one-line reason.
+    pub not_applicable: Vec<(Method, String)>,
     /// Reference shadow rays per second (all cores).
     pub reference_rays_per_s: f64,
 }
@@ -126,8 +134,14 @@ pub fn run(
         frame: reference,
         hard: None,
     }];
+    let mut not_applicable = Vec::new();
     for &method in Method::all() {
         if method.is_reference() {
+            continue;
+        }
+        if let Some(why) = method.refuses(scene.light.kind()) {
+            progress(&format!("{method}: not applicable ({why})"));
+            not_applicable.push((method, why));
             continue;
         }
         progress(&format!("{method}: {}", method.description()));
@@ -172,6 +186,7 @@ pub fn run(
         request: *request,
         mask,
         results,
+        not_applicable,
         reference_rays_per_s,
     })
 }

@@ -30,6 +30,18 @@ pub struct Report {
     /// Pixels that count (a surface facing the light).
     pub pixels: usize,
     pub methods: Vec<MethodRow>,
+    /// Methods that refuse the scene's light, with the reason (absent in older reports).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_applicable: Vec<NotApplicable>,
+}
+
+/// A method `compare` did not draw: it cannot take the scene's light.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct NotApplicable {
+    pub method: String,
+    /// `"disk"` or `"line"`: the light it needs.
+    pub needs: String,
+    pub reason: String,
 }
 
 /// One method's row of the report.
@@ -100,6 +112,15 @@ impl Report {
             reference_rays_per_s: c.reference_rays_per_s,
             pixels: c.mask.iter().filter(|&&m| m).count(),
             methods: c.results.iter().map(row).collect(),
+            not_applicable: c
+                .not_applicable
+                .iter()
+                .map(|(m, why)| NotApplicable {
+                    method: m.name().to_string(),
+                    needs: m.needs().map_or("", |k| k.name()).to_string(),
+                    reason: why.clone(),
+                })
+                .collect(),
         }
     }
 
@@ -158,6 +179,12 @@ impl Report {
             s.push_str(&format!(
                 "| {} | {:.2} | {:.4} | {:.4} | {:.3} | {} | {:.2} | {} |\n",
                 m.method, m.class_mismatch_pct, m.mae, m.penumbra_mae, m.p99, gpu, m.cpu_ms, heat
+            ));
+        }
+        for n in &self.not_applicable {
+            s.push_str(&format!(
+                "| {} | n/a — needs a {} light | | | | | | |\n",
+                n.method, n.needs
             ));
         }
         s

@@ -988,8 +988,8 @@ impl FusedTwin {
         );
         FusedTwin {
             dbuffer: DBufferTwin::new(scene, &geometry.casters),
-            light: scene.light,
-            bins: EdgeBins::build(&edges, &scene.light, &vp, 64),
+            light: scene.light.disk_or_centre(),
+            bins: EdgeBins::build(&edges, &scene.light.disk_or_centre(), &vp, 64),
             edges,
             surfaces: Bvh::build(scene.all_triangles()),
             is_caster: scene
@@ -1377,7 +1377,7 @@ mod tests {
                 target: Vec3::ZERO,
                 fov_y_deg: 45.0,
             },
-            light,
+            light: light.into(),
             objects,
         }
     }
@@ -1388,7 +1388,9 @@ mod tests {
             .meshes
             .iter()
             .enumerate()
-            .flat_map(|(k, m)| candidate_edges(m, &classify(m, &scene.light), k as u32))
+            .flat_map(|(k, m)| {
+                candidate_edges(m, &classify(m, &scene.light.disk_or_centre()), k as u32)
+            })
             .collect()
     }
 
@@ -1630,7 +1632,7 @@ mod tests {
             };
             let prepared = PreparedCasters::new(&scene);
             let geometry = prepared.build(
-                &scene.light,
+                &scene.light.disk_or_centre(),
                 &crate::geometry::VolumeParams::for_scene(&scene),
             );
             let params = FusedParams {
@@ -1638,7 +1640,7 @@ mod tests {
                 ..FusedParams::default()
             };
             let twin = FusedTwin::new(&scene, &prepared, &geometry, params);
-            let l = scene.light;
+            let l = scene.light.disk_or_centre();
             let h_max = scene
                 .objects
                 .iter()

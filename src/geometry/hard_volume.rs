@@ -33,7 +33,7 @@ use glam::{Vec3, Vec4};
 use super::adjacency::{CasterMesh, NO_FACE};
 use super::classify::{classify, FaceClass};
 use super::PreparedCasters;
-use crate::scene::DiskLight;
+use crate::scene::{DiskLight, Light, LineLight};
 
 /// Which faces of a caster make shadow volumes (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -95,12 +95,16 @@ pub fn point_light(p: Vec3) -> DiskLight {
     }
 }
 
-/// The light's centre as a point light: the disk with radius 0, its plane kept (the oracle's
-/// one-sided rule still holds). What `reference-hard` casts its rays to.
-pub fn centre_light(light: &DiskLight) -> DiskLight {
-    DiskLight {
-        radius: 0.0,
-        ..*light
+/// The light's centre as a point light: a disk with radius 0, its plane kept (the oracle's
+/// one-sided rule still holds), or a line's midpoint as a segment of length 0 (emitting all
+/// around, as the line does). What `reference-hard` casts its rays to.
+pub fn centre_light(light: &Light) -> Light {
+    match *light {
+        Light::Disk(d) => Light::Disk(DiskLight { radius: 0.0, ..d }),
+        Light::Line(l) => {
+            let m = l.midpoint();
+            Light::Line(LineLight { a: m, b: m, ..l })
+        }
     }
 }
 

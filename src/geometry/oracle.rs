@@ -1,18 +1,22 @@
-//! The ray-cast ground truth: `V(x)`, the fraction of the disk light visible from a point.
+//! The ray-cast ground truth: `V(x)`, the fraction of the light visible from a point.
 //!
-//! `V(x)` is estimated with shadow rays from `x` to `K` stratified sample points on the disk
-//! (design §4). The samples are the cells of a jittered grid on the unit square, mapped to the
-//! disk by Shirley and Chiu's area-preserving concentric map, so every sample stands for the
-//! same area `πr²/K`. The jitter comes from a fixed-seed hash: the same `K` always gives the same
-//! samples and the same `V`, on every run and thread.
+//! `V(x)` is estimated with shadow rays from `x` to `K` stratified sample points on the light
+//! (design §4). On a disk, the samples are the cells of a jittered grid on the unit square,
+//! mapped to the disk by Shirley and Chiu's area-preserving concentric map, so every sample
+//! stands for the same area `πr²/K`. On a line light ([`line_samples`]), sample `i` is jittered
+//! inside the `i`-th of `K` equal pieces of the segment, so it stands for the length `L/K`; the
+//! occluded part of the segment seen through one straight edge is one interval, so `V_K` is
+//! within `2/K` of the exact fraction. The jitter comes from a fixed-seed hash: the same `K`
+//! always gives the same samples and the same `V`, on every run and thread.
 //!
 //! When `K` is not a perfect square the grid has `m = round(√K)` rows; the first `K mod m` rows
 //! hold one cell more than the others, and each row's height is proportional to its cell count,
 //! so every cell still has area `1/K` (for a square `K` this is the plain `√K × √K` grid).
 //!
 //! Conventions:
-//! - the light is one-sided: a point on or behind its plane (`height_of(x) <= 0`) has `V = 0`;
-//! - the disk itself is not geometry;
+//! - a disk light is one-sided: a point on or behind its plane (`height_of(x) <= 0`) has
+//!   `V = 0`; a line light emits all around its segment ([`Light::reaches`]);
+//! - the light itself is not geometry;
 //! - occlusion uses [`intersect_triangle_tolerant`](super::ray::intersect_triangle_tolerant):
 //!   plain `f32` Möller–Trumbore lets about one shadow ray in 10⁵ slip through the shared edge
 //!   of two triangles of a closed mesh, which would light umbra points;
@@ -34,7 +38,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::bvh::Bvh;
-use crate::scene::{DiskLight, Scene};
+use crate::scene::{Light, LineLight, Scene};
 
 /// Default number of light samples per point (seed 000's Fig. 7b and 8d).
 pub const DEFAULT_SAMPLES: usize = 1024;
@@ -49,10 +53,10 @@ const JITTER_SEED: u64 = 0x0d1b_5eed_0000_0000;
 #[derive(Debug)]
 pub struct Oracle {
     bvh: Bvh,
-    light: DiskLight,
-    /// Sample points on the disk, world space.
+    light: Light,
+    /// Sample points on the light, world space.
     samples: Vec<Vec3>,
-    /// Whether the light's centre, normal and radius are finite (otherwise `V = 0`).
+    /// Whether the light's coordinates are finite (otherwise `V = 0`).
     light_ok: bool,
     rays: AtomicU64,
 }
@@ -70,17 +74,22 @@ impl Clone for Oracle {
 }
 
 impl Oracle {
-    /// An oracle where every triangle occludes, with `samples` rays per point (0 means 1).
-    pub fn new(triangles: Vec<[Vec3; 3]>, light: DiskLight, samples: usize) -> Oracle {
-        let (e1, e2) = light.basis();
-        let samples: Vec<Vec3> = disk_samples(samples.max(1))
-            .into_iter()
-            .map(|p| light.center + light.radius * (p.x * e1 + p.y * e2))
-            .collect();
-        let light_ok = light.center.is_finite()
-            && light.normal.is_finite()
-            && light.radius.is_finite()
-            && samples.iter().all(|s: &Vec3| s.is_finite());
+    /// An oracle where every triangle occludes, with `samples` rays per point (0 means 1), for
+    /// a disk or a line light.
+    pub fn new(triangles: Vec<[Vec3; 3]>, light: impl Into<Light>, samples: usize) -> Oracle {
+        let light = light.into();
+        let k = samples.max(1);
+        let samples: Vec<Vec3> = match &light {
+            Light::Disk(d) => {
+                let (e1, e2) = d.basis();
+                disk_samples(k)
+                    .into_iter()
+                    .map(|p| d.center + d.radius * (p.x * e1 + p.y * e2))
+                    .collect()
+            }
+            Light::Line(l) => line_samples(l, k),
+        };
+        let light_ok = light.is_finite() && samples.iter().all(|s: &Vec3| s.is_finite());
         Oracle {
             bvh: Bvh::build(triangles),
             light,
@@ -96,7 +105,7 @@ impl Oracle {
     }
 
     /// The light.
-    pub fn light(&self) -> &DiskLight {
+    pub fn light(&self) -> &Light {
         &self.light
     }
 
@@ -134,9 +143,7 @@ impl Oracle {
     /// non-finite point or a non-finite light. The progressive reference calls it with slices of
     /// the sample set.
     pub fn count_visible(&self, x: Vec3, samples: &[Vec3]) -> u32 {
-        // Finite `x` with a finite light gives a finite height; NaN fails the comparison.
-        let h = self.light.height_of(x);
-        if !self.light_ok || !x.is_finite() || h.is_nan() || h <= 0.0 {
+        if !self.light_ok || !x.is_finite() || !self.light.reaches(x) {
             return 0;
         }
         let (t0, t1) = (SELF_EPS, 1.0 - SELF_EPS);
@@ -190,6 +197,17 @@ pub fn disk_samples(k: usize) -> Vec<Vec2> {
     out
 }
 
+/// `k` stratified points on the segment of `light`, deterministic: point `i` at
+/// `a + (i + ξ_i)/k · (b − a)` with `ξ_i` the jitter hash (one point per equal piece).
+pub fn line_samples(light: &LineLight, k: usize) -> Vec<Vec3> {
+    (0..k)
+        .map(|i| {
+            let s = (i as f64 + unit_hash(i as u64, 0)) / k as f64;
+            light.at(s as f32)
+        })
+        .collect()
+}
+
 /// Shirley and Chiu's concentric map from the unit square to the unit disk (area-preserving).
 pub fn concentric(u: f32, v: f32) -> Vec2 {
     let a = 2.0 * u - 1.0;
@@ -221,6 +239,8 @@ fn unit_hash(i: u64, lane: u64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use crate::scene::DiskLight;
 
     fn light() -> DiskLight {
         DiskLight {
@@ -351,7 +371,7 @@ mod tests {
                 target: Vec3::ZERO,
                 fov_y_deg: 45.0,
             },
-            light: light(),
+            light: light().into(),
             objects: vec![
                 Object {
                     name: "ground".into(),

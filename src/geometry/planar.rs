@@ -179,7 +179,8 @@ mod tests {
                 normal: Vec3::NEG_Y,
                 radius: 0.5,
                 intensity: 1.0,
-            },
+            }
+            .into(),
             objects: vec![
                 object(
                     "ground",
@@ -190,13 +191,13 @@ mod tests {
                 object("flipped", flipped),
             ],
         };
-        let (r, warnings) = planar_receivers(&scene, scene.light.center);
+        let (r, warnings) = planar_receivers(&scene, scene.light.center());
         assert!(warnings.is_empty(), "{warnings:?}");
         let objects: Vec<usize> = r.iter().map(|r| r.object).collect();
         assert_eq!(objects, [0, 2, 3]);
         // Oriented toward the light.
         for p in &r {
-            assert!(p.plane.dot(scene.light.center.extend(1.0)) > 0.0);
+            assert!(p.plane.dot(scene.light.center().extend(1.0)) > 0.0);
             assert!((p.plane.truncate().length() - 1.0).abs() < 1e-5);
         }
         let tilted = r[1].plane.truncate();

@@ -73,9 +73,12 @@ pub struct DBufferTwin {
 }
 
 impl DBufferTwin {
-    /// Build from every scene triangle (for `|cx_o|`) and each caster's volumes.
+    /// Build from every scene triangle (for `|cx_o|`) and each caster's volumes. The D-buffer
+    /// needs a disk light (its methods refuse a line light before anything is built); for a
+    /// line light this is the twin of a zero-radius disk at the midpoint, facing down.
     pub fn new(scene: &Scene, casters: &[CasterGeometry]) -> Self {
-        Self::from_parts(scene.light, scene.all_triangles(), casters)
+        let light = scene.light.disk_or_centre();
+        Self::from_parts(light, scene.all_triangles(), casters)
     }
 
     pub fn from_parts(

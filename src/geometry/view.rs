@@ -13,8 +13,8 @@ pub struct Receiver {
     pub position: Vec3,
     /// Unit normal of the hit triangle, turned toward the camera.
     pub normal: Vec3,
-    /// The normal faces the light centre and the point is in front of the light: the pixels the
-    /// metrics of design.md §4 are taken over.
+    /// The normal faces the light centre (a line's midpoint) and the light reaches the point
+    /// (in front of a one-sided disk): the pixels the metrics of design.md §4 are taken over.
     pub faces_light: bool,
 }
 
@@ -34,7 +34,7 @@ pub fn receivers(scene: &Scene, surfaces: &Bvh, width: u32, height: u32) -> Vec<
             }
             let position = origin + dir * hit.t;
             let faces_light =
-                normal.dot(light.center - position) > 0.0 && light.height_of(position) > 0.0;
+                normal.dot(light.center() - position) > 0.0 && light.reaches(position);
             Some(Receiver {
                 position,
                 normal,
@@ -85,7 +85,8 @@ mod tests {
                 normal: Vec3::NEG_Y,
                 radius: 0.5,
                 intensity: 1.0,
-            },
+            }
+            .into(),
             objects: vec![Object {
                 name: "ground".into(),
                 mesh: ground,

@@ -209,8 +209,8 @@ impl Default for VolumeParams {
 impl VolumeParams {
     /// Extrude well beyond everything in the scene.
     pub fn for_scene(scene: &Scene) -> Self {
-        let mut lo = scene.light.center;
-        let mut hi = scene.light.center;
+        let mut lo = scene.light.center() - Vec3::splat(scene.light.half_extent());
+        let mut hi = scene.light.center() + Vec3::splat(scene.light.half_extent());
         for o in &scene.objects {
             if let Some((a, b)) = o.mesh.bounds() {
                 lo = lo.min(a);

@@ -41,11 +41,15 @@ pub fn wanted_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     }
 }
 
-/// The features the render core uses when the adapter has them: timestamps (pass timings) and
-/// a float depth-stencil format (the stencil shadow methods' precision; they fall back on
-/// `Depth24PlusStencil8` without it).
+/// The features the render core uses when the adapter has them: timestamps (pass timings), a
+/// float depth-stencil format (the stencil shadow methods' precision; they fall back on
+/// `Depth24PlusStencil8` without it) and blending into 32-bit float targets (the penumbra
+/// wedges' coverage sum; `R16Float` without it).
 pub fn wanted_features(adapter: wgpu::Features) -> wgpu::Features {
-    adapter & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::DEPTH32FLOAT_STENCIL8)
+    adapter
+        & (wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::DEPTH32FLOAT_STENCIL8
+            | wgpu::Features::FLOAT32_BLENDABLE)
 }
 
 impl GpuContext {

@@ -115,7 +115,7 @@ pub fn render_in(
     report
         .cpu_ms
         .push(("frame_and_readback".into(), t.elapsed().as_secs_f64() * 1e3));
-    let dbuffer = dbuffer_of(request.method);
+    let dbuffer = dbuffer_of(request.method, session.scene().light.kind());
     let (_, geometry_ms) = session.geometry_builds(dbuffer);
     report
         .cpu_ms

@@ -21,16 +21,16 @@ use crate::geometry::hard_volume::centre_light;
 use crate::geometry::oracle::Oracle;
 use crate::geometry::progressive::ProgressiveReference;
 use crate::geometry::view;
-use crate::scene::{Camera, DiskLight, Scene};
+use crate::scene::{Camera, Light, Scene};
 
 /// What a reference image depends on: it starts again when any of it changes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReferenceKey {
-    pub light: DiskLight,
+    pub light: Light,
     pub camera: Camera,
     pub width: u32,
     pub height: u32,
-    /// K, the disk samples per pixel.
+    /// K, the light samples per pixel.
     pub samples: u32,
     /// Bumped whenever an object's mesh changes.
     pub meshes: u64,

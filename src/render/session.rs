@@ -24,7 +24,7 @@ use super::{GpuContext, RenderError, Texture};
 use crate::geometry::light_view::LightView;
 use crate::geometry::progressive::ProgressiveReference;
 use crate::geometry::{PreparedCasters, SceneGeometry};
-use crate::scene::{Camera as SceneCamera, DiskLight, Mesh, Scene};
+use crate::scene::{Camera as SceneCamera, Light, LightKind, Mesh, Scene};
 
 /// One frame to record: into which targets, what, and (for a window) how to show it.
 pub struct FrameJob<'a> {
@@ -121,8 +121,10 @@ impl Session {
         self.revision
     }
 
-    /// Move the light; light-space work is redone on the next frame if it changed.
-    pub fn set_light(&mut self, light: DiskLight) {
+    /// Move the light (or change it, disk or line); light-space work is redone on the next
+    /// frame if it changed.
+    pub fn set_light(&mut self, light: impl Into<Light>) {
+        let light = light.into();
         if light != self.scene.light {
             self.scene.light = light;
             self.moved();
@@ -213,7 +215,7 @@ impl Session {
         ctx: &GpuContext,
         request: &FrameRequest,
     ) -> Result<Method, RenderError> {
-        let d = dbuffer_of(request.method);
+        let d = dbuffer_of(request.method, self.scene.light.kind());
         if !self.methods.contains_key(&d) || d != request.method {
             self.prepare_only(ctx, d, request)?;
         }
@@ -417,6 +419,9 @@ impl Session {
         let request = job.request;
         request.validate(ctx)?;
         let method = request.method;
+        if let Some(why) = method.refuses(self.scene.light.kind()) {
+            return Err(RenderError::Request(why));
+        }
         let state = self
             .methods
             .entry(method)
@@ -513,7 +518,9 @@ impl Session {
         request: &FrameRequest,
     ) -> Result<Frame, RenderError> {
         let mut own = std::mem::take(&mut self.own);
-        let dbuffer = request.read_dbuffer.then(|| dbuffer_of(request.method));
+        let dbuffer = request
+            .read_dbuffer
+            .then(|| dbuffer_of(request.method, self.scene.light.kind()));
         let submitted = (|| {
             self.submit(
                 ctx,
@@ -610,10 +617,13 @@ impl Session {
     }
 }
 
-/// Which method's D-buffer `dbuffer.exr` holds for a frame of `method`: its own if it is a
-/// D-buffer method, else the paper's.
-pub fn dbuffer_of(method: Method) -> Method {
-    if method == Method::DBUFFER_CENTER {
+/// Which method's D-buffer `dbuffer.exr` holds for a frame of `method` under a `light` light:
+/// its own if it is a D-buffer method, else the paper's; under a line light (which the D-buffer
+/// refuses), the hard shadow map from the midpoint (its `|cx_o|` channel alone).
+pub fn dbuffer_of(method: Method, light: LightKind) -> Method {
+    if light == LightKind::Line {
+        Method::HARD
+    } else if method == Method::DBUFFER_CENTER {
         method
     } else {
         Method::DBUFFER

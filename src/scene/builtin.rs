@@ -1,4 +1,4 @@
-//! Built-in scenes (design.md §6). Each is a TOML file in `assets/scenes/`, embedded in the
+//! Built-in scenes (design.md §6), and scenes with a linear light after seed 003's figures. Each is a TOML file in `assets/scenes/`, embedded in the
 //! binary and parsed by the same code as user scene files, so they double as examples.
 
 use super::{Scene, SceneError, SceneFile};
@@ -63,6 +63,31 @@ const SCENES: &[(&str, &str)] = &[
     (
         "fusion-many",
         include_str!("../../assets/scenes/fusion-many.toml"),
+    ),
+    // Linear lights (seed 003's figures).
+    (
+        "line-fig2",
+        include_str!("../../assets/scenes/line-fig2.toml"),
+    ),
+    (
+        "line-fig3-tilted",
+        include_str!("../../assets/scenes/line-fig3-tilted.toml"),
+    ),
+    (
+        "line-fig6-gap",
+        include_str!("../../assets/scenes/line-fig6-gap.toml"),
+    ),
+    (
+        "line-fig8-overlap",
+        include_str!("../../assets/scenes/line-fig8-overlap.toml"),
+    ),
+    (
+        "line-fig9",
+        include_str!("../../assets/scenes/line-fig9.toml"),
+    ),
+    (
+        "line-bar",
+        include_str!("../../assets/scenes/line-bar.toml"),
     ),
 ];
 

@@ -12,6 +12,13 @@
 //! radius = 0.5
 //! intensity = 1.0          # optional, default 1
 //!
+//! # or a linear light (design.md §7), emitting all around the segment from `a` to `b`:
+//! # [light]
+//! # kind = "line"          # optional, default "disk"
+//! # a = [-1.0, 4.0, 0.0]
+//! # b = [1.0, 4.0, 0.0]    # at least MIN_LINE_LENGTH (1e-4 m) from `a`
+//! # intensity = 1.0
+//!
 //! [[object]]
 //! name = "ground"          # optional, default: the mesh name
 //! mesh = "plane"           # a built-in shape name (see `shapes`), or a path to .obj/.gltf/.glb relative to this file
@@ -30,7 +37,10 @@
 //! The light's normal need not be unit length; it is normalised when the scene is built.
 
 use super::obj::Others;
-use super::{shapes, Camera, DiskLight, Mesh, Object, Scene, SceneError};
+use super::{
+    shapes, Camera, DiskLight, Light, LightKind, LineLight, Mesh, Object, Scene, SceneError,
+    MIN_LINE_LENGTH,
+};
 use crate::budget::{MAX_SCENE_FILE_BYTES, MAX_SCENE_TRIANGLES, MAX_SCENE_VERTICES};
 use crate::fsutil::ByteBudget;
 use glam::{Affine3A, EulerRot, Quat, Vec3};
@@ -102,6 +112,11 @@ const SCHEMA_WORDS: &[&str] = &[
     "rotate_deg",
     "scale",
     "casts_shadow",
+    "kind",
+    "disk",
+    "line",
+    "a",
+    "b",
     "true",
     "false",
     "inf",
@@ -241,15 +256,116 @@ pub struct CameraSpec {
     pub fov_y_deg: f64,
 }
 
-/// `[light]`.
+/// `[light]`: a disk (`center`, `normal`, `radius`) or, with `kind = "line"`, a segment (`a`,
+/// `b`). One flat table rather than a tagged enum, so `kind` can default to a disk (old files
+/// load unchanged), unknown keys stay errors, and the keys of the other kind get the house's
+/// messages ([`SceneFile::validate`]). A disk writes back exactly the keys it always had.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightSpec {
-    pub center: [f64; 3],
-    pub normal: [f64; 3],
-    pub radius: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<LightKind>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub a: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub b: Option<[f64; 3]>,
     #[serde(default = "one")]
     pub intensity: f64,
+}
+
+impl LightSpec {
+    /// A disk light's keys.
+    pub fn disk(center: [f64; 3], normal: [f64; 3], radius: f64) -> LightSpec {
+        LightSpec {
+            kind: None,
+            center: Some(center),
+            normal: Some(normal),
+            radius: Some(radius),
+            a: None,
+            b: None,
+            intensity: 1.0,
+        }
+    }
+
+    /// A line light's keys.
+    pub fn line(a: [f64; 3], b: [f64; 3]) -> LightSpec {
+        LightSpec {
+            kind: Some(LightKind::Line),
+            center: None,
+            normal: None,
+            radius: None,
+            a: Some(a),
+            b: Some(b),
+            intensity: 1.0,
+        }
+    }
+
+    pub fn kind(&self) -> LightKind {
+        self.kind.unwrap_or_default()
+    }
+
+    /// The light, in `f32`, for a spec that [`SceneFile::validate`] accepted; missing keys of
+    /// an unchecked spec read as zero (a zero normal becomes straight down).
+    pub fn light(&self) -> Light {
+        let v = |a: Option<[f64; 3]>| a.map_or(Vec3::ZERO, v3);
+        match self.kind() {
+            LightKind::Disk => Light::Disk(DiskLight {
+                center: v(self.center),
+                normal: v(self.normal).try_normalize().unwrap_or(Vec3::NEG_Y),
+                radius: self.radius.unwrap_or(0.0) as f32,
+                intensity: self.intensity as f32,
+            }),
+            LightKind::Line => Light::Line(LineLight {
+                a: v(self.a),
+                b: v(self.b),
+                intensity: self.intensity as f32,
+            }),
+        }
+    }
+
+    /// The disk's centre or the segment's midpoint, as written in the file.
+    pub fn center_f64(&self) -> [f64; 3] {
+        match (self.kind(), self.center, self.a, self.b) {
+            (LightKind::Disk, Some(c), _, _) => c,
+            (LightKind::Line, _, Some(a), Some(b)) => std::array::from_fn(|i| 0.5 * (a[i] + b[i])),
+            _ => [0.0; 3],
+        }
+    }
+
+    /// The same place as a light of `kind` ([`Light::converted`]).
+    pub fn converted(&self, kind: LightKind) -> LightSpec {
+        if kind == self.kind() {
+            return self.clone();
+        }
+        let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
+        let mut out = match self.light().converted(kind) {
+            Light::Disk(d) => LightSpec::disk(f(d.center), f(d.normal), f64::from(d.radius)),
+            Light::Line(l) => LightSpec::line(f(l.a), f(l.b)),
+        };
+        out.intensity = self.intensity;
+        out
+    }
+
+    /// The light moved so its centre (a line's midpoint) is at `to`; a line keeps its
+    /// direction and length.
+    pub fn set_center(&mut self, to: [f64; 3]) {
+        match self.kind() {
+            LightKind::Disk => self.center = Some(to),
+            LightKind::Line => {
+                let c = self.center_f64();
+                let shift =
+                    |p: Option<[f64; 3]>| p.map(|p| std::array::from_fn(|i| p[i] + to[i] - c[i]));
+                self.a = shift(self.a);
+                self.b = shift(self.b);
+            }
+        }
+    }
 }
 
 /// One `[[object]]`.
@@ -454,25 +570,92 @@ impl SceneFile {
         }
 
         let l = &self.light;
-        finite("light.center", &l.center)?;
-        finite("light.normal", &l.normal)?;
-        finite("light.radius", &[l.radius])?;
+        // The keys of the other kind are mistakes, not options: say which kind reads them.
+        let foreign = |key: &str, found: String, kind: LightKind| {
+            let expected = match kind {
+                LightKind::Line => {
+                    "no such key for a line light (kind = \"line\" reads a, b and intensity)"
+                }
+                LightKind::Disk => {
+                    "no such key for a disk light (a disk reads center, normal, radius and \
+                     intensity; end points a and b need kind = \"line\")"
+                }
+            };
+            invalid(key, expected, found)
+        };
+        let missing = |key: &str, expected: &str| invalid(key, expected, "nothing".into());
+        match l.kind() {
+            LightKind::Disk => {
+                for (key, value) in [("light.a", l.a), ("light.b", l.b)] {
+                    if let Some(v) = value {
+                        return Err(foreign(key, show(&v), LightKind::Disk));
+                    }
+                }
+                let center = l
+                    .center
+                    .ok_or_else(|| missing("light.center", "the disk's centre [x, y, z]"))?;
+                let normal = l.normal.ok_or_else(|| {
+                    missing(
+                        "light.normal",
+                        "the disk's normal [x, y, z] (it emits toward it)",
+                    )
+                })?;
+                let radius = l
+                    .radius
+                    .ok_or_else(|| missing("light.radius", "the disk's radius"))?;
+                finite("light.center", &center)?;
+                finite("light.normal", &normal)?;
+                finite("light.radius", &[radius])?;
+                let n = v3(normal);
+                if n.length() <= 1e-6 || n.try_normalize().is_none() {
+                    return Err(invalid(
+                        "light.normal",
+                        "a non-zero direction (it is normalised)",
+                        show(&normal),
+                    ));
+                }
+                if radius <= 0.0 {
+                    return Err(invalid(
+                        "light.radius",
+                        "a positive disk radius",
+                        show(&[radius]),
+                    ));
+                }
+            }
+            LightKind::Line => {
+                for (key, value) in [("light.center", l.center), ("light.normal", l.normal)] {
+                    if let Some(v) = value {
+                        return Err(foreign(key, show(&v), LightKind::Line));
+                    }
+                }
+                if let Some(r) = l.radius {
+                    return Err(foreign("light.radius", show(&[r]), LightKind::Line));
+                }
+                let a = l.a.ok_or_else(|| {
+                    missing("light.a", "the first end point [x, y, z] of the line light")
+                })?;
+                let b = l.b.ok_or_else(|| {
+                    missing(
+                        "light.b",
+                        "the second end point [x, y, z] of the line light",
+                    )
+                })?;
+                finite("light.a", &a)?;
+                finite("light.b", &b)?;
+                // In f32, as the light is used: a and b must stay apart there too.
+                if (v3(b) - v3(a)).length() < MIN_LINE_LENGTH as f32 {
+                    return Err(invalid(
+                        "light.b",
+                        &format!(
+                            "an end point at least {MIN_LINE_LENGTH} m from light.a (the line \
+                             light has zero length)"
+                        ),
+                        show(&b),
+                    ));
+                }
+            }
+        }
         finite("light.intensity", &[l.intensity])?;
-        let n = v3(l.normal);
-        if n.length() <= 1e-6 || n.try_normalize().is_none() {
-            return Err(invalid(
-                "light.normal",
-                "a non-zero direction (it is normalised)",
-                show(&l.normal),
-            ));
-        }
-        if l.radius <= 0.0 {
-            return Err(invalid(
-                "light.radius",
-                "a positive disk radius",
-                show(&[l.radius]),
-            ));
-        }
         if l.intensity < 0.0 {
             return Err(invalid(
                 "light.intensity",
@@ -551,12 +734,7 @@ impl SceneFile {
                 }
             })
             .collect();
-        let light = DiskLight {
-            center: v3(l.center),
-            normal: v3(l.normal).normalize(),
-            radius: l.radius as f32,
-            intensity: l.intensity as f32,
-        };
+        let light = l.light();
         let camera = match &self.camera {
             Some(c) => c.camera(),
             None => super::framed_camera(&light, &objects),
@@ -784,7 +962,10 @@ scale = [1, 2, 3]
         assert_eq!(o.scale, Scale::PerAxis([1.0, 2.0, 3.0]));
         let s = f.build(Path::new("."), "m.toml").unwrap();
         assert_eq!(s.name, "m");
-        assert_eq!(s.light.normal, Vec3::new(0.0, -1.0, 0.0));
+        assert_eq!(
+            s.light.as_disk().map(|d| d.normal),
+            Some(Vec3::new(0.0, -1.0, 0.0))
+        );
         assert_eq!(s.objects[0].mesh.triangles.len(), 2 * 8 * 3);
     }
 

@@ -1,4 +1,5 @@
-//! Scenes: the disk light, the camera and the objects, from TOML files or built-ins.
+//! Scenes: the light (a disk, or a line segment), the camera and the objects, from TOML files or
+//! built-ins.
 
 pub mod builtin;
 mod error;
@@ -34,6 +35,210 @@ impl DiskLight {
     /// Two unit vectors spanning the disk plane, orthogonal to each other and to the normal.
     pub fn basis(&self) -> (Vec3, Vec3) {
         self.normal.any_orthonormal_pair()
+    }
+}
+
+/// A linear light (seed 003): the segment from `a` to `b`, emitting all around it. V at a point
+/// is the fraction of the segment's length it sees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LineLight {
+    pub a: Vec3,
+    pub b: Vec3,
+    pub intensity: f32,
+}
+
+impl LineLight {
+    /// The point at `s` ∈ [0, 1] along the segment (`a` at 0, `b` at 1).
+    pub fn at(&self, s: f32) -> Vec3 {
+        self.a + (self.b - self.a) * s
+    }
+
+    pub fn midpoint(&self) -> Vec3 {
+        (self.a + self.b) * 0.5
+    }
+
+    pub fn length(&self) -> f32 {
+        (self.b - self.a).length()
+    }
+}
+
+/// The shortest line light a scene file may give (metres): below it the segment has no
+/// direction worth the name and is refused as "zero length".
+pub const MIN_LINE_LENGTH: f64 = 1e-4;
+
+/// Which kind a light is (`[light] kind = "disk"` or `"line"`; a disk by default).
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum LightKind {
+    #[default]
+    Disk,
+    Line,
+}
+
+impl LightKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            LightKind::Disk => "disk",
+            LightKind::Line => "line",
+        }
+    }
+}
+
+impl std::fmt::Display for LightKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The scene's light: the one-sided disk of the D-buffer paper, or a linear light (design.md §7).
+/// The D-buffer geometry stage keeps taking a [`DiskLight`] ([`Light::as_disk`]); what every
+/// method shares goes through [`Light::center`] (the point the hard methods use).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Light {
+    Disk(DiskLight),
+    Line(LineLight),
+}
+
+impl From<DiskLight> for Light {
+    fn from(d: DiskLight) -> Light {
+        Light::Disk(d)
+    }
+}
+
+impl From<LineLight> for Light {
+    fn from(l: LineLight) -> Light {
+        Light::Line(l)
+    }
+}
+
+impl Light {
+    pub fn kind(&self) -> LightKind {
+        match self {
+            Light::Disk(_) => LightKind::Disk,
+            Light::Line(_) => LightKind::Line,
+        }
+    }
+
+    pub fn as_disk(&self) -> Option<&DiskLight> {
+        match self {
+            Light::Disk(d) => Some(d),
+            Light::Line(_) => None,
+        }
+    }
+
+    /// The disk, or for a line a zero-radius disk at its midpoint facing down: what the
+    /// D-buffer's twins build from when a caller did not refuse the line first (they do; this
+    /// keeps a wrong call from panicking).
+    pub fn disk_or_centre(&self) -> DiskLight {
+        self.as_disk().copied().unwrap_or(DiskLight {
+            center: self.center(),
+            normal: Vec3::NEG_Y,
+            radius: 0.0,
+            intensity: self.intensity(),
+        })
+    }
+
+    pub fn as_line(&self) -> Option<&LineLight> {
+        match self {
+            Light::Line(l) => Some(l),
+            Light::Disk(_) => None,
+        }
+    }
+
+    /// The disk's centre or the segment's midpoint: the point the hard methods (a shadow map,
+    /// a stencil volume) treat as the light, and what the light view looks from.
+    pub fn center(&self) -> Vec3 {
+        match self {
+            Light::Disk(d) => d.center,
+            Light::Line(l) => l.midpoint(),
+        }
+    }
+
+    pub fn intensity(&self) -> f32 {
+        match self {
+            Light::Disk(d) => d.intensity,
+            Light::Line(l) => l.intensity,
+        }
+    }
+
+    /// Half the light's extent: the disk's radius, half the segment's length.
+    pub fn half_extent(&self) -> f32 {
+        match self {
+            Light::Disk(d) => d.radius,
+            Light::Line(l) => 0.5 * l.length(),
+        }
+    }
+
+    /// Whether light can arrive at `x` at all: a disk is one-sided (`x` strictly in front of
+    /// its plane), a line emits all around (every finite point).
+    pub fn reaches(&self, x: Vec3) -> bool {
+        match self {
+            Light::Disk(d) => d.height_of(x) > 0.0,
+            Light::Line(_) => x.is_finite(),
+        }
+    }
+
+    /// Every coordinate finite (and a finite radius).
+    pub fn is_finite(&self) -> bool {
+        match self {
+            Light::Disk(d) => d.center.is_finite() && d.normal.is_finite() && d.radius.is_finite(),
+            Light::Line(l) => l.a.is_finite() && l.b.is_finite(),
+        }
+    }
+
+    /// The light moved: points by `point`, directions by `direction` (a rigid motion).
+    pub fn moved(&self, point: impl Fn(Vec3) -> Vec3, direction: impl Fn(Vec3) -> Vec3) -> Light {
+        match *self {
+            Light::Disk(d) => Light::Disk(DiskLight {
+                center: point(d.center),
+                normal: direction(d.normal).normalize_or(d.normal),
+                ..d
+            }),
+            Light::Line(l) => Light::Line(LineLight {
+                a: point(l.a),
+                b: point(l.b),
+                ..l
+            }),
+        }
+    }
+
+    /// The same place as a light of `kind`: a disk becomes the segment across it (through its
+    /// centre, as long as its diameter, along the first vector of its plane's basis); a segment
+    /// becomes a disk as wide as it is long (at least 1 cm), centred on its midpoint, facing
+    /// down (sideways under a vertical segment). Intensity stays. The bench times the methods
+    /// of one kind on the other kind's scenes this way.
+    pub fn converted(&self, kind: LightKind) -> Light {
+        match (*self, kind) {
+            (Light::Disk(d), LightKind::Line) => {
+                let (u, _) = d.basis();
+                Light::Line(LineLight {
+                    a: d.center - u * d.radius,
+                    b: d.center + u * d.radius,
+                    intensity: d.intensity,
+                })
+            }
+            (Light::Line(l), LightKind::Disk) => {
+                let along = (l.b - l.a).normalize_or_zero();
+                let down = (Vec3::NEG_Y - along * along.dot(Vec3::NEG_Y))
+                    .try_normalize()
+                    .unwrap_or(Vec3::X);
+                Light::Disk(DiskLight {
+                    center: l.midpoint(),
+                    normal: down,
+                    radius: (0.5 * l.length()).max(0.01),
+                    intensity: l.intensity,
+                })
+            }
+            (same, _) => same,
+        }
+    }
+
+    /// The light translated so its [`Light::center`] is at `to`.
+    pub fn with_center(&self, to: Vec3) -> Light {
+        let d = to - self.center();
+        self.moved(|p| p + d, |v| v)
     }
 }
 
@@ -89,7 +294,7 @@ impl Camera {
 /// is above it), just far enough that all of it fits a square view with a 10 % margin (a wider
 /// image shows more on the sides). The light itself is left out of the frame: it is drawn
 /// nowhere in a render, and taking it in would leave half the picture to the sky.
-pub fn framed_camera(light: &DiskLight, objects: &[Object]) -> Camera {
+pub fn framed_camera(light: &Light, objects: &[Object]) -> Camera {
     const FOV_Y_DEG: f32 = 45.0;
     let any_caster = objects.iter().any(|o| o.casts_shadow);
     let bounds = objects
@@ -100,8 +305,8 @@ pub fn framed_camera(light: &DiskLight, objects: &[Object]) -> Camera {
     let (mut lo, mut hi) = match bounds {
         Some(b) => b,
         None => {
-            let r = Vec3::splat(light.radius.max(0.5));
-            (light.center - r, light.center + r)
+            let r = Vec3::splat(light.half_extent().max(0.5));
+            (light.center() - r, light.center() + r)
         }
     };
     let corners = |lo: Vec3, hi: Vec3| {
@@ -114,7 +319,7 @@ pub fn framed_camera(light: &DiskLight, objects: &[Object]) -> Camera {
         })
     };
     // The shadow of the box on the plane y = lo.y, seen from the light's centre.
-    let c = light.center;
+    let c = light.center();
     let floor = lo.y;
     if bounds.is_some() && c.y > floor {
         for p in corners(lo, hi).collect::<Vec<_>>() {
@@ -162,7 +367,7 @@ pub struct Object {
 pub struct Scene {
     pub name: String,
     pub camera: Camera,
-    pub light: DiskLight,
+    pub light: Light,
     pub objects: Vec<Object>,
 }
 
@@ -215,8 +420,8 @@ impl Scene {
             ));
         }
 
-        let mut lo = self.light.center - Vec3::splat(self.light.radius);
-        let mut hi = self.light.center + Vec3::splat(self.light.radius);
+        let mut lo = self.light.center() - Vec3::splat(self.light.half_extent());
+        let mut hi = self.light.center() + Vec3::splat(self.light.half_extent());
         for (i, o) in self.objects.iter().enumerate() {
             let who = format!("object[{i}] '{}'", shown(&o.name));
             let overflowed = o.mesh.positions.iter().filter(|p| !p.is_finite()).count();
@@ -502,9 +707,9 @@ casts_shadow = false
         let (blo, bhi) = (lo * scale + shift, hi * scale + shift);
         let gap = (center.clamp(blo, bhi) - center).length();
         let radius = (0.5 * gap).clamp(0.01, 0.5);
-        file.light.center = center.to_array();
-        file.light.normal = l.direction.as_dvec3().to_array();
-        file.light.radius = radius;
+        file.light.center = Some(center.to_array());
+        file.light.normal = Some(l.direction.as_dvec3().to_array());
+        file.light.radius = Some(radius);
     }
     file.objects.push(file::ObjectSpec {
         name: path.file_stem().map(|s| s.to_string_lossy().into_owned()),

@@ -12,7 +12,7 @@
 
 use glam::{Quat, Vec3};
 
-use super::{Camera, DiskLight, Scene};
+use super::{Camera, Light, Scene};
 
 /// What moves around the orbit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,7 +36,7 @@ impl std::str::FromStr for Orbit {
 pub struct Poses {
     orbit: Orbit,
     /// The light at frame 0 (moved off the axis if it was on it).
-    pub light: DiskLight,
+    pub light: Light,
     camera: Camera,
     /// A point on the vertical axis of the orbit.
     axis: Vec3,
@@ -52,17 +52,17 @@ impl Poses {
             Orbit::Camera => scene.camera.target,
             Orbit::Light => {
                 let centre = casters_centre(scene).unwrap_or(Vec3::ZERO);
-                let offset = light.center - centre;
+                let offset = light.center() - centre;
                 let flat = Vec3::new(offset.x, 0.0, offset.z);
                 let horizontal = flat.length();
-                let radius = 0.5 * offset.y.abs().max(light.radius);
+                let radius = 0.5 * offset.y.abs().max(light.half_extent());
                 if horizontal < 0.5 * radius {
                     let out = flat.try_normalize().unwrap_or(Vec3::X);
-                    light.center = Vec3::new(
+                    light = light.with_center(Vec3::new(
                         centre.x + out.x * radius,
-                        light.center.y,
+                        light.center().y,
                         centre.z + out.z * radius,
-                    );
+                    ));
                     note = Some(format!(
                         "the light is (nearly) straight above the casters: it orbits {radius:.2} m \
                          off their vertical axis, half its height above their centre"
@@ -81,7 +81,7 @@ impl Poses {
     }
 
     /// Frame `k` of `n`'s light and camera (the one that does not orbit stays as it was).
-    pub fn at(&self, k: usize, n: usize) -> (DiskLight, Camera) {
+    pub fn at(&self, k: usize, n: usize) -> (Light, Camera) {
         let angle = std::f32::consts::TAU * k as f32 / n.max(1) as f32;
         let turn = Quat::from_rotation_y(angle);
         let about = |p: Vec3| {
@@ -89,14 +89,7 @@ impl Poses {
             axis + turn * (p - axis)
         };
         match self.orbit {
-            Orbit::Light => (
-                DiskLight {
-                    center: about(self.light.center),
-                    normal: (turn * self.light.normal).normalize_or(self.light.normal),
-                    ..self.light
-                },
-                self.camera,
-            ),
+            Orbit::Light => (self.light.moved(about, |v| turn * v), self.camera),
             Orbit::Camera => (
                 self.light,
                 Camera {
@@ -135,36 +128,40 @@ mod tests {
     fn the_light_keeps_its_height_distance_and_relative_tilt() {
         let scene = crate::scene::load("fig7-concave").unwrap();
         let poses = Poses::new(&scene, Orbit::Light);
-        let start = scene.light;
+        let start = *scene.light.as_disk().unwrap();
+        let first = *poses.light.as_disk().unwrap();
         let centre = casters_centre(&scene).unwrap();
         let axis_dist = |p: Vec3| Vec3::new(p.x - centre.x, 0.0, p.z - centre.z).length();
         let mut last = start.center;
         for k in 0..8 {
             let (l, _) = poses.at(k, 8);
-            assert!((l.center.y - poses.light.center.y).abs() < 1e-5);
-            assert!((axis_dist(l.center) - axis_dist(poses.light.center)).abs() < 1e-4);
+            let l = *l.as_disk().unwrap();
+            assert!((l.center.y - first.center.y).abs() < 1e-5);
+            assert!((axis_dist(l.center) - axis_dist(first.center)).abs() < 1e-4);
             // The normal keeps its angle to the direction toward the axis.
             let inward =
                 |c: Vec3| Vec3::new(centre.x - c.x, 0.0, centre.z - c.z).normalize_or_zero();
-            let a0 = poses.light.normal.dot(inward(poses.light.center));
+            let a0 = first.normal.dot(inward(first.center));
             assert!((l.normal.dot(inward(l.center)) - a0).abs() < 1e-4);
-            assert!((l.normal.y - poses.light.normal.y).abs() < 1e-5);
+            assert!((l.normal.y - first.normal.y).abs() < 1e-5);
             if k > 0 {
                 assert!((l.center - last).length() > 1e-3, "frame {k} moved");
             }
             last = l.center;
         }
-        assert!((poses.at(0, 8).0.center - poses.light.center).length() < 1e-6);
+        assert!((poses.at(0, 8).0.center() - first.center).length() < 1e-6);
     }
 
     #[test]
     fn a_light_on_the_axis_is_moved_off_it_and_the_camera_orbits_its_target() {
         let mut scene = crate::scene::load("fig7-concave").unwrap();
         let centre = casters_centre(&scene).unwrap();
-        scene.light.center = Vec3::new(centre.x, centre.y + 4.0, centre.z);
+        scene.light = scene
+            .light
+            .with_center(Vec3::new(centre.x, centre.y + 4.0, centre.z));
         let poses = Poses::new(&scene, Orbit::Light);
         assert!(poses.note.is_some());
-        assert!((poses.light.center.x - centre.x - 2.0).abs() < 1e-4);
+        assert!((poses.light.center().x - centre.x - 2.0).abs() < 1e-4);
 
         let poses = Poses::new(&scene, Orbit::Camera);
         let target = scene.camera.target;

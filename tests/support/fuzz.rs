@@ -448,8 +448,11 @@ fn scene_error_echo(e: &SceneError) -> Echo {
 /// The geometry stage on a small scene: no panic, warnings one line each. Returns the shape
 /// of what it found (warnings without their numbers, a rough size) as an outcome.
 fn check_geometry(scene: &Scene) -> Result<String, String> {
+    // The D-buffer's geometry stage takes a disk; a line light's scene gets the zero-radius
+    // disk at its midpoint (what the twins fall back to), so the stage still sees its casters.
     let prepared = PreparedCasters::new(scene);
-    let geometry = prepared.build(&scene.light, &VolumeParams::for_scene(scene));
+    let light = scene.light.disk_or_centre();
+    let geometry = prepared.build(&light, &VolumeParams::for_scene(scene));
     let mut kinds: Vec<String> = Vec::new();
     for w in &geometry.warnings {
         check_message("a warning", w, Echo::Names)?;
@@ -877,7 +880,8 @@ fn scene_of(mesh: Mesh) -> Scene {
             normal: Vec3::NEG_Y,
             radius: 0.5,
             intensity: 1.0,
-        },
+        }
+        .into(),
         objects: vec![Object {
             name: "fuzz".into(),
             mesh,

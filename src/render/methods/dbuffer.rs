@@ -26,6 +26,7 @@ use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError, VolumeVertex,
 };
+use crate::scene::DiskLight;
 
 pub static DBUFFER: MethodSpec = MethodSpec {
     name: "dbuffer",
@@ -134,7 +135,7 @@ impl DBuffer {
     }
 
     /// The geometry stage and the volumes' upload, when the light or a caster moved.
-    fn update_geometry(&mut self, inputs: &FrameInputs<'_>) {
+    fn update_geometry(&mut self, inputs: &FrameInputs<'_>, light: DiskLight) {
         if self
             .geometry
             .as_ref()
@@ -147,11 +148,10 @@ impl DBuffer {
             ..VolumeParams::for_scene(inputs.scene)
         };
         let t = Instant::now();
-        let geometry = inputs.prepared().build(&inputs.scene.light, &params);
+        let geometry = inputs.prepared().build(&light, &params);
         self.geometry_ms = t.elapsed().as_secs_f64() * 1e3;
         self.builds += 1;
         let device = &inputs.ctx.device;
-        let light = inputs.scene.light;
         // The farthest any surface lies below the light's plane (a little beyond).
         let (lo, hi) = inputs.surfaces.bounds;
         let reach = (0..8)
@@ -220,7 +220,12 @@ impl MethodState for DBuffer {
         shared: &mut SharedMaps,
         rec: &mut Recorder<'_>,
     ) -> Result<(), RenderError> {
-        self.update_geometry(inputs);
+        let light = *inputs.disk(if self.center_silhouettes {
+            DBUFFER_CENTER.name
+        } else {
+            DBUFFER.name
+        })?;
+        self.update_geometry(inputs, light);
         shared.shadow_map.update(inputs, rec);
         let Some(map) = shared.shadow_map.targets() else {
             return Err(RenderError::Gpu("the shadow map was not made".into()));

@@ -120,18 +120,28 @@ pub fn half_angle(view: &LightView, apex: Vec3, axis: Vec3) -> f32 {
 pub fn elm_params(inputs: &FrameInputs<'_>) -> ElmParams {
     let light = inputs.scene.light;
     let view = inputs.light_view;
-    let outer = half_angle(view, light.center, light.normal);
+    // A disk's spotlight points along its normal; a line's along the view fitted to the casters.
+    let axis = light.as_disk().map_or_else(
+        || {
+            view.view
+                .inverse()
+                .transform_vector3(Vec3::NEG_Z)
+                .normalize_or(Vec3::NEG_Y)
+        },
+        |d| d.normal,
+    );
+    let outer = half_angle(view, light.center(), axis);
     ElmParams {
         view_proj: view.view_projection(),
-        light: light.center,
+        light: light.center(),
         far: view.far,
-        axis: light.normal,
-        intensity: light.intensity,
+        axis,
+        intensity: light.intensity(),
         outer,
         inner: INNER_SHARE * outer,
         bits: inputs.knobs.get(&DEPTH_BITS),
         pattern: pattern(inputs.knobs),
-        emitter: Some(light.normal),
+        emitter: light.as_disk().map(|d| d.normal),
         size: inputs.map_size,
     }
 }

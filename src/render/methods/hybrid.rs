@@ -175,7 +175,7 @@ impl MethodState for HybridMethod {
         let frame = HybridFrame {
             light_view_proj: inputs.light_view.view_projection(),
             infinite_view_proj: inputs.view.infinite_view_proj,
-            light: inputs.scene.light.center,
+            light: inputs.scene.light.center(),
             map_size: map.size,
             walls: params,
             top_bias: 0.5 * params.threshold,

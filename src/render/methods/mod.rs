@@ -12,6 +12,7 @@ pub mod dbuffer;
 pub mod extended_light_map;
 pub mod hard;
 pub mod hybrid;
+pub mod linear_ssm;
 pub mod on_shadow_map;
 pub mod pcf;
 pub mod pcss;
@@ -20,6 +21,7 @@ pub mod reference;
 pub mod reference_hard;
 pub mod sampled;
 pub mod shadow_volume;
+pub mod wedges;
 
 use std::cell::OnceCell;
 use std::fmt;
@@ -35,7 +37,7 @@ use super::timer::Recorder;
 use super::{GpuContext, RenderError};
 use crate::geometry::light_view::LightView;
 use crate::geometry::{PreparedCasters, SceneGeometry, VtVariant};
-use crate::scene::Scene;
+use crate::scene::{DiskLight, LightKind, Scene};
 
 /// Every method, in the order pickers, `compare` and `bench` list them. The registry.
 pub const ALL: &[Method] = &[
@@ -45,10 +47,12 @@ pub const ALL: &[Method] = &[
     Method(&pcf::PCF),
     Method(&pcss::PCSS),
     Method(&sampled::SAMPLED),
+    Method(&linear_ssm::LINEAR_SSM),
     Method(&shadow_volume::SHADOW_VOLUME),
     Method(&planar::PLANAR),
     Method(&hybrid::HYBRID),
     Method(&extended_light_map::EXTENDED_LIGHT_MAP),
+    Method(&wedges::WEDGES),
     Method(&reference::REFERENCE),
     Method(&reference_hard::REFERENCE_HARD),
 ];
@@ -119,7 +123,67 @@ impl Method {
     pub fn is_hard(self) -> bool {
         self.0.hard
     }
+
+    /// The kind of light the method needs, if it cannot take both (design.md §7).
+    pub fn needs(self) -> Option<LightKind> {
+        if DISK_ONLY.contains(&self.name()) {
+            Some(LightKind::Disk)
+        } else if LINE_ONLY.contains(&self.name()) {
+            Some(LightKind::Line)
+        } else {
+            None
+        }
+    }
+
+    /// The method a `light` light gets when none is named: the first of the registry made for
+    /// that kind only (the D-buffer for a disk, `linear-ssm` for a line).
+    pub fn made_for(light: LightKind) -> Method {
+        ALL.iter()
+            .copied()
+            .find(|m| m.needs() == Some(light))
+            .or_else(|| ALL.iter().copied().find(|m| m.takes(light)))
+            .unwrap_or(Method::HARD)
+    }
+
+    /// Whether the method can render with a `light` light.
+    pub fn takes(self, light: LightKind) -> bool {
+        self.needs().is_none_or(|k| k == light)
+    }
+
+    /// `None` when the method can render with a `light` light; else the one-line reason it
+    /// refuses, naming the method, both kinds and the methods that take this one. `render`
+    /// exits with it, `compare` and `bench` list the method as not applicable, the lab greys
+    /// its picker entry: a disk-only method never draws a line light's scene as something else.
+    pub fn refuses(self, light: LightKind) -> Option<String> {
+        let needs = self.needs().filter(|k| *k != light)?;
+        let this = match light {
+            LightKind::Line => "a line (kind = \"line\")",
+            LightKind::Disk => "a disk",
+        };
+        let others: Vec<&str> = ALL
+            .iter()
+            .filter(|m| m.takes(light))
+            .map(|m| m.name())
+            .collect();
+        Some(format!(
+            "method '{self}' needs a {needs} light, and this scene's light is {this}; \
+             for a {light} light use {}",
+            others.join(", ")
+        ))
+    }
 }
+
+/// The methods that need a disk light (design.md §7): the D-buffer family (its volumes are
+/// the disk's), `wedges` (the coverage of a disk) and `pcss` (a blocker search over a disk).
+const DISK_ONLY: &[&str] = &[
+    "dbuffer",
+    "dbuffer-center",
+    "dbuffer-fused",
+    "wedges",
+    "pcss",
+];
+/// The methods that need a line light: seed 003's soft shadow maps.
+const LINE_ONLY: &[&str] = &["linear-ssm"];
 
 impl Default for Method {
     fn default() -> Self {
@@ -291,6 +355,16 @@ impl FrameInputs<'_> {
     pub fn prepared(&self) -> &PreparedCasters {
         self.prepared
             .get_or_init(|| PreparedCasters::new(self.scene))
+    }
+
+    /// The scene's disk light, for a method that needs one; an error naming `method` for a
+    /// line light (the session refuses such a frame before it gets here).
+    pub fn disk(&self, method: &str) -> Result<&DiskLight, RenderError> {
+        self.scene.light.as_disk().ok_or_else(|| {
+            RenderError::Request(format!(
+                "method '{method}' needs a disk light, and this scene's light is a line"
+            ))
+        })
     }
 }
 

@@ -67,8 +67,8 @@ fn nearest_caster(scene: &Scene) -> f32 {
     scene
         .casters()
         .flat_map(|o| o.mesh.positions.iter())
-        .filter(|v| light.height_of(**v) > 0.0)
-        .map(|v| (*v - light.center).length())
+        .filter(|v| light.reaches(**v))
+        .map(|v| (*v - light.center()).length())
         .filter(|d| d.is_finite() && *d > 0.0)
         .fold(f32::MAX, f32::min)
         .min(1e30)

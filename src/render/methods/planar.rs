@@ -83,7 +83,7 @@ impl PlanarShadows {
     fn build(&mut self, inputs: &FrameInputs<'_>) {
         let scene = inputs.scene;
         let device = &inputs.ctx.device;
-        let (receivers, warnings) = planar_receivers(scene, scene.light.center);
+        let (receivers, warnings) = planar_receivers(scene, scene.light.center());
         let triangles = |i: usize| -> Vec<[f32; 4]> {
             scene.objects[i]
                 .mesh
@@ -142,7 +142,7 @@ impl MethodState for PlanarShadows {
         let uniforms = PlanarUniforms::new(
             inputs.view.infinite_view_proj,
             inputs.view.eye,
-            inputs.scene.light.center,
+            inputs.scene.light.center(),
             &self.receivers,
             shadow_v,
         );

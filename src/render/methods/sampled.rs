@@ -1,5 +1,5 @@
-//! `sampled`: N shadow maps from N stratified points on the disk, averaged (seed 002 §3.1): the
-//! brute-force area light (maps from `passes::sample_maps`, camera pass
+//! `sampled`: N shadow maps from N stratified points on the light (the disk, or a line light's
+//! segment), averaged (seed 002 §3.1): the brute-force area light (maps from `passes::sample_maps`, camera pass
 //! `shaders/methods/sampled.wgsl`).
 
 use std::sync::Arc;
@@ -18,7 +18,7 @@ use crate::render::{
 /// How many point lights.
 pub static LIGHTS: Knob = Knob {
     name: "lights",
-    help: "sampled: shadow maps from this many stratified points on the disk",
+    help: "sampled: shadow maps from this many stratified points on the light (disk or segment)",
     min: 1,
     max: MAX_LIGHTS,
     default: 16,
@@ -27,7 +27,7 @@ pub static LIGHTS: Knob = Knob {
 
 pub static SAMPLED: MethodSpec = MethodSpec {
     name: "sampled",
-    description: "N shadow maps from points on the disk, averaged",
+    description: "N shadow maps from points on the light, averaged",
     knobs: &[&LIGHTS],
     cpu_side: false,
     hard: false,

@@ -194,7 +194,7 @@ impl MethodState for ShadowVolume {
             let t = Instant::now();
             let built = build_volumes(
                 inputs,
-                inputs.scene.light.center,
+                inputs.scene.light.center(),
                 open,
                 self.screen.pass.push(),
             );

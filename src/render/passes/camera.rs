@@ -21,7 +21,7 @@ use crate::render::{
     buffer_entry, cleared, opaque, pipeline_layout, uniform_buffer, uniform_entry, GpuContext,
     SurfaceVertex, Texture,
 };
-use crate::scene::Scene;
+use crate::scene::{Light, Scene};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 /// The colour target seen as its bytes (the view pass copies them as they are).
@@ -43,9 +43,20 @@ pub struct CameraUniforms {
     pub light_radius: f32,
     pub light_normal: [f32; 3],
     pub light_intensity: f32,
+    /// [`LIGHT_DISK`] or [`LIGHT_LINE`]: a line emits all around (no one-sided test, no
+    /// emitter cosine); `light_center` is then its midpoint, `light_radius` 0.
+    pub light_kind: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<CameraUniforms>() == 112);
+const _: () = assert!(std::mem::size_of::<CameraUniforms>() == 128);
+
+/// `CameraUniforms::light_kind` of a disk light (`LIGHT_DISK` in `shared/camera.wgsl`).
+pub const LIGHT_DISK: u32 = 0;
+/// `CameraUniforms::light_kind` of a line light (`LIGHT_LINE` in `shared/camera.wgsl`).
+pub const LIGHT_LINE: u32 = 1;
 
 /// The camera's world → clip transform for a `width`×`height` image of `scene` (whose surfaces
 /// span `bounds`): reversed depth, planes that hold the whole scene.
@@ -102,14 +113,22 @@ impl ScreenView {
 impl CameraUniforms {
     pub fn new(scene: &Scene, view_proj: Mat4) -> CameraUniforms {
         let light = scene.light;
+        let (radius, normal, kind) = match light {
+            Light::Disk(d) => (d.radius, d.normal, LIGHT_DISK),
+            Light::Line(_) => (0.0, Vec3::ZERO, LIGHT_LINE),
+        };
         CameraUniforms {
             view_proj: view_proj.to_cols_array_2d(),
             eye: scene.camera.eye.to_array(),
             ambient: AMBIENT,
-            light_center: light.center.to_array(),
-            light_radius: light.radius,
-            light_normal: light.normal.to_array(),
-            light_intensity: light.intensity,
+            light_center: light.center().to_array(),
+            light_radius: radius,
+            light_normal: normal.to_array(),
+            light_intensity: light.intensity(),
+            light_kind: kind,
+            _pad0: 0,
+            _pad1: 0,
+            _pad2: 0,
         }
     }
 }

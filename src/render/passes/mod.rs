@@ -13,9 +13,11 @@ pub mod planar;
 pub mod probe;
 pub mod sample_maps;
 pub mod shadow_map;
+pub mod ssm;
 pub mod stencil_volumes;
 pub mod view;
 pub mod view_twin;
+pub mod wedges;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 

@@ -1,15 +1,16 @@
 //! The `sampled` method's shadow maps (`shaders/passes/sample_maps.wgsl`): N stratified points on
-//! the disk, each a point light with a `size`² distance map, one layer of an array texture (seed
-//! 002 §3.1). The method's camera pass averages their hard tests.
+//! the light (disk or segment), each a point light with a `size`² distance map, one layer of an
+//! array texture (seed 002 §3.1). The method's camera pass averages their hard tests;
+//! `linear-ssm` draws the same maps at its own points on a segment.
 //!
 //! Every point uses the D-buffer's frustum moved to that point: the frustum is fitted to the
-//! directions `v − q` from every disk point `q` to every caster vertex `v`, so it holds each
-//! caster as any disk point sees it.
+//! directions `v − q` from every light point `q` (the disk's rim, the segment's ends) to every
+//! caster vertex `v`, so it holds each caster as any light point sees it.
 
 use std::sync::Arc;
 
 use bytemuck::Zeroable;
-use glam::Mat4;
+use glam::{Mat4, Vec3};
 
 use super::next_generation;
 use super::shadow_map::{DEPTH_FORMAT, DISTANCE_FORMAT, NO_SURFACE};
@@ -22,7 +23,7 @@ use crate::render::{
     render_pipeline, shader_module, uniform_buffer, uniform_entry, GpuContext, PipelineSpec,
     SurfaceVertex,
 };
-use crate::scene::DiskLight;
+use crate::scene::Light;
 
 /// The most point lights (and map layers).
 pub const MAX_LIGHTS: u32 = 64;
@@ -53,27 +54,50 @@ pub struct SampleLights {
 
 const _: () = assert!(std::mem::size_of::<SampleLights>() == 64 * 80 + 32);
 
-/// The N points on the disk and their view-projections, with the test's bias.
+/// The N points on the light and their view-projections, with the test's bias: on a disk the
+/// oracle's stratified points, on a segment the centres of N equal pieces
+/// (`a + (i + ½)/N · (b − a)`).
 pub fn sample_lights(
-    light: &DiskLight,
+    light: &Light,
     view: &LightView,
     n: u32,
     size: u32,
     bias: (f32, f32),
 ) -> SampleLights {
-    let mut out = SampleLights::zeroed();
-    let (e1, e2) = light.basis();
     let n = n.clamp(1, MAX_LIGHTS);
-    for (slot, p) in out.lights.iter_mut().zip(disk_samples(n as usize)) {
-        let q = light.center + light.radius * (p.x * e1 + p.y * e2);
-        let moved = view.view * Mat4::from_translation(light.center - q);
+    let points: Vec<Vec3> = match light {
+        Light::Disk(d) => {
+            let (e1, e2) = d.basis();
+            disk_samples(n as usize)
+                .into_iter()
+                .map(|p| d.center + d.radius * (p.x * e1 + p.y * e2))
+                .collect()
+        }
+        Light::Line(l) => (0..n).map(|i| l.at((i as f32 + 0.5) / n as f32)).collect(),
+    };
+    lights_at(light.center(), &points, view, size, bias)
+}
+
+/// Point lights at `points` (at most [`MAX_LIGHTS`]), each with `view` (the light view from
+/// `center`) moved to it.
+pub fn lights_at(
+    center: Vec3,
+    points: &[Vec3],
+    view: &LightView,
+    size: u32,
+    bias: (f32, f32),
+) -> SampleLights {
+    let mut out = SampleLights::zeroed();
+    let n = points.len().min(MAX_LIGHTS as usize);
+    for (slot, &q) in out.lights.iter_mut().zip(&points[..n]) {
+        let moved = view.view * Mat4::from_translation(center - q);
         *slot = SampleLight {
             view_proj: (view.projection * moved).to_cols_array_2d(),
             point: q.to_array(),
             _pad: 0.0,
         };
     }
-    out.count = n;
+    out.count = n as u32;
     out.size = size as f32;
     out.texel_slope = view.texel_slope(size);
     out.bias_constant = bias.0;
@@ -118,6 +142,8 @@ impl SampleMapsPass {
 pub struct SampleTargets {
     pub size: u32,
     pub layers: u32,
+    /// The array texture (`linear-ssm` copies its layers out).
+    pub texture: wgpu::Texture,
     /// The whole array, for the camera pass.
     pub array_view: wgpu::TextureView,
     layer_views: Vec<wgpu::TextureView>,
@@ -177,7 +203,7 @@ impl SampleMaps {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: DISTANCE_FORMAT,
-            usage: U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
+            usage: U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
             view_formats: &[],
         });
         let depth = device.create_texture(&wgpu::TextureDescriptor {
@@ -209,6 +235,7 @@ impl SampleMaps {
         self.targets = Some(SampleTargets {
             size,
             layers,
+            texture,
             array_view,
             layer_views,
             depth: depth.create_view(&wgpu::TextureViewDescriptor::default()),

@@ -15,7 +15,7 @@ use crate::render::{
     render_pipeline, shader_module, uniform_buffer, uniform_entry, GpuContext, PipelineSpec,
     SurfaceVertex, Texture,
 };
-use crate::scene::DiskLight;
+use crate::scene::Light;
 
 pub const DISTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -36,12 +36,18 @@ pub struct LightUniforms {
 const _: () = assert!(std::mem::size_of::<LightUniforms>() == 96);
 
 impl LightUniforms {
-    pub fn new(light: &DiskLight, view: &LightView) -> LightUniforms {
+    /// From the light's centre (a line's midpoint); `normal` is a disk's, or for a line light
+    /// (which has none) the view's axis.
+    pub fn new(light: &Light, view: &LightView) -> LightUniforms {
+        let normal = match light {
+            Light::Disk(d) => d.normal,
+            Light::Line(_) => view.view.inverse().transform_vector3(glam::Vec3::NEG_Z),
+        };
         LightUniforms {
             view_proj: view.view_projection().to_cols_array_2d(),
-            center: light.center.to_array(),
+            center: light.center().to_array(),
             inv_far: 1.0 / view.far,
-            normal: light.normal.to_array(),
+            normal: normal.to_array(),
             _pad: 0.0,
         }
     }

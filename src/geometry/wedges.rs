@@ -1,0 +1,367 @@
+//! Penumbra wedges (Akenine-Möller & Assarsson 2002; Assarsson & Akenine-Möller 2003) for the
+//! disk light, on the CPU: the exact part of the disk one silhouette edge covers as seen from a
+//! receiver point, the wedge that bounds where it is not zero, and the twin of the whole method.
+//! `shaders/passes/wedges.wgsl` is its GPU twin.
+//!
+//! **The method.** A hard shadow volume from the disk's centre (`geometry::hard_volume`, the
+//! stencil count `H` of `shadow-volume`), then one wedge per silhouette edge of that volume;
+//! for a receiver point `x` inside a wedge, the edge's coverage `c` of the disk as `x` sees it is
+//! added up, and
+//!
+//! ```text
+//! V(x) = clamp(1 − H(x) − Σ_edges c_i(x), 0, 1),   H = 1 where the centre's count is not 0
+//! ```
+//!
+//! (and `H = 1` on a side of a caster turned away from the centre, which the centre cannot see:
+//! [`WedgeTwin::surface_visibility`]).
+//!
+//! **The coverage.** Project the edge from `x` onto the light's plane (after clipping it to the
+//! slab between the light's plane and `x`'s parallel plane: parts beyond `x` cannot occlude,
+//! parts behind the one-sided light cannot either) and express it in disk units. With `p0`, `p1`
+//! the part of the projected segment inside the unit disk,
+//!
+//! ```text
+//! c(a, b) = (p0 × p1 − atan2(p0 × p1, p0 · p1)) / (2π)      (0 if the segment misses the disk)
+//! ```
+//!
+//! is the signed area between the chord `p0 p1` and the arc, inside the angle the ends subtend
+//! at the centre, over the disk's area. For a closed loop walked counter-clockwise, the signed
+//! areas of `disk ∩ triangle(centre, A_i, B_i)` sum to `disk ∩ loop`; taking away each edge's
+//! sector (which sums to the centre's winding number `H`) leaves terms that vanish for edges
+//! whose projection misses the disk — the edges whose wedge does not hold `x`. So the covered
+//! fraction is `H + Σ c_i`, and `c < 0` exactly when `x` is inside the edge's hard-shadow quad:
+//! the 2003 paper's add-or-subtract rule falls out. A whole chord at signed distance `h` from the
+//! centre covers `(acos h − h √(1 − h²))/π`, the disk–half-plane area of `V(t)`'s exact variant.
+//! (Derived and checked numerically in the design note for issues 13–14, §10.2.)
+//!
+//! **The errors the papers admit, kept:** silhouettes from the centre only (wrong for large
+//! lights and thick casters: the side faces hide part of the light from points beside the
+//! caster, which the centre's silhouette does not see), and overlapping edges and casters summed
+//! instead of combined (two edges covering the same part of the light count it twice; the clamp
+//! hides some of it).
+
+use glam::{DVec2, DVec3, Vec3};
+
+use super::hard_volume::{scene_volumes, HardVolume, OpenMeshes};
+use super::hull::convex_hull;
+use super::PreparedCasters;
+use crate::scene::DiskLight;
+
+/// Fraction of a receiver's height above the light plane kept off either end of the slab an
+/// edge is clipped to (the GPU uses the same).
+pub const SLAB_EPS: f64 = 1e-4;
+
+/// The part of the unit disk between the directed segment `a → b` and the arc, inside the angle
+/// its ends subtend at the centre, over π (see the module documentation); 0 where it misses.
+pub fn edge_coverage_2d(a: DVec2, b: DVec2) -> f64 {
+    let d = b - a;
+    let len = d.length();
+    // Also false for NaN: a degenerate or broken segment covers nothing.
+    if len.is_nan() || len <= 0.0 {
+        return 0.0;
+    }
+    let dh = d / len;
+    // Signed distance of the line from the centre, then ± the half chord around the foot:
+    // stable for far, nearly grazing projections, where the quadratic's discriminant is not.
+    let h = a.x * dh.y - a.y * dh.x;
+    if h.abs() >= 1.0 {
+        return 0.0;
+    }
+    let half = (1.0 - h * h).sqrt();
+    let foot = -a.dot(dh);
+    let t0 = (foot - half).clamp(0.0, len);
+    let t1 = (foot + half).clamp(0.0, len);
+    if t1 <= t0 {
+        return 0.0;
+    }
+    let p0 = a + dh * t0;
+    let p1 = a + dh * t1;
+    let cross = p0.perp_dot(p1);
+    (cross - cross.atan2(p0.dot(p1))) / (2.0 * std::f64::consts::PI)
+}
+
+/// The disk's frame for the coverage: centre, normal (toward the scene), radius and the basis
+/// `(u, w)` of its plane, with `u × w = −n` (the orientation the sign rule is stated in).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DiskFrame {
+    pub center: DVec3,
+    pub normal: DVec3,
+    pub u: DVec3,
+    pub w: DVec3,
+    pub radius: f64,
+}
+
+impl DiskFrame {
+    pub fn new(light: &DiskLight) -> DiskFrame {
+        let (u, w) = light.basis();
+        let (u, mut w) = (u.as_dvec3(), w.as_dvec3());
+        let normal = light.normal.as_dvec3();
+        if u.cross(w).dot(normal) > 0.0 {
+            w = -w;
+        }
+        DiskFrame {
+            center: light.center.as_dvec3(),
+            normal,
+            u,
+            w,
+            radius: f64::from(light.radius),
+        }
+    }
+
+    /// The coverage of the disk by the edge `e0 → e1` as `x` sees it (`e0 → e1` in the
+    /// direction the hard volume's sides walk it).
+    pub fn edge_coverage(&self, x: Vec3, e0: Vec3, e1: Vec3) -> f64 {
+        let (x, e0, e1) = (x.as_dvec3(), e0.as_dvec3(), e1.as_dvec3());
+        let c = self.center;
+        let tx = self.normal.dot(x - c);
+        if tx.is_nan() || tx <= 0.0 || self.radius.is_nan() || self.radius <= 0.0 {
+            return 0.0;
+        }
+        let (t0, t1) = (self.normal.dot(e0 - c), self.normal.dot(e1 - c));
+        let (lo, hi) = (SLAB_EPS * tx, (1.0 - SLAB_EPS) * tx);
+        let (mut s0, mut s1) = (0.0f64, 1.0f64);
+        let dt = t1 - t0;
+        if dt.abs() < 1e-12 * tx {
+            if t0 < lo || t0 > hi {
+                return 0.0;
+            }
+        } else {
+            let (sa, sb) = ((lo - t0) / dt, (hi - t0) / dt);
+            s0 = s0.max(sa.min(sb));
+            s1 = s1.min(sa.max(sb));
+            if s1 <= s0 {
+                return 0.0;
+            }
+        }
+        let to_disk = |q: DVec3| {
+            let tq = self.normal.dot(q - c);
+            let g = x + (q - x) * (tx / (tx - tq)) - c;
+            DVec2::new(g.dot(self.u), g.dot(self.w)) / self.radius
+        };
+        edge_coverage_2d(to_disk(e0.lerp(e1, s0)), to_disk(e0.lerp(e1, s1)))
+    }
+}
+
+/// The wedge of edge `e0 → e1`: a convex solid holding every point whose view of the disk the
+/// edge can cut, up to `reach` from the edge. The exact region is swept by the rays from the
+/// disk's points through the edge's points; it is held by the hull of the edge and of its ends
+/// pushed `reach` away from the 8 corners of the octagon around the disk (circumradius
+/// `r / cos(π/8)`): every point of the region is a convex combination of those 18 points.
+/// Triangles outward-wound; a box around the 18 points where they span no volume.
+pub fn wedge_hull(light: &DiskLight, e0: Vec3, e1: Vec3, reach: f32) -> Vec<[Vec3; 3]> {
+    let (u, w) = light.basis();
+    let rim = light.radius / (std::f32::consts::PI / 8.0).cos();
+    let mut points = vec![e0, e1];
+    for k in 0..8 {
+        let a = k as f32 * std::f32::consts::TAU / 8.0;
+        let q = light.center + rim * (a.cos() * u + a.sin() * w);
+        for e in [e0, e1] {
+            points.push(e + (e - q).normalize_or_zero() * reach);
+        }
+    }
+    match convex_hull(&points) {
+        Some(mesh) => mesh.triangle_corners().collect(),
+        None => box_triangles(&points),
+    }
+}
+
+/// The 12 outward-wound triangles of the bounding box of `points`.
+fn box_triangles(points: &[Vec3]) -> Vec<[Vec3; 3]> {
+    let lo = points.iter().fold(Vec3::splat(f32::MAX), |m, p| m.min(*p));
+    let hi = points.iter().fold(Vec3::splat(f32::MIN), |m, p| m.max(*p));
+    let pad = (hi - lo).max_element().max(1e-3) * 1e-3;
+    let (lo, hi) = (lo - pad, hi + pad);
+    let corner = |i: usize| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    // Quads as corner indices, counter-clockwise seen from outside.
+    const QUADS: [[usize; 4]; 6] = [
+        [0, 2, 3, 1], // −z
+        [4, 5, 7, 6], // +z
+        [0, 1, 5, 4], // −y
+        [2, 6, 7, 3], // +y
+        [0, 4, 6, 2], // −x
+        [1, 3, 7, 5], // +x
+    ];
+    QUADS
+        .iter()
+        .flat_map(|q| {
+            [
+                [corner(q[0]), corner(q[1]), corner(q[2])],
+                [corner(q[0]), corner(q[2]), corner(q[3])],
+            ]
+        })
+        .collect()
+}
+
+/// How far wedges reach: the diagonal of everything the scene holds (no receiver is farther from
+/// a caster), and a little more.
+pub fn wedge_reach(scene: &crate::scene::Scene) -> f32 {
+    let mut lo = scene.light.center();
+    let mut hi = lo;
+    for o in &scene.objects {
+        if let Some((a, b)) = o.mesh.bounds() {
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+    }
+    let d = (hi - lo).length() * 1.05 + 1e-3;
+    if d.is_finite() {
+        d
+    } else {
+        1e4
+    }
+}
+
+/// The edges whose wedges a scene's casters get: the sides of the casters' hard volumes from
+/// the centre closed by their lit faces (Crow's one-sided volumes: each silhouette once, so the
+/// loops wind once around what they hide). For a closed mesh these are the sides of any closing;
+/// for an open one the two-sided count (`H`) counts both faces at a silhouette, but its wedges
+/// must be summed once.
+pub fn wedge_edges(casters: &PreparedCasters, center: Vec3) -> Vec<[Vec3; 2]> {
+    scene_volumes(casters, center, OpenMeshes::OneSided)
+        .into_iter()
+        .flat_map(|(_, _, v)| v.sides)
+        .collect()
+}
+
+/// The whole method on the CPU: the hard volumes from the centre (for `H`, closed as the
+/// method's `open` says) and the wedges' edges.
+pub struct WedgeTwin {
+    pub frame: DiskFrame,
+    pub volumes: Vec<HardVolume>,
+    pub edges: Vec<[Vec3; 2]>,
+}
+
+impl WedgeTwin {
+    pub fn new(casters: &PreparedCasters, light: &DiskLight, open: OpenMeshes) -> WedgeTwin {
+        WedgeTwin {
+            frame: DiskFrame::new(light),
+            volumes: scene_volumes(casters, light.center, open)
+                .into_iter()
+                .map(|(_, _, v)| v)
+                .collect(),
+            edges: wedge_edges(casters, light.center),
+        }
+    }
+
+    /// `H(x)`: whether the centre's hard volumes hold `x` (the stencil count is not 0). For a
+    /// point on a caster, its own face's volume starts at the point itself: it is counted from
+    /// a hair (1e-4 of the way) toward the centre, as the GPU's volumes are pushed that much
+    /// away from it.
+    pub fn hard(&self, x: Vec3) -> bool {
+        let c = self.frame.center.as_vec3();
+        let x = x + (c - x) * 1e-4;
+        self.volumes.iter().map(|v| v.count(x)).sum::<i32>() != 0
+    }
+
+    /// `Σ c_i(x)` over every wedge's edge.
+    pub fn coverage_sum(&self, x: Vec3) -> f64 {
+        self.edges
+            .iter()
+            .map(|&[e0, e1]| self.frame.edge_coverage(x, e0, e1))
+            .sum()
+    }
+
+    /// V at `x`, as the method computes it.
+    pub fn visibility(&self, x: Vec3) -> f64 {
+        let h = if self.hard(x) { 1.0 } else { 0.0 };
+        (1.0 - h - self.coverage_sum(x)).clamp(0.0, 1.0)
+    }
+
+    /// V at a surface point `x` with normal `n` (toward the viewer): on a side turned away from
+    /// the centre, the centre is hidden by that surface itself (`H = 1`, as Crow's volume from
+    /// the centre has it), so `V = clamp(−Σc)`; elsewhere [`WedgeTwin::visibility`].
+    pub fn surface_visibility(&self, x: Vec3, n: Vec3) -> f64 {
+        let c = self.frame.center;
+        if n.as_dvec3().dot(c - x.as_dvec3()) <= 0.0 {
+            (-self.coverage_sum(x)).clamp(0.0, 1.0)
+        } else {
+            self.visibility(x)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fraction of the unit disk beyond a chord at signed distance h from the centre.
+    fn segment(h: f64) -> f64 {
+        let h = h.clamp(-1.0, 1.0);
+        (h.acos() - h * (1.0 - h * h).sqrt()) / std::f64::consts::PI
+    }
+
+    #[test]
+    fn a_whole_chord_covers_the_disk_half_plane_area() {
+        for i in 0..=40 {
+            let h = -1.0 + 2.0 * i as f64 / 40.0;
+            // A long segment along +x at height y = h: the centre is on its right.
+            let c = edge_coverage_2d(DVec2::new(-5.0, h), DVec2::new(5.0, h));
+            assert!((c.abs() - segment(h.abs())).abs() < 1e-9, "h = {h}: {c}");
+            // Reversing the segment flips the sign.
+            let r = edge_coverage_2d(DVec2::new(5.0, h), DVec2::new(-5.0, h));
+            assert!((c + r).abs() < 1e-12, "h = {h}");
+        }
+        // The bottom edge of a counter-clockwise region above y = 0.5 (the centre outside it)
+        // covers the segment beyond that chord: the design note's 0.1955 (its sign there is
+        // for the edge walked the other way).
+        let c = edge_coverage_2d(DVec2::new(-3.0, 0.5), DVec2::new(3.0, 0.5));
+        assert!((c - 0.195_501_109_477_885).abs() < 1e-9, "{c}");
+    }
+
+    #[test]
+    fn polygons_cover_their_area_in_the_disk() {
+        // Random convex polygons (counter-clockwise): winding of the centre + Σ c = the area of
+        // polygon ∩ disk over π, against a fine grid of the disk.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..30 {
+            let centre = DVec2::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0);
+            let n = 3 + (rnd() * 5.0) as usize;
+            let mut angles: Vec<f64> = (0..n).map(|_| rnd() * std::f64::consts::TAU).collect();
+            angles.sort_by(f64::total_cmp);
+            let size = 0.3 + rnd() * 1.5;
+            let poly: Vec<DVec2> = angles
+                .iter()
+                .map(|a| centre + DVec2::new(a.cos(), a.sin()) * size)
+                .collect();
+            let inside = |p: DVec2| {
+                (0..n).all(|i| (poly[(i + 1) % n] - poly[i]).perp_dot(p - poly[i]) >= 0.0)
+            };
+            let winding = if inside(DVec2::ZERO) { 1.0 } else { 0.0 };
+            let sum: f64 = (0..n)
+                .map(|i| edge_coverage_2d(poly[i], poly[(i + 1) % n]))
+                .sum();
+            let grid = 400;
+            let mut hit = 0usize;
+            let mut total = 0usize;
+            for i in 0..grid {
+                for j in 0..grid {
+                    let p = DVec2::new(
+                        -1.0 + 2.0 * (i as f64 + 0.5) / grid as f64,
+                        -1.0 + 2.0 * (j as f64 + 0.5) / grid as f64,
+                    );
+                    if p.length_squared() <= 1.0 {
+                        total += 1;
+                        hit += usize::from(inside(p));
+                    }
+                }
+            }
+            let area = hit as f64 / total as f64;
+            assert!(
+                (winding + sum - area).abs() < 2e-3,
+                "winding {winding} + Σc {sum} vs area {area}"
+            );
+        }
+    }
+}

@@ -1,0 +1,223 @@
+//! `wedges`: soft shadow volumes with penumbra wedges (Akenine-Möller & Assarsson 2002;
+//! Assarsson & Akenine-Möller 2003; seed 002 §3.3), for the disk light.
+//!
+//! Per light or caster move: the casters' hard volumes from the disk's centre
+//! (`geometry::hard_volume`, the same as `shadow-volume`'s) and one wedge per side edge of them
+//! (`geometry::wedges::wedge_hull`), uploaded. Per frame: the screen prepass and the z-fail count
+//! (`passes::stencil_volumes`, shared with `shadow-volume`: no second copy), the wedges' coverage
+//! sum and the resolve (`passes::wedges`); the camera pass reads V at its pixel.
+//!
+//! The errors the papers admit are kept, to show in `compare`: silhouettes from the centre only
+//! (thick or concave casters under a large light: `fig1-large-light`, `no-umbra`) and
+//! overlapping edges or casters summed, not combined (`overlap`, `fig7-concave`,
+//! `fig8c-complex`, `bunny`); the sum is clamped, which hides some of it.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::Vec3;
+
+use super::shadow_volume::{build_volumes, open_meshes, screen_v_entries, OPEN};
+use super::{CameraBindings, FrameInputs, MethodPipeline, MethodSpec, MethodState, SharedMaps};
+use crate::geometry::hard_volume::{scene_volumes, OpenMeshes};
+use crate::geometry::volumes::{VolumeKind, VolumeMesh, VolumeVertex};
+use crate::geometry::wedges::{wedge_hull, wedge_reach};
+use crate::geometry::{SceneGeometry, VtVariant};
+use crate::render::gpu_scene::VertexChunks;
+use crate::render::passes::stencil_volumes::ScreenPass;
+use crate::render::passes::wedges::{WedgeVertex, Wedges};
+use crate::render::timer::Recorder;
+use crate::render::{view_entry, GpuContext, RenderError};
+use crate::scene::DiskLight;
+
+pub static WEDGES: MethodSpec = MethodSpec {
+    name: "wedges",
+    description: "penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)",
+    knobs: &[&OPEN],
+    cpu_side: false,
+    hard: false,
+    new: |ctx| Box::new(WedgesMethod::new(ctx)),
+};
+
+const SHADER: &str = "methods/wedges.wgsl";
+
+/// The camera pass's group 1: the screen visibility (`shared/screen_v.wgsl`) and the coverage sum.
+fn camera_entries() -> [wgpu::BindGroupLayoutEntry; 2] {
+    let [v] = screen_v_entries();
+    [
+        v,
+        crate::render::texture_entry(
+            1,
+            wgpu::ShaderStages::FRAGMENT,
+            wgpu::TextureViewDimension::D2,
+        ),
+    ]
+}
+
+/// The wedges of every side edge of `volumes`' hard volumes, as GPU vertices, and the overlay's
+/// view of them (each wedge cut at about the distance from its edge to the light).
+pub fn build_wedges(
+    light: &DiskLight,
+    sides: &[[Vec3; 2]],
+    reach: f32,
+) -> (Vec<WedgeVertex>, VolumeMesh) {
+    let mut vertices = Vec::new();
+    let mut overlay = VolumeMesh::default();
+    let pad = |v: Vec3| [v.x, v.y, v.z];
+    for &[e0, e1] in sides {
+        for [a, b, c] in wedge_hull(light, e0, e1, reach) {
+            for p in [a, b, c] {
+                vertices.push(WedgeVertex {
+                    position: pad(p),
+                    _pad0: 0.0,
+                    e0: pad(e0),
+                    _pad1: 0.0,
+                    e1: pad(e1),
+                    _pad2: 0.0,
+                });
+            }
+        }
+        // The overlay: the wedge down to about as far below the edge as the light is above it.
+        let short = 1.2 * (0.5 * (e0 + e1) - light.center).length();
+        for t in wedge_hull(light, e0, e1, short) {
+            let base = overlay.vertices.len() as u32;
+            for p in t {
+                overlay.vertices.push(VolumeVertex {
+                    position: p,
+                    kind: VolumeKind::PenumbraQuad,
+                    edge: [e0, e1],
+                    extrusion: light.center,
+                });
+            }
+            overlay.indices.extend([base, base + 1, base + 2]);
+        }
+    }
+    (vertices, overlay)
+}
+
+pub struct WedgesMethod {
+    screen: ScreenPass,
+    wedges: Wedges,
+    pipeline: Arc<MethodPipeline>,
+    volumes: VertexChunks,
+    wedge_vertices: VertexChunks,
+    built_for: Option<(u64, OpenMeshes)>,
+    geometry: Option<SceneGeometry>,
+    builds: u64,
+    geometry_ms: f64,
+    bind_group: Option<(wgpu::BindGroup, u64)>,
+}
+
+impl WedgesMethod {
+    pub fn new(ctx: &GpuContext) -> WedgesMethod {
+        let screen = ScreenPass::new(ctx);
+        let wedges = Wedges::new(ctx, &screen);
+        WedgesMethod {
+            screen,
+            wedges,
+            pipeline: MethodPipeline::get(ctx, SHADER, &camera_entries()),
+            volumes: VertexChunks::empty(),
+            wedge_vertices: VertexChunks::empty(),
+            built_for: None,
+            geometry: None,
+            builds: 0,
+            geometry_ms: 0.0,
+            bind_group: None,
+        }
+    }
+}
+
+impl MethodState for WedgesMethod {
+    fn prepare(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        _shared: &mut SharedMaps,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), RenderError> {
+        let light = *inputs.disk(WEDGES.name)?;
+        let ctx = inputs.ctx;
+        let open = open_meshes(inputs.knobs);
+        if self.built_for != Some((inputs.revision, open)) {
+            let t = Instant::now();
+            // The hard part: shadow-volume's volumes from the centre, as they are.
+            let mut built = build_volumes(inputs, light.center, open, self.screen.pass.push());
+            // The wedges: each silhouette edge once (Crow's one-sided sides; see
+            // geometry::wedges::wedge_edges), whatever `open` closes the stencil count with.
+            let volumes = scene_volumes(inputs.prepared(), light.center, OpenMeshes::OneSided);
+            let reach = wedge_reach(inputs.scene);
+            let mut vertices = Vec::new();
+            for ((_, _, volume), caster) in volumes.iter().zip(&mut built.geometry.casters) {
+                let (v, overlay) = build_wedges(&light, &volume.sides, reach);
+                vertices.extend(v);
+                // Wedges beside the hard volume's sides in the overlay's penumbra volume.
+                let base = caster.volumes.vertices.len() as u32;
+                caster.volumes.vertices.extend(overlay.vertices);
+                caster
+                    .volumes
+                    .indices
+                    .extend(overlay.indices.iter().map(|i| i + base));
+                caster.stats.penumbra_edges = volume.sides.len();
+                caster.stats.penumbra_triangles = overlay.indices.len() / 3;
+            }
+            built.geometry.stats.penumbra_edges = built
+                .geometry
+                .casters
+                .iter()
+                .map(|c| c.stats.penumbra_edges)
+                .sum();
+            built.geometry.stats.penumbra_triangles = vertices.len() / 3;
+            self.volumes = VertexChunks::new(&ctx.device, "Wedges::volumes", &built.vertices);
+            self.wedge_vertices = VertexChunks::new(&ctx.device, "Wedges::wedges", &vertices);
+            self.geometry = Some(built.geometry);
+            self.geometry_ms = t.elapsed().as_secs_f64() * 1e3;
+            self.builds += 1;
+            self.built_for = Some((inputs.revision, open));
+        }
+        let generation = self.screen.begin(ctx, &inputs.view).generation;
+        self.screen.record_prepass(rec, inputs.surfaces);
+        self.screen.record_zfail(rec, &self.volumes);
+        self.wedges
+            .record(ctx, rec, &self.screen, &light, &self.wedge_vertices);
+        let (Some(targets), Some(sum)) = (self.screen.targets(), self.wedges.sum()) else {
+            return Err(RenderError::Gpu("the wedges' targets were not made".into()));
+        };
+        if self
+            .bind_group
+            .as_ref()
+            .is_none_or(|(_, g)| *g != generation)
+        {
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("Wedges::bind_group"),
+                layout: &self.pipeline.layout,
+                entries: &[
+                    view_entry(0, &targets.visibility.view),
+                    view_entry(1, &sum.view),
+                ],
+            });
+            self.bind_group = Some((group, generation));
+        }
+        Ok(())
+    }
+
+    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
+        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
+            pipeline: self.pipeline.pipeline(device, vt),
+            bind_group: g,
+        })
+    }
+
+    fn geometry(&self) -> Option<&SceneGeometry> {
+        self.geometry.as_ref()
+    }
+
+    fn geometry_builds(&self) -> (u64, f64) {
+        (self.builds, self.geometry_ms)
+    }
+
+    fn stencil_fill(&self, ctx: &GpuContext) -> Option<Result<f64, RenderError>> {
+        Some(
+            self.screen
+                .measure_fill(ctx, &|pass| self.volumes.draw(pass)),
+        )
+    }
+}
