@@ -593,3 +593,57 @@ fn a_line_light_greys_the_disk_methods_and_its_ends_drag() {
     );
     assert_eq!(moved.a, line.a, "a stays");
 }
+
+/// A window shrunk to nothing (minimised, or a 0×0 viewport) makes no frame and no error; grown
+/// again, the lab renders as before.
+#[test]
+fn a_zero_sized_window_renders_nothing_and_recovers() {
+    let mut h = lab(None);
+    h.run();
+    assert!(h.state().shown().is_some());
+    for size in [
+        egui::vec2(0.0, 0.0),
+        egui::vec2(900.0, 0.0),
+        egui::vec2(1.0, 1.0),
+    ] {
+        h.set_size(size);
+        for _ in 0..5 {
+            h.step();
+        }
+        let (text, level) = h.state().status();
+        assert_ne!(level, Level::Error, "{size:?}: {text}");
+    }
+    let before = h.state().frames_rendered();
+    h.set_size(egui::vec2(900.0, 720.0));
+    h.run();
+    let shown = h.state().shown().expect("a frame after growing again");
+    assert!(shown.request.width > 100 && shown.request.height > 100);
+    assert!(h.state().frames_rendered() > before, "a new frame was made");
+}
+
+/// The GPU device lost (here destroyed, which wgpu reports as a lost device): the lab does not
+/// panic, says so on the status line and keeps its window running.
+#[test]
+fn a_lost_device_is_reported_not_a_panic() {
+    let mut h = lab(Some("fig7-concave"));
+    h.run();
+    let frames = h.state().window_frames();
+    h.state()
+        .core()
+        .expect("a render core")
+        .ctx
+        .device
+        .destroy();
+    // Something that needs a new frame: another method.
+    click(&mut h, "hard");
+    for _ in 0..10 {
+        h.step();
+    }
+    let (text, level) = h.state().status();
+    assert_eq!(level, Level::Error, "{text}");
+    assert!(
+        text.contains("device was lost") && text.contains("start dbuffer again"),
+        "{text}"
+    );
+    assert!(h.state().window_frames() > frames);
+}

@@ -23,6 +23,8 @@ pub struct GpuContext {
     pub timestamps: bool,
     /// Validation errors no error scope caught, kept instead of panicking.
     uncaptured: Arc<Mutex<Vec<String>>>,
+    /// Why the device was lost, once it is (a driver reset, a removed GPU, `destroy`).
+    lost: Arc<Mutex<Option<String>>>,
     /// Device-lifetime pass objects by type and name ([`GpuContext::shared`]).
     shared: Mutex<HashMap<(TypeId, &'static str), SharedObject>>,
 }
@@ -92,6 +94,17 @@ impl GpuContext {
                 errors.push(e.to_string());
             }
         }));
+        let lost = Arc::new(Mutex::new(None));
+        let why = Arc::clone(&lost);
+        device.set_device_lost_callback(move |reason, message| {
+            if let Ok(mut lost) = why.lock() {
+                *lost = Some(if message.is_empty() {
+                    format!("{reason:?}")
+                } else {
+                    format!("{reason:?}: {message}")
+                });
+            }
+        });
         let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         GpuContext {
             device,
@@ -99,6 +112,7 @@ impl GpuContext {
             adapter,
             timestamps,
             uncaptured,
+            lost,
             shared: Mutex::new(HashMap::new()),
         }
     }
@@ -109,6 +123,25 @@ impl GpuContext {
             "{} ({:?}, {:?})",
             self.adapter.name, self.adapter.backend, self.adapter.device_type
         )
+    }
+
+    /// `Err(RenderError::Lost)` once the device is lost: nothing recorded on it will run again.
+    pub fn check_lost(&self) -> Result<(), RenderError> {
+        match self.lost.lock().ok().and_then(|l| l.clone()) {
+            Some(why) => Err(RenderError::Lost(why)),
+            None => Ok(()),
+        }
+    }
+
+    /// [`GpuContext::check_lost`] after the work in flight finished (at most a quarter of a
+    /// second): wgpu reports a loss from a poll, a destroyed device once its queue is empty.
+    /// Only on an error path: it waits.
+    pub fn check_lost_after_poll(&self) -> Result<(), RenderError> {
+        let _ = self.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: Some(std::time::Duration::from_millis(250)),
+        });
+        self.check_lost()
     }
 
     /// Errors the device reported outside any error scope since the last call.

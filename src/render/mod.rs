@@ -276,6 +276,11 @@ pub enum RenderError {
     Device(String),
     #[error("the GPU reported an error: {0}")]
     Gpu(String),
+    #[error(
+        "the GPU device was lost ({0}); nothing more can be drawn with it: save the scene and \
+         start dbuffer again"
+    )]
+    Lost(String),
     #[error("{0}")]
     Request(String),
     #[error("reading back from the GPU failed: {0}")]

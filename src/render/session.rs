@@ -372,6 +372,7 @@ impl Session {
         ctx: &GpuContext,
         jobs: &mut [FrameJob<'_>],
     ) -> Result<u64, RenderError> {
+        ctx.check_lost()?;
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut encoder = ctx
             .device
@@ -399,11 +400,16 @@ impl Session {
         }
         // Errors raised before the scope (creating pipelines) come first: they are the cause.
         let scoped = pollster::block_on(scope.pop());
-        if let Some(e) = ctx.take_uncaptured_errors().into_iter().next() {
+        let error = ctx
+            .take_uncaptured_errors()
+            .into_iter()
+            .next()
+            .or(scoped.map(|e| e.to_string()));
+        if let Some(e) = error {
+            // A lost device fails every call after it: say that, not the first call it failed
+            // (wgpu tells the device's loss on its next poll).
+            ctx.check_lost_after_poll()?;
             return Err(RenderError::Gpu(e));
-        }
-        if let Some(e) = scoped {
-            return Err(RenderError::Gpu(e.to_string()));
         }
         result?;
         self.pending_read_bytes = bytes;
