@@ -153,6 +153,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/dbuffer.wgsl"),
     ),
     (
+        "methods/dbuffer_fused.wgsl",
+        include_str!("../shaders/methods/dbuffer_fused.wgsl"),
+    ),
+    (
         "methods/hard.wgsl",
         include_str!("../shaders/methods/hard.wgsl"),
     ),
@@ -181,6 +185,14 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/passes/floor.wgsl"),
     ),
     (
+        "passes/fused_layers.wgsl",
+        include_str!("../shaders/passes/fused_layers.wgsl"),
+    ),
+    (
+        "passes/fused_lists.wgsl",
+        include_str!("../shaders/passes/fused_lists.wgsl"),
+    ),
+    (
         "passes/probe.wgsl",
         include_str!("../shaders/passes/probe.wgsl"),
     ),
@@ -203,6 +215,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "shared/fullscreen_vs.wgsl",
         include_str!("../shaders/shared/fullscreen_vs.wgsl"),
+    ),
+    (
+        "shared/fused.wgsl",
+        include_str!("../shaders/shared/fused.wgsl"),
     ),
     (
         "shared/light.wgsl",

@@ -7,6 +7,8 @@
 pub mod camera;
 pub mod dbuffer_volumes;
 pub mod floor;
+pub mod fused_layers;
+pub mod fused_lists;
 pub mod probe;
 pub mod sample_maps;
 pub mod shadow_map;
