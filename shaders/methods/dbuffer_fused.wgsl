@@ -28,7 +28,6 @@ const LUT_ANGLES: u32 = 256u;
 const ANCHOR_SAMPLES: u32 = 3u;
 const LUT_OFFSETS: u32 = 128u;
 const PI: f32 = 3.14159265358979;
-const TAU: f32 = 6.28318530717959;
 
 // The paper's V at the pixel: methods/dbuffer.wgsl's lookup (tests/render_fused.rs holds the
 // overflowing pixels to the paper's V).
@@ -57,7 +56,6 @@ struct Chord {
     end_b: vec2<f32>,
     delta: i32,
     area: f32,
-    valid: bool,
 };
 
 fn cross2(a: vec2<f32>, b: vec2<f32>) -> f32 {
@@ -108,38 +106,55 @@ fn region_area(p: vec2<f32>, q: vec2<f32>) -> f32 {
     if !(abs(c) > 0.0) || !(abs(c) < 3.0e38) {
         return 0.0;
     }
+    // The common case without an arc tangent: both ends outside the disk and the segment across
+    // it. The sectors beside the crossings cancel against the sector p 0 q, and the region is the
+    // circular segment cut by the line at distance h from the centre (what the general formula
+    // gives, in exact arithmetic).
+    let d = q - p;
+    let a = dot(d, d);
+    let h2 = c * c / a;
+    let t0 = -dot(p, d) / a;
+    let half = sqrt(max(1.0 - h2, 0.0) / a);
+    if dot(p, p) > 1.0 && dot(q, q) > 1.0 && h2 < 1.0 && t0 - half > 0.0 && t0 + half < 1.0 {
+        let h = sqrt(h2);
+        return (acos(h) - h * sqrt(1.0 - h2)) / PI;
+    }
     return abs((sector(p, q) - disk_triangle_area(p, q)) / PI);
 }
 
-// geometry::fused::edge_chord, with one shortcut: an edge whose chord misses the disk
-// (distance from the centre at least 1: no sample beyond it, no area) is left out before its
-// ends and area are computed. The twin computes them and gets an empty region and area 0 there.
+// Whether an edge is a silhouette from x: one face in front of x, the other not.
+fn edge_silhouette(e: FusedEdge, x: vec3<f32>) -> bool {
+    let tol = FUSED_FACING_TOL * (1.0 + fused_max_abs(x) + e.b.w);
+    return (dot(e.n0.xyz, x) - e.n0.w > -tol) != (dot(e.n1.xyz, x) - e.n1.w > -tol);
+}
+
+// Whether a silhouette edge changes something seen from x: partly nearer the light than x, its
+// chord cutting the disk (geometry::fused::edge_chord also makes chords that miss the disk: no
+// sample beyond them, area 0).
+fn edge_cuts_disk(e: FusedEdge, x: vec3<f32>, hx: f32) -> bool {
+    let limit = hx * (1.0 - FUSED_CLIP);
+    let near = fused_height(fused, e.a.xyz) < limit || fused_height(fused, e.b.xyz) < limit;
+    let m = cross(e.a.xyz - x, e.b.xyz - x);
+    let cc = dot(m, fused.center - x);
+    let fold = dot(m, e.fold.xyz);
+    let ab = fused.radius * vec2<f32>(dot(m, fused.e1), dot(m, fused.e2));
+    return near && cc != 0.0 && fold != 0.0 && abs(cc) < 3.0e38 && cc * cc < dot(ab, ab);
+}
+
+// geometry::fused::edge_chord for an edge that cuts the disk (edge_cuts_disk).
 fn edge_chord(e: FusedEdge, x: vec3<f32>, hx: f32) -> Chord {
     var out: Chord;
-    out.valid = false;
-    // A silhouette from x: one face in front of x, the other not.
-    let tol = FUSED_FACING_TOL * (1.0 + fused_max_abs(x) + fused_max_abs(e.a.xyz));
-    if (dot(e.n0.xyz, x) - e.n0.w > -tol) == (dot(e.n1.xyz, x) - e.n1.w > -tol) {
-        return out;
-    }
-    // Clip the edge to the part nearer the light than x.
     let limit = hx * (1.0 - FUSED_CLIP);
     let ha = fused_height(fused, e.a.xyz);
     let hb = fused_height(fused, e.b.xyz);
     let a_near = ha < limit;
     let b_near = hb < limit;
-    if !a_near && !b_near {
-        return out;
-    }
     let c = fused.center;
     let r = fused.radius;
     let m = cross(e.a.xyz - x, e.b.xyz - x);
     let cc = dot(m, c - x);
     let fold = dot(m, e.fold.xyz);
     let ab = r * vec2<f32>(dot(m, fused.e1), dot(m, fused.e2));
-    if cc == 0.0 || fold == 0.0 || !(abs(cc) < 3.0e38) || !(cc * cc < dot(ab, ab)) {
-        return out;
-    }
     let cut = e.a.xyz + (e.b.xyz - e.a.xyz) * ((limit - ha) / (hb - ha));
     let pa = select(cut, e.a.xyz, a_near);
     let pb = select(cut, e.b.xyz, b_near);
@@ -156,17 +171,27 @@ fn edge_chord(e: FusedEdge, x: vec3<f32>, hx: f32) -> Chord {
     let ua = vec2<f32>(dot(qa - c, fused.e1), dot(qa - c, fused.e2)) / r;
     let ub = vec2<f32>(dot(qb - c, fused.e1), dot(qb - c, fused.e2)) / r;
     out.area = region_area(ua, ub);
-    out.valid = true;
     return out;
 }
 
-// The angle bin of the normal (a, b), rounded to the nearest (geometry::fused::lut_bin).
-fn lut_bin(n: vec2<f32>) -> u32 {
-    var phi = atan2(n.y, n.x);
-    if phi < 0.0 {
-        phi += TAU;
+// The position along the diamond |u| + |v| = 1 of the ray through n, in [0, 4): a monotone
+// stand-in for its angle (geometry::fused::diamond_angle).
+fn diamond_angle(n: vec2<f32>) -> f32 {
+    let s = abs(n.x) + abs(n.y);
+    if !(s > 0.0) {
+        return 0.0;
     }
-    return u32(round(phi / TAU * f32(LUT_ANGLES))) % LUT_ANGLES;
+    let x = n.x / s;
+    let y = n.y / s;
+    if y >= 0.0 {
+        return select(1.0 - x, y, x >= 0.0);
+    }
+    return select(3.0 + x, 2.0 - y, x < 0.0);
+}
+
+// The angle bin of the normal n, rounded to the nearest (geometry::fused::lut_bin).
+fn lut_bin(n: vec2<f32>) -> u32 {
+    return u32(round(diamond_angle(n) * (f32(LUT_ANGLES) / 4.0))) % LUT_ANGLES;
 }
 
 // The samples in an edge's region (DiskMask::lut_region).
@@ -311,24 +336,8 @@ fn popcount(v: vec4<u32>) -> u32 {
     return c.x + c.y + c.z + c.w;
 }
 
-fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
-    let l = light_lookup(x, n);
-    let hidden = hidden_from_center(l);
-    // Outside the fitted frustum no penumbra can reach: lit. Behind the one-sided light, or on
-    // a side turned away from the centre: nothing arrives.
-    if !in_front_of_light(x) || !faces_light_center(x, n) {
-        return plain(0.0);
-    }
-    if !l.inside {
-        return plain(1.0);
-    }
-    let size = u32(fused.list_size);
-    let lt = vec2<u32>(clamp(floor(l.uv * fused.list_size), vec2<f32>(0.0), vec2<f32>(fused.list_size - 1.0)));
-    let list = lt.y * size + lt.x;
-    let count = counts[list];
-    if count > fused.cap || fused.all_overflow != 0u {
-        return paper_visibility(l, hidden);
-    }
+// The mask over a list of `count` edges starting at `first` (FusedTwin::sample's Mask path).
+fn mask_visibility(x: vec3<f32>, l: LightLookup, hidden: bool, first: u32, count: u32) -> f32 {
     // L(c) for a receiver beyond every caster crossing of its ray (CasterCrossings::layers_at):
     // the crossings along the D-buffer texel's ray, corrected where the ray, swept sideways to
     // x's, passes an outline seen from c (an edge of the list).
@@ -342,24 +351,44 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     // ∫Δ over the disk, exactly, and the layers of a crossing.
     var integral = 0.0;
     var layers = 0;
-    let first = list * fused.cap;
-    for (var i = 0u; i < count; i++) {
-        let e = edges[lists[first + i]];
-        if known && e.fold.w != 0.0 {
-            let m = cross(e.a.xyz - c, e.b.xyz - c);
-            let fold = dot(m, e.fold.xyz);
-            let sx = dot(m, x - c);
-            let sy = dot(m, y - c);
-            if fold != 0.0 && (sx > 0.0) != (sy > 0.0)
-                && segment_meets_triangle(e.a.xyz, e.b.xyz, c, y, x) {
-                let k = i32(e.a.w);
-                centre += select(-k, k, (sx > 0.0) == (fold > 0.0));
+    // The chord of an edge that cuts the disk (its ends, area and samples) is made one per round
+    // of the outer loop. A CPU rasteriser runs a SIMD group of pixels through both sides of every
+    // branch but leaves a loop when all its pixels have: so the pixels skip the other edges each
+    // at their own pace in the inner loop, and the rounds are as many as the most such edges in
+    // the group, not as the longest list.
+    var i = 0u;
+    loop {
+        var e: FusedEdge;
+        var found = false;
+        loop {
+            if i >= count {
+                break;
+            }
+            e = edges[lists[first + i]];
+            i++;
+            // L(c): the sweep from the texel's ray to x passes the plane through c and an
+            // outline seen from c, within the edge.
+            let sx = dot(e.mc.xyz, x - c);
+            let sy = dot(e.mc.xyz, y - c);
+            if known && e.fold.w != 0.0 && e.mc.w != 0.0 && (sx > 0.0) != (sy > 0.0) {
+                if segment_meets_triangle(e.a.xyz, e.b.xyz, c, y, x) {
+                    let k = i32(e.a.w);
+                    centre += select(-k, k, (sx > 0.0) == (e.mc.w > 0.0));
+                }
+            }
+            var cuts = false;
+            if edge_silhouette(e, x) {
+                cuts = edge_cuts_disk(e, x, hx);
+            }
+            if cuts {
+                found = true;
+                break;
             }
         }
-        let ch = edge_chord(e, x, hx);
-        if !ch.valid {
-            continue;
+        if !found {
+            break;
         }
+        let ch = edge_chord(e, x, hx);
         if ch.area > 0.0 {
             integral += f32(ch.delta) * ch.area;
             layers = max(layers, abs(ch.delta));
@@ -367,31 +396,26 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         counter_add(&counter, lut_region(ch), ch.delta);
     }
     let hidden_c = select(hidden, centre > 0, known);
-    if count == 0u {
-        // No chord crosses the disk: all of it is as the centre is.
-        return plain(select(1.0, 0.0, hidden_c));
-    }
-    // The samples in use (the LUT leaves the others out of every region, so they count 0).
-    let n_samples = min(fused.samples, 128u);
-    let filled = clamp(vec4<i32>(i32(n_samples)) - vec4<i32>(0, 32, 64, 96), vec4<i32>(0), vec4<i32>(32));
-    let valid = select((vec4<u32>(1u) << vec4<u32>(filled)) - 1u, vec4<u32>(0xffffffffu), filled == vec4<i32>(32));
-    // The ANCHOR_SAMPLES-th smallest count (geometry::fused::ANCHOR_SAMPLES says why not the
-    // smallest), bit by bit from the top of u = count + 16: a radix select.
-    var candidates = valid;
-    var rank = min(ANCHOR_SAMPLES, n_samples);
-    var min_u = 0;
-    select_plane(~counter.p4, 16, &candidates, &rank, &min_u);
-    select_plane(counter.p3, 8, &candidates, &rank, &min_u);
-    select_plane(counter.p2, 4, &candidates, &rank, &min_u);
-    select_plane(counter.p1, 2, &candidates, &rank, &min_u);
-    select_plane(counter.p0, 1, &candidates, &rank, &min_u);
-    let floor_c = select(select(0, 1, hidden), centre, known);
-    let anchor = max(16 - min_u, floor_c);
-    let visible = popcount(at_most(counter, 16 - anchor) & valid);
-    var v = f32(visible) / f32(max(n_samples, 1u));
-    if layers == 0 {
-        v = select(1.0, 0.0, hidden_c);
-    } else {
+    // No chord cuts the disk: all of it is as the centre is.
+    var v = select(1.0, 0.0, hidden_c);
+    if layers > 0 {
+        // The samples in use (the LUT leaves the others out of every region: they count 0).
+        let n_samples = min(fused.samples, 128u);
+        let filled = clamp(vec4<i32>(i32(n_samples)) - vec4<i32>(0, 32, 64, 96), vec4<i32>(0), vec4<i32>(32));
+        let valid = select((vec4<u32>(1u) << vec4<u32>(filled)) - 1u, vec4<u32>(0xffffffffu), filled == vec4<i32>(32));
+        // The ANCHOR_SAMPLES-th smallest count (geometry::fused::ANCHOR_SAMPLES says why not the
+        // smallest), bit by bit from the top of u = count + 16: a radix select.
+        var candidates = valid;
+        var rank = min(ANCHOR_SAMPLES, n_samples);
+        var min_u = 0;
+        select_plane(~counter.p4, 16, &candidates, &rank, &min_u);
+        select_plane(counter.p3, 8, &candidates, &rank, &min_u);
+        select_plane(counter.p2, 4, &candidates, &rank, &min_u);
+        select_plane(counter.p1, 2, &candidates, &rank, &min_u);
+        select_plane(counter.p0, 1, &candidates, &rank, &min_u);
+        let floor_c = select(select(0, 1, hidden), centre, known);
+        let anchor = max(16 - min_u, floor_c);
+        v = f32(popcount(at_most(counter, 16 - anchor) & valid)) / f32(max(n_samples, 1u));
         // One layer deep: every sample sees 0 or `layers` layers; then V is exact.
         let lc = select(select(0, layers, hidden), centre, known);
         let one_deep = equal_to(counter, 16 - lc) | equal_to(counter, 16 + layers - lc);
@@ -399,5 +423,27 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
             v = clamp(1.0 - (f32(lc) + integral) / f32(layers), 0.0, 1.0);
         }
     }
-    return plain(v);
+    return v;
+}
+
+fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
+    let l = light_lookup(x, n);
+    let hidden = hidden_from_center(l);
+    // Outside the fitted frustum no penumbra can reach: lit. Behind the one-sided light, or on
+    // a side turned away from the centre: nothing arrives.
+    let dark = !in_front_of_light(x) || !faces_light_center(x, n);
+    var out = plain(select(1.0, 0.0, dark));
+    if l.inside && !dark {
+        let size = u32(fused.list_size);
+        let lt = vec2<u32>(clamp(floor(l.uv * fused.list_size), vec2<f32>(0.0), vec2<f32>(fused.list_size - 1.0)));
+        let list = lt.y * size + lt.x;
+        let count = counts[list];
+        let overflow = count > fused.cap || fused.all_overflow != 0u;
+        if overflow {
+            out = paper_visibility(l, hidden);
+        } else {
+            out = plain(mask_visibility(x, l, hidden, list * fused.cap, count));
+        }
+    }
+    return out;
 }

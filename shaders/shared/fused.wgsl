@@ -38,15 +38,16 @@ struct FusedUniforms {
     _pad: u32,
 };
 
-// A candidate edge (geometry::fused::FusedEdge::gpu_record): a.xyz, layers · b.xyz, caster ·
-// n0.xyz, offset0 · n1.xyz, offset1 · fold.xyz, 1 where a silhouette from the light centre.
-// Face planes n·p − offset, positive in front.
+// A candidate edge (geometry::fused::FusedEdge::gpu_record): a.xyz, layers · b.xyz, max |a_i| ·
+// n0.xyz, offset0 · n1.xyz, offset1 · fold.xyz, 1 where a silhouette from the light centre c ·
+// m_c.xyz, m_c·fold with m_c = (a − c) × (b − c). Face planes n·p − offset, positive in front.
 struct FusedEdge {
     a: vec4<f32>,
     b: vec4<f32>,
     n0: vec4<f32>,
     n1: vec4<f32>,
     fold: vec4<f32>,
+    mc: vec4<f32>,
 };
 
 // One list texel's ray and where its receivers can be (geometry::fused::TexelRay), as the merge
@@ -84,7 +85,7 @@ fn fused_max_abs(v: vec3<f32>) -> f32 {
 
 // FusedEdge::is_silhouette_from.
 fn fused_is_silhouette_from(e: FusedEdge, x: vec3<f32>) -> bool {
-    let tol = FUSED_FACING_TOL * (1.0 + fused_max_abs(x) + fused_max_abs(e.a.xyz));
+    let tol = FUSED_FACING_TOL * (1.0 + fused_max_abs(x) + e.b.w);
     let front0 = dot(e.n0.xyz, x) - e.n0.w > -tol;
     let front1 = dot(e.n1.xyz, x) - e.n1.w > -tol;
     return front0 != front1;

@@ -141,18 +141,22 @@ pub struct FusedEdge {
 
 impl FusedEdge {
     /// The edge as the GPU's storage-buffer record (`FusedEdge` of `shaders/shared/fused.wgsl`):
-    /// `a.xyz, layers` · `b.xyz, caster` · `n0.xyz, offset0` · `n1.xyz, offset1` ·
-    /// `fold.xyz, 1 if a silhouette from the light centre c else 0` (the outlines seen from `c`
-    /// [`CasterCrossings::layers_at`] looks for), the same `f32`s the twin computes with.
-    pub fn gpu_record(&self, c: Vec3) -> [[f32; 4]; 5] {
+    /// `a.xyz, layers` · `b.xyz, max |aᵢ|` (the scale of the facing tolerance) ·
+    /// `n0.xyz, offset0` · `n1.xyz, offset1` · `fold.xyz, 1 if a silhouette from the light
+    /// centre c else 0` (an outline seen from `c`, which [`CasterCrossings::layers_at`] looks
+    /// for) · `m_c.xyz, m_c·fold` with `m_c = (a − c) × (b − c)`, the normal of the plane through
+    /// `c` and the edge. The same `f32`s the twin computes with.
+    pub fn gpu_record(&self, c: Vec3) -> [[f32; 4]; 6] {
+        let m = (self.a - c).cross(self.b - c);
         [
             self.a.extend(self.layers as f32).to_array(),
-            self.b.extend(self.caster as f32).to_array(),
+            self.b.extend(self.a.abs().max_element()).to_array(),
             self.n0.extend(self.offset0).to_array(),
             self.n1.extend(self.offset1).to_array(),
             self.fold
                 .extend(f32::from(u8::from(self.is_silhouette_from(c))))
                 .to_array(),
+            m.extend(m.dot(self.fold)).to_array(),
         ]
     }
 
@@ -311,8 +315,8 @@ pub enum MaskEval {
     #[default]
     Exact,
     /// Through look-up tables of precomputed half-plane masks (Schwarz & Stamminger 2007): lines
-    /// through the centre by angle (`LUT_ANGLES` bins), chords by angle and distance from the centre
-    /// (`LUT_ANGLES` × `LUT_OFFSETS`). What a GPU with little ALU to spare (lavapipe) would do.
+    /// through the centre by angle (`LUT_ANGLES` bins, uniform in [`diamond_angle`]), chords by
+    /// angle and distance from the centre (`LUT_ANGLES` × `LUT_OFFSETS`). What the GPU does.
     Lut,
 }
 
@@ -345,9 +349,9 @@ pub struct DiskMask {
     /// Unit-disk coordinates, the oracle's stratified pattern for `N` samples.
     pub samples: Vec<Vec2>,
     pub eval: MaskEval,
-    /// `LUT_ANGLES` masks of `{p : p·(cos φ, sin φ) > 0}`.
+    /// `LUT_ANGLES` masks of `{p : p·n_k > 0}` (`n_k` the direction of angle bin `k`).
     through_centre: Vec<Bits>,
-    /// `LUT_ANGLES × LUT_OFFSETS` masks of `{p : p·(cos φ, sin φ) > ρ}`.
+    /// `LUT_ANGLES × LUT_OFFSETS` masks of `{p : p·n_k > ρ}`.
     chords: Vec<Bits>,
 }
 
@@ -362,8 +366,7 @@ impl DiskMask {
         let (mut through_centre, mut chords) = (Vec::new(), Vec::new());
         if eval == MaskEval::Lut {
             for k in 0..LUT_ANGLES {
-                let phi = lut_angle(k);
-                let n = Vec2::new(phi.cos(), phi.sin());
+                let n = lut_direction(k);
                 let mut m = Bits::default();
                 for (i, p) in samples.iter().enumerate() {
                     if p.dot(n) > 0.0 {
@@ -465,14 +468,48 @@ impl DiskMask {
     }
 }
 
-fn lut_angle(k: usize) -> f32 {
-    k as f32 / LUT_ANGLES as f32 * std::f32::consts::TAU
+/// The unit direction of angle bin `k`: the bins are uniform in the "diamond angle"
+/// ([`diamond_angle`]), which a GPU computes with one division where an angle takes an arc
+/// tangent.
+fn lut_direction(k: usize) -> Vec2 {
+    let d = k as f32 / LUT_ANGLES as f32 * 4.0;
+    let v = if d < 1.0 {
+        Vec2::new(1.0 - d, d)
+    } else if d < 2.0 {
+        Vec2::new(1.0 - d, 2.0 - d)
+    } else if d < 3.0 {
+        Vec2::new(d - 3.0, 2.0 - d)
+    } else {
+        Vec2::new(d - 3.0, d - 4.0)
+    };
+    v.normalize()
+}
+
+/// A monotone stand-in for the angle of `(a, b)`, in `[0, 4)`: the position along the diamond
+/// `|u| + |v| = 1` where the ray through `(a, b)` meets it, counter-clockwise from `(1, 0)`.
+/// `shaders/methods/dbuffer_fused.wgsl` computes it the same way.
+pub fn diamond_angle(a: f32, b: f32) -> f32 {
+    let s = a.abs() + b.abs();
+    if s.is_nan() || s <= 0.0 {
+        return 0.0;
+    }
+    let (x, y) = (a / s, b / s);
+    if y >= 0.0 {
+        if x >= 0.0 {
+            y
+        } else {
+            1.0 - x
+        }
+    } else if x < 0.0 {
+        2.0 - y
+    } else {
+        3.0 + x
+    }
 }
 
 /// The angle bin of the normal `(a, b)`, rounded to the nearest.
 fn lut_bin(a: f32, b: f32) -> usize {
-    let phi = b.atan2(a).rem_euclid(std::f32::consts::TAU);
-    ((phi / std::f32::consts::TAU * LUT_ANGLES as f32).round() as usize) % LUT_ANGLES
+    ((diamond_angle(a, b) * (LUT_ANGLES as f32 / 4.0)).round() as usize) % LUT_ANGLES
 }
 
 /// Wraps a layer count to the camera pass's `COUNTER_BITS`-bit two's complement.

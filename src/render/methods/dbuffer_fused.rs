@@ -249,7 +249,7 @@ fn update_edges(
         },
     );
     let vp = inputs.light_view.view_projection();
-    let (records, hulls): (Vec<[[f32; 4]; 5]>, Vec<[[f32; 2]; HULL_CORNERS]>) = if over_budget
+    let (records, hulls): (Vec<[[f32; 4]; 6]>, Vec<[[f32; 2]; HULL_CORNERS]>) = if over_budget
     {
         (Vec::new(), Vec::new())
     } else {

@@ -29,7 +29,7 @@ use crate::render::{
 /// Bytes of one list texel's ray (`TexelRay` of `shaders/shared/fused.wgsl`).
 pub const TEXEL_RAY_BYTES: u64 = 128;
 /// Bytes of one candidate edge (`FusedEdge`).
-pub const EDGE_BYTES: u64 = 80;
+pub const EDGE_BYTES: u64 = 96;
 /// Corners of one proxy hull (`geometry::fused::proxy_hull` has at most 16).
 pub const HULL_CORNERS: usize = 16;
 /// Bytes of one proxy hull.
@@ -199,11 +199,11 @@ pub struct EdgeBuffers {
 impl EdgeBuffers {
     /// `records`: [`crate::geometry::fused::FusedEdge::gpu_record`] per edge; `hulls`: each
     /// edge's proxy corners, padded to [`HULL_CORNERS`] by repeating the last.
-    pub fn new(device: &wgpu::Device, records: &[[[f32; 4]; 5]], hulls: &[[[f32; 2]; HULL_CORNERS]]) -> EdgeBuffers {
+    pub fn new(device: &wgpu::Device, records: &[[[f32; 4]; 6]], hulls: &[[[f32; 2]; HULL_CORNERS]]) -> EdgeBuffers {
         use wgpu::util::DeviceExt;
         // Storage bindings may not be empty.
-        let records: Vec<[[f32; 4]; 5]> = if records.is_empty() {
-            vec![[[0.0; 4]; 5]]
+        let records: Vec<[[f32; 4]; 6]> = if records.is_empty() {
+            vec![[[0.0; 4]; 6]]
         } else {
             records.to_vec()
         };
