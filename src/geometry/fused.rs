@@ -1984,6 +1984,51 @@ mod tests {
         true
     }
 
+    /// The light as seen from a point, on the knot's ground where two loops fuse: its layers
+    /// give the method's visible samples, each chord's line passes through its projected ends,
+    /// and the path says where the mask did not run.
+    #[test]
+    fn the_light_from_a_point_is_what_the_mask_saw() {
+        let Ok(scene) = crate::scene::load("fig8c-complex") else {
+            panic!("fig8c-complex loads");
+        };
+        let prepared = PreparedCasters::new(&scene);
+        let geometry = prepared.build(
+            &scene.light,
+            &crate::geometry::VolumeParams::for_scene(&scene),
+        );
+        let twin = FusedTwin::new(&scene, &prepared, &geometry, FusedParams::default());
+        let (mut masked, mut fused) = (0, 0);
+        for i in 0..40 {
+            for j in 0..40 {
+                let x = Vec3::new(-1.2 + 0.06 * i as f32, 0.0, -1.2 + 0.06 * j as f32);
+                let l = twin.light_from(x);
+                let s = twin.sample(x);
+                assert_eq!((l.v, l.path), (s.v, s.path));
+                if l.path != FusedPath::Mask {
+                    assert!(l.chords.is_empty() && l.layers.is_empty());
+                    continue;
+                }
+                masked += 1;
+                let m = s.mask.expect("the mask ran");
+                assert_eq!(l.layers.len(), l.samples.len());
+                let lit = l.layers.iter().filter(|&&k| k <= 0).count() as u32;
+                assert_eq!(lit, m.visible, "{x}");
+                fused += usize::from(l.layers.iter().any(|&k| k > 2));
+                for c in &l.chords {
+                    let [a, b, cc] = c.chord.chord;
+                    let scale = a.abs() + b.abs() + cc.abs();
+                    for p in c.chord.ends {
+                        let on = a * p.x + b * p.y + cc;
+                        assert!(on.abs() <= 1e-3 * scale * (1.0 + p.length()), "{x}: {on}");
+                    }
+                    assert!(twin.edges()[c.edge as usize].caster == c.caster);
+                }
+            }
+        }
+        assert!(masked > 100 && fused > 0, "{masked} masked, {fused} fused");
+    }
+
     #[test]
     fn counters_wrap_like_the_gpus() {
         assert_eq!(wrap(15), 15);
