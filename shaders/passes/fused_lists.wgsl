@@ -1,6 +1,6 @@
 // dbuffer-fused's per-texel edge lists (src/render/passes/fused_lists.rs). Twin:
 // geometry::fused::FusedTwin::texel_ray_of (cs_merge), edge_in_texel (fs_list) and
-// FusedTwin::crossings_of (fs_maps).
+// FusedTwin::crossings_of (cs_maps).
 //   cs_merge  per list texel, its ray and where its receivers can be, from the receivers of the
 //             3×3 texels around it (passes/fused_layers.wgsl): up to three patches and a deeper
 //             stretch (TexelRay);
@@ -9,7 +9,7 @@
 //             the count is below the cap. Overflow rule: a list whose count exceeds the cap is not
 //             used (the camera pass falls back to the paper's V); below it the set of edges does
 //             not depend on the order in which fragments ran;
-//   fs_maps   per D-buffer texel: the caster crossings along its ray, the largest crossing height
+//   cs_maps   per D-buffer texel: the caster crossings along its ray, the largest crossing height
 //             over the 3×3 texels around it, its list texel's count and whether it overflowed
 //             (the method's light maps, and the camera pass's L(c)).
 // #include shared/fused.wgsl
@@ -36,6 +36,7 @@
 @group(1) @binding(11) var cross_count: texture_2d<f32>;
 @group(1) @binding(12) var cross_far: texture_depth_2d;
 @group(1) @binding(13) var<storage, read> counts: array<u32>;
+@group(1) @binding(14) var maps_out: texture_storage_2d<rgba32float, write>;
 
 // geometry::fused::{PATCH_TEXELS, PATCH_COS, PATCH_BULGE}.
 const PATCH_TEXELS: f32 = 64.0;
@@ -353,34 +354,44 @@ fn fs_list(f: ProxyOut) -> @location(0) vec4<f32> {
     return vec4<f32>(0.0);
 }
 
-// ---- fs_maps ----
+// ---- cs_maps ----
 
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let x = f32((i << 1u) & 2u) * 2.0 - 1.0;
-    let y = f32(i & 2u) * 2.0 - 1.0;
-    return vec4<f32>(x, y, 0.0, 1.0);
-}
+// The largest crossing heights of a 16×16 tile of texels and the ring around it.
+var<workgroup> far_tile: array<f32, 324>;
 
-// (crossings along the texel's ray, the largest crossing height over the 3×3 around it, the
-// count of its list texel, 1 where that list overflowed).
-@fragment
-fn fs_maps(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
+// Per D-buffer texel: (crossings along its ray, the largest crossing height over the 3×3 around
+// it, the count of its list texel, 1 where that list overflowed).
+@compute @workgroup_size(16, 16)
+fn cs_maps(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_id) local: vec3<u32>,
+    @builtin(workgroup_id) group: vec3<u32>
+) {
     let size = i32(fused.map_size);
-    let t = vec2<i32>(p.xy);
-    let crossings = round(textureLoad(cross_count, t, 0).x);
+    let origin = vec2<i32>(group.xy) * 16 - vec2<i32>(1);
+    for (var k = local.y * 16u + local.x; k < 324u; k += 256u) {
+        let q = origin + vec2<i32>(i32(k % 18u), i32(k / 18u));
+        var far = 0.0;
+        if all(q >= vec2<i32>(0)) && all(q < vec2<i32>(size)) {
+            far = textureLoad(cross_far, q, 0);
+        }
+        far_tile[k] = far;
+    }
+    workgroupBarrier();
+    let t = vec2<i32>(id.xy);
+    if any(t >= vec2<i32>(size)) {
+        return;
+    }
     var far = 0.0;
-    for (var dy = -1; dy <= 1; dy++) {
-        for (var dx = -1; dx <= 1; dx++) {
-            let q = t + vec2<i32>(dx, dy);
-            if all(q >= vec2<i32>(0)) && all(q < vec2<i32>(size)) {
-                far = max(far, textureLoad(cross_far, q, 0));
-            }
+    for (var dy = 0u; dy < 3u; dy++) {
+        for (var dx = 0u; dx < 3u; dx++) {
+            far = max(far, far_tile[(local.y + dy) * 18u + local.x + dx]);
         }
     }
+    let crossings = round(textureLoad(cross_count, t, 0).x);
     let l = u32(fused.list_size);
     let lt = min(vec2<u32>((vec2<f32>(t) + 0.5) / fused.map_size * fused.list_size), vec2<u32>(l - 1u));
     let count = counts[lt.y * l + lt.x];
     let overflow = count > fused.cap || fused.all_overflow != 0u;
-    return vec4<f32>(crossings, far / fused.inv_far, f32(count), select(0.0, 1.0, overflow));
+    textureStore(maps_out, t, vec4<f32>(crossings, far / fused.inv_far, f32(count), select(0.0, 1.0, overflow)));
 }
