@@ -30,7 +30,7 @@ enum Command {
         /// Image size, WxH (at most 64 Mpixels, sides up to 16384).
         #[arg(long, default_value = "512x512")]
         size: String,
-        /// dbuffer, dbuffer-center, hard, pcf, pcss, sampled or reference.
+        /// dbuffer, dbuffer-center, dbuffer-fused, hard, pcf, pcss, sampled or reference.
         #[arg(long, default_value = "dbuffer")]
         method: String,
         /// V(t): smoothstep, sqrt, exact or linear.
