@@ -101,9 +101,7 @@ fn twin(scene: &Scene, cap: usize) -> FusedTwin {
 }
 
 fn knobs(cap: u32) -> Knobs {
-    Knobs::default()
-        .with(&LIST_SIZE, LIST)
-        .with(&LIST_CAP, cap)
+    Knobs::default().with(&LIST_SIZE, LIST).with(&LIST_CAP, cap)
 }
 
 /// Pixels that show a receiver facing the light (the pixels every metric uses), with their
@@ -132,8 +130,13 @@ fn receivers(scene: &Scene, frame: &Frame) -> Vec<(usize, Vec3)> {
 /// The GPU's light maps at the D-buffer texel of `x`: (crossings, farthest crossing height, list
 /// count, overflow) and `|cx_o|`.
 fn maps_at(frame: &Frame, texel: [u32; 2]) -> ([f32; 4], f32) {
-    let maps = frame.maps.as_ref().expect("the method's light maps were read");
-    let t = maps.texel(texel[0], texel[1]).expect("a texel inside the maps");
+    let maps = frame
+        .maps
+        .as_ref()
+        .expect("the method's light maps were read");
+    let t = maps
+        .texel(texel[0], texel[1])
+        .expect("a texel inside the maps");
     (t[1], t[0][0])
 }
 
@@ -276,9 +279,7 @@ fn overflowing_lists_fall_back_to_the_papers_v() {
 fn lists_over_the_budget_are_refused() {
     let ctx = context();
     let mut session = Session::new(&ctx, load("table1-224"));
-    let knobs = Knobs::default()
-        .with(&LIST_SIZE, 2048)
-        .with(&LIST_CAP, 64);
+    let knobs = Knobs::default().with(&LIST_SIZE, 2048).with(&LIST_CAP, 64);
     let Err(e) = render_in(&ctx, &mut session, Method::DBUFFER_FUSED, knobs) else {
         panic!("a 1 GiB list buffer was accepted");
     };

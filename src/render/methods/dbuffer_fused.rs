@@ -39,8 +39,7 @@ use crate::render::passes::fused_lists::{
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext,
-    RenderError,
+    buffer_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
 };
 
 /// Texels per side of the grid of edge lists.
@@ -249,16 +248,14 @@ fn update_edges(
         },
     );
     let vp = inputs.light_view.view_projection();
-    let (records, hulls): (Vec<[[f32; 4]; 6]>, Vec<[[f32; 2]; HULL_CORNERS]>) = if over_budget
-    {
+    let (records, hulls): (Vec<[[f32; 4]; 6]>, Vec<[[f32; 2]; HULL_CORNERS]>) = if over_budget {
         (Vec::new(), Vec::new())
     } else {
         edges
             .iter()
             .map(|e| {
                 // Three list texels' footprint of margin at each end (the twin's proxy test).
-                let pad = [e.a, e.b]
-                    .map(|p| 3.0 * p.distance(light.center) * uniforms.half_slope);
+                let pad = [e.a, e.b].map(|p| 3.0 * p.distance(light.center) * uniforms.half_slope);
                 let hull = proxy_hull(e, &light, h_max, pad, &vp);
                 let last = hull.last().copied().unwrap_or(glam::Vec2::ZERO);
                 let corners =
@@ -305,13 +302,17 @@ impl MethodState for DBufferFused {
         // The paper's D-buffer: |cx_o| and the fallback, and the geometry (face classes).
         self.paper.prepare(inputs, shared, rec)?;
         let Some(geometry) = self.paper.geometry() else {
-            return Err(RenderError::Gpu("the D-buffer's geometry was not made".into()));
+            return Err(RenderError::Gpu(
+                "the D-buffer's geometry was not made".into(),
+            ));
         };
         if let Some(ms) = update_edges(&mut self.edges, inputs, geometry, list_size, max_binding) {
             self.geometry_ms = ms;
         }
         let Some(edges) = self.edges.as_ref() else {
-            return Err(RenderError::Gpu("dbuffer-fused's edges were not made".into()));
+            return Err(RenderError::Gpu(
+                "dbuffer-fused's edges were not made".into(),
+            ));
         };
         if self.lut.as_ref().is_none_or(|(_, s)| *s != samples) {
             use wgpu::util::DeviceExt;
@@ -352,7 +353,9 @@ impl MethodState for DBufferFused {
             self.layers
                 .record(inputs.ctx, rec, inputs.surfaces, inputs.map_size, list_size);
             let Some(layers) = self.layers.targets() else {
-                return Err(RenderError::Gpu("dbuffer-fused's layers were not made".into()));
+                return Err(RenderError::Gpu(
+                    "dbuffer-fused's layers were not made".into(),
+                ));
             };
             self.lists
                 .record(inputs.ctx, rec, layers, &edges.buffers, cap);
@@ -372,7 +375,9 @@ impl MethodState for DBufferFused {
             self.lists.targets(),
             self.lut.as_ref(),
         ) else {
-            return Err(RenderError::Gpu("dbuffer-fused's maps were not made".into()));
+            return Err(RenderError::Gpu(
+                "dbuffer-fused's maps were not made".into(),
+            ));
         };
         let generations = [
             map.generation,
@@ -422,7 +427,11 @@ impl MethodState for DBufferFused {
             size: lists.map_size,
             view_proj: self.view_proj,
             textures: [&map.distance.view, &lists.maps.view, &lists.maps.view],
-            raw: [&map.distance.texture, &lists.maps.texture, &lists.maps.texture],
+            raw: [
+                &map.distance.texture,
+                &lists.maps.texture,
+                &lists.maps.texture,
+            ],
             channels: CHANNELS,
             generation: map.generation ^ lists.generation.rotate_left(32),
         })

@@ -362,7 +362,8 @@ impl FusedLayers {
         }
         use wgpu::TextureUsages as U;
         let read = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING;
-        let tex = |label, size: u32, format| Texture::new(device, label, (size, size), format, read);
+        let tex =
+            |label, size: u32, format| Texture::new(device, label, (size, size), format, read);
         let first_depth = tex("LayerTargets::first_depth", list_size, DEPTH_FORMAT);
         let peel_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("LayerTargets::peel_group"),

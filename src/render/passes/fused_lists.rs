@@ -22,8 +22,8 @@ use super::fused_layers::{uniforms_layout, LayerTargets};
 use super::next_generation;
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, cleared, pipeline_layout, render_pipeline, shader_module, view_entry,
-    GpuContext, PipelineSpec, Texture,
+    buffer_entry, cleared, pipeline_layout, render_pipeline, shader_module, view_entry, GpuContext,
+    PipelineSpec, Texture,
 };
 
 /// Bytes of one list texel's ray (`TexelRay` of `shaders/shared/fused.wgsl`).
@@ -41,7 +41,11 @@ pub const MAPS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// The list pass writes no colour; a render pass needs an attachment.
 const NO_COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
-fn storage(binding: u32, visibility: wgpu::ShaderStages, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+fn storage(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    read_only: bool,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
@@ -54,7 +58,11 @@ fn storage(binding: u32, visibility: wgpu::ShaderStages, read_only: bool) -> wgp
     }
 }
 
-fn texture(binding: u32, visibility: wgpu::ShaderStages, depth: bool) -> wgpu::BindGroupLayoutEntry {
+fn texture(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    depth: bool,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
@@ -203,7 +211,11 @@ pub struct EdgeBuffers {
 impl EdgeBuffers {
     /// `records`: [`crate::geometry::fused::FusedEdge::gpu_record`] per edge; `hulls`: each
     /// edge's proxy corners, padded to [`HULL_CORNERS`] by repeating the last.
-    pub fn new(device: &wgpu::Device, records: &[[[f32; 4]; 6]], hulls: &[[[f32; 2]; HULL_CORNERS]]) -> EdgeBuffers {
+    pub fn new(
+        device: &wgpu::Device,
+        records: &[[[f32; 4]; 6]],
+        hulls: &[[[f32; 2]; HULL_CORNERS]],
+    ) -> EdgeBuffers {
         use wgpu::util::DeviceExt;
         // Storage bindings may not be empty.
         let records: Vec<[[f32; 4]; 6]> = if records.is_empty() {
@@ -393,10 +405,12 @@ impl FusedLists {
         );
         {
             let span = rec.span("fused_merge");
-            let mut p = rec.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("FusedLists::merge"),
-                timestamp_writes: span.compute_writes(rec.timer),
-            });
+            let mut p = rec
+                .encoder
+                .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("FusedLists::merge"),
+                    timestamp_writes: span.compute_writes(rec.timer),
+                });
             p.set_pipeline(&pass.merge);
             p.set_bind_group(0, &self.uniforms_group, &[]);
             p.set_bind_group(1, &merge_group, &[]);
@@ -422,10 +436,12 @@ impl FusedLists {
             }
         }
         let span = rec.span("fused_maps");
-        let mut p = rec.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("FusedLists::maps"),
-            timestamp_writes: span.compute_writes(rec.timer),
-        });
+        let mut p = rec
+            .encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("FusedLists::maps"),
+                timestamp_writes: span.compute_writes(rec.timer),
+            });
         p.set_pipeline(&pass.maps);
         p.set_bind_group(0, &self.uniforms_group, &[]);
         p.set_bind_group(1, &maps_group, &[]);
