@@ -115,6 +115,11 @@ pub const CHANNELS: &[Channel] = &[
     },
 ];
 
+/// One candidate edge as the GPU reads it (`FusedEdge::gpu_record`).
+type EdgeRecord = [[f32; 4]; 6];
+/// One edge's proxy hull, light-view NDC corners.
+type HullCorners = [[f32; 2]; HULL_CORNERS];
+
 /// The candidate edges for one revision and list grid.
 struct Edges {
     revision: u64,
@@ -248,7 +253,7 @@ fn update_edges(
         },
     );
     let vp = inputs.light_view.view_projection();
-    let (records, hulls): (Vec<[[f32; 4]; 6]>, Vec<[[f32; 2]; HULL_CORNERS]>) = if over_budget {
+    let (records, hulls): (Vec<EdgeRecord>, Vec<HullCorners>) = if over_budget {
         (Vec::new(), Vec::new())
     } else {
         edges
@@ -287,7 +292,7 @@ impl MethodState for DBufferFused {
         let cap = inputs.knobs.get(&LIST_CAP);
         let samples = inputs.knobs.get(&MASK_SAMPLES).clamp(1, 128);
         let device = &inputs.ctx.device;
-        let max_binding = u64::from(device.limits().max_storage_buffer_binding_size);
+        let max_binding = device.limits().max_storage_buffer_binding_size;
         let lists = list_bytes(list_size, cap);
         let ids = lists / (u64::from(cap) + 1) * u64::from(cap);
         if lists > MAX_FUSED_LIST_BYTES || ids > max_binding {
