@@ -132,4 +132,23 @@ fn the_light_as_seen_from_a_fused_pixel() {
         1.0 - blocked
     );
     h.snapshot("app-light-from-pixel");
+
+    // Every method gets the reference's rays; only dbuffer-fused its chords and mask.
+    h.get_by_label(Method::DBUFFER.name()).click();
+    h.hover_at(pos);
+    for _ in 0..200 {
+        h.step();
+        if h.state()
+            .pixel_light()
+            .is_some_and(|l| l.method == Method::DBUFFER)
+        {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let other = h.state().pixel_light().expect("the panel for dbuffer");
+    assert_eq!(other.method, Method::DBUFFER);
+    assert!(other.fused.is_none() && other.chords_drawn() == 0);
+    assert!((other.position - x).length() < 1e-5);
+    assert_eq!(other.blocked_fraction(), blocked);
 }
