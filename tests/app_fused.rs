@@ -152,3 +152,22 @@ fn the_light_as_seen_from_a_fused_pixel() {
     assert!((other.position - x).length() < 1e-5);
     assert_eq!(other.blocked_fraction(), blocked);
 }
+
+#[test]
+fn split_view_dbuffer_against_dbuffer_fused() {
+    let mut h = lab("fusion-cross");
+    h.run();
+    h.state_mut().settings.split = true;
+    h.state_mut().settings.split_method = Method::DBUFFER_FUSED.name().into();
+    h.run();
+    let left = h.state().shown().expect("left").method;
+    let right = h.state().shown_split().expect("right").method;
+    assert_eq!((left, right), (Method::DBUFFER, Method::DBUFFER_FUSED));
+    let a = h.state_mut().read_shown(false).expect("left frame");
+    let b = h.state_mut().read_shown(true).expect("right frame");
+    // Where the bars' shadows cross, the two differ by more than a rounding.
+    let differ = (0..a.visibility.len())
+        .filter(|&i| a.hit(i) && (a.visibility[i] - b.visibility[i]).abs() > 0.1)
+        .count();
+    assert!(differ > 20, "{differ} pixels differ by more than 0.1");
+}
