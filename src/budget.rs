@@ -80,12 +80,24 @@ pub const MAX_ORACLE_TRIANGLES: u64 = 1 << 22;
 /// Texels on a side of the D-buffer and the shadow maps (`--dbuffer-size N`).
 pub const MAX_DBUFFER_SIZE: u32 = 8192;
 
+/// GPU storage of `dbuffer-fused`'s edge lists (`--list-size`² texels × (`--list-cap` + 1)
+/// `u32`: the ids and a counter per texel): 128 MiB, WebGPU's default largest storage binding
+/// (and lavapipe's). The defaults (256², 128) take 32 MiB; a combination over it is refused,
+/// naming both flags.
+pub const MAX_FUSED_LIST_BYTES: u64 = 128 << 20;
+
+/// Candidate silhouette edges `dbuffer-fused` keeps for one light: 512 Ki (96 bytes of record
+/// and 128 of proxy each on the GPU, 112 MiB). A scene with more (millions of caster triangles
+/// under a large light) gets the paper's `dbuffer` V everywhere: every list counts as
+/// overflowing (the method's `overflow` light-map channel shows 1 everywhere).
+pub const MAX_FUSED_EDGES: u64 = 1 << 19;
+
 /// What `dbuffer inspect` may use on any input within the budget above: 2 GiB.
 pub const MEMORY_BOUND_BYTES: u64 = 2 << 30;
 
 /// The budget as the lines `dbuffer --help` prints after its commands.
 pub fn summary() -> String {
-    let rows: [(&str, String, &str); 15] = [
+    let rows: [(&str, String, &str); 17] = [
         (
             "MAX_SCENE_FILE_BYTES",
             bytes(MAX_SCENE_FILE_BYTES),
@@ -157,6 +169,16 @@ pub fn summary() -> String {
             "--dbuffer-size",
         ),
         (
+            "MAX_FUSED_LIST_BYTES",
+            bytes(MAX_FUSED_LIST_BYTES),
+            "dbuffer-fused's lists: --list-size² × (--list-cap + 1) × 4 bytes",
+        ),
+        (
+            "MAX_FUSED_EDGES",
+            MAX_FUSED_EDGES.to_string(),
+            "dbuffer-fused's candidate edges (over it: dbuffer's V everywhere)",
+        ),
+        (
             "MEMORY_BOUND_BYTES",
             bytes(MEMORY_BOUND_BYTES),
             "what inspect uses at most within the budget",
@@ -206,6 +228,8 @@ mod tests {
             "MAX_REFERENCE_SAMPLES",
             "MAX_IMAGE_PIXELS",
             "MAX_DBUFFER_SIZE",
+            "MAX_FUSED_LIST_BYTES",
+            "MAX_FUSED_EDGES",
         ] {
             assert!(s.contains(name), "{name} missing from:\n{s}");
         }

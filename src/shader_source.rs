@@ -153,6 +153,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/methods/dbuffer.wgsl"),
     ),
     (
+        "methods/dbuffer_fused.wgsl",
+        include_str!("../shaders/methods/dbuffer_fused.wgsl"),
+    ),
+    (
         "methods/extended_light_map.wgsl",
         include_str!("../shaders/methods/extended_light_map.wgsl"),
     ),
@@ -209,6 +213,14 @@ pub const EMBEDDED: &[(&str, &str)] = &[
         include_str!("../shaders/passes/floor.wgsl"),
     ),
     (
+        "passes/fused_layers.wgsl",
+        include_str!("../shaders/passes/fused_layers.wgsl"),
+    ),
+    (
+        "passes/fused_lists.wgsl",
+        include_str!("../shaders/passes/fused_lists.wgsl"),
+    ),
+    (
         "passes/hybrid.wgsl",
         include_str!("../shaders/passes/hybrid.wgsl"),
     ),
@@ -259,6 +271,10 @@ pub const EMBEDDED: &[(&str, &str)] = &[
     (
         "shared/fullscreen_vs.wgsl",
         include_str!("../shaders/shared/fullscreen_vs.wgsl"),
+    ),
+    (
+        "shared/fused.wgsl",
+        include_str!("../shaders/shared/fused.wgsl"),
     ),
     (
         "shared/light.wgsl",

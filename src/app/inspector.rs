@@ -4,7 +4,7 @@
 
 use eframe::egui::{self, Color32, Pos2, Rect, RichText, Sense, Stroke, Vec2};
 
-use super::LabApp;
+use super::{light_panel, LabApp};
 use crate::render::passes::probe::PixelValues;
 use crate::render::passes::view::View;
 use crate::render::passes::view_twin::branch_name;
@@ -54,6 +54,11 @@ impl LabApp {
                 egui::ScrollArea::vertical().show(ui, |ui| {
                     ui.heading("Pixel");
                     self.pixel_section(ui);
+                    if self.viewport.hover.is_some() {
+                        ui.separator();
+                        ui.heading("Light as seen from this pixel");
+                        self.light_section(ui);
+                    }
                     ui.separator();
                     ui.heading("Stats");
                     self.stats_section(ui);
@@ -134,6 +139,45 @@ impl LabApp {
             return;
         }
         rows_grid(ui, "pixel-grid", self.pixel_rows());
+    }
+
+    /// The light as seen from the pixel under the cursor (`light_panel`): computed on this
+    /// thread for that one pixel when the cursor reaches another surface point, not while a
+    /// mouse button is down (a drag edits the scene every frame).
+    fn light_section(&mut self, ui: &mut egui::Ui) {
+        let Some(hover) = self.viewport.hover else {
+            return;
+        };
+        let slot = usize::from(hover.split);
+        let found = self.viewport.shown[slot].as_ref().and_then(|shown| {
+            let p = self
+                .inspector
+                .at(slot, hover.x, hover.y, self.settings.view)?;
+            Some((
+                shown.method,
+                light_panel::fused_params(&shown.request),
+                p.position,
+            ))
+        });
+        let Some((method, params, position)) = found else {
+            ui.label(RichText::new("reading…").small());
+            return;
+        };
+        let Some(x) = position else {
+            self.light_panel.clear();
+            ui.label(RichText::new("no surface here").small());
+            return;
+        };
+        let busy = ui.input(|i| i.pointer.any_down());
+        if let (Some(core), false) = (self.core.as_ref(), busy) {
+            self.light_panel
+                .update(core.scene(), self.revision, method, x, params);
+        }
+        let Some(light) = self.light_panel.shown.as_ref() else {
+            return;
+        };
+        light_panel::draw(ui, light);
+        rows_grid(ui, "light-grid", light.rows());
     }
 
     fn stats_section(&self, ui: &mut egui::Ui) {

@@ -15,6 +15,7 @@ pub mod core;
 pub mod doc;
 mod files;
 mod inspector;
+pub mod light_panel;
 mod overlays;
 mod panels;
 pub mod record;
@@ -96,6 +97,8 @@ pub struct LabApp {
     render_error: Option<String>,
     viewport: viewport::ViewportState,
     inspector: inspector::Inspector,
+    /// The inspector's "light as seen from this pixel" panel.
+    light_panel: light_panel::LightPanel,
     stats: Stats,
     open_text: String,
     smoke: Option<smoke::Smoke>,
@@ -159,6 +162,7 @@ impl LabApp {
             render_error: None,
             viewport: viewport::ViewportState::default(),
             inspector: inspector::Inspector::default(),
+            light_panel: light_panel::LightPanel::default(),
             stats: Stats::default(),
             open_text: String::new(),
             smoke: options.smoke_screenshot.map(smoke::Smoke::new),
@@ -194,6 +198,11 @@ impl LabApp {
     /// What the viewport shows (left side of a split).
     pub fn shown(&self) -> Option<&Shown> {
         self.viewport.shown[0].as_ref()
+    }
+
+    /// What the inspector's "light as seen from this pixel" panel shows, once computed.
+    pub fn pixel_light(&self) -> Option<&light_panel::PixelLight> {
+        self.light_panel.shown.as_ref()
     }
 
     /// The right side of a split view.

@@ -83,6 +83,15 @@ pub const DEFAULT_CAP: usize = 128;
 /// of list entries.
 pub const DEFAULT_LIST_SIZE: u32 = 512;
 
+/// `L(c)` is anchored by the `ANCHOR_SAMPLES`-th smallest `Δ` over the samples, not the
+/// smallest: a few samples next to a chord or a sector line can come out ±layers off (the look-up
+/// tables quantise the lines, so two edges of one silhouette need not meet exactly), and with
+/// the smallest one such sample would shift every sample's count (a black dot in a lit area,
+/// seen in `fusion-many` with 371 pixels off by more than 0.1 at 256²; with 3, one). The price: a
+/// visible part of the disk smaller than 3 samples is not seen where `L(c)` is anchored by `Δ`
+/// (at most 2/128 of V).
+pub const ANCHOR_SAMPLES: usize = 3;
+
 /// Bit planes of the camera pass's per-sample layer counter (two's complement, wrapping): values
 /// from −16 to 15.
 pub const COUNTER_BITS: u32 = 5;
@@ -131,6 +140,26 @@ pub struct FusedEdge {
 }
 
 impl FusedEdge {
+    /// The edge as the GPU's storage-buffer record (`FusedEdge` of `shaders/shared/fused.wgsl`):
+    /// `a.xyz, layers` · `b.xyz, max |aᵢ|` (the scale of the facing tolerance) ·
+    /// `n0.xyz, offset0` · `n1.xyz, offset1` · `fold.xyz, 1 if a silhouette from the light
+    /// centre c else 0` (an outline seen from `c`, which [`CasterCrossings::layers_at`] looks
+    /// for) · `m_c.xyz, m_c·fold` with `m_c = (a − c) × (b − c)`, the normal of the plane through
+    /// `c` and the edge. The same `f32`s the twin computes with.
+    pub fn gpu_record(&self, c: Vec3) -> [[f32; 4]; 6] {
+        let m = (self.a - c).cross(self.b - c);
+        [
+            self.a.extend(self.layers as f32).to_array(),
+            self.b.extend(self.a.abs().max_element()).to_array(),
+            self.n0.extend(self.offset0).to_array(),
+            self.n1.extend(self.offset1).to_array(),
+            self.fold
+                .extend(f32::from(u8::from(self.is_silhouette_from(c))))
+                .to_array(),
+            m.extend(m.dot(self.fold)).to_array(),
+        ]
+    }
+
     /// Whether `x` sees one face from the front and the other from the back. A point on a face's
     /// plane counts as in front of it.
     pub fn is_silhouette_from(&self, x: Vec3) -> bool {
@@ -209,6 +238,10 @@ pub struct EdgeChord {
     pub delta: i32,
     /// The exact area of the region, as a fraction of the disk's.
     pub area: f64,
+    /// The (clipped) edge's end points projected from the receiver onto the light's plane, in
+    /// unit-disk coordinates (radii from the centre along `e₁`, `e₂`): what a picture of the disk
+    /// draws.
+    pub ends: [Vec2; 2],
 }
 
 impl EdgeChord {
@@ -265,12 +298,14 @@ pub fn edge_chord(edge: &FusedEdge, x: Vec3, light: &DiskLight) -> Option<EdgeCh
         let q = x + (p - x) * (hx / (hx - light.height_of(p)));
         Vec2::new((q - c).dot(e1), (q - c).dot(e2)) / r
     };
+    let ends = [project(pa), project(pb)];
     Some(EdgeChord {
         chord,
         end_a: end(pa),
         end_b: end(pb),
         delta,
-        area: region_area(project(pa), project(pb)),
+        area: region_area(ends[0], ends[1]),
+        ends,
     })
 }
 
@@ -281,8 +316,8 @@ pub enum MaskEval {
     #[default]
     Exact,
     /// Through look-up tables of precomputed half-plane masks (Schwarz & Stamminger 2007): lines
-    /// through the centre by angle (`LUT_ANGLES` bins), chords by angle and distance from the centre
-    /// (`LUT_ANGLES` × `LUT_OFFSETS`). What a GPU with little ALU to spare (lavapipe) would do.
+    /// through the centre by angle (`LUT_ANGLES` bins, uniform in [`diamond_angle`]), chords by
+    /// angle and distance from the centre (`LUT_ANGLES` × `LUT_OFFSETS`). What the GPU does.
     Lut,
 }
 
@@ -315,9 +350,9 @@ pub struct DiskMask {
     /// Unit-disk coordinates, the oracle's stratified pattern for `N` samples.
     pub samples: Vec<Vec2>,
     pub eval: MaskEval,
-    /// `LUT_ANGLES` masks of `{p : p·(cos φ, sin φ) > 0}`.
+    /// `LUT_ANGLES` masks of `{p : p·n_k > 0}` (`n_k` the direction of angle bin `k`).
     through_centre: Vec<Bits>,
-    /// `LUT_ANGLES × LUT_OFFSETS` masks of `{p : p·(cos φ, sin φ) > ρ}`.
+    /// `LUT_ANGLES × LUT_OFFSETS` masks of `{p : p·n_k > ρ}`.
     chords: Vec<Bits>,
 }
 
@@ -332,8 +367,7 @@ impl DiskMask {
         let (mut through_centre, mut chords) = (Vec::new(), Vec::new());
         if eval == MaskEval::Lut {
             for k in 0..LUT_ANGLES {
-                let phi = lut_angle(k);
-                let n = Vec2::new(phi.cos(), phi.sin());
+                let n = lut_direction(k);
                 let mut m = Bits::default();
                 for (i, p) in samples.iter().enumerate() {
                     if p.dot(n) > 0.0 {
@@ -367,6 +401,29 @@ impl DiskMask {
 
     pub fn is_empty(&self) -> bool {
         self.samples.is_empty()
+    }
+
+    /// The look-up tables as the GPU reads them, 128 bits (four `u32`, sample `i` is bit `i % 32`
+    /// of word `i / 32`) per mask: the [`LUT_ANGLES`] masks through the centre, then the
+    /// [`LUT_ANGLES`] × [`LUT_OFFSETS`] chord masks (angle-major). Empty unless the mask was made
+    /// with [`MaskEval::Lut`] and at most 128 samples (what the GPU's counter holds).
+    pub fn lut_words(&self) -> Vec<[u32; 4]> {
+        if self.eval != MaskEval::Lut || self.samples.len() > 128 {
+            return Vec::new();
+        }
+        let words = |b: &Bits| {
+            [
+                b[0] as u32,
+                (b[0] >> 32) as u32,
+                b[1] as u32,
+                (b[1] >> 32) as u32,
+            ]
+        };
+        self.through_centre
+            .iter()
+            .chain(&self.chords)
+            .map(words)
+            .collect()
     }
 
     /// Adds `ch.delta` to the counter of every sample in the edge's region; returns whether any
@@ -412,14 +469,48 @@ impl DiskMask {
     }
 }
 
-fn lut_angle(k: usize) -> f32 {
-    k as f32 / LUT_ANGLES as f32 * std::f32::consts::TAU
+/// The unit direction of angle bin `k`: the bins are uniform in the "diamond angle"
+/// ([`diamond_angle`]), which a GPU computes with one division where an angle takes an arc
+/// tangent.
+fn lut_direction(k: usize) -> Vec2 {
+    let d = k as f32 / LUT_ANGLES as f32 * 4.0;
+    let v = if d < 1.0 {
+        Vec2::new(1.0 - d, d)
+    } else if d < 2.0 {
+        Vec2::new(1.0 - d, 2.0 - d)
+    } else if d < 3.0 {
+        Vec2::new(d - 3.0, 2.0 - d)
+    } else {
+        Vec2::new(d - 3.0, d - 4.0)
+    };
+    v.normalize()
+}
+
+/// A monotone stand-in for the angle of `(a, b)`, in `[0, 4)`: the position along the diamond
+/// `|u| + |v| = 1` where the ray through `(a, b)` meets it, counter-clockwise from `(1, 0)`.
+/// `shaders/methods/dbuffer_fused.wgsl` computes it the same way.
+pub fn diamond_angle(a: f32, b: f32) -> f32 {
+    let s = a.abs() + b.abs();
+    if s.is_nan() || s <= 0.0 {
+        return 0.0;
+    }
+    let (x, y) = (a / s, b / s);
+    if y >= 0.0 {
+        if x >= 0.0 {
+            y
+        } else {
+            1.0 - x
+        }
+    } else if x < 0.0 {
+        2.0 - y
+    } else {
+        3.0 + x
+    }
 }
 
 /// The angle bin of the normal `(a, b)`, rounded to the nearest.
 fn lut_bin(a: f32, b: f32) -> usize {
-    let phi = b.atan2(a).rem_euclid(std::f32::consts::TAU);
-    ((phi / std::f32::consts::TAU * LUT_ANGLES as f32).round() as usize) % LUT_ANGLES
+    ((diamond_angle(a, b) * (LUT_ANGLES as f32 / 4.0)).round() as usize) % LUT_ANGLES
 }
 
 /// Wraps a layer count to the camera pass's `COUNTER_BITS`-bit two's complement.
@@ -474,13 +565,35 @@ pub fn mask_visibility<'a>(
     light: &DiskLight,
     mask: &DiskMask,
 ) -> MaskResult {
+    mask_details(edges, x, centre, light, mask).result
+}
+
+/// What the mask saw at one receiver: the result, the chord of every edge that is one there
+/// (with its position in the edges given), and each sample's `Δ` (the layers the path from the
+/// centre to it crosses, wrapped to the GPU counter's `COUNTER_BITS` bits).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaskDetails {
+    pub result: MaskResult,
+    pub chords: Vec<(usize, EdgeChord)>,
+    pub delta: Vec<i32>,
+}
+
+/// [`mask_visibility`] with what it saw ([`MaskDetails`]).
+pub fn mask_details<'a>(
+    edges: impl IntoIterator<Item = &'a FusedEdge>,
+    x: Vec3,
+    centre: CentreLayers,
+    light: &DiskLight,
+    mask: &DiskMask,
+) -> MaskDetails {
     let n = mask.len();
     let mut count = vec![0i32; n];
     let mut active = 0;
     // ∫Δ over the disk, exactly, and the layers of a crossing.
     let mut integral = 0.0f64;
     let mut layers = 0;
-    for e in edges {
+    let mut chords = Vec::new();
+    for (k, e) in edges.into_iter().enumerate() {
         let Some(ch) = edge_chord(e, x, light) else {
             continue;
         };
@@ -491,9 +604,21 @@ pub fn mask_visibility<'a>(
         if mask.add_region(&ch, &mut count) {
             active += 1;
         }
+        chords.push((k, ch));
     }
     let count: Vec<i32> = count.into_iter().map(wrap).collect();
-    let min = count.iter().copied().min().unwrap_or(0);
+    // The smallest Δ, ignoring up to ANCHOR_SAMPLES − 1 samples below it (the ANCHOR_SAMPLES-th
+    // smallest): a sample that a look-up table's quantised line put on the wrong side of one edge
+    // of a silhouette and not of its neighbour reads ±layers off, and must not shift every
+    // sample's count.
+    let min = {
+        let mut sorted = count.clone();
+        sorted.sort_unstable();
+        sorted
+            .get(ANCHOR_SAMPLES.min(sorted.len()).max(1) - 1)
+            .copied()
+            .unwrap_or(0)
+    };
     let (floor, hidden) = match centre {
         CentreLayers::Known(k) => (k, k > 0),
         CentreLayers::Hidden(h) => (i32::from(h), h),
@@ -520,13 +645,17 @@ pub fn mask_visibility<'a>(
             .all(|&k| k + lc == 0 || k + lc == layers)
             .then(|| (1.0 - (f64::from(lc) + integral) / f64::from(layers)).clamp(0.0, 1.0))
     };
-    MaskResult {
-        visible,
-        samples: n as u32,
-        anchor,
-        active_edges: active,
-        layers: layers as u32,
-        exact,
+    MaskDetails {
+        result: MaskResult {
+            visible,
+            samples: n as u32,
+            anchor,
+            active_edges: active,
+            layers: layers as u32,
+            exact,
+        },
+        chords,
+        delta: count,
     }
 }
 
@@ -621,6 +750,65 @@ pub fn wedge_proxy(
             p + radius * (a.cos() * e1 + a.sin() * e2)
         })
     })
+}
+
+/// The light pass's proxy as the GPU draws it: the convex hull, in the light view's normalised
+/// device coordinates, of [`wedge_proxy`]'s two octagons projected by `view_proj` (at most 16
+/// corners, counter-clockwise). Drawing the hull, not the octagons and quads, draws each texel
+/// once per edge, so an edge enters a list at most once. Where a corner lies at or behind the
+/// light view's eye plane the projection is not convex: the whole view (`[-1, 1]²`).
+pub fn proxy_hull(
+    edge: &FusedEdge,
+    light: &DiskLight,
+    h_max: f32,
+    pad: [f32; 2],
+    view_proj: &Mat4,
+) -> Vec<Vec2> {
+    let whole = vec![
+        Vec2::new(-1.0, -1.0),
+        Vec2::new(1.0, -1.0),
+        Vec2::new(1.0, 1.0),
+        Vec2::new(-1.0, 1.0),
+    ];
+    let [o0, o1] = wedge_proxy(edge, light, h_max, pad);
+    let mut points = Vec::with_capacity(16);
+    for p in o0.iter().chain(&o1) {
+        let clip = *view_proj * p.extend(1.0);
+        if clip.w.is_nan() || clip.w <= 1e-6 {
+            return whole;
+        }
+        let ndc = Vec2::new(clip.x, clip.y) / clip.w;
+        if !ndc.is_finite() {
+            return whole;
+        }
+        points.push(ndc);
+    }
+    hull_2d(points)
+}
+
+/// The convex hull of `points` (Andrew's monotone chain), counter-clockwise, without collinear
+/// corners.
+fn hull_2d(mut points: Vec<Vec2>) -> Vec<Vec2> {
+    points.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    points.dedup();
+    if points.len() < 3 {
+        return points;
+    }
+    let turn = |o: Vec2, a: Vec2, b: Vec2| (a - o).perp_dot(b - o);
+    let chain = |ordered: &mut dyn Iterator<Item = Vec2>| {
+        let mut out: Vec<Vec2> = Vec::new();
+        for p in ordered {
+            while out.len() >= 2 && turn(out[out.len() - 2], out[out.len() - 1], p) <= 0.0 {
+                out.pop();
+            }
+            out.push(p);
+        }
+        out.pop();
+        out
+    };
+    let mut hull = chain(&mut points.iter().copied());
+    hull.extend(chain(&mut points.iter().rev().copied()));
+    hull
 }
 
 /// Whether the segment `a b` meets the triangle.
@@ -944,6 +1132,40 @@ fn distance_to_segment(p: Vec2, a: Vec2, b: Vec2) -> f32 {
         0.0
     };
     (a + d * t - p).length()
+}
+
+/// One edge's chord as [`FusedTwin::light_from`] gives it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointChord {
+    /// The edge's index in [`FusedTwin::edges`].
+    pub edge: u32,
+    pub caster: u32,
+    /// The chord: `chord.ends` are the projected end points (unit-disk coordinates),
+    /// `chord.chord` the line `A u + B v + C = 0` through them (the centre on its negative side),
+    /// `chord.delta` the layers a path from the centre gains beyond it (negative: loses) within
+    /// the sector the ends span, `chord.area` that region's exact share of the disk.
+    pub chord: EdgeChord,
+}
+
+/// The light as seen from one receiver by `dbuffer-fused` ([`FusedTwin::light_from`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightFromPoint {
+    /// The method's V there.
+    pub v: f64,
+    pub path: FusedPath,
+    /// The light pass's count of the texel's list.
+    pub list_count: usize,
+    /// What the camera pass knew of the layers between the point and the disk centre.
+    pub centre: Option<CentreLayers>,
+    /// `L(c)` as anchored (see [`MaskResult::anchor`]).
+    pub anchor: i32,
+    pub chords: Vec<PointChord>,
+    /// The mask's disk samples (unit-disk coordinates) ...
+    pub samples: Vec<Vec2>,
+    /// ... and the layers between the point and each: lit where ≤ 0 (empty unless the mask ran).
+    pub layers: Vec<i32>,
+    /// V exactly, where the disk is at most one layer deep there.
+    pub exact: Option<f64>,
 }
 
 /// The CPU twin of `dbuffer-fused`: the paper's D-buffer twin, the candidate edges, the light
@@ -1297,6 +1519,61 @@ impl FusedTwin {
         self.sample(x).v
     }
 
+    /// The light as seen from `x` by the method: for the lab's "light as seen from this pixel"
+    /// panel. The chords of the edges of `x`'s list (each edge's clipped ends projected onto the
+    /// light's plane, in unit-disk coordinates, the side where the path from the centre gains or
+    /// loses layers, and the exact area of its region), the disk samples and how many layers lie
+    /// between `x` and each (`L(c) + Δ`, as anchored: lit where ≤ 0). Where the method did not
+    /// run its mask (outside the light view, an empty or an overflowing list), `chords` and
+    /// `layers` are empty and `path` says why; V is the method's V either way.
+    pub fn light_from(&self, x: Vec3) -> LightFromPoint {
+        let s = self.sample(x);
+        let mut out = LightFromPoint {
+            v: s.v,
+            path: s.path,
+            list_count: s.list_count,
+            centre: None,
+            anchor: 0,
+            chords: Vec::new(),
+            samples: self.mask.samples.clone(),
+            layers: Vec::new(),
+            exact: None,
+        };
+        if s.path != FusedPath::Mask {
+            return out;
+        }
+        let (Some(texel), Some(list_texel)) = (
+            self.texel_of(x, self.params.size),
+            self.texel_of(x, self.params.list_size),
+        ) else {
+            return out;
+        };
+        let list = self.texel_list(list_texel);
+        let edges = || list.edges.iter().map(|&k| &self.edges[k as usize]);
+        let centre = match self.crossings_of(texel).layers_at(x, edges(), &self.light) {
+            Some(k) => CentreLayers::Known(k),
+            None => CentreLayers::Hidden(s.dbuffer.hidden),
+        };
+        let d = mask_details(edges(), x, centre, &self.light, &self.mask);
+        out.centre = Some(centre);
+        out.anchor = d.result.anchor;
+        out.exact = d.result.exact;
+        out.layers = d.delta.iter().map(|k| k + d.result.anchor).collect();
+        out.chords = d
+            .chords
+            .into_iter()
+            .map(|(i, chord)| {
+                let edge = list.edges[i];
+                PointChord {
+                    edge,
+                    caster: self.edges[edge as usize].caster,
+                    chord,
+                }
+            })
+            .collect();
+        out
+    }
+
     /// The method without its bounds: no texels, no cap, every candidate edge near `x`, and no
     /// D-buffer classes (only its hidden-from-centre test, for the anchor), with `mask`'s samples.
     /// With the oracle's own samples this is the oracle up to numerical ties; the tests use it to
@@ -1538,6 +1815,7 @@ mod tests {
                 end_b: [q.y, -q.x],
                 delta: 2,
                 area: 0.0,
+                ends: [p, q],
             };
             let mut inside = 0usize;
             for i in 0..n {
@@ -1577,6 +1855,7 @@ mod tests {
                 end_b: [(phi - 1.1).sin(), -(phi - 1.1).cos()],
                 delta: 2,
                 area: 0.0,
+                ends: [Vec2::ZERO; 2],
             };
             let (mut a, mut b) = (vec![0; 128], vec![0; 128]);
             exact.add_region(&ch, &mut a);
@@ -1673,6 +1952,16 @@ mod tests {
                             inside_hull(ndc, &pts),
                             "{name}: texel {tx},{ty} accepts edge {k} outside its proxy"
                         );
+                        // The polygon the GPU draws (counter-clockwise) holds it too.
+                        let poly = proxy_hull(e, &l, h_max, pad, &vp);
+                        let inside_polygon = (0..poly.len()).all(|i| {
+                            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+                            (b - a).perp_dot(ndc - a) >= -1e-6
+                        });
+                        assert!(
+                            poly.len() <= 16 && inside_polygon,
+                            "{name}: texel {tx},{ty} accepts edge {k} outside its drawn proxy"
+                        );
                     }
                 }
             }
@@ -1696,6 +1985,51 @@ mod tests {
             }
         }
         true
+    }
+
+    /// The light as seen from a point, on the knot's ground where two loops fuse: its layers
+    /// give the method's visible samples, each chord's line passes through its projected ends,
+    /// and the path says where the mask did not run.
+    #[test]
+    fn the_light_from_a_point_is_what_the_mask_saw() {
+        let Ok(scene) = crate::scene::load("fig8c-complex") else {
+            panic!("fig8c-complex loads");
+        };
+        let prepared = PreparedCasters::new(&scene);
+        let geometry = prepared.build(
+            &scene.light.disk_or_centre(),
+            &crate::geometry::VolumeParams::for_scene(&scene),
+        );
+        let twin = FusedTwin::new(&scene, &prepared, &geometry, FusedParams::default());
+        let (mut masked, mut fused) = (0, 0);
+        for i in 0..40 {
+            for j in 0..40 {
+                let x = Vec3::new(-1.2 + 0.06 * i as f32, 0.0, -1.2 + 0.06 * j as f32);
+                let l = twin.light_from(x);
+                let s = twin.sample(x);
+                assert_eq!((l.v, l.path), (s.v, s.path));
+                if l.path != FusedPath::Mask {
+                    assert!(l.chords.is_empty() && l.layers.is_empty());
+                    continue;
+                }
+                masked += 1;
+                let m = s.mask.expect("the mask ran");
+                assert_eq!(l.layers.len(), l.samples.len());
+                let lit = l.layers.iter().filter(|&&k| k <= 0).count() as u32;
+                assert_eq!(lit, m.visible, "{x}");
+                fused += usize::from(l.layers.iter().any(|&k| k > 2));
+                for c in &l.chords {
+                    let [a, b, cc] = c.chord.chord;
+                    let scale = a.abs() + b.abs() + cc.abs();
+                    for p in c.chord.ends {
+                        let on = a * p.x + b * p.y + cc;
+                        assert!(on.abs() <= 1e-3 * scale * (1.0 + p.length()), "{x}: {on}");
+                    }
+                    assert!(twin.edges()[c.edge as usize].caster == c.caster);
+                }
+            }
+        }
+        assert!(masked > 100 && fused > 0, "{masked} masked, {fused} fused");
     }
 
     #[test]

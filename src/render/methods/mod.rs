@@ -9,6 +9,7 @@
 //! V(t), the targets — is the camera pass's ([`super::passes::camera`]).
 
 pub mod dbuffer;
+pub mod dbuffer_fused;
 pub mod extended_light_map;
 pub mod hard;
 pub mod hybrid;
@@ -43,6 +44,7 @@ use crate::scene::{DiskLight, LightKind, Scene};
 pub const ALL: &[Method] = &[
     Method(&dbuffer::DBUFFER),
     Method(&dbuffer::DBUFFER_CENTER),
+    Method(&dbuffer_fused::DBUFFER_FUSED),
     Method(&hard::HARD),
     Method(&pcf::PCF),
     Method(&pcss::PCSS),
@@ -83,6 +85,8 @@ impl Method {
     pub const DBUFFER: Method = Method(&dbuffer::DBUFFER);
     /// The D-buffer with silhouettes from the light centre.
     pub const DBUFFER_CENTER: Method = Method(&dbuffer::DBUFFER_CENTER);
+    /// The D-buffer with every silhouette chord (issue 12).
+    pub const DBUFFER_FUSED: Method = Method(&dbuffer_fused::DBUFFER_FUSED);
     /// The hard shadow map, the baseline of the benchmarks.
     pub const HARD: Method = Method(&hard::HARD);
     /// The ray-cast ground truth.

@@ -8,6 +8,8 @@ pub mod camera;
 pub mod dbuffer_volumes;
 pub mod extended_light_map;
 pub mod floor;
+pub mod fused_layers;
+pub mod fused_lists;
 pub mod hybrid;
 pub mod planar;
 pub mod probe;

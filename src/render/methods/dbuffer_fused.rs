@@ -1,0 +1,460 @@
+//! `dbuffer-fused` (issue 12; `docs/fused.md`): the D-buffer with every silhouette chord a
+//! receiver needs, so that the parts of the disk hidden by different casters, or different parts
+//! of one caster, combine as they do in reality. CPU twin: `geometry::fused::FusedTwin`.
+//!
+//! Per light or caster move: the paper's D-buffer (this method keeps a [`DBuffer`] of its own:
+//! its `|cx_o|` is the hidden-from-centre test and its V(t) the fallback of an overflowing list),
+//! the candidate edges and their proxy hulls (CPU), then the light passes
+//! `passes::fused_layers` (caster crossings; receivers along each list texel's ray) and
+//! `passes::fused_lists` (merge, lists, maps). Per frame: the camera pass with
+//! `shaders/methods/dbuffer_fused.wgsl`.
+//!
+//! **Knobs.** `--list-size` (texels per side of the list grid, default 256), `--list-cap` (edge
+//! ids one list stores, default 128), `--mask-samples` (disk samples of the mask, default and
+//! at most 128). The lists take `list-size² × (list-cap + 1) × 4` bytes: at most
+//! [`MAX_FUSED_LIST_BYTES`] and the adapter's largest storage binding, else the frame is refused
+//! naming both flags.
+//!
+//! **Overflow rule.** A list texel whose edges outnumber the cap is not used: its pixels get the
+//! paper's V(t). So do all pixels when the candidate edges exceed [`MAX_FUSED_EDGES`] (or what
+//! the adapter's storage bindings hold).
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use super::dbuffer::DBuffer;
+use super::{
+    CameraBindings, Channel, Empty, FrameInputs, Knob, LightMaps, MethodPipeline, MethodSpec,
+    MethodState, SharedMaps,
+};
+use crate::budget::{bytes, MAX_FUSED_EDGES, MAX_FUSED_LIST_BYTES};
+use crate::geometry::fused::{
+    candidate_edges, proxy_hull, DiskMask, FusedEdge, MaskEval, DEFAULT_CAP, DEFAULT_SAMPLES,
+};
+use crate::geometry::{SceneGeometry, VtVariant};
+use crate::render::passes::fused_layers::{FusedLayers, FusedSizes, FusedUniforms};
+use crate::render::passes::fused_lists::{
+    list_bytes, EdgeBuffers, FusedLists, EDGE_BYTES, HULL_BYTES, HULL_CORNERS,
+};
+use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
+use crate::render::timer::Recorder;
+use crate::render::{
+    buffer_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
+};
+
+/// Texels per side of the grid of edge lists.
+pub static LIST_SIZE: Knob = Knob {
+    name: "list-size",
+    help: "dbuffer-fused: texels per side of the grid of edge lists",
+    min: 8,
+    max: 2048,
+    default: 256,
+    max_name: None,
+};
+
+/// Edge ids one list holds.
+pub static LIST_CAP: Knob = Knob {
+    name: "list-cap",
+    help: "dbuffer-fused: edges one list holds (a longer list falls back to dbuffer's V)",
+    min: 1,
+    max: 1024,
+    default: DEFAULT_CAP as u32,
+    max_name: None,
+};
+
+/// Disk samples of the mask.
+pub static MASK_SAMPLES: Knob = Knob {
+    name: "mask-samples",
+    help: "dbuffer-fused: disk samples of the mask where the disk is more than one layer deep",
+    min: 1,
+    max: 128,
+    default: DEFAULT_SAMPLES as u32,
+    max_name: None,
+};
+
+pub static DBUFFER_FUSED: MethodSpec = MethodSpec {
+    name: "dbuffer-fused",
+    description: "D-buffer with every silhouette chord (occluder fusion)",
+    knobs: &[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES],
+    cpu_side: false,
+    hard: false,
+    new: |ctx| Box::new(DBufferFused::new(ctx)),
+};
+
+const SHADER: &str = "methods/dbuffer_fused.wgsl";
+
+/// The method's light-space channels: textures 0 (`|cx_o|`) and 1 (the maps of
+/// `passes::fused_lists`: crossings, farthest crossing height, list count, overflow).
+pub const CHANNELS: &[Channel] = &[
+    Channel {
+        name: "layers to c",
+        texture: 1,
+        component: 0,
+        empty: Empty::NonPositive,
+        or: None,
+    },
+    Channel {
+        name: "list length",
+        texture: 1,
+        component: 2,
+        empty: Empty::NonPositive,
+        or: None,
+    },
+    Channel {
+        name: "overflow",
+        texture: 1,
+        component: 3,
+        empty: Empty::NonPositive,
+        or: None,
+    },
+    Channel {
+        name: "|cx_o|",
+        texture: 0,
+        component: 0,
+        empty: Empty::Far,
+        or: None,
+    },
+];
+
+/// One candidate edge as the GPU reads it (`FusedEdge::gpu_record`).
+type EdgeRecord = [[f32; 4]; 6];
+/// One edge's proxy hull, light-view NDC corners.
+type HullCorners = [[f32; 2]; HULL_CORNERS];
+
+/// The candidate edges for one revision and list grid.
+struct Edges {
+    revision: u64,
+    list_size: u32,
+    map_size: u32,
+    count: usize,
+    h_max: f32,
+    /// More candidates than the budget or the adapter holds: every list overflows.
+    over_budget: bool,
+    buffers: EdgeBuffers,
+}
+
+pub struct DBufferFused {
+    paper: DBuffer,
+    pipeline: Arc<MethodPipeline>,
+    shadow_uniforms: wgpu::Buffer,
+    uniforms: wgpu::Buffer,
+    layers: FusedLayers,
+    lists: FusedLists,
+    edges: Option<Edges>,
+    /// The look-up tables and the sample count they were made for.
+    lut: Option<(wgpu::Buffer, u32)>,
+    geometry_ms: f64,
+    /// What the light passes hold: revision, D-buffer size, list size, cap, edges generation.
+    made_for: Option<(u64, u32, u32, u32, u64)>,
+    view_proj: glam::Mat4,
+    bind_group: Option<(wgpu::BindGroup, [u64; 5])>,
+}
+
+impl DBufferFused {
+    pub fn new(ctx: &GpuContext) -> DBufferFused {
+        use wgpu::ShaderStages as S;
+        let mut entries = lookup_entries().to_vec();
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: S::FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let d2 = wgpu::TextureViewDimension::D2;
+        entries.extend([
+            texture_entry(2, S::FRAGMENT, d2),
+            texture_entry(3, S::FRAGMENT, d2),
+            texture_entry(4, S::FRAGMENT, d2),
+            uniform_entry(5, S::FRAGMENT),
+            storage(6),
+            storage(7),
+            storage(8),
+            storage(9),
+        ]);
+        let uniforms = uniform_buffer::<FusedUniforms>(&ctx.device, "DBufferFused::uniforms");
+        DBufferFused {
+            paper: DBuffer::new(ctx, false),
+            pipeline: MethodPipeline::get(ctx, SHADER, &entries),
+            shadow_uniforms: uniform_buffer::<ShadowUniforms>(
+                &ctx.device,
+                "DBufferFused::shadow_uniforms",
+            ),
+            layers: FusedLayers::new(ctx, &uniforms),
+            lists: FusedLists::new(ctx, &uniforms),
+            uniforms,
+            edges: None,
+            lut: None,
+            geometry_ms: 0.0,
+            made_for: None,
+            view_proj: glam::Mat4::IDENTITY,
+            bind_group: None,
+        }
+    }
+
+    /// How many candidate edges the current light has (0 before the first frame).
+    pub fn candidate_edges(&self) -> usize {
+        self.edges.as_ref().map_or(0, |e| e.count)
+    }
+}
+
+/// The candidate edges and their proxies, when the light, a caster or the list grid
+/// changed.
+fn update_edges(
+    slot: &mut Option<Edges>,
+    inputs: &FrameInputs<'_>,
+    geometry: &SceneGeometry,
+    list_size: u32,
+    max_binding: u64,
+) -> Option<f64> {
+    let key = (inputs.revision, list_size, inputs.map_size);
+    if slot
+        .as_ref()
+        .is_some_and(|e| (e.revision, e.list_size, e.map_size) == key)
+    {
+        return None;
+    }
+    let t = Instant::now();
+    // A disk (the session refuses a line light for this method before a frame gets here).
+    let light = inputs.scene.light.disk_or_centre();
+    let prepared = inputs.prepared();
+    let edges: Vec<FusedEdge> = prepared
+        .meshes
+        .iter()
+        .zip(&geometry.casters)
+        .enumerate()
+        .flat_map(|(k, (mesh, g))| candidate_edges(mesh, &g.classes, k as u32))
+        .collect();
+    // The largest receiver height: the proxies reach down to it.
+    let h_max = inputs
+        .scene
+        .objects
+        .iter()
+        .flat_map(|o| o.mesh.positions.iter())
+        .map(|&p| light.height_of(p))
+        .filter(|h| h.is_finite())
+        .fold(0.0f32, f32::max);
+    let limit = MAX_FUSED_EDGES
+        .min(max_binding / EDGE_BYTES)
+        .min(max_binding / HULL_BYTES);
+    let over_budget = edges.len() as u64 > limit;
+    let uniforms = FusedUniforms::new(
+        &light,
+        inputs.light_view,
+        FusedSizes {
+            map_size: inputs.map_size,
+            list_size,
+            cap: 0,
+            samples: 0,
+            edge_count: 0,
+            h_max,
+            all_overflow: false,
+        },
+    );
+    let vp = inputs.light_view.view_projection();
+    let (records, hulls): (Vec<EdgeRecord>, Vec<HullCorners>) = if over_budget {
+        (Vec::new(), Vec::new())
+    } else {
+        edges
+            .iter()
+            .map(|e| {
+                // Three list texels' footprint of margin at each end (the twin's proxy test).
+                let pad = [e.a, e.b].map(|p| 3.0 * p.distance(light.center) * uniforms.half_slope);
+                let hull = proxy_hull(e, &light, h_max, pad, &vp);
+                let last = hull.last().copied().unwrap_or(glam::Vec2::ZERO);
+                let corners =
+                    std::array::from_fn(|i| hull.get(i).copied().unwrap_or(last).to_array());
+                (e.gpu_record(light.center), corners)
+            })
+            .unzip()
+    };
+    *slot = Some(Edges {
+        revision: inputs.revision,
+        list_size,
+        map_size: inputs.map_size,
+        count: edges.len(),
+        h_max,
+        over_budget,
+        buffers: EdgeBuffers::new(&inputs.ctx.device, &records, &hulls),
+    });
+    Some(t.elapsed().as_secs_f64() * 1e3)
+}
+
+impl MethodState for DBufferFused {
+    fn prepare(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        shared: &mut SharedMaps,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), RenderError> {
+        let list_size = inputs.knobs.get(&LIST_SIZE);
+        let cap = inputs.knobs.get(&LIST_CAP);
+        let samples = inputs.knobs.get(&MASK_SAMPLES).clamp(1, 128);
+        let device = &inputs.ctx.device;
+        let max_binding = device.limits().max_storage_buffer_binding_size;
+        let lists = list_bytes(list_size, cap);
+        let ids = lists / (u64::from(cap) + 1) * u64::from(cap);
+        if lists > MAX_FUSED_LIST_BYTES || ids > max_binding {
+            return Err(RenderError::Request(format!(
+                "--list-size {list_size} with --list-cap {cap}: dbuffer-fused's lists would take {} \
+                 (MAX_FUSED_LIST_BYTES is {}, this adapter binds at most {} at once); lower either",
+                bytes(lists),
+                bytes(MAX_FUSED_LIST_BYTES),
+                bytes(max_binding)
+            )));
+        }
+        // The paper's D-buffer: |cx_o| and the fallback, and the geometry (face classes).
+        self.paper.prepare(inputs, shared, rec)?;
+        let Some(geometry) = self.paper.geometry() else {
+            return Err(RenderError::Gpu(
+                "the D-buffer's geometry was not made".into(),
+            ));
+        };
+        if let Some(ms) = update_edges(&mut self.edges, inputs, geometry, list_size, max_binding) {
+            self.geometry_ms = ms;
+        }
+        let Some(edges) = self.edges.as_ref() else {
+            return Err(RenderError::Gpu(
+                "dbuffer-fused's edges were not made".into(),
+            ));
+        };
+        if self.lut.as_ref().is_none_or(|(_, s)| *s != samples) {
+            use wgpu::util::DeviceExt;
+            let words = DiskMask::new(samples as usize, MaskEval::Lut).lut_words();
+            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("DBufferFused::lut"),
+                contents: bytemuck::cast_slice(&words),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+            self.lut = Some((buffer, samples));
+            self.bind_group = None;
+        }
+        let uniforms = FusedUniforms::new(
+            &inputs.scene.light.disk_or_centre(),
+            inputs.light_view,
+            FusedSizes {
+                map_size: inputs.map_size,
+                list_size,
+                cap,
+                samples,
+                edge_count: edges.buffers.count,
+                h_max: edges.h_max,
+                all_overflow: edges.over_budget,
+            },
+        );
+        inputs
+            .ctx
+            .queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+        let key = (
+            inputs.revision,
+            inputs.map_size,
+            list_size,
+            cap,
+            edges.buffers.generation,
+        );
+        if self.made_for != Some(key) {
+            self.layers
+                .record(inputs.ctx, rec, inputs.surfaces, inputs.map_size, list_size);
+            let Some(layers) = self.layers.targets() else {
+                return Err(RenderError::Gpu(
+                    "dbuffer-fused's layers were not made".into(),
+                ));
+            };
+            self.lists
+                .record(inputs.ctx, rec, layers, &edges.buffers, cap);
+            self.made_for = Some(key);
+            self.view_proj = inputs.light_view.view_projection();
+        }
+        let Some(map) = shared.shadow_map.targets() else {
+            return Err(RenderError::Gpu("the shadow map was not made".into()));
+        };
+        let shadow = ShadowUniforms::new(inputs.light_view, map.size, [0.0; 4]);
+        inputs
+            .ctx
+            .queue
+            .write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow));
+        let (Some(paper), Some(lists), Some((lut, _))) = (
+            self.paper.light_maps(shared),
+            self.lists.targets(),
+            self.lut.as_ref(),
+        ) else {
+            return Err(RenderError::Gpu(
+                "dbuffer-fused's maps were not made".into(),
+            ));
+        };
+        let generations = [
+            map.generation,
+            paper.generation,
+            lists.generation,
+            edges.buffers.generation,
+            u64::from(samples),
+        ];
+        if self
+            .bind_group
+            .as_ref()
+            .is_none_or(|(_, g)| *g != generations)
+        {
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("DBufferFused::bind_group"),
+                layout: &self.pipeline.layout,
+                entries: &[
+                    buffer_entry(0, &self.shadow_uniforms),
+                    view_entry(1, &map.distance.view),
+                    view_entry(2, paper.textures[1]),
+                    view_entry(3, paper.textures[2]),
+                    view_entry(4, &lists.maps.view),
+                    buffer_entry(5, &self.uniforms),
+                    buffer_entry(6, &edges.buffers.edges),
+                    buffer_entry(7, &lists.counts),
+                    buffer_entry(8, &lists.lists),
+                    buffer_entry(9, lut),
+                ],
+            });
+            self.bind_group = Some((group, generations));
+        }
+        Ok(())
+    }
+
+    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
+        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
+            pipeline: self.pipeline.pipeline(device, vt),
+            bind_group: g,
+        })
+    }
+
+    fn light_maps<'a>(&'a self, shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
+        self.made_for?;
+        let map = shared.shadow_map.targets()?;
+        let lists = self.lists.targets()?;
+        Some(LightMaps {
+            size: lists.map_size,
+            view_proj: self.view_proj,
+            textures: [&map.distance.view, &lists.maps.view, &lists.maps.view],
+            raw: [
+                &map.distance.texture,
+                &lists.maps.texture,
+                &lists.maps.texture,
+            ],
+            channels: CHANNELS,
+            generation: map.generation ^ lists.generation.rotate_left(32),
+        })
+    }
+
+    fn geometry(&self) -> Option<&SceneGeometry> {
+        self.paper.geometry()
+    }
+
+    fn geometry_builds(&self) -> (u64, f64) {
+        let (builds, ms) = self.paper.geometry_builds();
+        (builds, ms + self.geometry_ms)
+    }
+
+    fn invalidate(&mut self) {
+        self.paper.invalidate();
+        self.made_for = None;
+    }
+}

@@ -1,0 +1,451 @@
+//! `dbuffer-fused`'s per-texel edge lists (`shaders/passes/fused_lists.wgsl`), after its layers
+//! (`passes::fused_layers`), once per light or caster move. CPU twin: `geometry::fused`
+//! (`FusedTwin::texel_ray_of`, `edge_in_texel`, `proxy_hull`, `FusedTwin::crossings_of`).
+//!
+//! 1. `fused_merge` (compute, `list_size`²): per list texel its ray and where its receivers can
+//!    be, from the 3×3 texels around it: [`TEXEL_RAY_BYTES`] each.
+//! 2. `fused_lists` (render): per candidate edge its proxy hull, instanced; per texel the list
+//!    test; an edge that passes is counted (`atomicAdd`) and its id stored while the count is
+//!    below the cap. Storage: `list_size`² counters and `list_size`² × cap ids (`u32`).
+//! 3. `fused_maps` (compute, `map_size`²): per D-buffer texel the caster crossings along its
+//!    ray, the largest crossing height over the 3×3 around it, its list's count and whether it
+//!    overflowed (Rgba32Float): the method's light maps, and `L(c)` for the camera pass.
+//!
+//! **Overflow rule.** Every edge that passes is counted; a list whose count exceeds the cap is
+//! not used at all (the camera pass gives that pixel the paper's `dbuffer` V), whichever ids the
+//! GPU happened to store. Below the cap the set of ids does not depend on the order in which
+//! fragments ran, and neither does V.
+
+use std::sync::Arc;
+
+use super::fused_layers::{uniforms_layout, LayerTargets};
+use super::next_generation;
+use crate::render::timer::Recorder;
+use crate::render::{
+    buffer_entry, cleared, pipeline_layout, render_pipeline, shader_module, view_entry, GpuContext,
+    PipelineSpec, Texture,
+};
+
+/// Bytes of one list texel's ray (`TexelRay` of `shaders/shared/fused.wgsl`).
+pub const TEXEL_RAY_BYTES: u64 = 128;
+/// Bytes of one candidate edge (`FusedEdge`).
+pub const EDGE_BYTES: u64 = 96;
+/// Corners of one proxy hull (`geometry::fused::proxy_hull` has at most 16).
+pub const HULL_CORNERS: usize = 16;
+/// Bytes of one proxy hull.
+pub const HULL_BYTES: u64 = (HULL_CORNERS * 8) as u64;
+/// Vertices drawn per edge: a fan of 14 triangles over 16 corners.
+const PROXY_VERTICES: u32 = 3 * (HULL_CORNERS as u32 - 2);
+/// The per-texel light maps.
+pub const MAPS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The list pass writes no colour; a render pass needs an attachment.
+const NO_COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+
+fn storage(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    read_only: bool,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn texture(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    depth: bool,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Texture {
+            sample_type: if depth {
+                wgpu::TextureSampleType::Depth
+            } else {
+                wgpu::TextureSampleType::Float { filterable: false }
+            },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// The pipelines, built once per device.
+pub struct FusedListsPass {
+    merge: wgpu::ComputePipeline,
+    list: wgpu::RenderPipeline,
+    maps: wgpu::ComputePipeline,
+    uniforms_layout: wgpu::BindGroupLayout,
+    merge_layout: wgpu::BindGroupLayout,
+    list_layout: wgpu::BindGroupLayout,
+    maps_layout: wgpu::BindGroupLayout,
+}
+
+impl FusedListsPass {
+    pub fn get(ctx: &GpuContext) -> Arc<FusedListsPass> {
+        ctx.shared(|device| {
+            use wgpu::ShaderStages as S;
+            let module = shader_module(device, "passes/fused_lists.wgsl");
+            let uniforms_layout = uniforms_layout(device, "FusedListsPass::uniforms_layout");
+            let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some(label),
+                    entries,
+                })
+            };
+            let merge_layout = layout(
+                "FusedListsPass::merge_layout",
+                &[
+                    texture(0, S::COMPUTE, false),
+                    texture(1, S::COMPUTE, false),
+                    texture(2, S::COMPUTE, false),
+                    texture(3, S::COMPUTE, false),
+                    texture(4, S::COMPUTE, false),
+                    storage(5, S::COMPUTE, false),
+                ],
+            );
+            let list_layout = layout(
+                "FusedListsPass::list_layout",
+                &[
+                    storage(6, S::FRAGMENT, true),
+                    storage(7, S::FRAGMENT, true),
+                    storage(8, S::VERTEX, true),
+                    storage(9, S::FRAGMENT, false),
+                    storage(10, S::FRAGMENT, false),
+                ],
+            );
+            let maps_layout = layout(
+                "FusedListsPass::maps_layout",
+                &[
+                    texture(11, S::COMPUTE, false),
+                    texture(12, S::COMPUTE, true),
+                    storage(13, S::COMPUTE, true),
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 14,
+                        visibility: S::COMPUTE,
+                        ty: wgpu::BindingType::StorageTexture {
+                            access: wgpu::StorageTextureAccess::WriteOnly,
+                            format: MAPS_FORMAT,
+                            view_dimension: wgpu::TextureViewDimension::D2,
+                        },
+                        count: None,
+                    },
+                ],
+            );
+            let merge = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("FusedListsPass::merge"),
+                layout: Some(&pipeline_layout(
+                    device,
+                    "FusedListsPass::merge_pipeline_layout",
+                    &[&uniforms_layout, &merge_layout],
+                )),
+                module: &module,
+                entry_point: Some("cs_merge"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let list = render_pipeline(
+                device,
+                &PipelineSpec {
+                    label: "FusedListsPass::list",
+                    module: &module,
+                    layout: &pipeline_layout(
+                        device,
+                        "FusedListsPass::list_pipeline_layout",
+                        &[&uniforms_layout, &list_layout],
+                    ),
+                    vs: "vs_proxy",
+                    fs: Some("fs_list"),
+                    buffers: &[],
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: NO_COLOR_FORMAT,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::empty(),
+                    })],
+                    cull: None,
+                    depth: None,
+                },
+            );
+            let maps = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("FusedListsPass::maps"),
+                layout: Some(&pipeline_layout(
+                    device,
+                    "FusedListsPass::maps_pipeline_layout",
+                    &[&uniforms_layout, &maps_layout],
+                )),
+                module: &module,
+                entry_point: Some("cs_maps"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            FusedListsPass {
+                merge,
+                list,
+                maps,
+                uniforms_layout,
+                merge_layout,
+                list_layout,
+                maps_layout,
+            }
+        })
+    }
+}
+
+/// The candidate edges on the GPU: their records and proxy hulls.
+pub struct EdgeBuffers {
+    pub edges: wgpu::Buffer,
+    pub hulls: wgpu::Buffer,
+    pub count: u32,
+    pub generation: u64,
+}
+
+impl EdgeBuffers {
+    /// `records`: [`crate::geometry::fused::FusedEdge::gpu_record`] per edge; `hulls`: each
+    /// edge's proxy corners, padded to [`HULL_CORNERS`] by repeating the last.
+    pub fn new(
+        device: &wgpu::Device,
+        records: &[[[f32; 4]; 6]],
+        hulls: &[[[f32; 2]; HULL_CORNERS]],
+    ) -> EdgeBuffers {
+        use wgpu::util::DeviceExt;
+        // Storage bindings may not be empty.
+        let records: Vec<[[f32; 4]; 6]> = if records.is_empty() {
+            vec![[[0.0; 4]; 6]]
+        } else {
+            records.to_vec()
+        };
+        let hull_data: Vec<[[f32; 2]; HULL_CORNERS]> = if hulls.is_empty() {
+            vec![[[0.0; 2]; HULL_CORNERS]]
+        } else {
+            hulls.to_vec()
+        };
+        let buffer = |label, contents: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        EdgeBuffers {
+            edges: buffer("EdgeBuffers::edges", bytemuck::cast_slice(&records)),
+            hulls: buffer("EdgeBuffers::hulls", bytemuck::cast_slice(&hull_data)),
+            count: hulls.len().min(records.len()) as u32,
+            generation: next_generation(),
+        }
+    }
+}
+
+/// The lists' storage and the maps, for one (map size, list size, cap).
+pub struct ListTargets {
+    pub map_size: u32,
+    pub list_size: u32,
+    pub cap: u32,
+    rays: wgpu::Buffer,
+    /// Per list texel, how many edges passed (`u32`).
+    pub counts: wgpu::Buffer,
+    /// Per list texel, `cap` edge ids (`u32`).
+    pub lists: wgpu::Buffer,
+    /// Per D-buffer texel: crossings, farthest crossing height, list count, overflow.
+    pub maps: Texture,
+    no_color: Texture,
+    pub generation: u64,
+}
+
+/// Bytes of the lists' storage at a list grid of `list_size`² and `cap` ids per list: the
+/// counters and the ids.
+pub fn list_bytes(list_size: u32, cap: u32) -> u64 {
+    let texels = u64::from(list_size) * u64::from(list_size);
+    texels * 4 * (u64::from(cap) + 1)
+}
+
+/// A session's `dbuffer-fused` lists.
+pub struct FusedLists {
+    pass: Arc<FusedListsPass>,
+    uniforms_group: wgpu::BindGroup,
+    targets: Option<ListTargets>,
+}
+
+impl FusedLists {
+    /// `uniforms`: the method's `FusedUniforms` buffer (written before each record).
+    pub fn new(ctx: &GpuContext, uniforms: &wgpu::Buffer) -> FusedLists {
+        let pass = FusedListsPass::get(ctx);
+        let uniforms_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("FusedLists::uniforms_group"),
+            layout: &pass.uniforms_layout,
+            entries: &[buffer_entry(0, uniforms)],
+        });
+        FusedLists {
+            pass,
+            uniforms_group,
+            targets: None,
+        }
+    }
+
+    pub fn targets(&self) -> Option<&ListTargets> {
+        self.targets.as_ref()
+    }
+
+    fn ensure_targets(&mut self, device: &wgpu::Device, map_size: u32, list_size: u32, cap: u32) {
+        if self
+            .targets
+            .as_ref()
+            .is_some_and(|t| (t.map_size, t.list_size, t.cap) == (map_size, list_size, cap))
+        {
+            return;
+        }
+        use wgpu::BufferUsages as B;
+        use wgpu::TextureUsages as U;
+        let texels = u64::from(list_size) * u64::from(list_size);
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        self.targets = Some(ListTargets {
+            map_size,
+            list_size,
+            cap,
+            rays: buffer("ListTargets::rays", texels * TEXEL_RAY_BYTES, B::STORAGE),
+            counts: buffer(
+                "ListTargets::counts",
+                texels * 4,
+                B::STORAGE | B::COPY_DST | B::COPY_SRC,
+            ),
+            lists: buffer(
+                "ListTargets::lists",
+                texels * u64::from(cap) * 4,
+                B::STORAGE | B::COPY_SRC,
+            ),
+            maps: Texture::new(
+                device,
+                "ListTargets::maps",
+                (map_size, map_size),
+                MAPS_FORMAT,
+                U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC,
+            ),
+            no_color: Texture::new(
+                device,
+                "ListTargets::no_color",
+                (list_size, list_size),
+                NO_COLOR_FORMAT,
+                U::RENDER_ATTACHMENT,
+            ),
+            generation: next_generation(),
+        });
+    }
+
+    /// Record the merge, the lists of `edges` and the maps from `layers` (drawn for the same
+    /// light, sizes and uniforms just before), with `cap` ids per list.
+    pub fn record(
+        &mut self,
+        ctx: &GpuContext,
+        rec: &mut Recorder<'_>,
+        layers: &LayerTargets,
+        edges: &EdgeBuffers,
+        cap: u32,
+    ) {
+        let (map_size, list_size) = (layers.map_size, layers.list_size);
+        self.ensure_targets(&ctx.device, map_size, list_size, cap);
+        let Some(t) = self.targets.as_ref() else {
+            return;
+        };
+        let device = &ctx.device;
+        let pass = &self.pass;
+        let group = |label, layout, entries: &[wgpu::BindGroupEntry<'_>]| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout,
+                entries,
+            })
+        };
+        let merge_group = group(
+            "FusedLists::merge_group",
+            &pass.merge_layout,
+            &[
+                view_entry(0, &layers.first.view),
+                view_entry(1, &layers.second.view),
+                view_entry(2, &layers.last.view),
+                view_entry(3, &layers.last_caster.view),
+                view_entry(4, &layers.receivers.view),
+                buffer_entry(5, &t.rays),
+            ],
+        );
+        let list_group = group(
+            "FusedLists::list_group",
+            &pass.list_layout,
+            &[
+                buffer_entry(6, &t.rays),
+                buffer_entry(7, &edges.edges),
+                buffer_entry(8, &edges.hulls),
+                buffer_entry(9, &t.counts),
+                buffer_entry(10, &t.lists),
+            ],
+        );
+        let maps_group = group(
+            "FusedLists::maps_group",
+            &pass.maps_layout,
+            &[
+                view_entry(11, &layers.crossings.view),
+                view_entry(12, &layers.crossing_far.view),
+                buffer_entry(13, &t.counts),
+                view_entry(14, &t.maps.view),
+            ],
+        );
+        {
+            let span = rec.span("fused_merge");
+            let mut p = rec
+                .encoder
+                .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("FusedLists::merge"),
+                    timestamp_writes: span.compute_writes(rec.timer),
+                });
+            p.set_pipeline(&pass.merge);
+            p.set_bind_group(0, &self.uniforms_group, &[]);
+            p.set_bind_group(1, &merge_group, &[]);
+            let groups = list_size.div_ceil(8);
+            p.dispatch_workgroups(groups, groups, 1);
+        }
+        rec.encoder.clear_buffer(&t.counts, 0, None);
+        {
+            let span = rec.span("fused_lists");
+            let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("FusedLists::lists"),
+                color_attachments: &[cleared(&t.no_color.view, wgpu::Color::TRANSPARENT)],
+                depth_stencil_attachment: None,
+                timestamp_writes: span.writes(rec.timer, true, true),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if edges.count > 0 {
+                p.set_pipeline(&pass.list);
+                p.set_bind_group(0, &self.uniforms_group, &[]);
+                p.set_bind_group(1, &list_group, &[]);
+                p.draw(0..PROXY_VERTICES, 0..edges.count);
+            }
+        }
+        let span = rec.span("fused_maps");
+        let mut p = rec
+            .encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("FusedLists::maps"),
+                timestamp_writes: span.compute_writes(rec.timer),
+            });
+        p.set_pipeline(&pass.maps);
+        p.set_bind_group(0, &self.uniforms_group, &[]);
+        p.set_bind_group(1, &maps_group, &[]);
+        let groups = map_size.div_ceil(16);
+        p.dispatch_workgroups(groups, groups, 1);
+    }
+}
