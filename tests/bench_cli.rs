@@ -163,6 +163,9 @@ fn bad_flags_are_refused_with_a_reason() {
             "one-line reason: {stderr}"
         );
         assert!(!dir.exists(), "{args:?} wrote {}", dir.display());
+        // Refused before the GPU starts, and the cause said once.
+        assert!(!stderr.contains("bench on "), "{args:?}: {stderr}");
+        assert!(stderr.matches(expect).count() <= 2, "{args:?}: {stderr}");
     }
     let out = dbuffer()
         .args(["bench", "--fast"])

@@ -39,7 +39,8 @@ pub const TARGET_SIZE: u32 = 1024;
 /// What can stop a bench run. A method that cannot render is not one of them: its rows say why.
 #[derive(Debug, thiserror::Error)]
 pub enum BenchError {
-    #[error("cannot load scene '{name}': {source}")]
+    // The cause is the source (printed after it by anyhow's chain), not repeated here.
+    #[error("cannot load scene '{name}'")]
     Scene {
         name: String,
         #[source]
@@ -490,20 +491,34 @@ impl Report {
 /// What the run reports as it goes (for a progress line on stderr).
 pub type Progress<'a> = &'a mut dyn FnMut(&str);
 
-/// Run the bench on `ctx`.
-pub fn run(ctx: &GpuContext, config: &Config, progress: Progress) -> Result<Report, BenchError> {
+/// Load the scenes `config` names, in order (before any GPU work: a bad name fails first).
+pub fn load_scenes(config: &Config) -> Result<Vec<Scene>, BenchError> {
+    config
+        .scenes
+        .iter()
+        .map(|name| {
+            scene::load(name).map_err(|source| BenchError::Scene {
+                name: name.clone(),
+                source: Box::new(source),
+            })
+        })
+        .collect()
+}
+
+/// Run the bench on `ctx` over `loaded`, the scenes of [`load_scenes`].
+pub fn run(
+    ctx: &GpuContext,
+    config: &Config,
+    loaded: Vec<Scene>,
+    progress: Progress,
+) -> Result<Report, BenchError> {
     config.validate()?;
     let started = Instant::now();
     let mut scenes = Vec::new();
-    let mut loaded = Vec::new();
-    for name in &config.scenes {
-        let scene = scene::load(name).map_err(|source| BenchError::Scene {
-            name: name.clone(),
-            source: Box::new(source),
-        })?;
+    for scene in &loaded {
+        let name = &scene.name;
         progress(&format!("geometry  {name}"));
-        scenes.push(scene_info(&scene, config.geometry_runs));
-        loaded.push(scene);
+        scenes.push(scene_info(scene, config.geometry_runs));
     }
 
     let total = loaded.len() * config.sizes.len();

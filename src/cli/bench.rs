@@ -69,6 +69,7 @@ pub fn config(args: &BenchArgs) -> Result<Config> {
 
 pub fn run(args: &BenchArgs) -> Result<()> {
     let config = config(args)?;
+    let loaded = bench::load_scenes(&config)?;
     let ctx = GpuContext::headless()?;
     errln!(
         "bench on {}: {} scenes × {} sizes × {} methods, {} + {} frames each; about {:.0} s",
@@ -92,7 +93,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         bar.stage(line);
         done += 1;
     };
-    let report = bench::run(&ctx, &config, &mut progress)?;
+    let report = bench::run(&ctx, &config, loaded, &mut progress)?;
     bar.set(steps as u64);
     bar.finish();
     let markdown = bench::table::markdown(&report);
