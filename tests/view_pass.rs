@@ -91,18 +91,10 @@ impl Fixture {
                 }],
             )
             .unwrap_or_else(|e| panic!("{e}"));
-        let display = self
-            .targets
-            .view
-            .as_ref()
-            .and_then(|v| v.display())
-            .expect("a display");
+        let display = self.targets.shown().expect("a display");
         let (w, h) = (display.width, display.height);
         let bytes = Readback::default()
-            .read(
-                &self.ctx,
-                &[TextureRead::color(&display.texture.texture, 4)],
-            )
+            .read(&self.ctx, &[TextureRead::color(display.texture, 4)])
             .unwrap_or_else(|e| panic!("{e}"))
             .remove(0);
         let px = bytes

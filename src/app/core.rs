@@ -29,7 +29,7 @@ impl Slot {
 
     /// The size of what the slot's display shows, once it has one.
     pub fn display_size(&self) -> Option<(u32, u32)> {
-        let d = self.targets.view.as_ref()?.display()?;
+        let d = self.targets.shown()?;
         Some((d.width, d.height))
     }
 }
@@ -90,7 +90,7 @@ impl Core {
     /// was made again).
     pub fn register_textures(&mut self, render_state: &egui_wgpu::RenderState) {
         for slot in &mut self.slots {
-            let Some(display) = slot.targets.view.as_ref().and_then(|v| v.display()) else {
+            let Some(display) = slot.targets.shown() else {
                 continue;
             };
             match slot.texture {
@@ -101,7 +101,7 @@ impl Core {
                         .write()
                         .update_egui_texture_from_wgpu_texture(
                             &render_state.device,
-                            &display.texture.view,
+                            display.view,
                             wgpu::FilterMode::Nearest,
                             id,
                         );
@@ -110,7 +110,7 @@ impl Core {
                 None => {
                     let id = render_state.renderer.write().register_native_texture(
                         &render_state.device,
-                        &display.texture.view,
+                        display.view,
                         wgpu::FilterMode::Nearest,
                     );
                     slot.texture = Some((id, display.generation));

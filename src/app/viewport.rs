@@ -426,6 +426,9 @@ impl LabApp {
             return;
         };
         let split_x = self.split_x(rect);
+        // The final image is the camera's colour target itself, transparent where no surface
+        // is: black behind it, as the view pass draws "no surface" in the other views.
+        painter.rect_filled(rect, 0.0, Color32::BLACK);
         let texture = |slot: usize| core.slots[slot].texture.map(|(id, _)| id);
         if let Some(id) = texture(0) {
             match split_x {

@@ -180,8 +180,8 @@ fn display(out: &mut String, r: &Report) {
     }
     let _ = writeln!(
         out,
-        "\n*lab frame*: what the window does per frame, headless — the camera pass and the view pass into \
-         the display texture, one submit, fenced; with a still light the D-buffer is cached, with a moving \
+        "\n*lab frame*: what the window does per frame, headless — the camera pass (the final image is \
+         its colour target, shown as it is; the other views add the view pass), one submit, fenced; with a still light the D-buffer is cached, with a moving \
          one the geometry stage and the light pass run too. *readback path*: `Session::frame` as \
          `dbuffer render` calls it (camera targets and D-buffer read back), which is what the lab did every \
          frame before. *floor*: the scene in flat colour into Rgba8 + depth, the cheapest image of it.\n"

@@ -9,7 +9,7 @@ use super::gpu_scene::GpuScene;
 use super::methods::{Channel, FrameInputs, Knobs, LightMaps, Method, MethodState, SharedMaps};
 use super::passes::camera::{Camera, CameraTargets, CameraUniforms};
 use super::passes::probe::Probe;
-use super::passes::view::{ViewInputs, ViewParams, ViewTarget};
+use super::passes::view::{View, ViewInputs, ViewParams, ViewTarget};
 use super::readback::{f32s_of, Readback, TextureRead};
 use super::timer::Recorder;
 use super::{GpuContext, RenderError};
@@ -75,6 +75,20 @@ pub struct FrameTargets {
     pub rendered: Option<Rendered>,
     /// Values read back from the targets a frame later (the inspector, the display range).
     pub probe: Option<Probe>,
+    /// The last view asked for was `final`: the camera's colour target is what is shown, and no
+    /// view pass ran (it would copy it byte for byte).
+    pub shows_camera: bool,
+}
+
+/// The texture a viewport shows: the view pass's display, or for the final image the camera's
+/// colour target itself (as gamma-encoded bytes).
+pub struct ShownTexture<'a> {
+    pub texture: &'a wgpu::Texture,
+    pub view: &'a wgpu::TextureView,
+    pub width: u32,
+    pub height: u32,
+    /// Changes whenever the texture is another one (a viewport registers it again).
+    pub generation: u64,
 }
 
 /// What a [`FrameTargets`] holds.
@@ -93,7 +107,30 @@ impl FrameTargets {
             view: None,
             rendered: None,
             probe: None,
+            shows_camera: false,
         }
+    }
+
+    /// What a viewport shows of these targets, once something was recorded into them.
+    pub fn shown(&self) -> Option<ShownTexture<'_>> {
+        if self.shows_camera {
+            let c = self.camera.as_ref()?;
+            return Some(ShownTexture {
+                texture: &c.color.texture,
+                view: &c.color_bytes,
+                width: c.width,
+                height: c.height,
+                generation: c.generation,
+            });
+        }
+        let d = self.view.as_ref()?.display()?;
+        Some(ShownTexture {
+            texture: &d.texture.texture,
+            view: &d.texture.view,
+            width: d.width,
+            height: d.height,
+            generation: d.generation,
+        })
     }
 }
 
@@ -178,6 +215,11 @@ pub fn record_view(
     maps: Option<LightMaps<'_>>,
     rec: &mut Recorder<'_>,
 ) {
+    // The final image is the camera's colour target as it is: shown directly, no pass.
+    targets.shows_camera = params.view == View::Final;
+    if targets.shows_camera {
+        return;
+    }
     let FrameTargets {
         camera,
         view,
