@@ -336,7 +336,10 @@ mod tests {
             let h = -1.0 + 2.0 * i as f64 / 40.0;
             // A long segment along +x at height y = h: the centre is on its right.
             let c = edge_coverage_2d(DVec2::new(-5.0, h), DVec2::new(5.0, h));
-            assert!((c.abs() - disk_segment_fraction(h.abs())).abs() < 1e-9, "h = {h}: {c}");
+            assert!(
+                (c.abs() - disk_segment_fraction(h.abs())).abs() < 1e-9,
+                "h = {h}: {c}"
+            );
             // Reversing the segment flips the sign.
             let r = edge_coverage_2d(DVec2::new(5.0, h), DVec2::new(-5.0, h));
             assert!((c + r).abs() < 1e-12, "h = {h}");
@@ -370,8 +373,7 @@ mod tests {
         let mut cut = 0;
         for _ in 0..40 {
             let x = DVec3::new(rnd() * 2.0 - 1.0, 3.0 + rnd() * 2.0, rnd() * 2.0 - 1.0);
-            let n = DVec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0)
-                .normalize();
+            let n = DVec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0).normalize();
             let f = frame.horizon_fraction(x.as_vec3(), n.as_vec3());
             // Equal-area rings: ring i at radius √((i + ½)/rings).
             let mut front = 0usize;

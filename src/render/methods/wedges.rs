@@ -33,7 +33,9 @@ use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::stencil_volumes::ScreenPass;
 use crate::render::passes::wedges::{WedgeVertex, Wedges};
 use crate::render::timer::Recorder;
-use crate::render::{buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError};
+use crate::render::{
+    buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
+};
 use crate::scene::DiskLight;
 
 /// `--wedges-horizon`: clip the disk by the receiver's own plane.
