@@ -130,8 +130,8 @@ impl DiskFrame {
         let n = n.as_dvec3();
         let k = n.dot(self.center - x.as_dvec3());
         let s = (n - n.dot(self.normal) * self.normal).length() * self.radius;
-        // Also true for NaN: no chord to cut by.
-        if !(s > 1e-6 * k.abs()) {
+        // No chord to cut by (NaN included; the GPU's `!(s > 1e-6 |k|)`).
+        if s.is_nan() || k.is_nan() || s <= 1e-6 * k.abs() {
             return if k > 0.0 { 1.0 } else { 0.0 };
         }
         disk_segment_fraction(-k / s)
