@@ -34,6 +34,19 @@
 //! centre covers `(acos h − h √(1 − h²))/π`, the disk–half-plane area of `V(t)`'s exact variant.
 //! (Derived and checked numerically in the design note for issues 13–14, §10.2.)
 //!
+//! **The receiver's own plane.** A receiver `x` with normal `n` gets nothing from the part of the
+//! disk behind its tangent plane (`n · (y − x) ≤ 0`): a fact of the light integral, not of the
+//! casters. Wedges miss it where the receiver is on a caster and lit from the centre, its plane
+//! cutting the disk (the band above a sphere's terminator): no silhouette edge of the centre's
+//! volume is between it and the light, so no wedge holds it and the sum reads 1. So the plane is
+//! taken as one more occluder, `V = min(V_wedges, F)` with `F` the exact part of the disk in front
+//! of the plane ([`DiskFrame::horizon_fraction`]: the disk–half-plane area of V(t)'s exact
+//! variant, `visibility::disk_segment_fraction`). `min`, not a product: on a face beside a
+//! silhouette edge the edge lies in the face's plane, so its wedge already covers exactly what is
+//! behind the plane (`V_wedges = F` there), and a product would count it twice; for a closed
+//! opaque receiver the truth is never above `F`, and on the ground under a disk above it `F = 1`.
+//! `--wedges-horizon 0` turns it off, to show the papers' raw method.
+//!
 //! **The errors the papers admit, kept:** silhouettes from the centre only (wrong for large
 //! lights and thick casters: the side faces hide part of the light from points beside the
 //! caster, which the centre's silhouette does not see), and overlapping edges and casters summed
@@ -44,6 +57,7 @@ use glam::{DVec2, DVec3, Vec3};
 
 use super::hard_volume::{scene_volumes, HardVolume, OpenMeshes};
 use super::hull::convex_hull;
+use super::visibility::disk_segment_fraction;
 use super::PreparedCasters;
 use crate::scene::DiskLight;
 
@@ -106,6 +120,21 @@ impl DiskFrame {
             w,
             radius: f64::from(light.radius),
         }
+    }
+
+    /// The part of the disk in front of the plane through `x` with normal `n` (`n · (y − x) > 0`),
+    /// the receiver's horizon: with `k = n · (c − x)` and `m` the part of `n` in the disk's
+    /// plane, a disk point `c + r p` is in front where `p · m̂ > −k / (r |m|)`, the far side of a
+    /// chord. 1 or 0 where `n` is (nearly) the disk's normal, by the side the centre is on.
+    pub fn horizon_fraction(&self, x: Vec3, n: Vec3) -> f64 {
+        let n = n.as_dvec3();
+        let k = n.dot(self.center - x.as_dvec3());
+        let s = (n - n.dot(self.normal) * self.normal).length() * self.radius;
+        // No chord to cut by (NaN included; the GPU's `!(s > 1e-6 |k|)`).
+        if s.is_nan() || k.is_nan() || s <= 1e-6 * k.abs() {
+            return if k > 0.0 { 1.0 } else { 0.0 };
+        }
+        disk_segment_fraction(-k / s)
     }
 
     /// The coverage of the disk by the edge `e0 → e1` as `x` sees it (`e0 → e1` in the
@@ -235,6 +264,9 @@ pub struct WedgeTwin {
     pub frame: DiskFrame,
     pub volumes: Vec<HardVolume>,
     pub edges: Vec<[Vec3; 2]>,
+    /// Clip the disk by the receiver's own plane in [`WedgeTwin::surface_visibility`]
+    /// (`--wedges-horizon`, on unless set off).
+    pub horizon: bool,
 }
 
 impl WedgeTwin {
@@ -246,6 +278,7 @@ impl WedgeTwin {
                 .map(|(_, _, v)| v)
                 .collect(),
             edges: wedge_edges(casters, light.center),
+            horizon: true,
         }
     }
 
@@ -275,13 +308,20 @@ impl WedgeTwin {
 
     /// V at a surface point `x` with normal `n` (toward the viewer): on a side turned away from
     /// the centre, the centre is hidden by that surface itself (`H = 1`, as Crow's volume from
-    /// the centre has it), so `V = clamp(−Σc)`; elsewhere [`WedgeTwin::visibility`].
+    /// the centre has it), so `V = clamp(−Σc)`; elsewhere [`WedgeTwin::visibility`]. Then, with
+    /// [`WedgeTwin::horizon`], at most the part of the disk in front of the surface's plane
+    /// (see the module documentation).
     pub fn surface_visibility(&self, x: Vec3, n: Vec3) -> f64 {
         let c = self.frame.center;
-        if n.as_dvec3().dot(c - x.as_dvec3()) <= 0.0 {
+        let v = if n.as_dvec3().dot(c - x.as_dvec3()) <= 0.0 {
             (-self.coverage_sum(x)).clamp(0.0, 1.0)
         } else {
             self.visibility(x)
+        };
+        if self.horizon {
+            v.min(self.frame.horizon_fraction(x, n))
+        } else {
+            v
         }
     }
 }
@@ -290,19 +330,16 @@ impl WedgeTwin {
 mod tests {
     use super::*;
 
-    /// The fraction of the unit disk beyond a chord at signed distance h from the centre.
-    fn segment(h: f64) -> f64 {
-        let h = h.clamp(-1.0, 1.0);
-        (h.acos() - h * (1.0 - h * h).sqrt()) / std::f64::consts::PI
-    }
-
     #[test]
     fn a_whole_chord_covers_the_disk_half_plane_area() {
         for i in 0..=40 {
             let h = -1.0 + 2.0 * i as f64 / 40.0;
             // A long segment along +x at height y = h: the centre is on its right.
             let c = edge_coverage_2d(DVec2::new(-5.0, h), DVec2::new(5.0, h));
-            assert!((c.abs() - segment(h.abs())).abs() < 1e-9, "h = {h}: {c}");
+            assert!(
+                (c.abs() - disk_segment_fraction(h.abs())).abs() < 1e-9,
+                "h = {h}: {c}"
+            );
             // Reversing the segment flips the sign.
             let r = edge_coverage_2d(DVec2::new(5.0, h), DVec2::new(-5.0, h));
             assert!((c + r).abs() < 1e-12, "h = {h}");
@@ -312,6 +349,52 @@ mod tests {
         // for the edge walked the other way).
         let c = edge_coverage_2d(DVec2::new(-3.0, 0.5), DVec2::new(3.0, 0.5));
         assert!((c - 0.195_501_109_477_885).abs() < 1e-9, "{c}");
+    }
+
+    #[test]
+    fn the_horizon_fraction_is_the_part_of_the_disk_in_front_of_the_plane() {
+        // A tilted disk and random planes through random points: the fraction against the
+        // disk's points on a fine polar grid counted in front of the plane.
+        let light = DiskLight {
+            center: Vec3::new(0.3, 4.0, -0.2),
+            normal: Vec3::new(-0.2, -1.0, 0.1).normalize(),
+            radius: 0.7,
+            intensity: 1.0,
+        };
+        let frame = DiskFrame::new(&light);
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (rings, spokes) = (300, 600);
+        let mut cut = 0;
+        for _ in 0..40 {
+            let x = DVec3::new(rnd() * 2.0 - 1.0, 3.0 + rnd() * 2.0, rnd() * 2.0 - 1.0);
+            let n = DVec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0).normalize();
+            let f = frame.horizon_fraction(x.as_vec3(), n.as_vec3());
+            // Equal-area rings: ring i at radius √((i + ½)/rings).
+            let mut front = 0usize;
+            for i in 0..rings {
+                let rho = ((i as f64 + 0.5) / rings as f64).sqrt() * frame.radius;
+                for j in 0..spokes {
+                    let a = (j as f64 + 0.5) / spokes as f64 * std::f64::consts::TAU;
+                    let y = frame.center + rho * (a.cos() * frame.u + a.sin() * frame.w);
+                    front += usize::from(n.dot(y - x) > 0.0);
+                }
+            }
+            let grid = front as f64 / (rings * spokes) as f64;
+            assert!((f - grid).abs() < 2e-3, "x {x} n {n}: {f} against {grid}");
+            cut += usize::from(grid > 0.02 && grid < 0.98);
+        }
+        assert!(cut >= 10, "only {cut} planes cut the disk");
+        // A plane parallel to the disk: all or nothing by the side the centre is on.
+        let below = Vec3::new(0.0, 1.0, 0.0);
+        let nc = light.normal;
+        assert_eq!(frame.horizon_fraction(below, -nc), 1.0);
+        assert_eq!(frame.horizon_fraction(below, nc), 0.0);
     }
 
     #[test]

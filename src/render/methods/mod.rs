@@ -246,7 +246,7 @@ pub struct Knob {
 }
 
 /// At most this many distinct knobs over all methods (checked by a test).
-pub const MAX_KNOBS: usize = 16;
+pub const MAX_KNOBS: usize = 24;
 
 /// Every distinct knob of the registry, in registry order.
 pub fn all_knobs() -> Vec<&'static Knob> {

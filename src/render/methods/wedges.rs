@@ -7,6 +7,10 @@
 //! (`passes::stencil_volumes`, shared with `shadow-volume`: no second copy), the wedges' coverage
 //! sum and the resolve (`passes::wedges`); the camera pass reads V at its pixel.
 //!
+//! The camera pass then takes at most the part of the disk in front of the receiver's own plane
+//! (`V = min(V_wedges, F)`, see `geometry::wedges`): a receiver on a caster whose plane cuts the
+//! disk is in no wedge, and the papers leave it lit (`--wedges-horizon 0` shows that).
+//!
 //! The errors the papers admit are kept, to show in `compare`: silhouettes from the centre only
 //! (thick or concave casters under a large light: `fig1-large-light`, `no-umbra`) and
 //! overlapping edges or casters summed, not combined (`overlap`, `fig7-concave`,
@@ -18,7 +22,9 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::shadow_volume::{build_volumes, open_meshes, screen_v_entries, OPEN};
-use super::{CameraBindings, FrameInputs, MethodPipeline, MethodSpec, MethodState, SharedMaps};
+use super::{
+    CameraBindings, FrameInputs, Knob, Knobs, MethodPipeline, MethodSpec, MethodState, SharedMaps,
+};
 use crate::geometry::hard_volume::{scene_volumes, OpenMeshes};
 use crate::geometry::volumes::{VolumeKind, VolumeMesh, VolumeVertex};
 use crate::geometry::wedges::{wedge_hull, wedge_reach};
@@ -27,13 +33,27 @@ use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::stencil_volumes::ScreenPass;
 use crate::render::passes::wedges::{WedgeVertex, Wedges};
 use crate::render::timer::Recorder;
-use crate::render::{view_entry, GpuContext, RenderError};
+use crate::render::{
+    buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
+};
 use crate::scene::DiskLight;
+
+/// `--wedges-horizon`: clip the disk by the receiver's own plane.
+pub static HORIZON: Knob = Knob {
+    name: "wedges-horizon",
+    help: "wedges: 1 = a receiver gets at most the part of the disk in front of its own plane \
+           (V = min(V, that part)); 0 = the papers' wedges as they are (lit where a caster's own \
+           face cuts the disk)",
+    min: 0,
+    max: 1,
+    default: 1,
+    max_name: None,
+};
 
 pub static WEDGES: MethodSpec = MethodSpec {
     name: "wedges",
     description: "penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)",
-    knobs: &[&OPEN],
+    knobs: &[&OPEN, &HORIZON],
     cpu_side: false,
     hard: false,
     new: |ctx| Box::new(WedgesMethod::new(ctx)),
@@ -41,8 +61,9 @@ pub static WEDGES: MethodSpec = MethodSpec {
 
 const SHADER: &str = "methods/wedges.wgsl";
 
-/// The camera pass's group 1: the screen visibility (`shared/screen_v.wgsl`) and the coverage sum.
-fn camera_entries() -> [wgpu::BindGroupLayoutEntry; 2] {
+/// The camera pass's group 1: the screen visibility (`shared/screen_v.wgsl`), the coverage sum
+/// and the options ([`WedgeOptions`]).
+fn camera_entries() -> [wgpu::BindGroupLayoutEntry; 3] {
     let [v] = screen_v_entries();
     [
         v,
@@ -51,7 +72,15 @@ fn camera_entries() -> [wgpu::BindGroupLayoutEntry; 2] {
             wgpu::ShaderStages::FRAGMENT,
             wgpu::TextureViewDimension::D2,
         ),
+        uniform_entry(2, wgpu::ShaderStages::FRAGMENT),
     ]
+}
+
+/// `wedge_options` of `shaders/methods/wedges.wgsl`: x = 1 clips by the receiver's plane.
+type WedgeOptions = [f32; 4];
+
+fn wedge_options(knobs: &Knobs) -> WedgeOptions {
+    [knobs.get(&HORIZON) as f32, 0.0, 0.0, 0.0]
 }
 
 /// The wedges of every side edge of `volumes`' hard volumes, as GPU vertices, and the overlay's
@@ -106,6 +135,7 @@ pub struct WedgesMethod {
     builds: u64,
     geometry_ms: f64,
     bind_group: Option<(wgpu::BindGroup, u64)>,
+    options: wgpu::Buffer,
 }
 
 impl WedgesMethod {
@@ -123,6 +153,7 @@ impl WedgesMethod {
             builds: 0,
             geometry_ms: 0.0,
             bind_group: None,
+            options: uniform_buffer::<WedgeOptions>(&ctx.device, "Wedges::options"),
         }
     }
 }
@@ -173,6 +204,11 @@ impl MethodState for WedgesMethod {
             self.builds += 1;
             self.built_for = Some((inputs.revision, open));
         }
+        ctx.queue.write_buffer(
+            &self.options,
+            0,
+            bytemuck::bytes_of(&wedge_options(inputs.knobs)),
+        );
         let generation = self.screen.begin(ctx, &inputs.view).generation;
         self.screen.record_prepass(rec, inputs.surfaces);
         self.screen.record_zfail(rec, &self.volumes);
@@ -192,6 +228,7 @@ impl MethodState for WedgesMethod {
                 entries: &[
                     view_entry(0, &targets.visibility.view),
                     view_entry(1, &sum.view),
+                    buffer_entry(2, &self.options),
                 ],
             });
             self.bind_group = Some((group, generation));
