@@ -105,6 +105,22 @@ fn has_hard_reference(c: &Comparison) -> bool {
     c.results.iter().any(|r| r.method == Method::REFERENCE_HARD)
 }
 
+/// `img` as a PNG at the encoder's best compression: a page meant to be kept and shared (a
+/// 512² comparison: about 0.3 MB instead of 0.8 MB at the fast level the other files use).
+pub fn encode(img: &RgbImage) -> image::ImageResult<Vec<u8>> {
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    use image::{ExtendedColorType, ImageEncoder};
+    let mut png = Vec::new();
+    PngEncoder::new_with_quality(&mut png, CompressionType::Best, FilterType::Adaptive)
+        .write_image(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            ExtendedColorType::Rgb8,
+        )?;
+    Ok(png)
+}
+
 /// The montage of `c`.
 pub fn render(c: &Comparison) -> RgbImage {
     let layout = Layout::of(c);

@@ -308,11 +308,9 @@ pub fn write(dir: &Path, c: &Comparison) -> io::Result<Vec<PathBuf>> {
             )?;
         }
     }
-    let img = montage::render(c);
-    let (mw, mh) = img.dimensions();
     put(
         montage::MONTAGE_PNG,
-        output::png_rgb8(mw, mh, img.as_raw()).map_err(encode)?,
+        montage::encode(&montage::render(c)).map_err(encode)?,
     )?;
     put(REPORT_MD, report.markdown().into_bytes())?;
     let json = serde_json::to_string_pretty(&report).map_err(io::Error::other)?;
