@@ -7,7 +7,7 @@
 //! are.
 //!
 //! Tiles are downscaled by a whole factor so that no cell is wider or taller than [`MAX_CELL`]
-//! (a 512² comparison: 256² cells, seven to a row, 1840 px wide). The image is box-filtered; the
+//! (a 512² comparison: 256² cells, seven to a row, 1856 px wide). The image is box-filtered; the
 //! error rows keep the worst of each block (the largest `|ΔV|`, a mismatched pixel's colour over a
 //! matching one's), so a one-pixel error line survives the reduction.
 //!
