@@ -47,7 +47,8 @@ enum Command {
         verbose: bool,
     },
     /// Render every method and the ray-traced reference, and report their errors: each
-    /// method's image, visibility EXR and error heatmap, report.md and report.json.
+    /// method's image, visibility EXR and error heatmap (the hard methods' mismatch against
+    /// reference-hard too), montage.png (every method on one page), report.md and report.json.
     Compare {
         /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
         scene: String,

@@ -64,6 +64,23 @@ fn until_reference_done(h: &mut Harness<'_, LabApp>) {
     panic!("the reference did not finish");
 }
 
+/// Step the window until the frame shown is `reference-hard`'s (its rays are cast on a worker
+/// thread, in real time).
+fn until_reference_hard_shown(h: &mut Harness<'_, LabApp>) {
+    for _ in 0..600 {
+        h.step();
+        if h.state()
+            .shown()
+            .is_some_and(|s| s.method == Method::REFERENCE_HARD)
+        {
+            h.run();
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    panic!("reference-hard did not arrive");
+}
+
 fn click(h: &mut Harness<'_, LabApp>, label: &str) {
     h.get_by_label(label).click();
     h.run();
@@ -112,6 +129,9 @@ fn every_method_and_variant_switches_and_shows_at_once() {
         click(&mut h, m.name());
         if m.is_reference() {
             until_reference_done(&mut h);
+        }
+        if m == Method::REFERENCE_HARD {
+            until_reference_hard_shown(&mut h);
         }
         let app = h.state();
         assert_eq!(app.settings.method(), m);
@@ -419,6 +439,75 @@ fn the_window_keeps_making_frames_while_the_reference_converges() {
         .expect("the reference is on the GPU");
     assert!(done > 0 && done < total, "{done}/{total}: still converging");
     assert!(app.window_frames() > 10);
+}
+
+/// `reference-hard` casts its rays on a worker thread, as the reference does: the window keeps
+/// making frames from the click until V arrives (showing the last picture and a note
+/// meanwhile), and what arrives is the exact hard shadow of the view shown.
+#[test]
+fn the_window_keeps_making_frames_while_reference_hard_is_cast() {
+    let mut h = lab(None);
+    // Full resolution: enough rays that casting them takes many window frames' time.
+    h.state_mut().settings.render_scale = 1.0;
+    h.run();
+    assert_eq!(h.state().shown().expect("a frame").method, Method::DBUFFER);
+    let steps = |h: &Harness<'_, LabApp>| h.state().core().expect("a core").hard_worker.steps();
+    let before = steps(&h);
+    let frames = h.state().window_frames();
+    h.get_by_label(Method::REFERENCE_HARD.name()).click();
+    let start = std::time::Instant::now();
+    let mut waiting_note = false;
+    while steps(&h) == before && start.elapsed() < std::time::Duration::from_secs(120) {
+        h.step();
+        let shown = h.state().shown().expect("the last frame stays shown");
+        if shown.method == Method::DBUFFER {
+            waiting_note |= shown
+                .note
+                .as_deref()
+                .is_some_and(|n| n.starts_with("reference-hard:"));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let between = h.state().window_frames() - frames;
+    println!(
+        "reference-hard: {between} window frames in {:.0} ms from the click to V's arrival",
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    assert!(
+        steps(&h) > before,
+        "reference-hard did not arrive in two minutes"
+    );
+    // The click's frame asks for it; the window ran on while the worker cast the rays.
+    assert!(
+        between >= 3,
+        "{between} window frames from the click to V's arrival"
+    );
+    assert!(waiting_note, "the last picture, with a note, while waiting");
+    until_reference_hard_shown(&mut h);
+    assert_ne!(
+        h.state().status().1,
+        Level::Error,
+        "{:?}",
+        h.state().status()
+    );
+    assert!(h.state().shown().expect("shown").note.is_none());
+    // What it shows is the exact hard shadow of this view, pixel for pixel.
+    let f = shown_frame(&mut h, false);
+    let scene = h.state().core().expect("a core").session.scene().clone();
+    let exact = dbuffer::render::reference::compute_hard(&scene, f.width, f.height).visibility;
+    let hits: Vec<usize> = (0..f.len()).filter(|&i| f.hit(i)).collect();
+    let wrong = hits
+        .iter()
+        .filter(|&&i| f.visibility[i] != exact[i])
+        .count();
+    assert_eq!(wrong, 0, "of {} pixels", hits.len());
+    println!("{}x{}: {} pixels, all exact", f.width, f.height, hits.len());
+    let dark = hits.iter().filter(|&&i| exact[i] == 0.0).count();
+    assert!(
+        dark > 100 && dark < hits.len() - 100,
+        "{dark} dark of {}",
+        hits.len()
+    );
 }
 
 /// A file dropped on the window, as egui-winit hands it over.

@@ -1,7 +1,7 @@
 //! `dbuffer compare`'s report holds the numbers its own files give: every metric is recomputed
 //! here from the written visibility EXRs, and every heatmap is the error those EXRs show.
 
-use dbuffer::compare::{self, heatmap, report, CompareRequest};
+use dbuffer::compare::{self, heatmap, montage, report, CompareRequest};
 use dbuffer::geometry::bvh::Bvh;
 use dbuffer::geometry::{metrics, view, VtVariant};
 use dbuffer::output::read_exr_rgba;
@@ -38,7 +38,7 @@ fn the_report_matches_the_written_files() {
     let dir = std::env::temp_dir().join(format!("dbuffer-compare-test-{}", std::process::id()));
     let written = report::write(&dir, &comparison).unwrap_or_else(|e| panic!("{e}"));
     // Three files a method drawn (the reference has no heatmap), a hard-error image per hard
-    // method drawn, and the two reports.
+    // method drawn, the montage and the two reports.
     let drawn = comparison.results.len();
     let hard = comparison
         .results
@@ -46,7 +46,70 @@ fn the_report_matches_the_written_files() {
         .filter(|r| r.method.is_hard())
         .count();
     assert_eq!(drawn + comparison.not_applicable.len(), Method::all().len());
-    assert_eq!(written.len(), 3 * drawn - 1 + hard + 2);
+    assert_eq!(written.len(), 3 * drawn - 1 + hard + 3);
+    assert!(hard > 0 && hard < drawn);
+
+    // The montage: one tile per method drawn, three cells each (image, |ΔV|, against
+    // reference-hard), and each tile shows its own method.
+    let layout = montage::Layout::new(W, H, drawn as u32, 3);
+    let page = image::open(dir.join(montage::MONTAGE_PNG))
+        .unwrap_or_else(|e| panic!("{e}"))
+        .to_rgb8();
+    assert_eq!(page.dimensions(), (layout.width, layout.height));
+    assert_eq!(layout.factor, 1, "a small comparison is not reduced");
+    let cell = |i: usize, k: u32| {
+        let (x, y) = layout.cell(i as u32, k);
+        image::imageops::crop_imm(&page, x, y, W, H).to_image()
+    };
+    let tile_of = |m: Method| {
+        comparison
+            .results
+            .iter()
+            .position(|r| r.method == m)
+            .unwrap_or_else(|| panic!("{m} drawn"))
+    };
+    for (i, r) in comparison.results.iter().enumerate() {
+        // The image cell is the method's image, pixel for pixel.
+        let img = cell(i, 0);
+        for (x, y, p) in img.enumerate_pixels() {
+            let c = r.frame.color[(y * W + x) as usize];
+            assert_eq!(p.0, [c[0], c[1], c[2]], "{} at ({x}, {y})", r.method);
+        }
+        // The label holds text: light pixels above the cells.
+        let (tx, ty) = layout.tile(i as u32);
+        let label = image::imageops::crop_imm(&page, tx, ty, W, 16).to_image();
+        assert!(
+            label
+                .pixels()
+                .filter(|p| p.0.iter().all(|&c| c > 150))
+                .count()
+                > 10,
+            "{}: no label",
+            r.method
+        );
+    }
+    // Two methods' tiles differ: the hard shadow's image and heatmap are not the D-buffer's.
+    let (d, hd) = (tile_of(Method::DBUFFER), tile_of(Method::HARD));
+    assert_ne!(cell(d, 0), cell(hd, 0));
+    assert_ne!(cell(d, 1), cell(hd, 1));
+    // The heatmap cell shows each counted pixel's error, and the hard cell what
+    // METHOD-hard-error.png shows.
+    let heat = cell(hd, 1);
+    let v_hard = &comparison.results[hd].frame.visibility;
+    let v_reference = &comparison.reference().frame.visibility;
+    for (x, y, p) in heat.enumerate_pixels() {
+        let i = (y * W + x) as usize;
+        let want = if comparison.mask[i] {
+            heatmap::error_rgb((v_hard[i] - v_reference[i]).abs())
+        } else {
+            heatmap::MASKED_RGB
+        };
+        assert_eq!(p.0, want, "hard's heatmap cell at ({x}, {y})");
+    }
+    let hard_error = image::open(dir.join("hard-hard-error.png"))
+        .unwrap_or_else(|e| panic!("{e}"))
+        .to_rgb8();
+    assert_eq!(cell(hd, 2), hard_error);
 
     let text = std::fs::read_to_string(dir.join(report::REPORT_JSON)).unwrap();
     let r: report::Report = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}"));

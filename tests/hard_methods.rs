@@ -514,6 +514,89 @@ fn planar_stencil_darkens_each_pixel_once() {
     assert!(half > 200, "{half} darkened pixels");
 }
 
+/// A unit box sunk halfway into the ground, the light's centre to its +x side: its lower half
+/// is below the receiver plane.
+const POKE_THROUGH: &str = r#"
+[camera]
+eye = [0.5, 3.0, 4.5]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 40.0
+
+[light]
+center = [2.0, 4.0, 0.0]
+normal = [0.0, -1.0, 0.0]
+radius = 0.3
+
+[[object]]
+name = "ground"
+mesh = "plane"
+scale = 10.0
+casts_shadow = false
+
+[[object]]
+name = "box"
+mesh = "cube"
+scale = 1.0
+"#;
+
+/// Planar's limit the README names: a caster crossing the receiver plane. Its part below the
+/// plane is flattened onto the plane too — along the rays from the light, which meet the plane
+/// *before* they reach it — so planar darkens ground the light sees: a strip beside the box on
+/// the light's side (the bottom edge x = 0.5, y = −0.5 lands at x = 2 − 1.5 · 4/4.5 ≈ 0.67),
+/// false shadow the exact hard shadow does not have. It misses none.
+#[test]
+fn planar_shadows_the_plane_from_below_where_a_caster_pokes_through() {
+    let scene = scene_from("poke-through", POKE_THROUGH);
+    let size = 128;
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let frame = render(
+        &mut offline,
+        &scene,
+        method("planar"),
+        size,
+        Knobs::default(),
+    );
+    let (truth, mask) = hard_truth(&scene, &frame);
+    let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), size, size);
+    let ground = on_plane(&scene, size, glam::Vec3::Y);
+    let mut false_x = Vec::new();
+    let mut missed = 0;
+    let mut dark_truth = 0;
+    for i in 0..truth.len() {
+        if !(mask[i] && ground[i]) {
+            continue;
+        }
+        let (t, v) = (truth[i] >= 0.5, frame.visibility[i] >= 0.5);
+        dark_truth += usize::from(!t);
+        missed += usize::from(!t && v);
+        if t && !v {
+            false_x.push(receivers[i].map_or(f32::NAN, |r| r.position.x));
+        }
+    }
+    // The strip between the box's side and where its bottom edge projects.
+    let strip = false_x.iter().filter(|x| (0.45..0.72).contains(*x)).count();
+    println!(
+        "poke-through: planar darkens {} lit ground pixels ({strip} in the strip 0.5 < x < 0.67), \
+         misses {missed} of {dark_truth} in shadow",
+        false_x.len()
+    );
+    assert!(dark_truth > 100, "the box's true shadow is in view");
+    assert!(strip > 40, "{strip} false shadow pixels in the strip");
+    // All of them there, but for a pixel or two along the true shadow's edge.
+    assert!(strip + 2 >= false_x.len(), "false shadow at x {false_x:?}");
+    assert!(missed <= 3, "{missed} missed shadow pixels");
+    // The exact method has none of it.
+    let sv = render(
+        &mut offline,
+        &scene,
+        method("shadow-volume"),
+        size,
+        Knobs::default(),
+    );
+    let (bad, n) = mismatch(&truth, &sv.visibility, &mask);
+    assert!(100.0 * bad as f64 / n as f64 <= EXACT_PCT, "{bad} of {n}");
+}
+
 /// Mismatched pixels of a frame against the truth, split like compare's table.
 fn hard_metrics(scene: &Scene, frame: &Frame) -> dbuffer::geometry::metrics::HardMetrics {
     let (truth, mask) = hard_truth(scene, frame);

@@ -97,9 +97,19 @@ impl Fixture {
             .read(&self.ctx, &[TextureRead::color(display.texture, 4)])
             .unwrap_or_else(|e| panic!("{e}"))
             .remove(0);
+        // As the viewport shows it: over black (the final image is the camera's colour target,
+        // transparent where no surface is; the view pass's displays are opaque).
+        let over_black = |c: u8, a: u8| ((u16::from(c) * u16::from(a) + 127) / 255) as u8;
         let px = bytes
             .chunks_exact(4)
-            .map(|c| [c[0], c[1], c[2], c[3]])
+            .map(|c| {
+                [
+                    over_black(c[0], c[3]),
+                    over_black(c[1], c[3]),
+                    over_black(c[2], c[3]),
+                    255,
+                ]
+            })
             .collect();
         (w, h, px)
     }

@@ -1,6 +1,6 @@
 //! The render core as the lab holds it: a [`Session`] on eframe's own wgpu device, the targets of
 //! the two views (either side of a split) that stay on the GPU and are shown as they are, and the
-//! reference's worker thread. Every pixel the lab shows is a frame of the same core `dbuffer
+//! reference's worker threads (the area reference's, and the exact hard shadow's). Every pixel the lab shows is a frame of the same core `dbuffer
 //! render` uses; only the probes' few hundred bytes come back per frame.
 
 use eframe::egui;
@@ -38,10 +38,14 @@ pub struct Core {
     pub ctx: GpuContext,
     pub session: Session,
     pub worker: ReferenceWorker,
+    /// `reference-hard`'s rays, cast off the UI thread like the reference's.
+    pub hard_worker: ReferenceWorker,
     /// The main view and the right-hand side of a split.
     pub slots: [Slot; 2],
     /// The reference snapshot handed to the GPU last: (done, total).
     pub reference_serial: u64,
+    /// Bumped whenever an exact hard shadow is handed to the GPU.
+    pub hard_serial: u64,
 }
 
 impl Core {
@@ -52,8 +56,10 @@ impl Core {
             ctx,
             session,
             worker: ReferenceWorker::new(),
+            hard_worker: ReferenceWorker::hard(),
             slots: [Slot::new(), Slot::new()],
             reference_serial: 0,
+            hard_serial: 0,
         }
     }
 
@@ -78,6 +84,17 @@ impl Core {
         self.session
             .set_reference(&self.ctx, s.key, &s.visibility, (s.done, s.total))?;
         self.reference_serial += 1;
+        Ok(true)
+    }
+
+    /// Hand the GPU the exact hard shadow the worker finished, if any. Returns whether it did.
+    pub fn take_reference_hard(&mut self) -> Result<bool, RenderError> {
+        let Some(s) = self.hard_worker.take() else {
+            return Ok(false);
+        };
+        self.session
+            .set_reference_hard(&self.ctx, s.key, &s.visibility)?;
+        self.hard_serial += 1;
         Ok(true)
     }
 

@@ -230,6 +230,29 @@ impl LabApp {
             .reference_progress()
             .filter(|_| reference_ready);
 
+        // The exact hard shadow: its rays on a worker too, V to the GPU when done; meanwhile the
+        // slot keeps its last picture and says what it waits for.
+        let hard_request = FrameRequest {
+            method: Method::REFERENCE_HARD,
+            ..base
+        };
+        if methods.contains(&Some(Method::REFERENCE_HARD)) {
+            if let Err(e) = core.take_reference_hard() {
+                errors.push(format!("reference-hard: {e}"));
+            }
+            if !core.session.has_reference_hard(&hard_request) {
+                let key = core.session.reference_hard_key(&hard_request);
+                core.hard_worker.want(core.session.scene(), key);
+            }
+            if core.hard_worker.busy() {
+                ctx.request_repaint_after(std::time::Duration::from_millis(30));
+            }
+        } else {
+            core.hard_worker.pause();
+        }
+        let hard_ready = core.session.has_reference_hard(&hard_request);
+        let hard_serial = if hard_ready { core.hard_serial } else { 0 };
+
         let mut jobs_meta = Vec::new();
         let [main_slot, split_slot] = &mut core.slots;
         let mut jobs: Vec<FrameJob<'_>> = Vec::new();
@@ -262,12 +285,26 @@ impl LabApp {
                 shown.note = Some("reference: waiting for its first samples".into());
                 continue;
             }
+            if method == Method::REFERENCE_HARD && !hard_ready {
+                let shown = self.viewport.shown[i].get_or_insert_with(|| Shown {
+                    method,
+                    request,
+                    light: core.session.scene().light,
+                    reference: None,
+                    note: None,
+                    serial: 0,
+                });
+                shown.note = Some("reference-hard: casting its rays (off the UI thread)…".into());
+                continue;
+            }
             let key = RenderKey {
                 request,
                 camera,
                 revision,
                 reference: if method.is_reference() {
                     reference_serial
+                } else if method == Method::REFERENCE_HARD {
+                    hard_serial
                 } else {
                     0
                 },

@@ -10,6 +10,7 @@
 //! applicable with their reason instead of being drawn (and `linear-ssm` under a disk).
 
 pub mod heatmap;
+pub mod montage;
 pub mod report;
 
 use std::time::Instant;

@@ -1,13 +1,13 @@
 //! The files of `dbuffer compare`: per method its image, its visibility EXR and its error
-//! heatmap, then `report.md` and `report.json` with the metrics and timings (the same table is
-//! printed to stdout).
+//! heatmap, then `montage.png` (every method on one page), `report.md` and `report.json` with the
+//! metrics and timings (the same table is printed to stdout).
 
 use std::io;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::{heatmap, Comparison, MethodResult};
+use super::{heatmap, montage, Comparison, MethodResult};
 use crate::fsutil::write_atomic;
 use crate::output;
 use crate::render::Method;
@@ -140,6 +140,10 @@ impl Report {
             self.vt,
             self.adapter
         );
+        s.push_str(&format!(
+            "![every method: image, |V − V_ref|, against reference-hard]({})\n\n",
+            montage::MONTAGE_PNG
+        ));
         s.push_str(&self.table());
         let hard = self.hard_table();
         if !hard.is_empty() {
@@ -304,6 +308,10 @@ pub fn write(dir: &Path, c: &Comparison) -> io::Result<Vec<PathBuf>> {
             )?;
         }
     }
+    put(
+        montage::MONTAGE_PNG,
+        montage::encode(&montage::render(c)).map_err(encode)?,
+    )?;
     put(REPORT_MD, report.markdown().into_bytes())?;
     let json = serde_json::to_string_pretty(&report).map_err(io::Error::other)?;
     put(REPORT_JSON, json.into_bytes())?;

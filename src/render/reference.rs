@@ -4,7 +4,9 @@
 //! samples per pixel at a time, on a worker thread for the lab ([`ReferenceWorker`]), so the
 //! window keeps its frame rate while the reference converges. Either way the finished samples
 //! go to the GPU as a texture (`Session::set_reference`) that the `reference` method shades and
-//! the error view compares against.
+//! the error view compares against. The exact hard shadow (`reference-hard`, [`compute_hard`])
+//! is one ray per pixel: in one go offline, and for the lab on a worker of its own
+//! ([`ReferenceWorker::hard`], handed over through `Session::set_reference_hard`).
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
@@ -143,15 +145,33 @@ pub struct ReferenceWorker {
 const STEP_MS: f64 = 90.0;
 
 impl ReferenceWorker {
+    /// The area reference's worker: K samples per pixel, progressively.
     pub fn new() -> ReferenceWorker {
+        ReferenceWorker::spawn(false)
+    }
+
+    /// The exact hard shadow's worker (`reference-hard`): each wanted key is computed whole
+    /// ([`compute_hard`]) and handed over as one snapshot holding 1 of 1 samples.
+    pub fn hard() -> ReferenceWorker {
+        ReferenceWorker::spawn(true)
+    }
+
+    fn spawn(hard: bool) -> ReferenceWorker {
         let (tx, rx) = mpsc::channel();
         let outbox = Arc::new(Outbox::default());
         let sink = outbox.clone();
         let thread = std::thread::Builder::new()
-            .name("dbuffer-reference".into())
+            .name(
+                if hard {
+                    "dbuffer-reference-hard"
+                } else {
+                    "dbuffer-reference"
+                }
+                .into(),
+            )
             .spawn(move || {
                 lower_priority();
-                work(&rx, &sink);
+                work(&rx, &sink, hard);
             })
             .ok();
         ReferenceWorker {
@@ -216,7 +236,7 @@ impl Drop for ReferenceWorker {
     }
 }
 
-fn work(rx: &Receiver<Command>, outbox: &Outbox) {
+fn work(rx: &Receiver<Command>, outbox: &Outbox, hard: bool) {
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -246,6 +266,32 @@ fn work(rx: &Receiver<Command>, outbox: &Outbox) {
                 job = None;
                 continue;
             }
+            Some(Command::Start(b)) if hard => {
+                // Only the newest key matters (an orbit asks for one a frame): skip those the
+                // window has already moved past.
+                let mut newest = Some(b);
+                loop {
+                    match rx.try_recv() {
+                        Ok(Command::Start(n)) => newest = Some(n),
+                        Ok(Command::Pause) => newest = None,
+                        Ok(Command::Quit) | Err(TryRecvError::Disconnected) => return,
+                        Err(TryRecvError::Empty) => break,
+                    }
+                }
+                let Some(b) = newest else { continue };
+                let (scene, key) = *b;
+                let computed = on(&pool, || compute_hard(&scene, key.width, key.height));
+                publish(
+                    outbox,
+                    Snapshot {
+                        key,
+                        visibility: computed.visibility,
+                        done: 1,
+                        total: 1,
+                    },
+                );
+                continue;
+            }
             Some(Command::Start(b)) => {
                 let (scene, key) = *b;
                 let r = on(&pool, || start(&scene, key.width, key.height, key.samples));
@@ -267,22 +313,31 @@ fn work(rx: &Receiver<Command>, outbox: &Outbox) {
         // Aim for STEP_MS per step.
         per_step = ((per_step as f64 * STEP_MS / ms.max(1.0)).round() as usize).clamp(1, 256);
         let (done, total) = (r.samples_done() as u32, r.samples_total() as u32);
-        if let Ok(mut l) = outbox.latest.lock() {
-            *l = Some(Snapshot {
+        publish(
+            outbox,
+            Snapshot {
                 key: *key,
                 visibility: r.visibility().to_vec(),
                 done,
                 total,
-            });
-        }
-        if let Ok(mut p) = outbox.progress.lock() {
-            *p = Some((*key, done, total));
-        }
-        outbox.steps.fetch_add(1, Ordering::AcqRel);
+            },
+        );
         if r.is_complete() {
             job = None;
         }
     }
+}
+
+/// Hand `snapshot` over (replacing one not yet taken) and count the step.
+fn publish(outbox: &Outbox, snapshot: Snapshot) {
+    let progress = (snapshot.key, snapshot.done, snapshot.total);
+    if let Ok(mut l) = outbox.latest.lock() {
+        *l = Some(snapshot);
+    }
+    if let Ok(mut p) = outbox.progress.lock() {
+        *p = Some(progress);
+    }
+    outbox.steps.fetch_add(1, Ordering::AcqRel);
 }
 
 /// `f` on `pool` (its parallel iterators on its threads), or here without one.

@@ -63,6 +63,8 @@ pub struct Session {
     timer: Option<PassTimer>,
     readback: Readback,
     reference: Option<ReferenceImage>,
+    /// The exact hard shadow handed in from outside (the lab's worker), for `reference-hard`.
+    reference_hard: Option<ReferenceImage>,
     /// The synchronous reference ([`Session::advance_reference`]).
     progressive: Option<(ReferenceKey, ProgressiveReference)>,
     /// The targets [`Session::frame`] renders into.
@@ -90,6 +92,7 @@ impl Session {
             meshes: 0,
             methods: HashMap::new(),
             reference: None,
+            reference_hard: None,
             progressive: None,
             own: FrameTargets::new(),
             pending_read_bytes: 0,
@@ -266,51 +269,37 @@ impl Session {
         ctx: &GpuContext,
         key: ReferenceKey,
         visibility: &[f32],
-        (done, total): (u32, u32),
+        progress: (u32, u32),
     ) -> Result<(), RenderError> {
-        let (w, h) = (key.width, key.height);
-        if visibility.len() != w as usize * h as usize {
-            return Err(RenderError::Request(format!(
-                "the reference needs V for each of the {w}×{h} pixels, found {}",
-                visibility.len()
-            )));
+        upload(&mut self.reference, ctx, key, visibility, progress)
+    }
+
+    /// What the exact hard shadow for `request` depends on (the area reference's key with one
+    /// sample: the light's centre).
+    pub fn reference_hard_key(&self, request: &FrameRequest) -> ReferenceKey {
+        ReferenceKey {
+            samples: 1,
+            ..self.reference_key(request)
         }
-        if self
-            .reference
-            .as_ref()
-            .is_none_or(|r| (r.key.width, r.key.height) != (w, h))
-        {
-            self.reference = Some(ReferenceImage {
-                texture: Texture::new(
-                    &ctx.device,
-                    "Session::reference",
-                    (w, h),
-                    wgpu::TextureFormat::R32Float,
-                    wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                ),
-                key,
-                done,
-                total,
-                generation: super::passes::next_generation(),
-            });
-        }
-        let Some(r) = self.reference.as_mut() else {
-            return Ok(());
-        };
-        ctx.queue.write_texture(
-            r.texture.texture.as_image_copy(),
-            bytemuck::cast_slice(visibility),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(w * 4),
-                rows_per_image: Some(h),
-            },
-            r.texture.texture.size(),
-        );
-        r.key = key;
-        r.done = done;
-        r.total = total;
-        Ok(())
+    }
+
+    /// Hand the GPU the exact hard shadow V for `key` (row-major, `key.width`×`key.height`,
+    /// made off this thread: the lab's worker); a frame of `reference-hard` for that key shades
+    /// it instead of casting its rays in the frame.
+    pub fn set_reference_hard(
+        &mut self,
+        ctx: &GpuContext,
+        key: ReferenceKey,
+        visibility: &[f32],
+    ) -> Result<(), RenderError> {
+        upload(&mut self.reference_hard, ctx, key, visibility, (1, 1))
+    }
+
+    /// Whether the GPU holds the exact hard shadow for `request`, handed in by
+    /// [`Session::set_reference_hard`].
+    pub fn has_reference_hard(&self, request: &FrameRequest) -> bool {
+        let key = self.reference_hard_key(request);
+        self.reference_hard.as_ref().is_some_and(|r| r.key == key)
     }
 
     /// Whether the GPU holds the reference for `request` (some samples of it).
@@ -444,8 +433,18 @@ impl Session {
             samples: request.knobs.get(&super::methods::reference::SAMPLES),
             meshes: self.meshes,
         };
-        // The reference method shades only the reference of exactly this view.
-        let external = reference.filter(|r| r.key == current).map(|r| External {
+        // The reference method shades only the reference of exactly this view; reference-hard
+        // the exact hard shadow of this view when one was handed in (else it casts its rays).
+        let hard_key = ReferenceKey {
+            samples: 1,
+            ..current
+        };
+        let external = if method == Method::REFERENCE_HARD {
+            self.reference_hard.as_ref().filter(|r| r.key == hard_key)
+        } else {
+            reference.filter(|r| r.key == current)
+        }
+        .map(|r| External {
             view: &r.texture.view,
             generation: r.generation,
         });
@@ -634,4 +633,57 @@ pub fn dbuffer_of(method: Method, light: LightKind) -> Method {
     } else {
         Method::DBUFFER
     }
+}
+
+/// Write V for `key` into `slot`'s texture (made again when the size changed), holding `done` of
+/// `total` samples per pixel.
+fn upload(
+    slot: &mut Option<ReferenceImage>,
+    ctx: &GpuContext,
+    key: ReferenceKey,
+    visibility: &[f32],
+    (done, total): (u32, u32),
+) -> Result<(), RenderError> {
+    let (w, h) = (key.width, key.height);
+    if visibility.len() != w as usize * h as usize {
+        return Err(RenderError::Request(format!(
+            "the reference needs V for each of the {w}×{h} pixels, found {}",
+            visibility.len()
+        )));
+    }
+    if slot
+        .as_ref()
+        .is_none_or(|r| (r.key.width, r.key.height) != (w, h))
+    {
+        *slot = Some(ReferenceImage {
+            texture: Texture::new(
+                &ctx.device,
+                "Session::reference",
+                (w, h),
+                wgpu::TextureFormat::R32Float,
+                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            ),
+            key,
+            done,
+            total,
+            generation: super::passes::next_generation(),
+        });
+    }
+    let Some(r) = slot.as_mut() else {
+        return Ok(());
+    };
+    ctx.queue.write_texture(
+        r.texture.texture.as_image_copy(),
+        bytemuck::cast_slice(visibility),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(w * 4),
+            rows_per_image: Some(h),
+        },
+        r.texture.texture.size(),
+    );
+    r.key = key;
+    r.done = done;
+    r.total = total;
+    Ok(())
 }

@@ -3,7 +3,9 @@
 //! the light's centre through the CPU's BVH ([`crate::render::reference::compute_hard`]), made
 //! again when the camera, the light, a mesh or the image size changed (or the bench asks, by
 //! [`MethodState::invalidate`]); the camera pass shades it like the area reference
-//! (`shaders/methods/reference.wgsl`).
+//! (`shaders/methods/reference.wgsl`). The lab casts those rays on a worker thread instead and
+//! hands V in (`Session::set_reference_hard`, seen here as [`FrameInputs::external`]): a frame
+//! with V handed in only binds it, and never casts a ray on the thread that records it.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -35,10 +37,19 @@ struct Key {
     height: u32,
 }
 
+/// Which texture the bind group holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Bound {
+    /// This method's own texture (rays cast in `prepare`).
+    Own,
+    /// V handed in from outside, by its generation.
+    External(u64),
+}
+
 pub struct ReferenceHard {
     pipeline: Arc<MethodPipeline>,
     texture: Option<Texture>,
-    bind_group: Option<wgpu::BindGroup>,
+    bind_group: Option<(wgpu::BindGroup, Bound)>,
     key: Option<Key>,
     builds: u64,
     ms: f64,
@@ -62,6 +73,16 @@ impl ReferenceHard {
     }
 }
 
+impl ReferenceHard {
+    fn bind(&self, device: &wgpu::Device, view: &wgpu::TextureView) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("ReferenceHard::bind_group"),
+            layout: &self.pipeline.layout,
+            entries: &[view_entry(0, view)],
+        })
+    }
+}
+
 impl MethodState for ReferenceHard {
     fn prepare(
         &mut self,
@@ -69,6 +90,18 @@ impl MethodState for ReferenceHard {
         _shared: &mut SharedMaps,
         _rec: &mut Recorder<'_>,
     ) -> Result<(), RenderError> {
+        if let Some(v) = inputs.external {
+            // Computed off this thread for exactly this view: bind it.
+            if self
+                .bind_group
+                .as_ref()
+                .is_none_or(|(_, b)| *b != Bound::External(v.generation))
+            {
+                let group = self.bind(&inputs.ctx.device, v.view);
+                self.bind_group = Some((group, Bound::External(v.generation)));
+            }
+            return Ok(());
+        }
         let (w, h) = (inputs.view.width, inputs.view.height);
         let key = Key {
             revision: inputs.revision,
@@ -77,11 +110,16 @@ impl MethodState for ReferenceHard {
             height: h,
         };
         if self.key == Some(key) {
+            if let (Some(t), Some((_, Bound::External(_)))) = (&self.texture, &self.bind_group) {
+                let group = self.bind(&inputs.ctx.device, &t.view);
+                self.bind_group = Some((group, Bound::Own));
+            }
             return Ok(());
         }
         let t = Instant::now();
         let computed = crate::render::reference::compute_hard(inputs.scene, w, h);
         let device = &inputs.ctx.device;
+        let mut fresh = false;
         if self
             .texture
             .as_ref()
@@ -94,12 +132,19 @@ impl MethodState for ReferenceHard {
                 wgpu::TextureFormat::R32Float,
                 wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
             );
-            self.bind_group = Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("ReferenceHard::bind_group"),
-                layout: &self.pipeline.layout,
-                entries: &[view_entry(0, &texture.view)],
-            }));
             self.texture = Some(texture);
+            fresh = true;
+        }
+        if fresh
+            || self
+                .bind_group
+                .as_ref()
+                .is_none_or(|(_, b)| *b != Bound::Own)
+        {
+            if let Some(t) = &self.texture {
+                let group = self.bind(device, &t.view);
+                self.bind_group = Some((group, Bound::Own));
+            }
         }
         if let Some(texture) = &self.texture {
             inputs.ctx.queue.write_texture(
@@ -120,7 +165,7 @@ impl MethodState for ReferenceHard {
     }
 
     fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|g| CameraBindings {
+        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
             pipeline: self.pipeline.pipeline(device, vt),
             bind_group: g,
         })
