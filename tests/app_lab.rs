@@ -411,7 +411,7 @@ fn the_window_keeps_making_frames_while_the_reference_converges() {
     let mut between = Vec::new();
     let mut last = (steps(&h), h.state().window_frames());
     let mut changes = 0;
-    while between.len() < 3 && start.elapsed() < std::time::Duration::from_secs(120) {
+    while between.len() < 5 && start.elapsed() < std::time::Duration::from_secs(120) {
         h.step();
         std::thread::sleep(std::time::Duration::from_millis(5));
         let now = (steps(&h), h.state().window_frames());
@@ -425,11 +425,15 @@ fn the_window_keeps_making_frames_while_the_reference_converges() {
         }
     }
     assert!(
-        between.len() >= 3,
+        between.len() >= 5,
         "the reference took {changes} steps in two minutes"
     );
+    // Rays cast inside the frame would give one window frame per step, every time. A loaded
+    // machine can slow one window frame past a step (~90 ms), so the typical interval counts.
+    let mut sorted = between.clone();
+    sorted.sort_unstable();
     assert!(
-        between.iter().all(|&f| f >= 2),
+        sorted[sorted.len() / 2] >= 2 && between.iter().sum::<u64>() >= 2 * between.len() as u64,
         "window frames between reference steps: {between:?}"
     );
     let app = h.state();

@@ -39,17 +39,20 @@ impl Inspector {
     }
 }
 
+/// The inspector's width in points, margins included.
+const INSPECTOR_WIDTH: f32 = 290.0;
+
 fn value(v: Option<f32>) -> String {
     v.map_or_else(|| "—".into(), |v| format!("{v:.5}"))
 }
 
 impl LabApp {
     pub(super) fn inspector_panel(&mut self, ui: &mut egui::Ui) {
+        // A fixed width: a panel that grew with its text (the light panel's heading appears on
+        // hover) would resize the viewport, and every resize starts the reference over.
         egui::Panel::right("inspector")
-            .default_size(230.0)
-            .min_size(230.0)
-            .max_size(300.0)
-            .resizable(true)
+            .exact_size(INSPECTOR_WIDTH)
+            .resizable(false)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
                     ui.heading("Pixel");
