@@ -57,14 +57,21 @@ impl LabApp {
                 egui::ScrollArea::vertical().show(ui, |ui| {
                     ui.heading("Pixel");
                     self.pixel_section(ui);
+                    // Both fold away (the light panel is tall: folded, the stats are in view).
                     if self.viewport.hover.is_some() {
                         ui.separator();
-                        ui.heading("Light as seen from this pixel");
-                        self.light_section(ui);
+                        egui::CollapsingHeader::new(
+                            egui::RichText::new("Light as seen from this pixel").heading(),
+                        )
+                        .id_salt("light-from-pixel")
+                        .default_open(true)
+                        .show(ui, |ui| self.light_section(ui));
                     }
                     ui.separator();
-                    ui.heading("Stats");
-                    self.stats_section(ui);
+                    egui::CollapsingHeader::new(egui::RichText::new("Stats").heading())
+                        .id_salt("stats")
+                        .default_open(true)
+                        .show(ui, |ui| self.stats_section(ui));
                 });
             });
     }
