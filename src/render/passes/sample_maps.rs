@@ -12,7 +12,7 @@ use std::sync::Arc;
 use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 
-use super::next_generation;
+use super::{next_generation, LayeredTargets};
 use super::shadow_map::{DEPTH_FORMAT, DISTANCE_FORMAT, NO_SURFACE};
 use crate::geometry::light_view::LightView;
 use crate::geometry::oracle::disk_samples;
@@ -190,55 +190,25 @@ impl SampleMaps {
         {
             return;
         }
-        let extent = |layers| wgpu::Extent3d {
-            width: size,
-            height: size,
-            depth_or_array_layers: layers,
-        };
-        use wgpu::TextureUsages as U;
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("SampleTargets::maps"),
-            size: extent(layers),
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DISTANCE_FORMAT,
-            usage: U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
-            view_formats: &[],
-        });
-        let depth = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("SampleTargets::depth"),
-            size: extent(1),
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH_FORMAT,
-            usage: U::RENDER_ATTACHMENT,
-            view_formats: &[],
-        });
-        let array_view = texture.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("SampleTargets::array_view"),
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
-        let layer_views = (0..layers)
-            .map(|layer| {
-                texture.create_view(&wgpu::TextureViewDescriptor {
-                    label: Some("SampleTargets::layer_view"),
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: layer,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                })
-            })
-            .collect();
+        let LayeredTargets {
+            texture,
+            array_view,
+            layer_views,
+            depth,
+        } = LayeredTargets::new(
+            device,
+            "SampleTargets::maps",
+            size,
+            layers,
+            (DISTANCE_FORMAT, DEPTH_FORMAT),
+        );
         self.targets = Some(SampleTargets {
             size,
             layers,
             texture,
             array_view,
             layer_views,
-            depth: depth.create_view(&wgpu::TextureViewDescriptor::default()),
+            depth,
             generation: next_generation(),
         });
     }

@@ -15,7 +15,7 @@ use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 
-use super::next_generation;
+use super::{next_generation, LayeredTargets};
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, pipeline_layout, render_pipeline, shader_module, texture_entry, uniform_entry,
@@ -318,55 +318,25 @@ impl Ssm {
         {
             return;
         }
-        use wgpu::TextureUsages as U;
-        let extent = |layers| wgpu::Extent3d {
-            width: size,
-            height: size,
-            depth_or_array_layers: layers,
-        };
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("SsmTargets::visibility"),
-            size: extent(layers),
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: VISIBILITY_FORMAT,
-            usage: U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
-            view_formats: &[],
-        });
-        let depth = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("SsmTargets::depth"),
-            size: extent(1),
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH_FORMAT,
-            usage: U::RENDER_ATTACHMENT,
-            view_formats: &[],
-        });
-        let array_view = texture.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("SsmTargets::array_view"),
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
-        let layer_views = (0..layers)
-            .map(|layer| {
-                texture.create_view(&wgpu::TextureViewDescriptor {
-                    label: Some("SsmTargets::layer_view"),
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: layer,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                })
-            })
-            .collect();
+        let LayeredTargets {
+            texture,
+            array_view,
+            layer_views,
+            depth,
+        } = LayeredTargets::new(
+            device,
+            "SsmTargets::visibility",
+            size,
+            layers,
+            (VISIBILITY_FORMAT, DEPTH_FORMAT),
+        );
         self.targets = Some(SsmTargets {
             size,
             layers,
             texture,
             array_view,
             layer_views,
-            depth: depth.create_view(&wgpu::TextureViewDescriptor::default()),
+            depth,
             generation: next_generation(),
         });
     }
