@@ -4,7 +4,7 @@
 //! oracle, the fused twin and the GPU's V at that pixel.
 
 use dbuffer::app::light_panel::{fused_params, PANEL_SAMPLES};
-use dbuffer::app::{LabApp, LabOptions};
+use dbuffer::app::LabApp;
 use dbuffer::geometry::fused::{FusedPath, FusedTwin};
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{PreparedCasters, VolumeParams};
@@ -13,27 +13,11 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 
+#[path = "support/lab.rs"]
+mod support_lab;
+
 fn lab(scene: &str) -> Harness<'static, LabApp> {
-    let scene = Some(scene.to_string());
-    Harness::builder()
-        .with_size(egui::vec2(900.0, 900.0))
-        .with_max_steps(500)
-        .with_render_cursor(false)
-        .wgpu()
-        .build_eframe(move |cc| {
-            let mut app = LabApp::new(
-                cc,
-                LabOptions {
-                    scene,
-                    deterministic: true,
-                    ..LabOptions::default()
-                },
-            );
-            app.settings.dbuffer_size = 256;
-            app.settings.render_scale = 0.5;
-            app.settings.reference_samples = 16;
-            app
-        })
+    support_lab::lab_sized(Some(scene), 900.0, 900.0)
 }
 
 #[test]

@@ -1,39 +1,19 @@
 //! The lab as a user drives it: the whole eframe app on the wgpu (lavapipe) adapter, through its
 //! widgets and the mouse. Snapshot thresholds are in `kittest.toml`.
 
-use dbuffer::app::{LabApp, LabOptions, Level, Selection, View};
+use dbuffer::app::{LabApp, Level, Selection, View};
 use dbuffer::render::Method;
 use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 
-/// The lab in a test window. Values come back from the GPU a frame or more later (a probe, the
-/// reference's samples), and the window repaints until they have: on lavapipe that can take a
-/// few dozen quick test frames, hence the generous step limit.
-/// The window is tall enough for the left panel with every method of the registry and the
-/// view's range controls open (its last section, Selection, must stay clickable).
+#[path = "support/lab.rs"]
+mod support_lab;
+
+/// The lab in a test window tall enough for the left panel with every method of the registry
+/// and the view's range controls open (its last section, Selection, must stay clickable).
 fn lab(scene: Option<&str>) -> Harness<'static, LabApp> {
-    let scene = scene.map(str::to_string);
-    Harness::builder()
-        .with_size(egui::vec2(900.0, 720.0))
-        .with_max_steps(500)
-        .with_render_cursor(false)
-        .wgpu()
-        .build_eframe(move |cc| {
-            let mut app = LabApp::new(
-                cc,
-                LabOptions {
-                    scene,
-                    deterministic: true,
-                    ..LabOptions::default()
-                },
-            );
-            // Small and quick on a CPU adapter.
-            app.settings.dbuffer_size = 256;
-            app.settings.render_scale = 0.5;
-            app.settings.reference_samples = 16;
-            app
-        })
+    support_lab::lab_sized(scene, 900.0, 720.0)
 }
 
 /// The frame the viewport shows, read back whole (`split`: its right side).

@@ -12,8 +12,8 @@ use std::sync::Arc;
 use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 
-use super::{next_generation, LayeredTargets};
 use super::shadow_map::{DEPTH_FORMAT, DISTANCE_FORMAT, NO_SURFACE};
+use super::{next_generation, LayeredTargets};
 use crate::geometry::light_view::LightView;
 use crate::geometry::oracle::disk_samples;
 use crate::render::gpu_scene::GpuScene;
