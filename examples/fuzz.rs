@@ -1,10 +1,12 @@
-//! The long run of the parser fuzzer (`tests/support/fuzz.rs`): scene TOML and OBJ, in-process,
+//! The long run of the parser fuzzer (`tests/support/fuzz.rs`): scene TOML, OBJ and glTF, in-process,
 //! structure-aware, with a counting allocator and a hang watchdog.
 //!
 //!     cargo run --release --example fuzz -- --execs 10000000
 //!     cargo run --release --example fuzz -- --execs 1000000 --target obj --seed 7 --jobs 1
+//!     cargo run --release --example fuzz -- --execs 1000000 --target gltf
 //!
-//! `--execs N` is the total over the targets and jobs (split evenly). `--jobs J` runs J
+//! `--execs N` is the total over the targets and jobs (split evenly); `--target NAME` runs one
+//! target (`scene-toml`, `obj`, `gltf`). `--jobs J` runs J
 //! threads, each from its own seed (default: one less than the cores, at least 1). Every
 //! failure is printed as it is found and written to `fuzz-failures/TARGET-N.bin`; the exit
 //! status is 1 if there was any. Add each one to `REGRESSIONS` in `tests/fuzz_parsers.rs`.
@@ -64,11 +66,20 @@ fn main() -> std::process::ExitCode {
                             per_run,
                             Limits::default(),
                             |f| {
+                                // A glTF input is up to 256 KB: its head here, the whole
+                                // in fuzz-failures/ at the end.
+                                let head = &f.input[..f.input.len().min(1024)];
                                 eprintln!(
-                                    "FAILURE {}: {}\n  input: b\"{}\"",
+                                    "FAILURE {}: {}\n  input ({} bytes): b\"{}\"{}",
                                     f.target,
                                     f.problem,
-                                    escape(&f.input)
+                                    f.input.len(),
+                                    escape(head),
+                                    if head.len() < f.input.len() {
+                                        "..."
+                                    } else {
+                                        ""
+                                    }
                                 );
                             },
                         )
