@@ -1237,7 +1237,13 @@ fn gltf_number(rng: &mut Rng) -> Value {
 /// A number array of `n` entries (a transform), one or all of them at an edge.
 fn gltf_numbers(rng: &mut Rng, n: usize) -> Value {
     let n = if rng.chance(8) { rng.below(17) } else { n };
-    let identity = |i: usize| if n == 16 && i % 5 == 0 { 1.0 } else { 0.0 };
+    let identity = |i: usize| {
+        if n == 16 && i.is_multiple_of(5) {
+            1.0
+        } else {
+            0.0
+        }
+    };
     let mut out: Vec<Value> = (0..n).map(|i| json!(identity(i))).collect();
     let all = rng.chance(4);
     for (i, v) in out.iter_mut().enumerate() {
