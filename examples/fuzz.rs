@@ -86,7 +86,17 @@ fn main() -> std::process::ExitCode {
                     })
                 })
                 .collect();
-            handles.into_iter().filter_map(|h| h.join().ok()).collect()
+            let results: Vec<_> = handles.into_iter().map(|h| h.join()).collect();
+            // A panic outside the target's run (in a mutator) ends its job: say so, and fail.
+            let lost = results.iter().filter(|r| r.is_err()).count();
+            if lost > 0 {
+                eprintln!(
+                    "FAILURE {}: {lost} of {jobs} jobs panicked outside the target (a mutator)",
+                    target.name
+                );
+                failed += lost;
+            }
+            results.into_iter().filter_map(Result::ok).collect()
         });
         let execs: u64 = reports.iter().map(|r| r.execs).sum();
         let outcomes = reports.iter().map(|r| r.outcomes).max().unwrap_or(0);

@@ -1300,7 +1300,7 @@ fn gltf_field_value(rng: &mut Rng, field: &str, old: Option<&Value>, doc: &Value
         _ => match old.and_then(Value::as_u64) {
             // Near the old value, or at an edge.
             Some(n) if rng.chance(2) => match rng.below(4) {
-                0 => json!(n + 1),
+                0 => json!(n.saturating_add(1)),
                 1 => json!(n.saturating_sub(1)),
                 2 => json!(n.saturating_mul(2)),
                 _ => json!(n.saturating_add(4)),
