@@ -1,10 +1,12 @@
-//! The long run of the parser fuzzer (`tests/support/fuzz.rs`): scene TOML and OBJ, in-process,
+//! The long run of the parser fuzzer (`tests/support/fuzz.rs`): scene TOML, OBJ and glTF, in-process,
 //! structure-aware, with a counting allocator and a hang watchdog.
 //!
 //!     cargo run --release --example fuzz -- --execs 10000000
 //!     cargo run --release --example fuzz -- --execs 1000000 --target obj --seed 7 --jobs 1
+//!     cargo run --release --example fuzz -- --execs 1000000 --target gltf
 //!
-//! `--execs N` is the total over the targets and jobs (split evenly). `--jobs J` runs J
+//! `--execs N` is the total over the targets and jobs (split evenly); `--target NAME` runs one
+//! target (`scene-toml`, `obj`, `gltf`). `--jobs J` runs J
 //! threads, each from its own seed (default: one less than the cores, at least 1). Every
 //! failure is printed as it is found and written to `fuzz-failures/TARGET-N.bin`; the exit
 //! status is 1 if there was any. Add each one to `REGRESSIONS` in `tests/fuzz_parsers.rs`.
@@ -64,18 +66,37 @@ fn main() -> std::process::ExitCode {
                             per_run,
                             Limits::default(),
                             |f| {
+                                // A glTF input is up to 256 KB: its head here, the whole
+                                // in fuzz-failures/ at the end.
+                                let head = &f.input[..f.input.len().min(1024)];
                                 eprintln!(
-                                    "FAILURE {}: {}\n  input: b\"{}\"",
+                                    "FAILURE {}: {}\n  input ({} bytes): b\"{}\"{}",
                                     f.target,
                                     f.problem,
-                                    escape(&f.input)
+                                    f.input.len(),
+                                    escape(head),
+                                    if head.len() < f.input.len() {
+                                        "..."
+                                    } else {
+                                        ""
+                                    }
                                 );
                             },
                         )
                     })
                 })
                 .collect();
-            handles.into_iter().filter_map(|h| h.join().ok()).collect()
+            let results: Vec<_> = handles.into_iter().map(|h| h.join()).collect();
+            // A panic outside the target's run (in a mutator) ends its job: say so, and fail.
+            let lost = results.iter().filter(|r| r.is_err()).count();
+            if lost > 0 {
+                eprintln!(
+                    "FAILURE {}: {lost} of {jobs} jobs panicked outside the target (a mutator)",
+                    target.name
+                );
+                failed += lost;
+            }
+            results.into_iter().filter_map(Result::ok).collect()
         });
         let execs: u64 = reports.iter().map(|r| r.execs).sum();
         let outcomes = reports.iter().map(|r| r.outcomes).max().unwrap_or(0);

@@ -59,6 +59,13 @@ const REGRESSIONS: &[(&str, &[u8])] = &[
           center = [0, 4, 0]\nnormal = [0, -1, 0]\n\
           radius = '''a\"b\nCANARYx7q = 1\n\"c'''\n",
     ),
+    // A glTF model named with a newline: its error was two lines (the label was the raw path).
+    (
+        "scene-toml",
+        b"[camera]\neye = [0, 3, 6]\ntarget = [0, 0.5, 0]\nfov_y_deg = 45\n[light]\n\
+          center = [0, 4, 0]\nnormal = [0, -1, 0]\nradius = 0.5\n[[object]]\n\
+          mesh = \"a\\nb.glb\"\n",
+    ),
     // A mesh name of 3000 characters came back whole in the error.
     ("scene-toml", LONG_MESH_NAME.as_bytes()),
     // A cone of 3967 segments scaled to 1e-7 welds its rim together: thousands of silhouette
@@ -69,6 +76,58 @@ const REGRESSIONS: &[(&str, &[u8])] = &[
           [light]\ncenter = [4294967296, 5.0, 3.4e38]\nnormal = [0.0, -1.0, 0.0]\n\
           radius = 0.5\n[[object]]\nmesh = \"cone:3967\"\ntranslate = [0.0, 1.25, 0.0]\n\
           scale = 0.0000001\n",
+    ),
+    // POSITION past the end of `accessors`: gltf-json's validation indexed with it and panicked.
+    (
+        "gltf",
+        b"{\"asset\":{\"version\":\"2.0\"},\"meshes\":[{\"primitives\":[{\"attributes\":\
+          {\"POSITION\":0}}]}],\"nodes\":[{\"mesh\":0}],\"scenes\":[{\"nodes\":[0]}]}",
+    ),
+    // The same, as the fuzzer found it: a GLB whose accessors were dropped.
+    (
+        "gltf",
+        b"glTF\x02\x00\x00\x00l\x01\x00\x00\x14\x01\x00\x00JSON{\"asset\":{\"version\":\"2.0\"},\
+          \"bufferViews\":[{\"buffer\":0,\"byteLength\":48,\"byteOffset\":0},{\"buffer\":0,\
+          \"byteLength\":12,\"byteOffset\":48}],\"buffers\":[{\"byteLength\":60}],\"meshes\":\
+          [{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],\"nodes\":[{\"mesh\":0}],\
+          \"scene\":0,\"scenes\":[{\"nodes\":[0]}]}<\x00\x00\x00BIN\x00\x00\x00\x00\x00\x00\x00\
+          \x00\x00\x00\x00\x00\x00\x00\x80?\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\
+          \x00\x00\x80?\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x80?\x00\x02\
+          \x01\x00\x01\x03\x00\x03\x02\x01\x02\x03",
+    ),
+    // A buffer file named with a newline (`%0A`): its error was two lines.
+    (
+        "gltf",
+        b"{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\
+          \"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],\"accessors\":\
+          [{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],\
+          \"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\
+          \"buffers\":[{\"byteLength\":36,\"uri\":\"a%0Ab.bin\"}]}",
+    ),
+    // An unknown required extension: gltf-json's path quoted its name (the canary) back.
+    (
+        "gltf",
+        b"{\"asset\":{\"version\":\"2.0\"},\"extensionsRequired\":[\"CANARYx7q\",\"CANARYx7q\"],\
+          \"scenes\":[{\"nodes\":[]}]}",
+    ),
+    // A buffer view at byteOffset 2^64 - 1: its end overflowed (a panic with overflow checks).
+    (
+        "gltf",
+        b"{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\
+          \"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],\"accessors\":\
+          [{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],\
+          \"bufferViews\":[{\"buffer\":0,\"byteLength\":36,\
+          \"byteOffset\":18446744073709551615}],\"buffers\":[{\"byteLength\":72,\"uri\":\"tet.bin\"}]}",
+    ),
+    // A view of 2^64 - 1 bytes under one-byte indices: counting what it can hold overflowed.
+    (
+        "gltf",
+        b"{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\
+          \"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"indices\":1}]}],\
+          \"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},\
+          {\"bufferView\":1,\"componentType\":5121,\"count\":12,\"type\":\"SCALAR\"}],\
+          \"bufferViews\":[{\"buffer\":0,\"byteLength\":48},{\"buffer\":0,\"byteOffset\":48,\
+          \"byteLength\":18446744073709551615}],\"buffers\":[{\"byteLength\":72,\"uri\":\"tet.bin\"}]}",
     ),
 ];
 
@@ -100,4 +159,26 @@ fn inputs_found_by_fuzzing_stay_fixed() {
                 .join("\n")
         );
     }
+}
+
+/// A model over the triangle budget by instancing (a 60 000-index strip placed by 300 nodes:
+/// 18M triangles from 64 KB) is refused from its accessors' counts, before it allocates: it
+/// used to assemble 16.8M triangles (200 MB) first.
+#[test]
+fn a_gltf_instancing_bomb_is_refused_before_it_allocates() {
+    let sandbox = Sandbox::new("bomb");
+    let path = sandbox.dir.join("bomb.glb");
+    let bytes = fuzz::gltf_build::instanced_strip(60_000, 300);
+    std::fs::write(&path, &bytes).unwrap();
+    let (result, used) = fuzz::measure(|| dbuffer::scene::gltf::load_gltf(&path));
+    let msg = result.unwrap_err().to_string();
+    assert!(
+        msg.contains("bomb.glb") && msg.contains("MAX_SCENE_TRIANGLES"),
+        "{msg}"
+    );
+    assert!(
+        used < 8 << 20,
+        "{used} bytes at the peak for a {}-byte file",
+        bytes.len()
+    );
 }

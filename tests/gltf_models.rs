@@ -11,6 +11,10 @@ use glam::Vec3;
 use proptest::prelude::*;
 use serde_json::{json, Value};
 
+#[path = "support/gltf_build.rs"]
+mod gltf_build;
+use gltf_build::{base64, f32_bytes, glb, instanced_strip, tet_doc};
+
 fn temp_dir(tag: &str) -> PathBuf {
     static NEXT: AtomicUsize = AtomicUsize::new(0);
     let dir = std::env::temp_dir().join(format!(
@@ -21,103 +25,6 @@ fn temp_dir(tag: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-/// A GLB file: header, JSON chunk (space-padded), BIN chunk (zero-padded) if any.
-fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut j = serde_json::to_vec(json).unwrap();
-    while !j.len().is_multiple_of(4) {
-        j.push(b' ');
-    }
-    let mut b = bin.to_vec();
-    while !b.len().is_multiple_of(4) {
-        b.push(0);
-    }
-    let total = 12 + 8 + j.len() + if b.is_empty() { 0 } else { 8 + b.len() };
-    let mut out = Vec::new();
-    out.extend(b"glTF");
-    out.extend(2u32.to_le_bytes());
-    out.extend((total as u32).to_le_bytes());
-    out.extend((j.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(j);
-    if !b.is_empty() {
-        out.extend((b.len() as u32).to_le_bytes());
-        out.extend(b"BIN\0");
-        out.extend(b);
-    }
-    out
-}
-
-/// The unit tetrahedron (0,0,0), (1,0,0), (0,1,0), (0,0,1), wound outward.
-const TET: [[f32; 3]; 4] = [
-    [0.0, 0.0, 0.0],
-    [1.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0],
-    [0.0, 0.0, 1.0],
-];
-const TET_FACES: [[u32; 3]; 4] = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
-
-fn f32_bytes(v: &[[f32; 3]]) -> Vec<u8> {
-    v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect()
-}
-
-/// Index bytes of `faces` as component type `ty` (5121 u8, 5123 u16, 5125 u32).
-fn index_bytes(faces: &[[u32; 3]], ty: u32) -> Vec<u8> {
-    faces
-        .iter()
-        .flatten()
-        .flat_map(|&i| match ty {
-            5121 => vec![i as u8],
-            5123 => (i as u16).to_le_bytes().to_vec(),
-            _ => i.to_le_bytes().to_vec(),
-        })
-        .collect()
-}
-
-/// A document with the tetrahedron as mesh 0 (indexed with `index_type`, or not), the given
-/// nodes (scene 0 lists `roots`), and the binary data for one buffer.
-fn tet_doc(index_type: Option<u32>, nodes: Value, roots: Value) -> (Value, Vec<u8>) {
-    let mut bin = f32_bytes(&TET);
-    let pos_len = bin.len();
-    let mut views = vec![json!({"buffer": 0, "byteOffset": 0, "byteLength": pos_len})];
-    let mut accessors = vec![json!({
-        "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
-        "min": [0, 0, 0], "max": [1, 1, 1]
-    })];
-    let mut primitive = json!({"attributes": {"POSITION": 0}});
-    match index_type {
-        Some(ty) => {
-            let idx = index_bytes(&TET_FACES, ty);
-            views.push(json!({"buffer": 0, "byteOffset": pos_len, "byteLength": idx.len()}));
-            accessors
-                .push(json!({"bufferView": 1, "componentType": ty, "count": 12, "type": "SCALAR"}));
-            primitive["indices"] = json!(1);
-            bin.extend(idx);
-        }
-        None => {
-            // Non-indexed: every corner of every face written out.
-            let corners: Vec<[f32; 3]> = TET_FACES
-                .iter()
-                .flatten()
-                .map(|&i| TET[i as usize])
-                .collect();
-            bin = f32_bytes(&corners);
-            views[0]["byteLength"] = json!(bin.len());
-            accessors[0]["count"] = json!(12);
-        }
-    }
-    let doc = json!({
-        "asset": {"version": "2.0"},
-        "scene": 0,
-        "scenes": [{"nodes": roots}],
-        "nodes": nodes,
-        "meshes": [{"primitives": [primitive]}],
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{"byteLength": bin.len()}],
-    });
-    (doc, bin)
 }
 
 fn parse_glb(doc: &Value, bin: &[u8]) -> Result<GltfModel, SceneError> {
@@ -418,23 +325,6 @@ fn gltf_with_a_bin_file_a_data_uri_and_in_a_scene_file() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let mut n = [0u8; 3];
-        n[..chunk.len()].copy_from_slice(chunk);
-        let v = u32::from(n[0]) << 16 | u32::from(n[1]) << 8 | u32::from(n[2]);
-        for i in 0..=chunk.len() {
-            out.push(A[(v >> (18 - 6 * i) & 63) as usize] as char);
-        }
-        for _ in chunk.len()..3 {
-            out.push('=');
-        }
-    }
-    out
-}
-
 #[test]
 fn truncated_and_wrong_magic_glb() {
     let (doc, bin) = tet_doc(Some(5123), json!([{"mesh": 0}]), json!([0]));
@@ -508,6 +398,18 @@ fn accessors_out_of_range_or_of_the_wrong_type() {
         &err_glb(&d, &bin),
         &["buffer view 1 is out of range", "buffer 0"],
     );
+    // A view offset near 2^64: the end of the view must not wrap around (a debug build
+    // panicked on the overflow).
+    let mut d = doc.clone();
+    d["bufferViews"][0]["byteOffset"] = json!(u64::MAX);
+    assert_has(
+        &err_glb(&d, &bin),
+        &[
+            "t.glb",
+            "buffer view 0 is out of range",
+            "18446744073709551615",
+        ],
+    );
     // A buffer that says more than the BIN chunk has.
     let mut d = doc.clone();
     d["buffers"][0]["byteLength"] = json!(4000);
@@ -576,10 +478,81 @@ fn huge_counts_are_refused_before_allocating() {
     d["accessors"][1]["count"] = json!(u64::MAX / 2);
     let msg = err_glb(&d, &bin);
     assert!(msg.contains("t.glb"), "{msg}");
+    // A view of 2^64 - 1 bytes under one-byte indices: the budget's count of what the view
+    // can hold must not overflow (a debug build panicked).
+    let (mut d, bin8) = tet_doc(Some(5121), json!([{"mesh": 0}]), json!([0]));
+    d["bufferViews"][1]["byteLength"] = json!(u64::MAX);
+    assert_has(&err_glb(&d, &bin8), &["t.glb", "buffer view 1"]);
     // A huge byteLength on a buffer the BIN chunk cannot back.
     let mut d = doc;
     d["buffers"][0]["byteLength"] = json!(1u64 << 40);
     assert_has(&err_glb(&d, &bin), &["t.glb", "buffer 0"]);
+}
+
+#[test]
+fn instances_over_the_budget_are_refused_before_reading() {
+    // A 60 000-index strip (59 998 triangles) placed by 300 nodes: 18M triangles from 64 KB.
+    let bytes = instanced_strip(60_000, 300);
+    assert!(bytes.len() < 70_000);
+    let msg = parse_gltf(&bytes, "many.glb", None)
+        .unwrap_err()
+        .to_string();
+    assert_has(
+        &msg,
+        &[
+            "many.glb",
+            "places at least",
+            "before reading",
+            "MAX_SCENE_TRIANGLES",
+        ],
+    );
+    // A shorter strip placed three times loads.
+    let m = parse_gltf(&instanced_strip(600, 3), "few.glb", None).unwrap();
+    assert_eq!(m.mesh.triangles.len(), 3 * 598);
+    assert_eq!(m.mesh.positions.len(), 256, "the instances weld together");
+}
+
+#[test]
+fn a_position_accessor_past_the_list_is_refused_not_a_panic() {
+    // gltf-json 1.4.1's validation indexes `accessors` with it unchecked.
+    let (mut doc, bin) = tet_doc(Some(5123), json!([{"mesh": 0}]), json!([0]));
+    doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(7);
+    assert_has(
+        &err_glb(&doc, &bin),
+        &[
+            "t.glb",
+            "invalid glTF",
+            "meshes[0].primitives[0].attributes[\"POSITION\"]",
+        ],
+    );
+    doc.as_object_mut().unwrap().remove("accessors");
+    doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(0);
+    assert_has(&err_glb(&doc, &bin), &["t.glb", "invalid glTF", "POSITION"]);
+}
+
+#[test]
+fn validation_errors_quote_no_extension_or_attribute_name() {
+    let (mut doc, bin) = tet_doc(Some(5123), json!([{"mesh": 0}]), json!([0]));
+    doc["extensionsRequired"] = json!(["SECRET\nline", "SECRET_TWO"]);
+    let msg = err_glb(&doc, &bin);
+    assert_has(&msg, &["t.glb", "invalid glTF", "extensionsRequired[0]"]);
+    assert!(!msg.contains("SECRET") && !msg.contains('\n'), "{msg:?}");
+}
+
+#[test]
+fn a_path_with_a_newline_stays_on_one_line() {
+    let dir = temp_dir("newline");
+    let (mut doc, _) = tet_doc(Some(5123), json!([{"mesh": 0}]), json!([0]));
+    doc["buffers"][0]["uri"] = json!("a%0Ab.bin");
+    let path = dir.join("m.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let msg = load_gltf(&path).unwrap_err().to_string();
+    assert!(!msg.contains('\n'), "{msg:?}");
+    assert_has(&msg, &["m.gltf", "buffer 0", "a\\nb.bin"]);
+    let msg = load_gltf(&dir.join("x\ny.glb")).unwrap_err().to_string();
+    assert!(!msg.contains('\n'), "{msg:?}");
+    assert_has(&msg, &["x\\ny.glb", "cannot read"]);
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

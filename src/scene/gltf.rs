@@ -14,8 +14,10 @@
 //! - accessors: FLOAT VEC3 positions, unsigned byte/short/int SCALAR indices; the accessor's
 //!   offset, stride and count must fit its buffer view, and the view its buffer; every index
 //!   must name a vertex; sparse accessors and accessors without a view are refused;
-//! - counts: [`MAX_TRIANGLES`] triangles over all primitives and instances, [`MAX_FILE_BYTES`]
-//!   per file read and over all buffers.
+//! - counts: [`MAX_TRIANGLES`] triangles and [`MAX_PLACED_VERTICES`] positions over all
+//!   primitives and node instances, counted from the accessors before any buffer is read;
+//!   `MAX_SCENE_VERTICES` distinct positions while welding; [`MAX_FILE_BYTES`] per file read
+//!   and over all buffers.
 //!
 //! Primitive modes: triangles, triangle strips and fans are read (strips and fans are turned
 //! into triangles); points and lines are skipped with a warning. A node whose world transform
@@ -86,7 +88,8 @@ pub fn is_gltf_path(path: &Path) -> bool {
 /// Loads the `.gltf` or `.glb` at `path` (either is recognised by its content: a GLB starts with
 /// `glTF`). Errors name the file as `path` displays.
 pub fn load_gltf(path: &Path) -> Result<GltfModel, SceneError> {
-    let label = path.display().to_string();
+    // Control characters escaped, a long path cut: the error stays one short line.
+    let label = super::shown(&path.display().to_string());
     let bytes = read_regular_file(path, &label)?;
     let base_dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -138,7 +141,31 @@ fn document(json: &[u8]) -> Result<::gltf::Document, ::gltf::Error> {
     use ::gltf::json::validation::{Error, Validate};
     let root: ::gltf::json::Root =
         ::gltf::json::deserialize::from_slice(json).map_err(::gltf::Error::Deserialize)?;
+    // gltf-json 1.4.1 validates a primitive by indexing `accessors` with its POSITION before
+    // checking that index (a 300-byte file with `"POSITION": 3` and two accessors panics in
+    // `validate`): those indices are checked here first.
     let mut errors = Vec::new();
+    let position = ::gltf::json::validation::Checked::Valid(::gltf::Semantic::Positions);
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            match primitive.attributes.get(&position) {
+                Some(i) if i.value() >= root.accessors.len() => errors.push((
+                    ::gltf::json::Path::new()
+                        .field("meshes")
+                        .index(m)
+                        .field("primitives")
+                        .index(p)
+                        .field("attributes")
+                        .key("POSITION"),
+                    Error::IndexOutOfBounds,
+                )),
+                _ => {}
+            }
+        }
+    }
+    if !errors.is_empty() {
+        return Err(::gltf::Error::Validation(errors));
+    }
     root.validate(&root, ::gltf::json::Path::new, &mut |path, error| {
         let path = path();
         let bounds = path.0.ends_with(".min") || path.0.ends_with(".max");
@@ -248,7 +275,7 @@ fn describe_gltf_error(e: &::gltf::Error) -> String {
             let shown: Vec<String> = list
                 .iter()
                 .take(3)
-                .map(|(path, err)| format!("{path}: {err}"))
+                .map(|(path, err)| format!("{}: {err}", path_shown(path.as_str())))
                 .collect();
             let more = if list.len() > 3 {
                 format!(" (and {} more)", list.len() - 3)
@@ -270,6 +297,46 @@ fn describe_gltf_error(e: &::gltf::Error) -> String {
         ),
         other => format!("invalid glTF: {other}"),
     }
+}
+
+/// A validation error's JSON path without what it quotes of the file: gltf-json appends the
+/// value (`extensionsRequired[0] = "NAME"`) and names keys (`attributes["NAME"]`); a value is
+/// dropped, a key kept only if it is a standard attribute name.
+fn path_shown(path: &str) -> String {
+    let path = path.split_once(" = ").map_or(path, |(p, _)| p);
+    let standard = |key: &str| {
+        ["POSITION", "NORMAL", "TANGENT"].contains(&key)
+            || ["TEXCOORD_", "COLOR_", "JOINTS_", "WEIGHTS_"]
+                .iter()
+                .any(|p| {
+                    key.strip_prefix(p).is_some_and(|n| {
+                        !n.is_empty() && n.len() <= 3 && n.bytes().all(|b| b.is_ascii_digit())
+                    })
+                })
+    };
+    let mut out = String::new();
+    let mut rest = path;
+    while let Some(at) = rest.find("[\"") {
+        out.push_str(&rest[..at]);
+        let after = &rest[at + 2..];
+        match after.find("\"]") {
+            Some(end) => {
+                let key = &after[..end];
+                out.push_str(if standard(key) { "[\"" } else { "[\"…" });
+                if standard(key) {
+                    out.push_str(key);
+                }
+                out.push_str("\"]");
+                rest = &after[end + 2..];
+            }
+            None => {
+                out.push_str("[\"…");
+                rest = "";
+            }
+        }
+    }
+    out.push_str(rest);
+    super::shown(&out)
 }
 
 /// The buffers read so far, by index.
@@ -359,7 +426,7 @@ impl Buffers<'_> {
             ));
         };
         let path = base.join(rel);
-        read_regular_file(&path, &path.display().to_string())
+        read_regular_file(&path, &super::shown(&path.display().to_string()))
             .map_err(|e| format!("buffer {index}: {e}"))
     }
 }
@@ -425,7 +492,72 @@ type Primitive = (Vec<Vec3>, Vec<[u32; 3]>);
 
 /// Most positions placed over all instances (each instance of a primitive places all of its
 /// positions): three per triangle of the budget.
-const MAX_PLACED_VERTICES: usize = 3 * MAX_TRIANGLES;
+pub const MAX_PLACED_VERTICES: usize = 3 * MAX_TRIANGLES;
+
+/// Most distinct positions after welding: the scene's vertex budget
+/// ([`crate::budget::MAX_SCENE_VERTICES`]), checked while welding so that the positions and the
+/// weld table never outgrow it.
+const MAX_WELDED_VERTICES: usize = crate::budget::MAX_SCENE_VERTICES as usize;
+
+/// Whether a primitive of this mode is read (triangles, strips, fans), not skipped.
+fn has_triangles(mode: ::gltf::mesh::Mode) -> bool {
+    use ::gltf::mesh::Mode;
+    matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    )
+}
+
+/// How many triangles [`assemble`] makes of `corners` corners in `mode`.
+fn triangles_of(mode: ::gltf::mesh::Mode, corners: u64) -> u64 {
+    use ::gltf::mesh::Mode;
+    match mode {
+        Mode::TriangleStrip | Mode::TriangleFan => corners.saturating_sub(2),
+        Mode::Triangles => corners / 3,
+        _ => 0,
+    }
+}
+
+/// An accessor's count, or fewer: at most what its buffer view's declared length can hold (a
+/// larger count is refused with the accessor's own range error when it is read).
+fn readable_count(acc: &::gltf::Accessor) -> u64 {
+    let count = acc.count() as u64;
+    match acc.view() {
+        Some(view) => {
+            let stride = view.stride().unwrap_or(acc.size()).max(1) as u64;
+            count.min((view.length() as u64 / stride).saturating_add(1))
+        }
+        None => count,
+    }
+}
+
+/// The triangles and positions the scene's instances would place, from the accessors' counts,
+/// before a byte of a buffer is read: a small file can place one big primitive many times
+/// (2 KB of nodes over a 60 KB strip is 18M triangles), so the budget is checked here, not
+/// once they are made.
+fn check_instances_budget(instances: &[Instance]) -> Result<(), String> {
+    let (mut assembled, mut placed) = (0u64, 0u64);
+    for inst in instances {
+        for primitive in inst.mesh.primitives() {
+            let mode = primitive.mode();
+            if !has_triangles(mode) {
+                continue;
+            }
+            let vertices = primitive
+                .get(&::gltf::Semantic::Positions)
+                .map_or(0, |a| readable_count(&a));
+            let corners = primitive.indices().map_or(vertices, |a| readable_count(&a));
+            assembled = assembled.saturating_add(triangles_of(mode, corners));
+            placed = placed.saturating_add(vertices);
+        }
+        if assembled > MAX_TRIANGLES as u64 || placed > MAX_PLACED_VERTICES as u64 {
+            return Err(format!(
+                "its scene places at least {assembled} triangles and {placed} vertices over its                  node instances (counted from the accessors, before reading them): the budget                  is {MAX_TRIANGLES} triangles per scene (MAX_SCENE_TRIANGLES) and                  {MAX_PLACED_VERTICES} placed vertices, three per triangle"
+            ));
+        }
+    }
+    Ok(())
+}
 
 fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfModel, String> {
     let scene = doc
@@ -506,12 +638,13 @@ fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfMo
         }
     }
 
+    check_instances_budget(&instances)?;
+
     let mut positions: Vec<Vec3> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
     // Each primitive's positions and triangles, read once however many nodes use it.
     let mut read: HashMap<(usize, usize), Primitive> = HashMap::new();
-    let (mut assembled, mut placed) = (0usize, 0usize);
     let mut skipped = 0usize;
     let mut primitives = 0usize;
     for inst in &instances {
@@ -521,12 +654,8 @@ fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfMo
                 inst.mesh.index(),
                 primitive.index()
             );
-            use ::gltf::mesh::Mode;
             let mode = primitive.mode();
-            if matches!(
-                mode,
-                Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
-            ) {
+            if !has_triangles(mode) {
                 skipped += 1;
                 continue;
             }
@@ -548,14 +677,6 @@ fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfMo
                     &*e.insert((local, tris))
                 }
             };
-            assembled += tris.len();
-            placed += local.len();
-            if assembled > MAX_TRIANGLES || placed > MAX_PLACED_VERTICES {
-                return Err(format!(
-                    "has more than {MAX_TRIANGLES} triangles or {MAX_PLACED_VERTICES} vertices \
-                     over its node instances (the limit for one model), reached at {what}"
-                ));
-            }
             let flip = Mat4::determinant(&inst.world) < 0.0;
             let mut remap = Vec::with_capacity(local.len());
             for p in local {
@@ -573,6 +694,13 @@ fn read_document(doc: &::gltf::Document, buffers: &mut Buffers) -> Result<GltfMo
                     next
                 });
                 remap.push(id);
+            }
+            if positions.len() > MAX_WELDED_VERTICES {
+                return Err(format!(
+                    "has more than {MAX_WELDED_VERTICES} distinct vertices over its node \
+                     instances, reached at {what}: the budget is {MAX_WELDED_VERTICES} vertices \
+                     per scene (MAX_SCENE_VERTICES)"
+                ));
             }
             for &[a, b, c] in tris {
                 let (a, b, c) = (remap[a as usize], remap[b as usize], remap[c as usize]);
@@ -681,16 +809,20 @@ fn accessor_bytes<'b>(
     }
     let buffer = view.buffer();
     let start = view.offset() as u64;
-    let end = start + view_len;
     let data = buffers.get(&buffer)?;
-    if end > data.len() as u64 || end > buffer.length() as u64 {
-        return Err(format!(
-            "buffer view {} is out of range: bytes {start}..{end} of buffer {}, which has {}",
-            view.index(),
-            buffer.index(),
-            data.len().min(buffer.length())
-        ));
-    }
+    let has = data.len().min(buffer.length()) as u64;
+    // A byteOffset near 2^64 must not wrap around.
+    let end = match start.checked_add(view_len) {
+        Some(end) if end <= has => end,
+        _ => {
+            return Err(format!(
+                "buffer view {} is out of range: {view_len} bytes from byte {start} of buffer {}, \
+                 which has {has}",
+                view.index(),
+                buffer.index(),
+            ))
+        }
+    };
     let bytes = &data[start as usize + acc.offset()..end as usize];
     Ok((bytes, elem, stride, count))
 }
@@ -808,6 +940,25 @@ mod tests {
         assert_eq!(percent_decode("plain.bin").unwrap(), "plain.bin");
         assert!(percent_decode("bad%2").is_none());
         assert!(percent_decode("bad%zz").is_none());
+    }
+
+    #[test]
+    fn validation_paths_quote_nothing_of_the_file() {
+        assert_eq!(
+            path_shown("extensionsRequired[0] = \"SECRET\""),
+            "extensionsRequired[0]"
+        );
+        assert_eq!(
+            path_shown("meshes[0].primitives[1].attributes[\"POSITION\"]"),
+            "meshes[0].primitives[1].attributes[\"POSITION\"]"
+        );
+        assert_eq!(
+            path_shown("meshes[0].primitives[0].attributes[\"_SECRET\"].x"),
+            "meshes[0].primitives[0].attributes[\"…\"].x"
+        );
+        assert_eq!(path_shown("a[\"TEXCOORD_1\"]"), "a[\"TEXCOORD_1\"]");
+        assert_eq!(path_shown("a[\"TEXCOORD_\"]"), "a[\"…\"]");
+        assert_eq!(path_shown("a[\"SEC\nRET"), "a[\"…");
     }
 
     #[test]

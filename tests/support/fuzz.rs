@@ -34,9 +34,14 @@ use std::time::{Duration, Instant};
 
 use dbuffer::geometry::{PreparedCasters, VolumeParams};
 use dbuffer::scene::file::decode_utf8;
+use dbuffer::scene::gltf::{load_gltf, MAX_FILE_BYTES, MAX_TRIANGLES};
 use dbuffer::scene::obj::{parse_obj_bytes, Others};
 use dbuffer::scene::{builtin, shapes, DiskLight, Mesh, Object, Scene, SceneError, SceneFile};
 use glam::Vec3;
+use serde_json::{json, Value};
+
+#[path = "gltf_build.rs"]
+pub mod gltf_build;
 
 /// Planted in inputs; an error about a file's content must never contain it.
 pub const CANARY: &str = "CANARYx7q";
@@ -111,6 +116,14 @@ fn peak() -> usize {
     PEAK.with(Cell::get)
 }
 
+/// Runs `f` and returns what it returned and the most bytes it held at once (with
+/// [`CountingAlloc`] as the global allocator).
+pub fn measure<R>(f: impl FnOnce() -> R) -> (R, usize) {
+    let base = reset_peak();
+    let r = f();
+    (r, peak().saturating_sub(base))
+}
+
 // ---------------------------------------------------------------------------------------------
 // Random numbers (SplitMix64: small, fast, reproducible from one seed)
 
@@ -157,12 +170,39 @@ impl Sandbox {
             std::fs::write(dir.join(name), text).expect("sandbox file");
         }
         std::fs::create_dir_all(dir.join("folder.obj")).expect("sandbox dir");
+        // Buffer files for `.gltf` inputs: the tetrahedron's, one that is empty, one over
+        // MAX_MODEL_FILE_BYTES (sparse: it takes no disk), and things that are not files.
+        let (_, tet_bin) = gltf_build::tet_doc(Some(5123), json!([{"mesh": 0}]), json!([0]));
+        for name in ["tet.bin", "sub/tet.bin", "CANARYx7q.bin"] {
+            let path = dir.join(name);
+            let _ = std::fs::create_dir_all(path.parent().unwrap_or(&dir));
+            std::fs::write(path, &tet_bin).expect("sandbox file");
+        }
+        // Models a scene file can name.
+        let (mut doc, _) = gltf_build::tet_doc(Some(5123), json!([{"mesh": 0}]), json!([0]));
+        std::fs::write(dir.join("tet.glb"), gltf_build::glb(&doc, &tet_bin)).expect("sandbox file");
+        doc["buffers"][0]["uri"] = json!("tet.bin");
+        std::fs::write(
+            dir.join("tet.gltf"),
+            serde_json::to_vec(&doc).unwrap_or_default(),
+        )
+        .expect("sandbox file");
+        std::fs::create_dir_all(dir.join("folder.glb")).expect("sandbox dir");
+        std::fs::write(dir.join("empty.bin"), b"").expect("sandbox file");
+        std::fs::File::create(dir.join("huge.bin"))
+            .and_then(|f| f.set_len(MAX_FILE_BYTES + 1))
+            .expect("sandbox file");
+        std::fs::create_dir_all(dir.join("folder.bin")).expect("sandbox dir");
         #[cfg(unix)]
         {
-            let _ = std::os::unix::fs::symlink("/dev/zero", dir.join("zero.obj"));
-            let _ = std::process::Command::new("mkfifo")
-                .arg(dir.join("fifo.obj"))
-                .status();
+            for name in ["zero.obj", "zero.bin", "zero.glb"] {
+                let _ = std::os::unix::fs::symlink("/dev/zero", dir.join(name));
+            }
+            for name in ["fifo.obj", "fifo.bin"] {
+                let _ = std::process::Command::new("mkfifo")
+                    .arg(dir.join(name))
+                    .status();
+            }
         }
         Sandbox { dir }
     }
@@ -218,6 +258,14 @@ pub fn targets() -> Vec<Target> {
             mutate: mutate_obj,
             run: run_obj,
             max_len: 32 << 10,
+        },
+        Target {
+            name: "gltf",
+            seeds: gltf_seeds,
+            mutate: mutate_gltf,
+            run: run_gltf,
+            // The Fox is 163 KB.
+            max_len: 256 << 10,
         },
     ]
 }
@@ -553,6 +601,14 @@ const STRINGS: &[&str] = &[
     "\"fifo.obj\"",
     "\"folder.obj\"",
     "\"missing.obj\"",
+    "\"tet.glb\"",
+    "\"tet.gltf\"",
+    "\"tet.bin\"",
+    "\"folder.glb\"",
+    "\"zero.glb\"",
+    "\"missing.glb\"",
+    "\"a\\nb.glb\"",
+    "\"CANARYx7q.gltf\"",
     "\"../../../../etc/passwd\"",
     "\"/dev/zero\"",
     "\"/dev/null\"",
@@ -618,7 +674,14 @@ fn toml_seeds() -> Vec<Vec<u8>> {
     for name in shapes::NAMES {
         seeds.push(format!("{head}\n[[object]]\nmesh = \"{name}\"\n").into_bytes());
     }
-    for mesh in ["tet.obj", "meshes/quad.obj", "bom.obj", "tiny.obj"] {
+    for mesh in [
+        "tet.obj",
+        "meshes/quad.obj",
+        "bom.obj",
+        "tiny.obj",
+        "tet.glb",
+        "tet.gltf",
+    ] {
         seeds.push(
             format!("{head}\n[[object]]\nmesh = \"{mesh}\"\ntranslate = [0, 1, 0]\n").into_bytes(),
         );
@@ -887,6 +950,963 @@ fn scene_of(mesh: Mesh) -> Scene {
             mesh,
             casts_shadow: true,
         }],
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// glTF
+
+/// The Fox of `assets/models` (576 triangles, a skin, animations, a texture): an exporter's file.
+const FOX: &[u8] = include_bytes!("../../assets/models/Fox.glb");
+
+/// A model whose triangles or placed vertices, counted from its JSON ([`gltf_size`]), pass
+/// these is within the budget but slow to build (seconds, hundreds of MB): it is not loaded.
+/// Over the budget it is, and must be refused.
+const GLTF_SMALL_TRIANGLES: u64 = 200_000;
+const GLTF_SMALL_VERTICES: u64 = 600_000;
+/// The loader's limit on positions placed over all node instances (three per triangle).
+const GLTF_MAX_PLACED: u64 = 3 * MAX_TRIANGLES as u64;
+
+/// A GLB's JSON and BIN chunks, or a `.gltf`'s JSON, to mutate one and put the file back
+/// together with every length right (the container's own mutations break them on purpose).
+struct GltfParts {
+    glb: bool,
+    json: Vec<u8>,
+    bin: Option<Vec<u8>>,
+}
+
+impl GltfParts {
+    /// Leniently: a length that says more than there is takes what there is.
+    fn split(bytes: &[u8]) -> GltfParts {
+        if !bytes.starts_with(b"glTF") || bytes.len() < 20 {
+            return GltfParts {
+                glb: false,
+                json: bytes.to_vec(),
+                bin: None,
+            };
+        }
+        let u32_at = |at: usize| {
+            bytes
+                .get(at..at + 4)
+                .map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+        };
+        let json_end = 20usize.saturating_add(u32_at(12)).min(bytes.len());
+        let json = bytes[20..json_end].to_vec();
+        let next = json_end.next_multiple_of(4);
+        let bin = (next + 8 <= bytes.len()).then(|| {
+            let end = (next + 8).saturating_add(u32_at(next)).min(bytes.len());
+            bytes[next + 8..end].to_vec()
+        });
+        GltfParts {
+            glb: true,
+            json,
+            bin,
+        }
+    }
+
+    fn join(&self) -> Vec<u8> {
+        if self.glb {
+            gltf_build::glb_raw(&self.json, self.bin.as_deref())
+        } else {
+            self.json.clone()
+        }
+    }
+}
+
+fn gltf_seeds() -> Vec<Vec<u8>> {
+    use gltf_build::{base64, f32_bytes, glb, tet_doc};
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    let to_vec = |v: &Value| serde_json::to_vec(v).unwrap_or_default();
+    let mut seeds = vec![FOX.to_vec()];
+    // The tetrahedron with each index type, and without indices.
+    for ty in [Some(5121), Some(5123), Some(5125), None] {
+        let (doc, bin) = tet_doc(ty, json!([{"mesh": 0}]), json!([0]));
+        seeds.push(glb(&doc, &bin));
+    }
+    // Nested TRS, a mirroring matrix, two instances, a spot, a point and a directional light.
+    let nodes = json!([
+        {"translation": [1, 0, 0], "scale": [2, 2, 2], "children": [1]},
+        {"rotation": [0, s, 0, s], "mesh": 0},
+        {"matrix": [-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 5, 0, 1], "mesh": 0},
+        {"translation": [0, 4, 0], "rotation": [-s, 0, 0, s],
+         "extensions": {"KHR_lights_punctual": {"light": 0}}},
+        {"translation": [0, 9, 0], "extensions": {"KHR_lights_punctual": {"light": 1}}},
+        {"extensions": {"KHR_lights_punctual": {"light": 2}}}
+    ]);
+    let (mut doc, bin) = tet_doc(Some(5123), nodes, json!([0, 2, 3, 4, 5]));
+    doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    doc["extensions"] = json!({"KHR_lights_punctual": {"lights": [
+        {"type": "spot", "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.7}, "intensity": 10},
+        {"type": "point", "range": 20},
+        {"type": "directional"}
+    ]}});
+    seeds.push(glb(&doc, &bin));
+    // The JSON form: the buffer as a base64 data: URI, and as files beside the model. Names
+    // carry the canary: they may not come back in an error about the file's content.
+    let (mut doc, bin) = tet_doc(Some(5123), json!([{"mesh": 0, "name": CANARY}]), json!([0]));
+    doc["asset"]["generator"] = json!(CANARY);
+    doc["buffers"][0]["uri"] = json!(format!(
+        "data:application/octet-stream;base64,{}",
+        base64(&bin)
+    ));
+    seeds.push(serde_json::to_vec_pretty(&doc).unwrap_or_default());
+    for uri in [
+        "tet.bin",
+        "sub/tet.bin",
+        "./sub/../tet.bin",
+        "CANARYx7q.bin",
+        "huge.bin",
+    ] {
+        doc["buffers"][0]["uri"] = json!(uri);
+        seeds.push(to_vec(&doc));
+    }
+    // A strip, a fan and a line primitive over one square.
+    let quad = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 0.0, -1.0],
+        [1.0, 0.0, -1.0],
+    ];
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"mesh": 0, "translation": [0, 1, 0], "scale": [1, -1, 1]}],
+        "meshes": [{"primitives": [
+            {"attributes": {"POSITION": 0}, "mode": 5},
+            {"attributes": {"POSITION": 0}, "mode": 6},
+            {"attributes": {"POSITION": 0}, "mode": 1}
+        ]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"}],
+        "bufferViews": [{"buffer": 0, "byteLength": 48, "byteStride": 12}],
+        "buffers": [{"byteLength": 48}],
+        "extras": {"CANARYx7q": CANARY},
+    });
+    seeds.push(glb(&doc, &f32_bytes(&quad)));
+    // Over the triangle budget by instancing: a strip of 60 000 one-byte indices (59 998
+    // triangles) used by 300 nodes, 18M triangles from a 64 KB file.
+    seeds.push(gltf_build::instanced_strip(60_000, 300));
+    seeds
+}
+
+/// Buffer URIs: data, files in the sandbox, and files that must be refused.
+const GLTF_URIS: &[&str] = &[
+    "tet.bin",
+    "sub/tet.bin",
+    "sub%2Ftet.bin",
+    "tet%2ebin",
+    "./tet.bin",
+    "sub/../tet.bin",
+    "sub/../../tet.bin",
+    "../tet.bin",
+    "/etc/passwd",
+    "file:///etc/passwd",
+    "http://example.com/a.bin",
+    "C:\\a.bin",
+    "empty.bin",
+    "huge.bin",
+    "zero.bin",
+    "fifo.bin",
+    "folder.bin",
+    "missing.bin",
+    "",
+    "%",
+    "%zz",
+    "%ff%fe.bin",
+    "%00.bin",
+    "a%0Ab.bin",
+    "a\nb.bin",
+    "\u{1b}[31mred.bin",
+    "CANARYx7q.bin",
+    "CANARYx7q",
+    "data:",
+    "data:application/octet-stream;base64,",
+    "data:application/octet-stream;base64,AAAA",
+    "data:application/octet-stream;base64,AAAAAA==",
+    "data:application/octet-stream;base64,AAA=A",
+    "data:application/octet-stream;base64,CANARYx7q",
+    "data:application/octet-stream,CANARYx7q",
+    "data:;base64,////",
+];
+
+/// Fields of the top-level arrays, with what kind of value to give them.
+const GLTF_FIELDS: &[(&str, &[&str])] = &[
+    (
+        "accessors",
+        &[
+            "count",
+            "byteOffset",
+            "componentType",
+            "type",
+            "bufferView",
+            "normalized",
+            "sparse",
+        ],
+    ),
+    (
+        "bufferViews",
+        &["byteLength", "byteStride", "byteOffset", "buffer", "target"],
+    ),
+    ("buffers", &["byteLength", "uri"]),
+    (
+        "nodes",
+        &[
+            "mesh",
+            "children",
+            "matrix",
+            "translation",
+            "rotation",
+            "scale",
+            "skin",
+            "camera",
+            "weights",
+        ],
+    ),
+    ("scenes", &["nodes"]),
+    ("meshes", &["primitives", "weights"]),
+];
+
+const GLTF_TYPES: &[&str] = &[
+    "SCALAR",
+    "VEC2",
+    "VEC3",
+    "VEC4",
+    "MAT2",
+    "MAT3",
+    "MAT4",
+    "vec3",
+    "",
+    "CANARYx7q",
+];
+
+/// Numbers at the edges: of u8/u16/u32/usize, of f32, component types, modes.
+fn gltf_number(rng: &mut Rng) -> Value {
+    const UNSIGNED: &[u64] = &[
+        0,
+        1,
+        2,
+        3,
+        4,
+        5,
+        6,
+        7,
+        8,
+        11,
+        12,
+        16,
+        24,
+        48,
+        72,
+        253,
+        255,
+        256,
+        1727,
+        1728,
+        65535,
+        65536,
+        5120,
+        5121,
+        5122,
+        5123,
+        5125,
+        5126,
+        34962,
+        16_777_216,
+        50_331_648,
+        2_147_483_647,
+        2_147_483_648,
+        4_294_967_295,
+        4_294_967_296,
+        (1 << 30) + 1,
+        1 << 40,
+        9_007_199_254_740_993,
+        u64::MAX / 2,
+        u64::MAX,
+    ];
+    const FLOATS: &[f64] = &[
+        0.5, -0.0, -1.0, 1e-45, 1e-38, 1e-7, 1e7, 1e30, 1e38, 3.4e38, 3.5e38, 1e39, -1e39, 1e300,
+        -1e300,
+    ];
+    match rng.below(4) {
+        0 => json!(rng.below(8)),
+        1 | 2 => json!(*rng.pick(UNSIGNED)),
+        _ if rng.chance(4) => json!(-(rng.below(3) as i64) - 1),
+        _ => json!(*rng.pick(FLOATS)),
+    }
+}
+
+/// A number array of `n` entries (a transform), one or all of them at an edge.
+fn gltf_numbers(rng: &mut Rng, n: usize) -> Value {
+    let n = if rng.chance(8) { rng.below(17) } else { n };
+    let identity = |i: usize| {
+        if n == 16 && i.is_multiple_of(5) {
+            1.0
+        } else {
+            0.0
+        }
+    };
+    let mut out: Vec<Value> = (0..n).map(|i| json!(identity(i))).collect();
+    let all = rng.chance(4);
+    for (i, v) in out.iter_mut().enumerate() {
+        if all || i == 0 {
+            *v = gltf_number(rng);
+        }
+    }
+    if !all && n > 1 {
+        out.swap(0, rng.below(n));
+    }
+    Value::Array(out)
+}
+
+/// A value for `field` of an element of `array`.
+fn gltf_field_value(rng: &mut Rng, field: &str, old: Option<&Value>, doc: &Value) -> Value {
+    let len = |name: &str| doc[name].as_array().map_or(0, Vec::len);
+    match field {
+        "type" => json!(*rng.pick(GLTF_TYPES)),
+        "uri" => json!(*rng.pick(GLTF_URIS)),
+        "normalized" => json!(rng.chance(2)),
+        "children" | "nodes" => {
+            let mut list: Vec<Value> = old.and_then(Value::as_array).cloned().unwrap_or_default();
+            match rng.below(3) {
+                0 => list.push(json!(rng.below(len("nodes") + 2))),
+                1 if !list.is_empty() => {
+                    let i = rng.below(list.len());
+                    list.insert(i, list[i].clone());
+                }
+                _ => {
+                    list = (0..rng.below(5))
+                        .map(|_| json!(rng.below(len("nodes") + 2)))
+                        .collect()
+                }
+            }
+            Value::Array(list)
+        }
+        "matrix" => gltf_numbers(rng, 16),
+        "rotation" => gltf_numbers(rng, 4),
+        "translation" | "scale" => gltf_numbers(rng, 3),
+        "weights" => gltf_numbers(rng, 2),
+        "sparse" => json!({"count": gltf_number(rng),
+            "indices": {"bufferView": 0, "componentType": 5123},
+            "values": {"bufferView": 0}}),
+        "primitives" => {
+            let mut list: Vec<Value> = old.and_then(Value::as_array).cloned().unwrap_or_default();
+            if let Some(first) = list.first().cloned() {
+                let most = if rng.chance(4) { 300 } else { 3 };
+                for _ in 0..1 + rng.below(most) {
+                    list.push(first.clone());
+                }
+            }
+            Value::Array(list)
+        }
+        _ => match old.and_then(Value::as_u64) {
+            // Near the old value, or at an edge.
+            Some(n) if rng.chance(2) => match rng.below(4) {
+                0 => json!(n.saturating_add(1)),
+                1 => json!(n.saturating_sub(1)),
+                2 => json!(n.saturating_mul(2)),
+                _ => json!(n.saturating_add(4)),
+            },
+            _ => gltf_number(rng),
+        },
+    }
+}
+
+/// The element `i` of the top-level `array`, as an object (made one if it is not).
+fn gltf_element<'a>(doc: &'a mut Value, array: &str, rng: &mut Rng) -> Option<&'a mut Value> {
+    let list = doc.get_mut(array)?.as_array_mut()?;
+    if list.is_empty() {
+        return None;
+    }
+    let i = rng.below(list.len());
+    Some(&mut list[i])
+}
+
+/// A random place in `v`: the value itself or something inside it.
+fn descend<'a>(rng: &mut Rng, v: &'a mut Value, depth: usize) -> &'a mut Value {
+    let inner = match v {
+        Value::Array(a) => a.len(),
+        Value::Object(o) => o.len(),
+        _ => 0,
+    };
+    if inner == 0 || depth > 12 || rng.chance(4) {
+        return v;
+    }
+    let i = rng.below(inner);
+    if v.is_array() {
+        return descend(rng, &mut v[i], depth + 1);
+    }
+    match v.as_object().and_then(|o| o.keys().nth(i).cloned()) {
+        Some(key) => descend(rng, &mut v[key.as_str()], depth + 1),
+        None => v,
+    }
+}
+
+/// One structural change to a glTF document.
+fn mutate_gltf_json(rng: &mut Rng, doc: &mut Value) {
+    if !doc.is_object() {
+        *doc = json!({"asset": {"version": "2.0"}});
+    }
+    match rng.below(12) {
+        // A field of an accessor, view, buffer, node, scene or mesh.
+        0..=3 => {
+            let (array, fields) = *rng.pick(GLTF_FIELDS);
+            let field = *rng.pick(fields);
+            let snapshot = doc.clone();
+            if let Some(Value::Object(e)) = gltf_element(doc, array, rng) {
+                let value = gltf_field_value(rng, field, e.get(field), &snapshot);
+                e.insert(field.to_string(), value);
+            }
+        }
+        // A primitive: its mode, indices, POSITION, or a morph target.
+        4 => {
+            let Some(mesh) = gltf_element(doc, "meshes", rng) else {
+                return;
+            };
+            let Some(list) = mesh.get_mut("primitives").and_then(Value::as_array_mut) else {
+                return;
+            };
+            if list.is_empty() {
+                return;
+            }
+            let i = rng.below(list.len());
+            let Value::Object(p) = &mut list[i] else {
+                return;
+            };
+            match rng.below(5) {
+                0 => {
+                    p.insert("mode".into(), json!(rng.below(8)));
+                }
+                1 => {
+                    p.insert("indices".into(), gltf_number(rng));
+                }
+                2 => {
+                    p.remove("indices");
+                }
+                3 => {
+                    if let Some(Value::Object(a)) = p.get_mut("attributes") {
+                        if rng.chance(3) {
+                            a.remove("POSITION");
+                        } else {
+                            a.insert("POSITION".into(), json!(rng.below(4)));
+                        }
+                    }
+                }
+                _ => {
+                    p.insert("targets".into(), json!([{"POSITION": 0}]));
+                }
+            }
+        }
+        // A key dropped anywhere.
+        5 => {
+            if let Value::Object(o) = descend(rng, doc, 0) {
+                if !o.is_empty() {
+                    let i = rng.below(o.len());
+                    if let Some(k) = o.keys().nth(i).cloned() {
+                        o.remove(&k);
+                    }
+                }
+            }
+        }
+        // An array element repeated or removed anywhere.
+        6 => {
+            if let Value::Array(a) = descend(rng, doc, 0) {
+                if !a.is_empty() {
+                    let i = rng.below(a.len());
+                    if rng.chance(2) {
+                        a.remove(i);
+                    } else {
+                        a.insert(i, a[i].clone());
+                    }
+                }
+            }
+        }
+        // Instances: many nodes holding a mesh, all in the scene.
+        7 => {
+            let most = if rng.chance(4) { 2000 } else { 4 };
+            let n = 1 + rng.below(most);
+            let mesh = rng.below(2);
+            let Some(nodes) = doc.get_mut("nodes").and_then(Value::as_array_mut) else {
+                return;
+            };
+            let first = nodes.len();
+            let translate = rng.chance(2);
+            for k in 0..n {
+                nodes.push(if translate {
+                    json!({"mesh": mesh, "translation": [k, 0, 0]})
+                } else {
+                    json!({"mesh": mesh})
+                });
+            }
+            if let Some(Value::Array(roots)) = doc.pointer_mut("/scenes/0/nodes") {
+                roots.extend((first..first + n).map(|i| json!(i)));
+            }
+        }
+        // A KHR_lights_punctual light changed, and put on a node.
+        8 => {
+            let lights = doc
+                .pointer("/extensions/KHR_lights_punctual/lights")
+                .and_then(Value::as_array)
+                .map_or(0, Vec::len);
+            if lights == 0 || rng.chance(4) {
+                let kind = *rng.pick(&["spot", "point", "directional", "area", ""]);
+                let light = json!({"type": kind, "spot": {
+                    "innerConeAngle": gltf_number(rng), "outerConeAngle": gltf_number(rng)},
+                    "intensity": gltf_number(rng), "range": gltf_number(rng),
+                    "color": gltf_numbers(rng, 3)});
+                if let Value::Object(root) = doc {
+                    let ext = root.entry("extensions").or_insert_with(|| json!({}));
+                    if let Value::Object(ext) = ext {
+                        let l = ext
+                            .entry("KHR_lights_punctual")
+                            .or_insert_with(|| json!({"lights": []}));
+                        if let Some(Value::Array(list)) = l.get_mut("lights") {
+                            list.push(light);
+                        }
+                    }
+                }
+            }
+            let light = if rng.chance(8) {
+                gltf_number(rng)
+            } else {
+                json!(rng.below(lights + 1))
+            };
+            if let Some(Value::Object(node)) = gltf_element(doc, "nodes", rng) {
+                node.insert(
+                    "extensions".into(),
+                    json!({"KHR_lights_punctual": {"light": light}}),
+                );
+                if rng.chance(2) {
+                    let (field, n) = *rng.pick(&[
+                        ("matrix", 16),
+                        ("translation", 3),
+                        ("rotation", 4),
+                        ("scale", 3),
+                    ]);
+                    node.insert(field.into(), gltf_numbers(rng, n));
+                }
+            }
+        }
+        // The scene: which one, its roots.
+        9 => {
+            if rng.chance(2) {
+                doc["scene"] = json!(rng.below(3));
+            } else if let Some(Value::Object(scene)) = gltf_element(doc, "scenes", rng) {
+                let snapshot = json!({});
+                let value = gltf_field_value(rng, "nodes", scene.get("nodes"), &snapshot);
+                scene.insert("nodes".into(), value);
+            }
+        }
+        // The canary, where a file's text could be repeated: a key, a name, an extension.
+        10 => {
+            let place = descend(rng, doc, 0);
+            match (rng.below(4), place) {
+                (0, Value::Object(o)) => {
+                    o.insert(CANARY.into(), json!(1));
+                }
+                (1, Value::Object(o)) => {
+                    o.insert("name".into(), json!(CANARY));
+                }
+                (2, v) => *v = json!(CANARY),
+                _ => {
+                    let key = *rng.pick(&["extensionsUsed", "extensionsRequired"]);
+                    doc[key] = json!([CANARY]);
+                }
+            }
+        }
+        // Any value anywhere becomes a number at an edge.
+        _ => *descend(rng, doc, 0) = gltf_number(rng),
+    }
+}
+
+/// Edits of the JSON text that a `Value` cannot hold: numbers JSON has no words for, keys
+/// twice, deep nesting, a byte-order mark.
+fn gltf_json_text(rng: &mut Rng, json: &mut Vec<u8>) {
+    const TOKENS: &[&str] = &[
+        "NaN",
+        "Infinity",
+        "-Infinity",
+        "1e400",
+        "-1e400",
+        "1e-400",
+        "-0",
+        "00",
+        "1.",
+        "0x10",
+        "18446744073709551616",
+        "-9223372036854775809",
+        "4294967296",
+        "1e39",
+        "null",
+        "true",
+        "\"\"",
+        "\"CANARYx7q\"",
+        "[]",
+        "{}",
+    ];
+    const KEYS: &[&str] = &[
+        "count",
+        "byteOffset",
+        "byteLength",
+        "byteStride",
+        "componentType",
+        "type",
+        "mesh",
+        "children",
+        "nodes",
+        "scene",
+        "buffer",
+        "bufferView",
+        "indices",
+        "mode",
+        "POSITION",
+        "uri",
+        "matrix",
+        "extensions",
+        "KHR_lights_punctual",
+        "light",
+        "CANARYx7q",
+    ];
+    let braces: Vec<usize> = (0..json.len()).filter(|&i| json[i] == b'{').collect();
+    match rng.below(5) {
+        0 => replace_token(rng, json, |rng| rng.pick(TOKENS).to_string()),
+        // A key again, right after an opening brace.
+        1 | 2 if !braces.is_empty() => {
+            let at = *rng.pick(&braces) + 1;
+            let value = match rng.below(3) {
+                0 => gltf_number(rng).to_string(),
+                1 => rng.pick(TOKENS).to_string(),
+                _ => "[0, 0, 0]".to_string(),
+            };
+            let piece = format!("\"{}\": {value},", rng.pick(KEYS));
+            json.splice(at..at, piece.bytes());
+        }
+        3 if !braces.is_empty() => {
+            let at = *rng.pick(&braces) + 1;
+            let depth = 1 + rng.below(200);
+            let piece = format!("\"extras\": {}{},", "[".repeat(depth), "]".repeat(depth));
+            json.splice(at..at, piece.bytes());
+        }
+        _ => {
+            if rng.chance(2) {
+                json.splice(0..0, *b"\xef\xbb\xbf");
+            } else {
+                json.splice(0..0, *b" \r\n\t");
+            }
+        }
+    }
+}
+
+/// Changes to a GLB's container: magic, version, declared lengths, chunk types and order.
+fn mutate_glb_container(rng: &mut Rng, input: &mut Vec<u8>) {
+    let edge = |rng: &mut Rng, len: usize| -> u32 {
+        let len = len as u32;
+        *rng.pick(&[
+            0,
+            1,
+            3,
+            4,
+            8,
+            11,
+            12,
+            19,
+            20,
+            len.wrapping_sub(1),
+            len,
+            len.wrapping_add(1),
+            len.wrapping_add(4),
+            0x7fff_ffff,
+            u32::MAX - 7,
+            u32::MAX,
+        ])
+    };
+    let set = |input: &mut Vec<u8>, at: usize, v: u32| {
+        if let Some(b) = input.get_mut(at..at + 4) {
+            b.copy_from_slice(&v.to_le_bytes());
+        }
+    };
+    let u32_at = |input: &[u8], at: usize| {
+        input
+            .get(at..at + 4)
+            .map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    let second = (20 + u32_at(input, 12))
+        .next_multiple_of(4)
+        .min(input.len());
+    let len = input.len();
+    match rng.below(9) {
+        0 => {
+            let i = rng.below(4);
+            if let Some(b) = input.get_mut(i) {
+                *b ^= 1 << rng.below(8);
+            }
+        }
+        1 => {
+            let v = *rng.pick(&[0, 1, 3, u32::MAX]);
+            set(input, 4, v);
+        }
+        2 => {
+            let v = edge(rng, len);
+            set(input, 8, v);
+        }
+        3 => {
+            let v = edge(rng, u32_at(input, 12));
+            set(input, 12, v);
+        }
+        4 => {
+            let v = edge(rng, u32_at(input, second));
+            set(input, second, v);
+        }
+        5 => {
+            let at = if rng.chance(2) { 16 } else { second + 4 };
+            let v = *rng.pick(&[0x4E4F_534A, 0x004E_4942, 0, 0x1234_5678]);
+            set(input, at, v);
+        }
+        // The BIN chunk dropped, the header's length fixed or not.
+        6 => {
+            input.truncate(second);
+            if rng.chance(2) {
+                let n = input.len() as u32;
+                set(input, 8, n);
+            }
+        }
+        // A chunk of an unknown type after the others, or before BIN.
+        7 => {
+            let at = if rng.chance(2) { input.len() } else { second };
+            let n = 4 * rng.below(4);
+            let mut chunk = (n as u32).to_le_bytes().to_vec();
+            chunk.extend(b"XTRA");
+            chunk.extend(std::iter::repeat_n(0u8, n));
+            input.splice(at..at, chunk);
+            let n = input.len() as u32;
+            set(input, 8, n);
+        }
+        // The chunks in the other order.
+        _ => {
+            if second > 20 && second < input.len() {
+                let json: Vec<u8> = input[12..second].to_vec();
+                input.drain(12..second);
+                input.extend(json);
+            }
+        }
+    }
+}
+
+/// Changes to the binary data: indices and floats at their edges.
+fn mutate_gltf_bin(rng: &mut Rng, bin: &mut Vec<u8>, corpus: &[Vec<u8>]) {
+    if bin.is_empty() || rng.chance(6) {
+        mutate_bytes(rng, bin, corpus);
+        return;
+    }
+    let at = rng.below(bin.len()) & !3;
+    let word: u32 = *rng.pick(&[
+        0,
+        1,
+        2,
+        3,
+        255,
+        256,
+        65535,
+        65536,
+        u32::MAX,
+        0x7fc0_0000, // NaN
+        0x7f80_0000, // +inf
+        0xff80_0000, // -inf
+        0x7f7f_ffff, // f32::MAX
+        0x0000_0001, // the smallest subnormal
+        0x8000_0000, // -0.0
+    ]);
+    match rng.below(3) {
+        0 => {
+            if let Some(b) = bin.get_mut(at..at + 4) {
+                b.copy_from_slice(&word.to_le_bytes());
+            }
+        }
+        1 => {
+            if let Some(b) = bin.get_mut(at..at + 2) {
+                b.copy_from_slice(&(word as u16).to_le_bytes());
+            }
+        }
+        _ => {
+            let end = (at + 4 * (1 + rng.below(64))).min(bin.len());
+            bin.truncate(if rng.chance(2) { end } else { at });
+        }
+    }
+}
+
+fn mutate_gltf(rng: &mut Rng, input: &mut Vec<u8>, corpus: &[Vec<u8>]) {
+    let mut parts = GltfParts::split(input);
+    match rng.below(16) {
+        0..=6 => {
+            match serde_json::from_slice::<Value>(&parts.json) {
+                Ok(mut doc) => {
+                    mutate_gltf_json(rng, &mut doc);
+                    parts.json = serde_json::to_vec(&doc).unwrap_or_default();
+                }
+                Err(_) => mutate_bytes(rng, &mut parts.json, corpus),
+            }
+            *input = parts.join();
+        }
+        7 | 8 => {
+            gltf_json_text(rng, &mut parts.json);
+            *input = parts.join();
+        }
+        9 => {
+            mutate_bytes(rng, &mut parts.json, corpus);
+            *input = parts.join();
+        }
+        10 if parts.glb => {
+            let mut bin = parts.bin.take().unwrap_or_default();
+            mutate_gltf_bin(rng, &mut bin, corpus);
+            parts.bin = Some(bin);
+            *input = parts.join();
+        }
+        11 | 12 if parts.glb => mutate_glb_container(rng, input),
+        13 => splice(rng, input, corpus),
+        14 => {
+            let at = rng.below(input.len() + 1);
+            input.truncate(at);
+        }
+        _ => mutate_bytes(rng, input, corpus),
+    }
+}
+
+/// Triangles assembled and positions placed over every node instance of the model's scene,
+/// from the JSON alone (accessor counts and primitive modes; what the loader counts before it
+/// reads a byte of a buffer). `None` where the JSON does not say.
+fn gltf_size(bytes: &[u8]) -> Option<(u64, u64)> {
+    let parts = GltfParts::split(bytes);
+    let doc: Value = serde_json::from_slice(&parts.json).ok()?;
+    let scene = doc.get("scene").map_or(Some(0), Value::as_u64)? as usize;
+    let roots = doc.get("scenes")?.get(scene)?.get("nodes")?.as_array()?;
+    let count = |accessor: &Value| -> Option<u64> {
+        let i = accessor.as_u64()? as usize;
+        doc.get("accessors")?.get(i)?.get("count")?.as_u64()
+    };
+    let mut stack: Vec<u64> = roots.iter().filter_map(Value::as_u64).collect();
+    let mut seen = HashSet::new();
+    let (mut triangles, mut vertices) = (0u64, 0u64);
+    while let Some(n) = stack.pop() {
+        if !seen.insert(n) {
+            continue;
+        }
+        let Some(node) = doc.get("nodes").and_then(|l| l.get(n as usize)) else {
+            continue;
+        };
+        if let Some(children) = node.get("children").and_then(Value::as_array) {
+            stack.extend(children.iter().filter_map(Value::as_u64));
+        }
+        let Some(mesh) = node.get("mesh").and_then(Value::as_u64) else {
+            continue;
+        };
+        let primitives = doc
+            .get("meshes")
+            .and_then(|m| m.get(mesh as usize))
+            .and_then(|m| m.get("primitives"))
+            .and_then(Value::as_array);
+        for p in primitives.into_iter().flatten() {
+            let mode = p.get("mode").map_or(Some(4), Value::as_u64).unwrap_or(4);
+            let positions = p
+                .get("attributes")
+                .and_then(|a| a.get("POSITION"))
+                .and_then(count)
+                .unwrap_or(0);
+            let corners = p.get("indices").map_or(Some(positions), count).unwrap_or(0);
+            let t = match mode {
+                4 => corners / 3,
+                5 | 6 => corners.saturating_sub(2),
+                _ => continue,
+            };
+            triangles = triangles.saturating_add(t);
+            vertices = vertices.saturating_add(positions);
+        }
+    }
+    Some((triangles, vertices))
+}
+
+/// The error names the file, is one line, and quotes nothing of it: the canary may come back
+/// only as part of a path in the sandbox (a buffer's file name), never from the JSON.
+fn check_gltf_error(sandbox: &Sandbox, name: &str, msg: &str) -> Result<(), String> {
+    check_message("a glTF error", msg, Echo::Names)?;
+    if !msg.contains(name) {
+        return Err(format!("a glTF error does not name the file: {msg:?}"));
+    }
+    let dir = sandbox.dir.display().to_string();
+    let mut rest = msg;
+    while let Some(at) = rest.find(CANARY) {
+        if !rest[..at].contains(&dir) {
+            return Err(format!("a glTF error echoes the input: {msg:?}"));
+        }
+        rest = &rest[at + CANARY.len()..];
+    }
+    Ok(())
+}
+
+/// The input as the file `dbuffer render fuzz.glb` opens: written into the sandbox (`.gltf` if
+/// it starts as JSON, `.glb` otherwise), read by the loader (buffer files beside it, the
+/// budget's checks), then opened as a scene (the generated scene around the model, built).
+fn run_gltf(sandbox: &Sandbox, bytes: &[u8]) -> Result<String, String> {
+    let json = bytes
+        .iter()
+        .find(|b| !b" \t\r\n".contains(b))
+        .is_some_and(|&b| b == b'{');
+    let name = if json { "fuzz.gltf" } else { "fuzz.glb" };
+    let path = sandbox.dir.join(name);
+    std::fs::write(&path, bytes).map_err(|e| format!("cannot write the input: {e}"))?;
+    let over = match gltf_size(bytes) {
+        Some((t, v)) if t > MAX_TRIANGLES as u64 || v > GLTF_MAX_PLACED => true,
+        Some((t, v)) if t > GLTF_SMALL_TRIANGLES || v > GLTF_SMALL_VERTICES => {
+            return Ok("valid, large".into())
+        }
+        _ => false,
+    };
+    let model = match load_gltf(&path) {
+        Ok(m) => m,
+        Err(e) => {
+            let msg = e.to_string();
+            check_gltf_error(sandbox, name, &msg)?;
+            return Ok(outcome(&msg));
+        }
+    };
+    if over {
+        return Err(format!(
+            "a model over the budget loaded: {} triangles",
+            model.mesh.triangles.len()
+        ));
+    }
+    check_mesh(&model.mesh)?;
+    for w in &model.warnings {
+        check_message("a glTF warning", w, Echo::Never)?;
+    }
+    if let Some(l) = model.light {
+        if !l.position.is_finite() || (l.direction.length() - 1.0).abs() > 1e-3 {
+            return Err(format!(
+                "a light at {} pointing {}",
+                l.position, l.direction
+            ));
+        }
+    }
+    let path_text = path.to_str().ok_or("the sandbox path is not UTF-8")?;
+    let light = if model.light.is_some() {
+        "lit"
+    } else {
+        "unlit"
+    };
+    match dbuffer::scene::load(path_text) {
+        Ok(scene) => {
+            let geometry = if scene.caster_triangle_count() <= 20_000 {
+                check_geometry(&scene)?
+            } else {
+                "large".into()
+            };
+            Ok(format!(
+                "{light} {} {geometry}",
+                model.warnings.len().min(3)
+            ))
+        }
+        Err(e) => {
+            let msg = e.to_string();
+            check_gltf_error(sandbox, name, &msg)?;
+            Ok(format!("{light} {}", outcome(&msg)))
+        }
     }
 }
 

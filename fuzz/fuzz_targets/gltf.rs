@@ -1,0 +1,21 @@
+//! libFuzzer target: glTF models (`.gltf` JSON and `.glb`), written into a sandbox and opened as
+//! `dbuffer` opens them, through the checks of `tests/support/fuzz.rs`.
+#![no_main]
+
+#[path = "../../tests/support/fuzz.rs"]
+mod fuzz;
+
+use std::sync::OnceLock;
+
+use libfuzzer_sys::fuzz_target;
+
+static SANDBOX: OnceLock<fuzz::Sandbox> = OnceLock::new();
+
+fuzz_target!(|data: &[u8]| {
+    let sandbox = SANDBOX.get_or_init(|| fuzz::Sandbox::new("libfuzzer-gltf"));
+    if let Some(target) = fuzz::targets().into_iter().find(|t| t.name == "gltf") {
+        if let Err(broken) = (target.run)(sandbox, data) {
+            panic!("{broken}");
+        }
+    }
+});
