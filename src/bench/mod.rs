@@ -1160,7 +1160,8 @@ pub fn targets(report: &Report) -> Vec<Target> {
             strict: false,
             at_least: true,
             unit: "fps".into(),
-            detail: "wall time of geometry, light pass and camera pass (the final image), fenced".into(),
+            detail: "wall time of geometry, light pass and camera pass (the final image), fenced"
+                .into(),
         },
         at_most("D-buffer light pass / hard-shadow light pass", light, 1.5),
         at_most(
