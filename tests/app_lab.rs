@@ -720,3 +720,38 @@ fn a_lost_device_is_reported_not_a_panic() {
     );
     assert!(h.state().window_frames() > frames);
 }
+
+/// Moving the cursor over the viewport changes the inspector's rows and the light panel, and
+/// egui lays the right panel out anew for a pass: the reference must not start over (its
+/// samples only ever grow while nothing in the scene, the camera or the size changes).
+#[test]
+fn hovering_never_restarts_the_reference() {
+    let mut h = lab(Some("fig7-concave"));
+    h.state_mut().settings.reference_samples = 4096;
+    h.state_mut().settings.split = true;
+    h.state_mut().settings.split_method = "reference".into();
+    h.run();
+    let done = |h: &Harness<'_, LabApp>| {
+        h.state()
+            .core()
+            .and_then(|c| c.worker.progress())
+            .map_or(0, |(_, done, _)| done)
+    };
+    let rect = h.state().viewport_rect().expect("viewport");
+    let mut last = done(&h);
+    let mut restarts = 0;
+    for k in 0..40 {
+        let t = k as f32 / 40.0;
+        h.hover_at(egui::pos2(
+            rect.left() + rect.width() * (0.2 + 0.6 * t),
+            rect.top() + rect.height() * (0.3 + 0.5 * (1.0 - t)),
+        ));
+        h.step();
+        std::thread::sleep(std::time::Duration::from_millis(15));
+        let now = done(&h);
+        restarts += usize::from(now < last);
+        last = now;
+    }
+    assert_eq!(restarts, 0, "the reference started over {restarts} times");
+    assert!(last > 0, "the reference made progress");
+}

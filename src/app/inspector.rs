@@ -54,25 +54,30 @@ impl LabApp {
             .exact_size(INSPECTOR_WIDTH)
             .resizable(false)
             .show(ui, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| {
-                    ui.heading("Pixel");
-                    self.pixel_section(ui);
-                    // Both fold away (the light panel is tall: folded, the stats are in view).
-                    if self.viewport.hover.is_some() {
+                // The scroll bar always shown: one that appeared only when the rows grew (a
+                // branch name wrapping) widened the panel by its width for that frame.
+                egui::ScrollArea::vertical()
+                    .auto_shrink([false, false])
+                    .scroll_bar_visibility(egui::scroll_area::ScrollBarVisibility::AlwaysVisible)
+                    .show(ui, |ui| {
+                        ui.heading("Pixel");
+                        self.pixel_section(ui);
+                        // Both fold away (the light panel is tall: folded, the stats are in view).
+                        if self.viewport.hover.is_some() {
+                            ui.separator();
+                            egui::CollapsingHeader::new(
+                                egui::RichText::new("Light as seen from this pixel").heading(),
+                            )
+                            .id_salt("light-from-pixel")
+                            .default_open(true)
+                            .show(ui, |ui| self.light_section(ui));
+                        }
                         ui.separator();
-                        egui::CollapsingHeader::new(
-                            egui::RichText::new("Light as seen from this pixel").heading(),
-                        )
-                        .id_salt("light-from-pixel")
-                        .default_open(true)
-                        .show(ui, |ui| self.light_section(ui));
-                    }
-                    ui.separator();
-                    egui::CollapsingHeader::new(egui::RichText::new("Stats").heading())
-                        .id_salt("stats")
-                        .default_open(true)
-                        .show(ui, |ui| self.stats_section(ui));
-                });
+                        egui::CollapsingHeader::new(egui::RichText::new("Stats").heading())
+                            .id_salt("stats")
+                            .default_open(true)
+                            .show(ui, |ui| self.stats_section(ui));
+                    });
             });
     }
 

@@ -88,6 +88,30 @@ pub struct ViewportState {
     /// The pixel probed last, per slot, and the frame serial it was probed on.
     probed: [Option<(u32, u32, u64, View)>; 2],
     serial: u64,
+    /// The size frames are rendered at, and a different one asked for by the last pass.
+    size: Option<(u32, u32)>,
+    asked: Option<(u32, u32)>,
+}
+
+impl ViewportState {
+    /// The render size for a pass whose viewport is `asked` pixels: a new size is taken once two
+    /// passes in a row ask for it. A panel laid out narrower for a single pass (egui does so when
+    /// its content changes, e.g. as the cursor moves on) would otherwise make a frame at that
+    /// size and start the reference over twice.
+    fn settled_size(&mut self, asked: (u32, u32)) -> ((u32, u32), bool) {
+        let size = *self.size.get_or_insert(asked);
+        if asked == size {
+            self.asked = None;
+            return (size, true);
+        }
+        if self.asked == Some(asked) {
+            self.size = Some(asked);
+            self.asked = None;
+            return (asked, true);
+        }
+        self.asked = Some(asked);
+        (size, false)
+    }
 }
 
 /// Colour of the divider and of selections.
@@ -114,6 +138,10 @@ impl LabApp {
         self.interact(&ctx, &response, rect);
         let image_rect = self.image_rect(rect);
         self.hover(&response, image_rect);
+        let ((w, h), settled) = self.viewport.settled_size((w, h));
+        if !settled {
+            ctx.request_repaint();
+        }
         self.render_if_needed(&ctx, frame, w, h);
         self.paint_frames(ui, image_rect);
         if self.settings.view != View::DBuffer {
@@ -737,4 +765,26 @@ fn ray_segment(origin: Vec3, dir: Vec3, a: Vec3, b: Vec3) -> (f32, f32, f32) {
     let q = a + e * s;
     let t = (q - origin).dot(dir);
     (t, s, (origin + dir * t - q).length())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_size_asked_for_one_pass_is_not_rendered_two_passes_are() {
+        let mut v = ViewportState::default();
+        assert_eq!(v.settled_size((695, 750)), ((695, 750), true));
+        // One pass at another width (a panel laid out narrower), then back: never taken.
+        assert_eq!(v.settled_size((701, 750)), ((695, 750), false));
+        assert_eq!(v.settled_size((695, 750)), ((695, 750), true));
+        // A real resize: taken on its second pass, and kept.
+        assert_eq!(v.settled_size((800, 600)), ((695, 750), false));
+        assert_eq!(v.settled_size((800, 600)), ((800, 600), true));
+        assert_eq!(v.settled_size((800, 600)), ((800, 600), true));
+        // A window dragged wider every pass is followed once it holds a size for two passes.
+        assert_eq!(v.settled_size((810, 600)), ((800, 600), false));
+        assert_eq!(v.settled_size((820, 600)), ((800, 600), false));
+        assert_eq!(v.settled_size((820, 600)), ((820, 600), true));
+    }
 }
