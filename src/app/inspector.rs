@@ -40,7 +40,7 @@ impl Inspector {
 }
 
 /// The inspector's width in points, margins included.
-const INSPECTOR_WIDTH: f32 = 290.0;
+pub(super) const INSPECTOR_WIDTH: f32 = 290.0;
 
 fn value(v: Option<f32>) -> String {
     v.map_or_else(|| "—".into(), |v| format!("{v:.5}"))

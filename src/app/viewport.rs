@@ -120,7 +120,14 @@ pub const HIGHLIGHT: Color32 = Color32::from_rgb(255, 220, 60);
 impl LabApp {
     pub(super) fn viewport_ui(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame) {
         let ctx = ui.ctx().clone();
-        let rect = ui.available_rect_before_wrap();
+        let mut rect = ui.available_rect_before_wrap();
+        // Up to the inspector's fixed width, whatever width egui gave the panel this pass (it
+        // lays it out a few points narrower for a pass when its rows change).
+        rect.max.x = rect
+            .max
+            .x
+            .min(ctx.content_rect().max.x - super::inspector::INSPECTOR_WIDTH)
+            .max(rect.min.x);
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
         response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "viewport"));
         self.viewport.rect = Some(rect);
