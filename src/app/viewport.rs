@@ -85,8 +85,9 @@ pub struct ViewportState {
     views: [Option<ViewKey>; 2],
     /// The frame and view the last fit probe of each slot was for.
     fitted: [Option<(RenderKey, View, [bool; 4])>; 2],
-    /// The pixel probed last, per slot, and the frame serial it was probed on.
-    probed: [Option<(u32, u32, u64, View)>; 2],
+    /// The pixel probed last, per slot, the frame serial it was probed on, and the reference's
+    /// serial then (the inspector shows the reference's V there, which grows as it converges).
+    probed: [Option<(u32, u32, u64, View, u64)>; 2],
     serial: u64,
     /// The size frames are rendered at, and a different one asked for by the last pass.
     size: Option<(u32, u32)>,
@@ -361,7 +362,7 @@ impl LabApp {
                 self.viewport.shown[i].as_ref().map_or(0, |s| s.serial)
             };
             if let Some(h) = hover.filter(|h| h.split == (i == 1)) {
-                let here = Some((h.x, h.y, serial, params.view));
+                let here = Some((h.x, h.y, serial, params.view, reference_serial));
                 if redraw || self.viewport.probed[i] != here {
                     probes.push(ProbeRequest::Pixel {
                         x: h.x,
