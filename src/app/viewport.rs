@@ -85,9 +85,8 @@ pub struct ViewportState {
     views: [Option<ViewKey>; 2],
     /// The frame and view the last fit probe of each slot was for.
     fitted: [Option<(RenderKey, View, [bool; 4])>; 2],
-    /// The pixel probed last, per slot, the frame serial it was probed on, and the reference's
-    /// serial then (the inspector shows the reference's V there, which grows as it converges).
-    probed: [Option<(u32, u32, u64, View, u64)>; 2],
+    /// The pixel probed last, per slot.
+    probed: [Option<Probed>; 2],
     serial: u64,
     /// The size frames are rendered at, and a different one asked for by the last pass.
     size: Option<(u32, u32)>,
@@ -114,6 +113,11 @@ impl ViewportState {
         (size, false)
     }
 }
+
+/// A pixel probe's circumstances: the pixel, the frame serial it was probed on, the view, and
+/// the reference's serial then (the inspector shows the reference's V there, which grows as it
+/// converges): any of them changed, the pixel is probed again.
+type Probed = (u32, u32, u64, View, u64);
 
 /// Colour of the divider and of selections.
 pub const HIGHLIGHT: Color32 = Color32::from_rgb(255, 220, 60);
