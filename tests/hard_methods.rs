@@ -21,11 +21,7 @@ fn hard_truth(scene: &Scene, frame: &Frame) -> (Vec<f32>, Vec<bool>) {
         .iter()
         .map(|r| r.map_or(0.0, |r| oracle.visibility(r.position)))
         .collect();
-    let mask = receivers
-        .iter()
-        .enumerate()
-        .map(|(i, r)| frame.hit(i) && r.is_some_and(|r| r.faces_light))
-        .collect();
+    let mask = dbuffer::compare::counted_pixels(&receivers, frame);
     (truth, mask)
 }
 

@@ -26,11 +26,7 @@ impl Bench {
         let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
         let reference = render(&mut offline, &scene, Method::REFERENCE, Knobs::default());
         let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), SIZE, SIZE);
-        let mask = receivers
-            .iter()
-            .enumerate()
-            .map(|(i, r)| reference.hit(i) && r.is_some_and(|r| r.faces_light))
-            .collect();
+        let mask = dbuffer::compare::counted_pixels(&receivers, &reference);
         Bench {
             offline,
             scene,

@@ -29,11 +29,7 @@ fn measure(offline: &mut Offline, name: &str) -> Metrics {
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     // Which pixels see a surface facing the light: the CPU's view of the same pixels.
     let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), SIZE, SIZE);
-    let mask: Vec<bool> = receivers
-        .iter()
-        .enumerate()
-        .map(|(i, r)| frame.hit(i) && r.is_some_and(|r| r.faces_light))
-        .collect();
+    let mask: Vec<bool> = dbuffer::compare::counted_pixels(&receivers, &frame);
     let points: Vec<Vec3> = (0..frame.len())
         .map(|i| frame.position(i).unwrap_or(Vec3::ZERO))
         .collect();

@@ -330,11 +330,7 @@ fn wedges_against_the_reference_on_the_built_ins() {
         }
         let reference = render(&mut offline, &scene, Method::REFERENCE, SIZE);
         let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), SIZE, SIZE);
-        let mask: Vec<bool> = receivers
-            .iter()
-            .enumerate()
-            .map(|(i, r)| reference.hit(i) && r.is_some_and(|r| r.faces_light))
-            .collect();
+        let mask: Vec<bool> = dbuffer::compare::counted_pixels(&receivers, &reference);
         // The built-ins' grounds are the plane y = 0.
         let ground: Vec<bool> = mask
             .iter()

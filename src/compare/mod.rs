@@ -84,6 +84,17 @@ impl Comparison {
     }
 }
 
+/// The pixels every metric counts: the ones where `frame` shows a surface (any frame of the
+/// view) and the CPU's receiver under the pixel faces the light (`receivers` from
+/// [`view::receivers`] at the frame's size).
+pub fn counted_pixels(receivers: &[Option<view::Receiver>], frame: &Frame) -> Vec<bool> {
+    receivers
+        .iter()
+        .enumerate()
+        .map(|(i, r)| frame.hit(i) && r.is_some_and(|r| r.faces_light))
+        .collect()
+}
+
 /// Render the reference and every method in one session; `progress` hears what is being done.
 pub fn run(
     offline: &mut Offline,
@@ -120,11 +131,7 @@ pub fn run(
         request.width,
         request.height,
     );
-    let mask: Vec<bool> = receivers
-        .iter()
-        .enumerate()
-        .map(|(i, r)| reference.hit(i) && r.is_some_and(|r| r.faces_light))
-        .collect();
+    let mask = counted_pixels(&receivers, &reference);
 
     let mut results = vec![MethodResult {
         method: Method::REFERENCE,
