@@ -26,7 +26,7 @@ use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError, VolumeVertex,
 };
-use crate::scene::DiskLight;
+use crate::scene::{DiskLight, LightKind};
 
 pub static DBUFFER: MethodSpec = MethodSpec {
     name: "dbuffer",
@@ -34,6 +34,7 @@ pub static DBUFFER: MethodSpec = MethodSpec {
     knobs: &[],
     cpu_side: false,
     hard: false,
+    needs: Some(LightKind::Disk), // its volumes are the disk's
     new: |ctx| Box::new(DBuffer::new(ctx, false)),
 };
 
@@ -43,6 +44,7 @@ pub static DBUFFER_CENTER: MethodSpec = MethodSpec {
     knobs: &[],
     cpu_side: false,
     hard: false,
+    needs: Some(LightKind::Disk), // its volumes are the disk's
     new: |ctx| Box::new(DBuffer::new(ctx, true)),
 };
 

@@ -19,6 +19,7 @@
 //! paper's V(t). So do all pixels when the candidate edges exceed [`MAX_FUSED_EDGES`] (or what
 //! the adapter's storage bindings hold).
 
+use crate::scene::LightKind;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -78,6 +79,7 @@ pub static DBUFFER_FUSED: MethodSpec = MethodSpec {
     knobs: &[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES],
     cpu_side: false,
     hard: false,
+    needs: Some(LightKind::Disk), // its chords cut the disk
     new: |ctx| Box::new(DBufferFused::new(ctx)),
 };
 

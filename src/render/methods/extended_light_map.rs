@@ -55,6 +55,7 @@ pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec {
     knobs: &[&DEPTH_BITS, &PATTERN],
     cpu_side: false,
     hard: true,
+    needs: None,
     new: |ctx| Box::new(ElmMethod::new(ctx)),
 };
 

@@ -10,6 +10,7 @@ pub static HARD: MethodSpec = MethodSpec {
     knobs: &[],
     cpu_side: false,
     hard: true,
+    needs: None,
     new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
 };
 

@@ -65,6 +65,7 @@ pub static HYBRID: MethodSpec = MethodSpec {
     knobs: &[&THRESHOLD, &TEMPLATES, &EDGES],
     cpu_side: false,
     hard: true,
+    needs: None,
     new: |ctx| Box::new(HybridMethod::new(ctx)),
 };
 

@@ -29,7 +29,7 @@ use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, texture_entry, uniform_entry, view_entry, GpuContext, RenderError,
 };
-use crate::scene::LineLight;
+use crate::scene::{LightKind, LineLight};
 
 /// N, the samples on the segment.
 pub static SAMPLES: Knob = Knob {
@@ -47,6 +47,7 @@ pub static LINEAR_SSM: MethodSpec = MethodSpec {
     knobs: &[&SAMPLES],
     cpu_side: false,
     hard: false,
+    needs: Some(LightKind::Line), // seed 003's maps along a segment
     new: |ctx| Box::new(LinearSsm::new(ctx)),
 };
 

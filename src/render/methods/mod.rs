@@ -72,6 +72,8 @@ pub struct MethodSpec {
     /// A hard shadow from the light's centre as a point light: `compare` scores it against
     /// `reference-hard` too.
     pub hard: bool,
+    /// The kind of light it needs, if it cannot take both (design.md §7).
+    pub needs: Option<LightKind>,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
 }
@@ -130,13 +132,7 @@ impl Method {
 
     /// The kind of light the method needs, if it cannot take both (design.md §7).
     pub fn needs(self) -> Option<LightKind> {
-        if DISK_ONLY.contains(&self.name()) {
-            Some(LightKind::Disk)
-        } else if LINE_ONLY.contains(&self.name()) {
-            Some(LightKind::Line)
-        } else {
-            None
-        }
+        self.0.needs
     }
 
     /// The method a `light` light gets when none is named: the first of the registry made for
@@ -176,18 +172,6 @@ impl Method {
         ))
     }
 }
-
-/// The methods that need a disk light (design.md §7): the D-buffer family (its volumes are
-/// the disk's), `wedges` (the coverage of a disk) and `pcss` (a blocker search over a disk).
-const DISK_ONLY: &[&str] = &[
-    "dbuffer",
-    "dbuffer-center",
-    "dbuffer-fused",
-    "wedges",
-    "pcss",
-];
-/// The methods that need a line light: seed 003's soft shadow maps.
-const LINE_ONLY: &[&str] = &["linear-ssm"];
 
 impl Default for Method {
     fn default() -> Self {

@@ -21,6 +21,7 @@ pub static PCF: MethodSpec = MethodSpec {
     knobs: &[&RADIUS],
     cpu_side: false,
     hard: true,
+    needs: None,
     new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
 };
 

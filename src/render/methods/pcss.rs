@@ -5,7 +5,7 @@
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
 use super::{FrameInputs, Knob, MethodSpec};
-use crate::scene::Scene;
+use crate::scene::{LightKind, Scene};
 
 pub static BLOCKER_TAPS: Knob = Knob {
     name: "blocker-taps",
@@ -31,6 +31,7 @@ pub static PCSS: MethodSpec = MethodSpec {
     knobs: &[&BLOCKER_TAPS, &FILTER_TAPS],
     cpu_side: false,
     hard: false,
+    needs: Some(LightKind::Disk), // a blocker search over a disk
     new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
 };
 

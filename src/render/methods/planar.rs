@@ -42,6 +42,7 @@ pub static PLANAR: MethodSpec = MethodSpec {
     knobs: &[&OPACITY],
     cpu_side: false,
     hard: true,
+    needs: None,
     new: |ctx| Box::new(PlanarShadows::new(ctx)),
 };
 

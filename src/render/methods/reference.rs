@@ -31,6 +31,7 @@ pub static REFERENCE: MethodSpec = MethodSpec {
     knobs: &[&SAMPLES],
     cpu_side: true,
     hard: false,
+    needs: None,
     new: |ctx| Box::new(Reference::new(ctx)),
 };
 

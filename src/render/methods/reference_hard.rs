@@ -22,6 +22,7 @@ pub static REFERENCE_HARD: MethodSpec = MethodSpec {
     knobs: &[],
     cpu_side: true,
     hard: true,
+    needs: None,
     new: |ctx| Box::new(ReferenceHard::new(ctx)),
 };
 

@@ -31,6 +31,7 @@ pub static SAMPLED: MethodSpec = MethodSpec {
     knobs: &[&LIGHTS],
     cpu_side: false,
     hard: false,
+    needs: None,
     new: |ctx| Box::new(Sampled::new(ctx)),
 };
 

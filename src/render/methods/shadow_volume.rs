@@ -50,6 +50,7 @@ pub static SHADOW_VOLUME: MethodSpec = MethodSpec {
     knobs: &[&OPEN],
     cpu_side: false,
     hard: true,
+    needs: None,
     new: |ctx| Box::new(ShadowVolume::new(ctx)),
 };
 

@@ -36,7 +36,7 @@ use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
 };
-use crate::scene::DiskLight;
+use crate::scene::{DiskLight, LightKind};
 
 /// `--wedges-horizon`: clip the disk by the receiver's own plane.
 pub static HORIZON: Knob = Knob {
@@ -56,6 +56,7 @@ pub static WEDGES: MethodSpec = MethodSpec {
     knobs: &[&OPEN, &HORIZON],
     cpu_side: false,
     hard: false,
+    needs: Some(LightKind::Disk), // the coverage of a disk
     new: |ctx| Box::new(WedgesMethod::new(ctx)),
 };
 
