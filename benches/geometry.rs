@@ -1,5 +1,5 @@
 //! Geometry stage cost per light move: classification + silhouettes + volumes, for casters of
-//! 224 to 1M triangles (seed 000 Table 1 sizes, then scaling). Adjacency (welding, edges) is built
+//! 224 to 1M triangles (Jakobsen et al. 2004, Table 1 sizes, then scaling). Adjacency (welding, edges) is built
 //! once per mesh and timed separately.
 //!
 //!     cargo bench --bench geometry

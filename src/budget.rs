@@ -1,4 +1,4 @@
-//! The resource budget (design.md §7): every limit on what one input may make the program
+//! The resource budget (docs/guide/limits.md): every limit on what one input may make the program
 //! allocate, as a named constant, in one place.
 //!
 //! Each limit is checked **before** the allocation it guards: a built-in shape's triangle count

@@ -101,7 +101,7 @@ enum Command {
         #[command(flatten)]
         knobs: cli::MethodFlags,
     },
-    /// Time every method on seed 000's Table 1 scenes, and the geometry from 1k to 1M triangles;
+    /// Time every method on the D-buffer paper's Table 1 scenes, and the geometry from 1k to 1M triangles;
     /// print markdown tables and write bench.json, bench.md and geometry-scaling.png.
     Bench {
         /// Fewer frames and scaling up to 256k triangles (under two minutes on 2 CPU cores).

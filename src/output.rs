@@ -1,4 +1,4 @@
-//! Writing one render's files (design.md §3, `dbuffer render`), all or nothing.
+//! Writing one render's files (docs/guide/outputs.md), all or nothing.
 //!
 //! [`write_render`] writes the seven files of [`FILE_NAMES`] into a folder:
 //!
@@ -117,7 +117,7 @@ pub struct RenderOutputs {
     pub hit: Vec<bool>,
     /// World position per pixel (meaningful where `hit`).
     pub position: Vec<[f32; 3]>,
-    /// Shadow class per pixel where hit: 0 lit, 1 penumbra, 2 umbra (design.md §4 thresholds).
+    /// Shadow class per pixel where hit: 0 lit, 1 penumbra, 2 umbra (the thresholds of docs/method/metrics.md).
     pub class: Vec<u8>,
     /// The light-view D-buffer, `dbuffer_size`², row-major, row 0 at the top.
     pub dbuffer_size: u32,
@@ -134,7 +134,7 @@ pub struct RenderOutputs {
 
 impl RenderOutputs {
     /// A frame read back from the render core, as the files hold it: colour back to linear,
-    /// shadow classes by the thresholds of design.md §4, the D-buffer's "no surface" as `+inf`.
+    /// shadow classes by the thresholds of docs/method/metrics.md, the D-buffer's "no surface" as `+inf`.
     /// A frame without its D-buffer gets an empty one (0×0).
     pub fn from_frame(frame: &Frame, meta: RenderMeta) -> RenderOutputs {
         let hit: Vec<bool> = (0..frame.len()).map(|i| frame.hit(i)).collect();
@@ -993,7 +993,7 @@ impl PixelSource for FramePixels<'_> {
     }
 }
 
-/// The class code of V (design.md §4 thresholds): 0 lit, 1 penumbra, 2 umbra.
+/// The class code of V (the thresholds of docs/method/metrics.md): 0 lit, 1 penumbra, 2 umbra.
 fn class_code(v: f32) -> u8 {
     match ShadowClass::of(f64::from(v)) {
         ShadowClass::Lit => 0,

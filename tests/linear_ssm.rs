@@ -1,4 +1,4 @@
-//! `linear-ssm` (seed 003): its skins on the GPU against their CPU twin, its convergence to the
+//! `linear-ssm` (Heidrich, Brabec & Seidel 2000): its skins on the GPU against their CPU twin, its convergence to the
 //! line reference as the samples grow, and the artefacts the paper admits.
 
 use dbuffer::geometry::light_view::LightView;

@@ -190,7 +190,7 @@ fn disk_under_the_disk_light() {
     );
 }
 
-/// A line light over one straight edge (seed 003 Fig. 2): the light from (−1, 4, 0) to
+/// A line light over one straight edge (Heidrich et al. 2000, Fig. 2): the light from (−1, 4, 0) to
 /// (1, 4, 0), the occluder at height 2 covering x > 0 (edge across the light), receivers on the
 /// ground. The closed form of `geometry::line_light` (here V = clamp(½ − x/2, 0, 1), linear
 /// across the penumbra) against the reference end to end, and against `sampled` with N points

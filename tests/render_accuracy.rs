@@ -1,4 +1,4 @@
-//! The GPU render core against the ray-cast reference (design.md §4), V(t) exact: on the convex
+//! The GPU render core against the ray-cast reference (docs/method/metrics.md), V(t) exact: on the convex
 //! built-ins the class mismatch is at most 2 % and the penumbra MAE at most 0.08. Every built-in is
 //! measured and printed (`cargo test --test render_accuracy -- --nocapture`).
 

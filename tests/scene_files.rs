@@ -563,7 +563,7 @@ proptest! {
     }
 }
 
-// Line lights (design.md §7): `kind = "line"` with end points `a` and `b`.
+// Line lights (docs/guide/scene-format.md): `kind = "line"` with end points `a` and `b`.
 
 const LINE: &str = "[light]\nkind = \"line\"\na = [-1.0, 4.0, 0.0]\nb = [1.0, 4.0, 0.5]\n";
 

@@ -1,6 +1,6 @@
 //! The CPU twin of the method against the ray-cast reference over the camera view of the built-in
-//! scenes (design.md §4 metrics, V(t) exact). Convex casters must be boundary-correct up to pixels
-//! on the boundary itself; concave and overlapping casters break Assumption 1 of seed 000, and the
+//! scenes (the metrics of docs/method/metrics.md V(t) exact). Convex casters must be boundary-correct up to pixels
+//! on the boundary itself; concave and overlapping casters break Assumption 1 of Jakobsen et al. 2004, and the
 //! bounds there pin the D-buffer rules (nearest penumbra entry, nearest umbra exit per caster) that
 //! keep them close: the paper's "farthest penumbra wins" fails them. The `fusion-*` scenes are
 //! where it fails most; `dbuffer-fused` (its twin, `geometry::fused`) is held to every scene.

@@ -1,7 +1,7 @@
 //! The CPU twin of the D-buffer against ray-cast ground truth, over random convex casters
 //! (hulls of random points), random disk lights and random receiver points.
 //!
-//! What must hold (design.md §2, issue #2):
+//! What must hold (docs/method/dbuffer.md, issue #2):
 //! - where the whole of a disk 10 % larger is hidden (a margin around the boundary), the twin says
 //!   umbra; where none of the larger disk is hidden, the twin says lit. For a convex caster above
 //!   `x` this is decided exactly: the hidden part of the light plane is the convex hull of the
@@ -10,9 +10,9 @@
 //! - on the penumbra, V(t) with the exact variant is close to the oracle: mean |ΔV| ≤ 0.1 for every
 //!   caster whose umbra reaches the ground (and with 20 or more penumbra points), and at least 80 % of their penumbra points within 0.1.
 //!   Not every point: eq. 3 is exact only for edges parallel to the disk, and random hulls have
-//!   acute corners, where Assumption 1 of seed 000 fails. Casters whose umbra closes before the
+//!   acute corners, where Assumption 1 of Jakobsen et al. 2004 fails. Casters whose umbra closes before the
 //!   ground (a light much larger than the caster) are the paper's "no umbra" case, where V comes
-//!   out too low by construction (seed 000 §4): their classes are checked, their V is only
+//!   out too low by construction (Jakobsen et al. 2004, §4): their classes are checked, their V is only
 //!   measured and printed.
 
 use std::cell::Cell;

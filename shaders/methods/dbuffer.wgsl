@@ -1,4 +1,4 @@
-// `dbuffer` and `dbuffer-center`: the D-buffer lookup (seed 000 §4, with design.md's corrections;
+// `dbuffer` and `dbuffer-center`: the D-buffer lookup (Jakobsen et al. 2004, §4, with the corrections in docs/method/dbuffer.md;
 // src/render/methods/dbuffer.rs). Per pixel: |cx|, the hidden-from-centre test against |cx_o|,
 // the parameter t by the corrected eq. (3) from the umbra or the penumbra channel, then V(t).
 // Its CPU twin is DBufferTwin::sample (src/geometry/twin.rs) with geometry::visibility.

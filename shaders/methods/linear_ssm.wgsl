@@ -1,4 +1,4 @@
-// `linear-ssm`: soft shadow maps for linear lights (Heidrich, Brabec & Seidel 2000; seed 003;
+// `linear-ssm`: soft shadow maps for linear lights (Heidrich, Brabec & Seidel 2000;
 // src/render/methods/linear_ssm.rs). N samples on the segment, ends included, each a point light
 // with a distance map and a visibility channel per neighbouring pair (R: with the previous
 // sample, G: with the next); a point seen by sample k adds both of k's channels:

@@ -1,4 +1,4 @@
-// `sampled`: N point lights on the disk, each with its own shadow map, averaged (seed 002 §3.1;
+// `sampled`: N point lights on the disk, each with its own shadow map, averaged (light-source sampling, Heckbert & Herf 1997;
 // src/render/methods/sampled.rs, maps from shaders/passes/sample_maps.wgsl).
 // #include shared/camera.wgsl
 // #include shared/sample_lights.wgsl

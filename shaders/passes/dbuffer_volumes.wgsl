@@ -1,4 +1,4 @@
-// The D-buffer's volume channels, drawn from the light centre c (seed 000 §3; design.md §2).
+// The D-buffer's volume channels, drawn from the light centre c (Jakobsen et al. 2004, §3; docs/method/dbuffer.md).
 // Its CPU twin is src/geometry/twin.rs; the channel rules must match it:
 //   |cx_uv|  per caster the nearest umbra exit (faces whose normal points away from c: the
 //            pipeline culls the others), then the farthest over casters (fs_umbra; casters whose

@@ -1,4 +1,4 @@
-// The `sampled` method's shadow maps (seed 002 §3.1): every surface seen from N stratified points
+// The `sampled` method's shadow maps (light-source sampling, Heckbert & Herf 1997): every surface seen from N stratified points
 // on the disk, one array layer each, storing the Euclidean distance to that point (as |cx_o| does
 // for the centre). The draw's instance index picks the layer's light; the method's camera pass
 // reads the same SampleLights (shaders/methods/sampled.wgsl).

@@ -1,4 +1,4 @@
-// `linear-ssm`'s skins (seed 003 §3.2; CPU twin geometry::ssm::skins) from one sample's distance
+// `linear-ssm`'s skins (Heidrich et al. 2000, §3.2; CPU twin geometry::ssm::skins) from one sample's distance
 // map, in four dispatches:
 //   `find`    every 2x2 cell of texel centres: a cell whose four distances are discontinuous
 //             (the largest beyond the smallest times 1 + tau, or surface beside no surface) is

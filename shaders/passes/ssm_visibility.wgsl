@@ -1,4 +1,4 @@
-// `linear-ssm`'s visibility channels (seed 003 §3.2): the skins of one sample's map drawn into a
+// `linear-ssm`'s visibility channels (Heidrich et al. 2000, §3.2): the skins of one sample's map drawn into a
 // neighbouring sample's view, Gouraud-shaded from 0 on the occluder to 1 on the receiver,
 // interpolated linearly in the image as the paper's hardware did, times the pair's share of the
 // light. The nearest skin wins (a scratch depth buffer); a skin behind the sample's own nearest

@@ -1,7 +1,7 @@
-//! `dbuffer bench`: seed 000's Table 1 reproduced (casters of 224, 960, 5760 and 1440 triangles at
+//! `dbuffer bench`: the D-buffer paper's Table 1 reproduced (casters of 224, 960, 5760 and 1440 triangles at
 //! 300², 600² and 1024²), every other method of [`Method::ALL`] timed in the same run as a ratio
-//! to the D-buffer, the steady frame with the geometry cached and rebuilt every frame (seed 000
-//! §6.1), and the geometry stage from 1k to 1M caster triangles (design.md §5).
+//! to the D-buffer, the steady frame with the geometry cached and rebuilt every frame (Jakobsen et al.
+//! 2004, §6.1), and the geometry stage from 1k to 1M caster triangles (docs/results/performance.md).
 //!
 //! Everything is measured through the same calls the lab makes: a [`Session`] per scene, one
 //! [`FrameRequest`] per method. Frames are timed after warm-up ones (the first includes the
@@ -27,7 +27,7 @@ use crate::render::timer::{PassTimer, Recorder};
 use crate::render::{Frame, FrameRequest, FrameTargets, GpuContext, Knobs, Method};
 use crate::scene::{self, shapes, Camera, DiskLight, Object, Scene, SceneError};
 
-/// The Table 1 scenes of seed 000, in the paper's order.
+/// The Table 1 scenes of Jakobsen et al. 2004, in the paper's order.
 pub const TABLE1_SCENES: [&str; 4] = ["table1-224", "table1-960", "table1-5760", "table1-1440"];
 
 /// The scenes where occluders fuse (issue 12), timed by the full run after Table 1's.
@@ -341,7 +341,7 @@ pub struct SceneInfo {
     pub penumbra_triangles: usize,
 }
 
-/// The steady frame with the geometry cached against rebuilt every frame (seed 000 §6.1).
+/// The steady frame with the geometry cached against rebuilt every frame (Jakobsen et al. 2004, §6.1).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Coherence {
     pub scene: String,

@@ -82,7 +82,7 @@ pub fn markdown(r: &Report) -> String {
 }
 
 fn table1(out: &mut String, r: &Report) {
-    let _ = writeln!(out, "### Table 1 (seed 000), D-buffer\n");
+    let _ = writeln!(out, "### Table 1 (Jakobsen et al. 2004), D-buffer\n");
     let _ = writeln!(
         out,
         "| scene | caster tris | size | geometry ms (CPU) | light pass ms (GPU) | camera pass ms (GPU) | frame ms | fps | fps, geometry every frame | wall ms (incl. readback) |"
@@ -456,7 +456,7 @@ fn coherence(out: &mut String, r: &Report) {
     };
     let _ = writeln!(
         out,
-        "### Frame coherence (seed 000 §6.1): `{}` at {}², D-buffer\n",
+        "### Frame coherence (Jakobsen et al. 2004, §6.1): `{}` at {}², D-buffer\n",
         c.scene, c.size
     );
     let _ = writeln!(

@@ -418,7 +418,7 @@ struct Frames {
     mask: Vec<bool>,
 }
 
-/// The CPU twin of the method against the oracle over the camera's view (design.md §4 metrics).
+/// The CPU twin of the method against the oracle over the camera's view (the metrics of docs/method/metrics.md.
 fn compare_twin(
     scene: &scene::Scene,
     prepared: Option<&PreparedCasters>,

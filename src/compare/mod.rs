@@ -1,5 +1,5 @@
 //! `dbuffer compare`: every method and the ray-cast reference from the same view, measured
-//! against it (design.md §4) — the numbers and pictures that show where the D-buffer is right and
+//! against it (docs/method/metrics.md) — the numbers and pictures that show where the D-buffer is right and
 //! where the alternatives are not.
 //!
 //! Which pixels count: those where the GPU hit a surface that faces the light (the CPU's view of

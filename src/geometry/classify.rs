@@ -1,4 +1,4 @@
-//! Face classes against a disk light (seed 000 §2.1, with correction 1 of the design brief).
+//! Face classes against a disk light (Jakobsen et al. 2004, §2.1, with correction 1 of docs/method/dbuffer.md#face-classes).
 //!
 //! For a face with unit normal `n` through `v`, `f(p) = n·(p − v)`. Over the disk, `f` ranges
 //! over `f(c) ± r|n⊥|` with `n⊥ = n − (n·n_c) n_c`, reached at `c ± r n⊥/|n⊥|`. The paper's
@@ -19,7 +19,7 @@ pub enum FaceClass {
     /// No point of the disk is in front of the face (`max f ≤ 0`).
     NoneFront,
     /// A silhouette face whose plane has the light centre behind it (`f(c) < 0`): front-facing to
-    /// less than half of the disk (seed 000 Fig. 6).
+    /// less than half of the disk (Jakobsen et al. 2004, Fig. 6).
     SilhouetteA,
     /// A silhouette face with the light centre in front of it (`f(c) ≥ 0`).
     SilhouetteB,

@@ -1,5 +1,5 @@
 //! The D-buffer's view from the light centre: a perspective frustum fitted to where the casters'
-//! penumbrae can be, so texels are spent where shadows fall (design.md §2, "fit it to their
+//! penumbrae can be, so texels are spent where shadows fall (docs/method/dbuffer.md#the-d-buffer, "fit it to their
 //! bounds").
 //!
 //! A line light's view looks from its midpoint, fitted the same way with the segment's two end

@@ -1,4 +1,4 @@
-//! Closed forms for a linear light (seed 003 §3.1): the exact visible fraction of a segment light
+//! Closed forms for a linear light (Heidrich et al. 2000, §3.1): the exact visible fraction of a segment light
 //! seen past one straight edge, the truth the line reference, `sampled` and `linear-ssm` are
 //! tested against.
 //!
@@ -18,7 +18,7 @@
 //!
 //! For a light from `(−L/2, H, 0)` to `(L/2, H, 0)`, the occluder `x < 0` in the plane `y = h`
 //! and receivers on `y = 0`, this is `V = clamp(½ + x (H − h)/(h L), 0, 1)`: linear across the
-//! penumbra, as seed 003 says for a receiver parallel to the light; an edge parallel to the light
+//! penumbra, as Heidrich et al. 2000 say for a receiver parallel to the light; an edge parallel to the light
 //! casts a hard boundary.
 
 use glam::{DVec3, Vec3};

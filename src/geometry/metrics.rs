@@ -1,4 +1,4 @@
-//! The quality metrics of design.md §4: a method's visibility against the reference.
+//! The quality metrics (docs/method/metrics.md): a method's visibility against the reference.
 //!
 //! Over pixels that hit a surface facing the light, each V falls in a class — lit `V ≥ 1 − ε`,
 //! umbra `V ≤ ε`, penumbra otherwise, `ε = 0.004` — and the report gives the class mismatch (the

@@ -1,6 +1,6 @@
 //! The geometry stage: everything about the disk light and the casters that needs no GPU.
 //!
-//! Data flow for one light position (seed 000 §2.1): [`adjacency`] prepares each caster once
+//! Data flow for one light position (Jakobsen et al. 2004, §2.1): [`adjacency`] prepares each caster once
 //! (welding, edges); [`classify`] sorts its faces against the disk; [`silhouette`] finds the umbra
 //! and penumbra silhouettes and their extrusion points; [`volumes`] extrudes and closes the
 //! volumes. [`twin`] is the CPU twin of the D-buffer lookup; the visibility oracle is the ground
@@ -37,7 +37,7 @@ pub use volumes::{CasterGeometry, GeometryStats, VolumeKind, VolumeMesh, VolumeP
 use crate::scene::{DiskLight, Scene};
 
 /// The casters of a scene, prepared once (welding, adjacency, face planes). Only
-/// [`PreparedCasters::build`] runs again when the light moves (seed 000 §6.1).
+/// [`PreparedCasters::build`] runs again when the light moves (Jakobsen et al. 2004, §6.1).
 #[derive(Clone, Debug, Default)]
 pub struct PreparedCasters {
     pub meshes: Vec<CasterMesh>,

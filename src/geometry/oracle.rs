@@ -40,7 +40,7 @@ use rayon::prelude::*;
 use super::bvh::Bvh;
 use crate::scene::{Light, LineLight, Scene};
 
-/// Default number of light samples per point (seed 000's Fig. 7b and 8d).
+/// Default number of light samples per point (Jakobsen et al. 2004, Fig. 7b and 8d).
 pub const DEFAULT_SAMPLES: usize = 1024;
 
 /// Hits closer than this fraction of the segment to either end are ignored (self-intersection).

@@ -2,7 +2,7 @@
 //!
 //! An edge is on the *umbra silhouette* if it joins a none-frontfacing face to one that is not,
 //! and on the *penumbra silhouette* if it joins an all-frontfacing face to one that is not
-//! (seed 000 §2.1). Across a boundary edge a face borders its own back side.
+//! (Jakobsen et al. 2004, §2.1). Across a boundary edge a face borders its own back side.
 //!
 //! The two planes through the line of an edge that are tangent to the disk touch it at two rim
 //! points. `p_u` is the one whose plane has the disk and the caster on the same side (the umbra

@@ -1,5 +1,5 @@
 //! The CPU twin of `linear-ssm`'s skin extraction (`shaders/passes/ssm_skins.wgsl`): the "skins"
-//! or "phantom polygons" of seed 003 §3.2, from one light sample's distance map.
+//! or "phantom polygons" of Heidrich et al. 2000, §3.2, from one light sample's distance map.
 //!
 //! The paper triangulates every depth sample of a map, warps the triangles into the other
 //! sample's view and keeps the ones that span a depth discontinuity: they join an occluder to the

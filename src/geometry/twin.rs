@@ -8,7 +8,7 @@
 //!   whose normal faces away from `c` (umbra quads, category-A silhouette faces; category-B
 //!   silhouette faces face `c` and are culled). Untrimmed umbra quads cross each other at convex
 //!   corners and beyond the apex of a closing umbra; the true boundary is always the first exit.
-//!   Over casters the **farthest** of these wins (seed 000 §4, overlapping casters).
+//!   Over casters the **farthest** of these wins (Jakobsen et al. 2004, §4, overlapping casters).
 //! - `|cx_pv|`: the **nearest penumbra entry** — a hit on a penumbra quad or fan whose normal
 //!   faces `c`. A ray from `c` enters a caster's penumbra once and never leaves it (every
 //!   penumbra plane separates the disk, `c` included, from the caster), so along the ray the union

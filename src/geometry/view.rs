@@ -14,7 +14,7 @@ pub struct Receiver {
     /// Unit normal of the hit triangle, turned toward the camera.
     pub normal: Vec3,
     /// The normal faces the light centre (a line's midpoint) and the light reaches the point
-    /// (in front of a one-sided disk): the pixels the metrics of design.md §4 are taken over.
+    /// (in front of a one-sided disk): the pixels the metrics of docs/method/metrics.md are taken over.
     pub faces_light: bool,
 }
 

@@ -1,4 +1,4 @@
-//! The visibility parameter `t` (corrected eq. 3 of seed 000) and the `V(t)` variants.
+//! The visibility parameter `t` (corrected eq. 3 of Jakobsen et al. 2004, docs/method/dbuffer.md#the-visibility-parameter-t) and the `V(t)` variants.
 //!
 //! Along the ray from the light centre `c` through a shaded point `x`: `D = |cx|`; `S = |cx_s|`,
 //! the distance to the plane through the silhouette edge parallel to the disk; `U = |cx_uv|` and
@@ -69,10 +69,10 @@ pub fn t_visible(d: f64, s: f64, p: Option<f64>) -> (f64, Branch) {
 /// The `V(t)` functions that turn the parameter into a visible fraction of the disk.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum VtVariant {
-    /// `3t² − 2t³`, seed 000 eq. (4).
+    /// `3t² − 2t³`, Jakobsen et al. 2004, eq. (4).
     #[default]
     Smoothstep,
-    /// `√t`, seed 000 §6.2, for small occluders.
+    /// `√t`, Jakobsen et al. 2004, §6.2, for small occluders.
     Sqrt,
     /// The visible fraction of a disk cut by a chord at `1 − 2t` radii from its centre.
     Exact,

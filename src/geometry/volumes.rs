@@ -1,7 +1,7 @@
 //! Umbra and penumbra volumes of a caster, as one indexed triangle mesh tagged by kind.
 //!
 //! - **Umbra volume**: a quad per umbra-silhouette edge, extruded away from its `p_u`, plus the
-//!   silhouette faces (seed 000 §3.3; without them the D-buffer has holes). Umbra quads are
+//!   silhouette faces (Jakobsen et al. 2004, §3.3; without them the D-buffer has holes). Umbra quads are
 //!   oriented with their normal *away* from the light centre `c`: every umbra quad lies on a plane
 //!   tangent to the disk with the disk (and `c`) on its inner side, so a ray from `c` can only
 //!   *leave* the umbra through it. Adjacent quads cross at convex corners and beyond the apex of a
@@ -98,7 +98,7 @@ impl VolumeVertex {
     /// point through the fragment), so it is exact per fragment even for edges that are not
     /// parallel to the disk. On a silhouette face the face is its own edge: `|cx_s| = |cx|`.
     ///
-    /// Note: the formula printed in seed 000 and copied into the brief,
+    /// Note: the formula printed in Jakobsen et al. 2004,
     /// `(dir(c,x)·n)/(dir(c,e)·n)·dist(c,e)`, is this distance with the ratio inverted; the two
     /// agree only where `dir(c,x)·n = dir(c,e)·n`.
     pub fn edge_plane_distance(&self, hit: Vec3, dir: Vec3, light: &DiskLight) -> f32 {
@@ -191,7 +191,7 @@ pub struct VolumeParams {
     /// Largest angle of the disk arc one fan triangle covers, in degrees.
     pub fan_step_deg: f32,
     /// Classify faces against the light centre alone (a point light), then extrude those
-    /// silhouettes over the whole disk: the penumbra-wedge approximation seed 000 Fig. 1
+    /// silhouettes over the whole disk: the penumbra-wedge approximation Jakobsen et al. 2004, Fig. 1
     /// criticises (method `dbuffer-center`). Off, faces are classified against the disk.
     pub center_silhouettes: bool,
 }

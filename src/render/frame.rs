@@ -150,7 +150,7 @@ pub struct FrameParts<'a> {
     pub surfaces: &'a GpuScene,
 }
 
-/// One frame, in the order of design.md §1: the method's light-space passes (the D-buffer, shadow
+/// One frame, in the order of the data flow (docs/development/architecture.md): the method's light-space passes (the D-buffer, shadow
 /// maps: recorded only when the light or a caster moved since they were made), then the camera
 /// pass (per pixel V and shading) into `targets`, then, for a window, the view it shows.
 pub fn record_frame(

@@ -1,4 +1,4 @@
-//! The ray-cast ground truth (design.md §4): per pixel, the surface point under the pixel's centre
+//! The ray-cast ground truth (docs/method/metrics.md): per pixel, the surface point under the pixel's centre
 //! (a primary ray through the CPU's BVH), then rays to K stratified disk samples (the geometry
 //! oracle). All at once for `dbuffer render` and `compare` ([`compute`]); progressively, a few
 //! samples per pixel at a time, on a worker thread for the lab ([`ReferenceWorker`]), so the

@@ -1,6 +1,6 @@
 //! A scene being looked at over many frames (the lab, benchmarks, `render`): the surfaces are
 //! uploaded once; each method's light-space work (geometry, D-buffer, shadow maps) runs again only
-//! when the light or a caster moved (seed 000 §6.1: the D-buffer does not depend on the camera);
+//! when the light or a caster moved (Jakobsen et al. 2004, §6.1: the D-buffer does not depend on the camera);
 //! the camera pass runs every frame. Frames stay on the GPU in [`FrameTargets`]; reading one back
 //! is a separate call.
 

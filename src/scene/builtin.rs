@@ -1,4 +1,4 @@
-//! Built-in scenes (design.md §6), and scenes with a linear light after seed 003's figures. Each is a TOML file in `assets/scenes/`, embedded in the
+//! Built-in scenes (docs/guide/scenes.md), and scenes with a linear light after the figures of Heidrich et al. 2000. Each is a TOML file in `assets/scenes/`, embedded in the
 //! binary and parsed by the same code as user scene files, so they double as examples.
 
 use super::{Scene, SceneError, SceneFile};
@@ -64,7 +64,7 @@ const SCENES: &[(&str, &str)] = &[
         "fusion-many",
         include_str!("../../assets/scenes/fusion-many.toml"),
     ),
-    // Linear lights (seed 003's figures).
+    // Linear lights (the figures of Heidrich et al. 2000).
     (
         "line-fig2",
         include_str!("../../assets/scenes/line-fig2.toml"),

@@ -1,4 +1,4 @@
-//! The scene file (design.md §3): TOML, +Y up, right-handed, metres, angles in degrees.
+//! The scene file (docs/guide/scene-format.md): TOML, +Y up, right-handed, metres, angles in degrees.
 //!
 //! ```toml
 //! [camera]                 # optional: without it the view is framed on the casters and the light
@@ -12,7 +12,7 @@
 //! radius = 0.5
 //! intensity = 1.0          # optional, default 1
 //!
-//! # or a linear light (design.md §7), emitting all around the segment from `a` to `b`:
+//! # or a linear light (docs/guide/scene-format.md), emitting all around the segment from `a` to `b`:
 //! # [light]
 //! # kind = "line"          # optional, default "disk"
 //! # a = [-1.0, 4.0, 0.0]

@@ -38,7 +38,7 @@ impl DiskLight {
     }
 }
 
-/// A linear light (seed 003): the segment from `a` to `b`, emitting all around it. V at a point
+/// A linear light (Heidrich, Brabec & Seidel 2000): the segment from `a` to `b`, emitting all around it. V at a point
 /// is the fraction of the segment's length it sees.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LineLight {
@@ -92,7 +92,7 @@ impl std::fmt::Display for LightKind {
     }
 }
 
-/// The scene's light: the one-sided disk of the D-buffer paper, or a linear light (design.md §7).
+/// The scene's light: the one-sided disk of the D-buffer paper, or a linear light (docs/guide/scene-format.md).
 /// The D-buffer geometry stage keeps taking a [`DiskLight`] ([`Light::as_disk`]); what every
 /// method shares goes through [`Light::center`] (the point the hard methods use).
 #[derive(Clone, Copy, Debug, PartialEq)]

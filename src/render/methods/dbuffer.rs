@@ -1,5 +1,5 @@
-//! `dbuffer` (seed 000, with design.md's corrections) and `dbuffer-center` (its silhouettes and
-//! volumes taken from the light centre only: the penumbra-wedge approximation seed 000 Fig. 1
+//! `dbuffer` (Jakobsen et al. 2004, with the corrections in docs/method/dbuffer.md) and `dbuffer-center` (its silhouettes and
+//! volumes taken from the light centre only: the penumbra-wedge approximation Jakobsen et al. 2004, Fig. 1
 //! criticises).
 //!
 //! Per light or caster move: the geometry stage (`geometry::PreparedCasters::build`: classes,

@@ -1,11 +1,11 @@
-//! `linear-ssm`: soft shadow maps for linear lights (Heidrich, Brabec & Seidel 2000; seed 003).
+//! `linear-ssm`: soft shadow maps for linear lights (Heidrich, Brabec & Seidel 2000).
 //!
 //! N samples on the segment, its two ends included (`--ssm-samples`, the paper's 2 by default):
 //! each is a point light with a distance map (the `sampled` maps pass, at these points) and a
 //! visibility channel per neighbouring pair, built from the skins of the neighbour's map
 //! ([`crate::render::passes::ssm`]). The camera pass (`shaders/methods/linear_ssm.wgsl`) adds
 //! the channels of every sample that sees the point. Each pair of neighbours is a linear light of
-//! its own, `1/(N − 1)` of the whole (seed 003 §3.3); the two channels of an inner sample are the
+//! its own, `1/(N − 1)` of the whole (Heidrich et al. 2000, §3.3); the two channels of an inner sample are the
 //! paper's "two point lights merged, their visibility channels summed".
 //!
 //! What the paper admits, and what shows here: a point seen by no sample is in umbra even where
@@ -47,7 +47,7 @@ pub static LINEAR_SSM: MethodSpec = MethodSpec {
     knobs: &[&SAMPLES],
     cpu_side: false,
     hard: false,
-    needs: Some(LightKind::Line), // seed 003's maps along a segment
+    needs: Some(LightKind::Line), // Heidrich et al.'s maps along a segment
     new: |ctx| Box::new(LinearSsm::new(ctx)),
 };
 

@@ -72,7 +72,7 @@ pub struct MethodSpec {
     /// A hard shadow from the light's centre as a point light: `compare` scores it against
     /// `reference-hard` too.
     pub hard: bool,
-    /// The kind of light it needs, if it cannot take both (design.md §7).
+    /// The kind of light it needs, if it cannot take both (docs/method/README.md).
     pub needs: Option<LightKind>,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
@@ -130,7 +130,7 @@ impl Method {
         self.0.hard
     }
 
-    /// The kind of light the method needs, if it cannot take both (design.md §7).
+    /// The kind of light the method needs, if it cannot take both (docs/method/README.md).
     pub fn needs(self) -> Option<LightKind> {
         self.0.needs
     }

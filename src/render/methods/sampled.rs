@@ -1,5 +1,5 @@
 //! `sampled`: N shadow maps from N stratified points on the light (the disk, or a line light's
-//! segment), averaged (seed 002 §3.1): the brute-force area light (maps from `passes::sample_maps`, camera pass
+//! segment), averaged (light-source sampling, Heckbert & Herf 1997): the brute-force area light (maps from `passes::sample_maps`, camera pass
 //! `shaders/methods/sampled.wgsl`).
 
 use std::sync::Arc;

@@ -1,5 +1,5 @@
 //! `wedges`: soft shadow volumes with penumbra wedges (Akenine-Möller & Assarsson 2002;
-//! Assarsson & Akenine-Möller 2003; seed 002 §3.3), for the disk light.
+//! Assarsson & Akenine-Möller 2003), for the disk light.
 //!
 //! Per light or caster move: the casters' hard volumes from the disk's centre
 //! (`geometry::hard_volume`, the same as `shadow-volume`'s) and one wedge per side edge of them

@@ -1,6 +1,6 @@
 //! The `sampled` method's shadow maps (`shaders/passes/sample_maps.wgsl`): N stratified points on
 //! the light (disk or segment), each a point light with a `size`² distance map, one layer of an
-//! array texture (seed 002 §3.1). The method's camera pass averages their hard tests;
+//! array texture (light-source sampling, Heckbert & Herf 1997). The method's camera pass averages their hard tests;
 //! `linear-ssm` draws the same maps at its own points on a segment.
 //!
 //! Every point uses the D-buffer's frustum moved to that point: the frustum is fitted to the

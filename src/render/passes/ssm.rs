@@ -1,4 +1,4 @@
-//! `linear-ssm`'s skins and visibility channels (seed 003 §3.2): for each light sample `j`, a
+//! `linear-ssm`'s skins and visibility channels (Heidrich et al. 2000, §3.2): for each light sample `j`, a
 //! compute pass extracts the skins of its distance map (`shaders/passes/ssm_skins.wgsl`, CPU twin
 //! [`crate::geometry::ssm::skins`]) into one skin buffer, and two small render passes draw them
 //! into the visibility channels of its neighbours `j − 1` and `j + 1`
