@@ -10,9 +10,9 @@
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
@@ -129,6 +129,19 @@ struct Outbox {
     /// Steps finished since the worker started.
     steps: AtomicU64,
     busy: AtomicBool,
+    /// Counts the worker's news (a snapshot handed over, or it went idle), and wakes whoever
+    /// waits for the next ([`ReferenceWorker::wait_for_news`]).
+    news: Mutex<u64>,
+    news_arrived: Condvar,
+}
+
+impl Outbox {
+    fn announce(&self) {
+        if let Ok(mut n) = self.news.lock() {
+            *n += 1;
+        }
+        self.news_arrived.notify_all();
+    }
 }
 
 /// The lab's reference: rays cast on a worker thread (at a lower scheduling priority than the
@@ -219,6 +232,30 @@ impl ReferenceWorker {
     pub fn steps(&self) -> u64 {
         self.outbox.steps.load(Ordering::Acquire)
     }
+
+    /// How much news the worker has had (snapshots handed over, and times it went idle): what
+    /// [`ReferenceWorker::wait_for_news`] waits to see grow.
+    pub fn news(&self) -> u64 {
+        self.outbox.news.lock().map_or(0, |n| *n)
+    }
+
+    /// Blocks until the worker has news after `seen` (a value of [`ReferenceWorker::news`]) or
+    /// `timeout` has passed, and returns the count then. For tests, which step the window once
+    /// there is something new to show instead of polling; the lab itself never waits on the
+    /// worker (its frames ask for a repaint while the worker is busy).
+    pub fn wait_for_news(&self, seen: u64, timeout: Duration) -> u64 {
+        let Ok(n) = self.outbox.news.lock() else {
+            return seen;
+        };
+        match self
+            .outbox
+            .news_arrived
+            .wait_timeout_while(n, timeout, |n| *n <= seen)
+        {
+            Ok((n, _)) => *n,
+            Err(_) => seen,
+        }
+    }
 }
 
 impl Default for ReferenceWorker {
@@ -255,6 +292,7 @@ fn work(rx: &Receiver<Command>, outbox: &Outbox, hard: bool) {
             }
         } else {
             outbox.busy.store(false, Ordering::Release);
+            outbox.announce();
             match rx.recv() {
                 Ok(c) => Some(c),
                 Err(_) => return,
@@ -338,6 +376,7 @@ fn publish(outbox: &Outbox, snapshot: Snapshot) {
         *p = Some(progress);
     }
     outbox.steps.fetch_add(1, Ordering::AcqRel);
+    outbox.announce();
 }
 
 /// `f` on `pool` (its parallel iterators on its threads), or here without one.
