@@ -1,4 +1,4 @@
-//! The long run of the parser fuzzer (`tests/support/fuzz.rs`): scene TOML, OBJ and glTF, in-process,
+//! The long run of the parser fuzzer (the `dbuffer-fuzzer` crate, `tests/fuzzer/`): scene TOML, OBJ and glTF, in-process,
 //! structure-aware, with a counting allocator and a hang watchdog.
 //!
 //!     cargo run --release --example fuzz -- --execs 10000000
@@ -9,10 +9,9 @@
 //! target (`scene-toml`, `obj`, `gltf`). `--jobs J` runs J
 //! threads, each from its own seed (default: one less than the cores, at least 1). Every
 //! failure is printed as it is found and written to `fuzz-failures/TARGET-N.bin`; the exit
-//! status is 1 if there was any. Add each one to `REGRESSIONS` in `tests/fuzz_parsers.rs`.
+//! status is 1 if there was any. Add each one to `REGRESSIONS` in `tests/cpu/fuzz_parsers.rs`.
 
-#[path = "../tests/support/fuzz.rs"]
-mod fuzz;
+use dbuffer_fuzzer as fuzz;
 
 use std::time::Instant;
 

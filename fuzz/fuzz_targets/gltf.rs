@@ -1,9 +1,8 @@
 //! libFuzzer target: glTF models (`.gltf` JSON and `.glb`), written into a sandbox and opened as
-//! `dbuffer` opens them, through the checks of `tests/support/fuzz.rs`.
+//! `dbuffer` opens them, through the checks of the `dbuffer-fuzzer` crate (`tests/fuzzer/`).
 #![no_main]
 
-#[path = "../../tests/support/fuzz.rs"]
-mod fuzz;
+use dbuffer_fuzzer as fuzz;
 
 use std::sync::OnceLock;
 

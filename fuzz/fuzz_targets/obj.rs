@@ -1,8 +1,7 @@
-//! libFuzzer target: OBJ meshes, through the checks of `tests/support/fuzz.rs`.
+//! libFuzzer target: OBJ meshes, through the checks of the `dbuffer-fuzzer` crate (`tests/fuzzer/`).
 #![no_main]
 
-#[path = "../../tests/support/fuzz.rs"]
-mod fuzz;
+use dbuffer_fuzzer as fuzz;
 
 use std::sync::OnceLock;
 

@@ -1,6 +1,8 @@
-//! A structure-aware fuzzer for the input parsers, in-process, on stable Rust. Shared by the
-//! short run in `cargo test` (`tests/fuzz_parsers.rs`) and the long run
-//! (`cargo run --release --example fuzz -- --execs 10000000`, `examples/fuzz.rs`).
+//! A structure-aware fuzzer for the input parsers, in-process, on stable Rust. A crate of its
+//! own (a dev-dependency of `dbuffer`, never published) because four programs share it: the
+//! short run in `cargo test` (`tests/cpu/fuzz_parsers.rs`), the long run
+//! (`cargo run --release --example fuzz -- --execs 10000000`, `examples/fuzz.rs`) and the
+//! libFuzzer targets of `fuzz/`.
 //!
 //! **Why not coverage-guided.** libFuzzer (`cargo fuzz`) and AFL++ (`cargo afl`) both work on
 //! stable only by instrumenting every crate they build: here that is the whole dependency tree
@@ -21,8 +23,6 @@
 //! a `run` that feeds the parser and returns `Err` for a broken property, and add it to
 //! [`targets`].
 
-#![allow(dead_code)]
-
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::collections::HashSet;
@@ -40,7 +40,6 @@ use dbuffer::scene::{builtin, shapes, DiskLight, Mesh, Object, Scene, SceneError
 use glam::Vec3;
 use serde_json::{json, Value};
 
-#[path = "gltf_build.rs"]
 pub mod gltf_build;
 
 /// Planted in inputs; an error about a file's content must never contain it.
@@ -133,7 +132,7 @@ impl Rng {
     pub fn new(seed: u64) -> Rng {
         Rng(seed ^ 0x9e37_79b9_7f4a_7c15)
     }
-    pub fn next(&mut self) -> u64 {
+    pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -142,7 +141,7 @@ impl Rng {
     }
     /// Uniform in `0..n` (`n > 0`).
     pub fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
+        (self.next_u64() % n.max(1) as u64) as usize
     }
     pub fn chance(&mut self, one_in: usize) -> bool {
         self.below(one_in) == 0
@@ -857,7 +856,7 @@ fn obj_seeds() -> Vec<Vec<u8>> {
             .to_vec(),
     );
     // A slice of the bunny: real-world number formatting.
-    let bunny = include_str!("../../assets/bunny.obj");
+    let bunny = include_str!("../../../assets/bunny.obj");
     let vertices: Vec<&str> = bunny
         .lines()
         .filter(|l| l.starts_with("v "))
@@ -957,7 +956,7 @@ fn scene_of(mesh: Mesh) -> Scene {
 // glTF
 
 /// The Fox of `assets/models` (576 triangles, a skin, animations, a texture): an exporter's file.
-const FOX: &[u8] = include_bytes!("../../assets/models/Fox.glb");
+const FOX: &[u8] = include_bytes!("../../../assets/models/Fox.glb");
 
 /// A model whose triangles or placed vertices, counted from its JSON ([`gltf_size`]), pass
 /// these is within the budget but slow to build (seconds, hundreds of MB): it is not loaded.
@@ -1960,7 +1959,7 @@ pub fn mutate_bytes(rng: &mut Rng, input: &mut Vec<u8>, _corpus: &[Vec<u8>]) {
         }
         4 => input.truncate(pos),
         _ => {
-            let b = rng.next() as u8;
+            let b = rng.next_u64() as u8;
             input.insert(pos, b);
         }
     }

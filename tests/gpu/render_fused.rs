@@ -10,7 +10,7 @@
 //! - at an outline of the casters seen from the light centre, the light pass's texels decide:
 //!   the GPU rasterises the caster crossings and `|cx_o|` per texel (vertices snapped to the
 //!   rasteriser's sub-pixel grid), the twin casts exact rays through the texel centres and tests
-//!   the point itself against the centre (as for `dbuffer`, tests/render_gpu.rs). Where those
+//!   the point itself against the centre (as for `dbuffer`, `gpu::render_gpu`). Where those
 //!   differ, `L(c)` can differ by a layer and V by anything.
 //!
 //! So: mean |ΔV| < 0.002; at most 1 % of the pixels differ by more than 2/128; at most 0.1 % by
@@ -18,8 +18,7 @@
 //! among the 3×3 D-buffer texels around the pixel's, or the GPU's texel disagrees with the twin's
 //! ray about the crossings or about `|cx_o|`).
 
-#[path = "support/wgsl_layout.rs"]
-mod wgsl_layout;
+use crate::support::wgsl_layout::{self, assert_wgsl_layout};
 
 use dbuffer::geometry::fused::{FusedParams, FusedPath, FusedTwin, MaskEval};
 use dbuffer::geometry::metrics;

@@ -1,14 +1,9 @@
-//! The short run of the parser fuzzer (`tests/support/fuzz.rs`): a few thousand executions per
+//! The short run of the parser fuzzer (the `dbuffer-fuzzer` crate, `tests/fuzzer/`): a few thousand executions per
 //! target from a fixed seed, and every input a longer run ever found, replayed. The long run:
 //! `cargo run --release --example fuzz -- --execs 10000000` (see `examples/fuzz.rs`).
 
-#[path = "support/fuzz.rs"]
-mod fuzz;
-
-use fuzz::{escape, CountingAlloc, Limits, Sandbox};
-
-#[global_allocator]
-static ALLOC: CountingAlloc = CountingAlloc;
+use dbuffer_fuzzer as fuzz;
+use fuzz::{escape, Limits, Sandbox};
 
 /// Executions per target in `cargo test` (a few seconds in the dev profile).
 const EXECS: u64 = 3000;
@@ -135,7 +130,7 @@ const REGRESSIONS: &[(&str, &[u8])] = &[
 const LONG_MESH_NAME: &str = concat!(
     "[camera]\neye = [0, 3, 6]\ntarget = [0, 0.5, 0]\nfov_y_deg = 45\n[light]\n",
     "center = [0, 4, 0]\nnormal = [0, -1, 0]\nradius = 0.5\n[[object]]\nmesh = \"",
-    include_str!("support/long-name.txt"),
+    include_str!("long-name.txt"),
     ".obj\"\n",
 );
 

@@ -5,9 +5,7 @@ use std::path::{Path, PathBuf};
 
 use dbuffer::output::{self, read_exr_rgba};
 
-#[path = "support/cli.rs"]
-mod cli;
-use cli::dbuffer;
+use crate::support::{self as cli, dbuffer};
 
 fn temp_dir(name: &str) -> PathBuf {
     cli::temp_dir("render-cli", name)

@@ -1,7 +1,7 @@
 //! The hard-shadow methods of issue 13 against the exact hard shadow: one ray per pixel to the
 //! light's centre through the oracle's BVH (`geometry::oracle` with a zero-radius light), over the
 //! pixels the camera sees facing the light. Numbers are printed
-//! (`cargo test --release --test hard_methods -- --nocapture`).
+//! (`cargo test --release --test gpu hard_methods -- --nocapture`).
 
 use dbuffer::geometry::bvh::Bvh;
 use dbuffer::geometry::hard_volume::point_light;

@@ -13,8 +13,7 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 
-#[path = "support/lab.rs"]
-mod support_lab;
+use crate::support::{self as support_lab, step_until_gpu};
 
 fn lab(scene: &str) -> Harness<'static, LabApp> {
     support_lab::lab_sized(Some(scene), 900.0, 900.0)
@@ -60,13 +59,10 @@ fn the_light_as_seen_from_a_fused_pixel() {
         rect.top() + (py + 0.5) / hgt as f32 * rect.height(),
     );
     h.hover_at(pos);
-    for _ in 0..200 {
-        h.step();
-        if h.state().pixel_light().is_some_and(|l| l.position == x) {
-            break;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
+    // The probe under the cursor is read back from the GPU a frame or more later.
+    step_until_gpu(&mut h, 200, |h| {
+        h.state().pixel_light().is_some_and(|l| l.position == x)
+    });
     h.run();
     let _ = h.get_by_label("Light as seen from this pixel");
     let panel = h.state().pixel_light().expect("the panel computed").clone();
@@ -121,16 +117,11 @@ fn the_light_as_seen_from_a_fused_pixel() {
     // Every method gets the reference's rays; only dbuffer-fused its chords and mask.
     h.get_by_label(Method::DBUFFER.name()).click();
     h.hover_at(pos);
-    for _ in 0..200 {
-        h.step();
-        if h.state()
+    step_until_gpu(&mut h, 200, |h| {
+        h.state()
             .pixel_light()
             .is_some_and(|l| l.method == Method::DBUFFER)
-        {
-            break;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
+    });
     let other = h.state().pixel_light().expect("the panel for dbuffer");
     assert_eq!(other.method, Method::DBUFFER);
     assert!(other.fused.is_none() && other.chords_drawn() == 0);

@@ -1,8 +1,6 @@
 //! Small glTF models written byte by byte: the GLB container, the unit tetrahedron as a
 //! document with its binary buffer, and base64 for `data:` URIs. Shared by the glTF tests
-//! (`tests/gltf_models.rs`) and the glTF fuzz target's seeds (`tests/support/fuzz.rs`).
-
-#![allow(dead_code)]
+//! (`tests/cpu/gltf_models.rs`) and the glTF fuzz target's seeds (this crate's `lib.rs`).
 
 use serde_json::{json, Value};
 

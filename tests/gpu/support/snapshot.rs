@@ -254,7 +254,7 @@ pub fn check_snapshot_in(
         return Err(format!(
             "snapshot `{name}` does not exist: {} is missing.\n\
              The rendered image is in {}. To accept it as the snapshot, run the test again with\n\
-             UPDATE_SNAPSHOTS=1 (e.g. `UPDATE_SNAPSHOTS=1 cargo test --test <this test>`), look at\n\
+             UPDATE_SNAPSHOTS=1 (e.g. `UPDATE_SNAPSHOTS=1 cargo test --test gpu <this test>`), look at\n\
              the PNG, and commit it.",
             path.display(),
             new_path.display()

@@ -8,9 +8,7 @@ use std::path::PathBuf;
 use dbuffer::bench::{FrameSource, Report};
 use dbuffer::render::Method;
 
-#[path = "support/cli.rs"]
-mod cli;
-use cli::dbuffer;
+use crate::support::{self as cli, dbuffer};
 
 fn temp_dir(name: &str) -> PathBuf {
     cli::temp_dir("bench-cli", name)

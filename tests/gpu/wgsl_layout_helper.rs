@@ -1,7 +1,6 @@
-//! Tests of `tests/support/wgsl_layout.rs` on small Rust/WGSL struct pairs.
+//! Tests of `support/wgsl_layout.rs` on small Rust/WGSL struct pairs.
 
-#[path = "support/wgsl_layout.rs"]
-mod wgsl_layout;
+use crate::support::wgsl_layout;
 
 use std::mem::offset_of;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -81,13 +80,13 @@ fn matching_structs_pass() {
             ("count", offset_of!(Light, count)),
         ],
     );
-    crate::assert_wgsl_layout!(Params, WGSL, "Params", origin, scale, flags);
+    wgsl_layout::assert_wgsl_layout!(Params, WGSL, "Params", origin, scale, flags);
 }
 
 #[test]
 fn a_mismatch_fires_and_lists_both_layouts() {
     let message = panic_message(catch_unwind(AssertUnwindSafe(|| {
-        crate::assert_wgsl_layout!(ParamsUnpadded, WGSL, "Params", origin, scale, flags);
+        wgsl_layout::assert_wgsl_layout!(ParamsUnpadded, WGSL, "Params", origin, scale, flags);
     })));
     assert!(message.contains("layout mismatch"), "{message}");
     // Both sides of the differing row, and the sizes.

@@ -2,8 +2,7 @@
 //! `tests/snapshots/` (tolerance in `tests/snapshots/tolerance.toml`). `UPDATE_SNAPSHOTS=1`
 //! writes missing or failing ones; a failure leaves `NAME.new.png` and `NAME.diff.png` beside.
 
-#[path = "support/snapshot.rs"]
-mod snapshot;
+use crate::support::snapshot;
 
 use dbuffer::geometry::VtVariant;
 use dbuffer::render::offline::Offline;

@@ -8,14 +8,13 @@
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
-use std::time::{Duration, Instant};
+use std::sync::mpsc;
+use std::time::Duration;
 
 use dbuffer::budget;
 use dbuffer::scene::{self, SceneFile};
 
-#[path = "support/cli.rs"]
-mod cli;
-use cli::dbuffer;
+use crate::support::{self as cli, dbuffer};
 
 const CAMERA: &str =
     "[camera]\neye = [0.0, 3.0, 6.0]\ntarget = [0.0, 0.5, 0.0]\nfov_y_deg = 45.0\n";
@@ -74,7 +73,6 @@ fn run(mut cmd: Command) -> Run {
 }
 
 fn finish(mut child: Child, limit: Duration) -> Run {
-    let start = Instant::now();
     let mut out = child.stdout.take();
     let mut err = child.stderr.take();
     // Read both pipes on threads so a chatty child cannot block on a full pipe.
@@ -89,16 +87,22 @@ fn finish(mut child: Child, limit: Duration) -> Run {
     };
     let out_t = read(out.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
     let err_t = read(err.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
-    let status = loop {
-        if let Some(status) = child.try_wait().expect("wait") {
-            break status;
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
+    // Wait for the exit on a thread of its own, so the wait itself has a time limit.
+    let pid = child.id();
+    let (exited, exit) = mpsc::channel();
+    let waiter = std::thread::spawn(move || {
+        let _ = exited.send(child.wait());
+    });
+    let status = match exit.recv_timeout(limit) {
+        Ok(status) => status.expect("wait"),
+        Err(_) => {
+            // SAFETY: kill(2) only sends a signal. The child ran past the limit, so the waiter
+            // has not reaped it and `pid` is still the child's (one exiting at this very moment
+            // is reaped a moment before; Linux does not hand its pid out again that soon).
+            unsafe { libc::kill(pid as libc::pid_t, libc::SIGKILL) };
+            let _ = waiter.join();
             panic!("still running after {limit:?}: it hung (or read without end)");
         }
-        std::thread::sleep(Duration::from_millis(20));
     };
     Run {
         status,

@@ -1,8 +1,7 @@
-//! Tests of `tests/support/snapshot.rs` on synthetic images in a temporary directory (never in
+//! Tests of `support/snapshot.rs` on synthetic images in a temporary directory (never in
 //! `tests/snapshots/`).
 
-#[path = "support/snapshot.rs"]
-mod snapshot;
+use crate::support::snapshot;
 
 use std::path::{Path, PathBuf};
 

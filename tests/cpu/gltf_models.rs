@@ -11,9 +11,7 @@ use glam::Vec3;
 use proptest::prelude::*;
 use serde_json::{json, Value};
 
-#[path = "support/gltf_build.rs"]
-mod gltf_build;
-use gltf_build::{base64, f32_bytes, glb, instanced_strip, tet_doc};
+use dbuffer_fuzzer::gltf_build::{base64, f32_bytes, glb, instanced_strip, tet_doc};
 
 fn temp_dir(tag: &str) -> PathBuf {
     static NEXT: AtomicUsize = AtomicUsize::new(0);

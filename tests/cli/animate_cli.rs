@@ -5,9 +5,7 @@
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
-#[path = "support/cli.rs"]
-mod cli;
-use cli::dbuffer;
+use crate::support::{self as cli, dbuffer};
 
 fn temp_dir(name: &str) -> PathBuf {
     cli::temp_dir("animate-cli", name)

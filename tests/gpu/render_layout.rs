@@ -2,8 +2,7 @@
 //! variants, branches, views, colour maps, probe layout) has the same value on both sides
 //! (naga's reflection), so the two cannot drift apart silently.
 
-#[path = "support/wgsl_layout.rs"]
-mod wgsl_layout;
+use crate::support::wgsl_layout::{self, assert_wgsl_layout};
 
 use dbuffer::geometry::{Branch, VtVariant};
 use dbuffer::render::passes::camera::CameraUniforms;

@@ -1,7 +1,7 @@
 //! Each comparison method against the ray-cast reference, on a scene where the light is small
 //! next to the caster (table1-960) and one where it is large (fig1-large-light): each must behave
 //! as its construction says, and the numbers are printed
-//! (`cargo test --release --test methods_accuracy -- --nocapture`).
+//! (`cargo test --release --test gpu methods_accuracy -- --nocapture`).
 
 use dbuffer::geometry::bvh::Bvh;
 use dbuffer::geometry::metrics::{self, Metrics};

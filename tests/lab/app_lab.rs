@@ -7,8 +7,8 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 
-#[path = "support/lab.rs"]
-mod support_lab;
+use crate::support::{self as support_lab, step_until_gpu, step_until_worker, worker, Worker};
+use std::time::Duration;
 
 /// The lab in a test window tall enough for the left panel with every method of the registry
 /// and the view's range controls open (its last section, Selection, must stay clickable).
@@ -27,38 +27,32 @@ fn v_at(h: &mut Harness<'_, LabApp>, x: u32, y: u32) -> f32 {
     f.visibility[(y * f.width + x) as usize]
 }
 
+/// Long enough for any reference a test asks for on a loaded machine: the waits end as soon as
+/// what they wait for has arrived, so only a broken worker ever waits this long.
+const WORKER_LIMIT: Duration = Duration::from_secs(120);
+
 /// Step the window until the reference worker has finished (it casts its rays on its own
 /// thread, in real time).
 fn until_reference_done(h: &mut Harness<'_, LabApp>) {
-    for _ in 0..600 {
-        h.step();
-        let done = h.state().core().is_some_and(|c| {
+    let done = step_until_worker(h, Worker::Area, WORKER_LIMIT, |h| {
+        h.state().core().is_some_and(|c| {
             !c.worker.busy() && c.session.reference_progress().is_some_and(|(d, t)| d == t)
-        });
-        if done {
-            h.run();
-            return;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    panic!("the reference did not finish");
+        })
+    });
+    assert!(done, "the reference did not finish");
+    h.run();
 }
 
 /// Step the window until the frame shown is `reference-hard`'s (its rays are cast on a worker
 /// thread, in real time).
 fn until_reference_hard_shown(h: &mut Harness<'_, LabApp>) {
-    for _ in 0..600 {
-        h.step();
-        if h.state()
+    let shown = step_until_worker(h, Worker::Hard, WORKER_LIMIT, |h| {
+        h.state()
             .shown()
             .is_some_and(|s| s.method == Method::REFERENCE_HARD)
-        {
-            h.run();
-            return;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    panic!("reference-hard did not arrive");
+    });
+    assert!(shown, "reference-hard did not arrive");
+    h.run();
 }
 
 fn click(h: &mut Harness<'_, LabApp>, label: &str) {
@@ -248,15 +242,9 @@ fn hard_methods_show_their_overlays_and_maps() {
     );
     h.snapshot("app-shadow-volume-volumes");
 
-    // Its edges come back from the GPU in real time: step until they have.
+    // Its edges come back from the GPU a frame or more later: step until they have.
     h.get_by_label("hybrid").click();
-    for _ in 0..500 {
-        h.step();
-        if sides(&h, "hybrid").1 > 0 {
-            break;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
+    step_until_gpu(&mut h, 100, |h| sides(h, "hybrid").1 > 0);
     let tops = sides(&h, "hybrid").1;
     assert!(tops > 0, "{tops} reconstructed edges");
     assert_eq!(h.state().shown().expect("shown").method, method("hybrid"));
@@ -391,9 +379,11 @@ fn the_window_keeps_making_frames_while_the_reference_converges() {
     let mut between = Vec::new();
     let mut last = (steps(&h), h.state().window_frames());
     let mut changes = 0;
-    while between.len() < 5 && start.elapsed() < std::time::Duration::from_secs(120) {
+    while between.len() < 5 && start.elapsed() < WORKER_LIMIT {
+        let seen = worker(&h, Worker::Area).news();
         h.step();
-        std::thread::sleep(std::time::Duration::from_millis(5));
+        // A window frame every 5 ms at most (a 200 Hz display), sooner when a step has ended.
+        worker(&h, Worker::Area).wait_for_news(seen, Duration::from_millis(5));
         let now = (steps(&h), h.state().window_frames());
         if now.0 != last.0 {
             changes += 1;
@@ -441,7 +431,8 @@ fn the_window_keeps_making_frames_while_reference_hard_is_cast() {
     h.get_by_label(Method::REFERENCE_HARD.name()).click();
     let start = std::time::Instant::now();
     let mut waiting_note = false;
-    while steps(&h) == before && start.elapsed() < std::time::Duration::from_secs(120) {
+    while steps(&h) == before && start.elapsed() < WORKER_LIMIT {
+        let seen = worker(&h, Worker::Hard).news();
         h.step();
         let shown = h.state().shown().expect("the last frame stays shown");
         if shown.method == Method::DBUFFER {
@@ -450,7 +441,8 @@ fn the_window_keeps_making_frames_while_reference_hard_is_cast() {
                 .as_deref()
                 .is_some_and(|n| n.starts_with("reference-hard:"));
         }
-        std::thread::sleep(std::time::Duration::from_millis(2));
+        // A window frame every 2 ms at most, sooner when the rays have arrived.
+        worker(&h, Worker::Hard).wait_for_news(seen, Duration::from_millis(2));
     }
     let between = h.state().window_frames() - frames;
     println!(
@@ -753,12 +745,16 @@ fn hovering_never_restarts_the_reference() {
             rect.left() + rect.width() * (0.2 + 0.6 * t),
             rect.top() + rect.height() * (0.3 + 0.5 * (1.0 - t)),
         ));
+        let seen = worker(&h, Worker::Area).news();
         h.step();
-        std::thread::sleep(std::time::Duration::from_millis(15));
+        // A cursor move every 15 ms at most, sooner when the reference has new samples.
+        worker(&h, Worker::Area).wait_for_news(seen, Duration::from_millis(15));
         let now = done(&h);
         restarts += usize::from(now < last);
         last = now;
     }
     assert_eq!(restarts, 0, "the reference started over {restarts} times");
-    assert!(last > 0, "the reference made progress");
+    // The cursor at rest, the samples go on growing from where they were.
+    let grew = step_until_worker(&mut h, Worker::Area, WORKER_LIMIT, |h| done(h) > last);
+    assert!(grew && done(&h) >= last, "the reference made progress");
 }

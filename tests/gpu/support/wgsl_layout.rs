@@ -17,7 +17,7 @@
 //! or with the [`assert_wgsl_layout!`] shorthand, which takes field names once.
 //!
 //! Offsets are naga's (the WGSL layout rules, the same in every address space); whether a struct
-//! may also be used as a uniform is the validator's business (`tests/shaders.rs`).
+//! may also be used as a uniform is the validator's business (`gpu::shaders`).
 #![allow(dead_code)]
 
 use naga::TypeInner;
@@ -94,16 +94,16 @@ pub fn assert_layout<T>(wgsl: &str, name: &str, fields: &[(&str, usize)]) {
 
 /// `assert_wgsl_layout!(RustType, wgsl, "WgslName", field_a, field_b, ..)`: [`assert_layout`]
 /// with each field's offset taken by `std::mem::offset_of!` (Rust and WGSL names must agree).
-#[macro_export]
 macro_rules! assert_wgsl_layout {
     ($ty:ty, $wgsl:expr, $name:expr, $($field:ident),+ $(,)?) => {
-        $crate::wgsl_layout::assert_layout::<$ty>(
+        $crate::support::wgsl_layout::assert_layout::<$ty>(
             $wgsl,
             $name,
             &[$((stringify!($field), ::std::mem::offset_of!($ty, $field))),+],
         )
     };
 }
+pub(crate) use assert_wgsl_layout;
 
 /// The value of the scalar WGSL `const` called `name` in `wgsl` (f32, u32, i32 or bool
 /// literals), or `None` when there is none of that name.

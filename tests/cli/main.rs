@@ -1,0 +1,10 @@
+//! The `dbuffer` binary as a user runs it (cargo builds it for this test binary): `render`,
+//! `animate`, `compare`, `bench`, `inspect`, and hostile inputs. Every case runs the binary in a
+//! folder of its own, so the cases share nothing but the build.
+
+mod support;
+
+mod animate_cli;
+mod bad_inputs;
+mod bench_cli;
+mod render_cli;

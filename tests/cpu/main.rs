@@ -1,0 +1,19 @@
+//! The tests that need no GPU: the scenes and their parsers (with the fuzzer's short run), the
+//! geometry and its CPU twins against the ray-cast oracle, and the files `render` writes. One
+//! module per topic; run one with `cargo test --test cpu scene_files`.
+
+mod fused_vs_oracle;
+mod fuzz_parsers;
+mod gltf_models;
+mod oracle_analytic;
+mod output_files;
+mod scene_builtins;
+mod scene_files;
+mod twin_builtins;
+mod twin_vs_oracle;
+
+/// The fuzzer measures each input's peak allocation (`fuzz_parsers`), which needs its counting
+/// allocator as the binary's. It counts per thread, so the other tests here, on threads of
+/// their own, neither disturb its figures nor notice it beyond a thread-local add per allocation.
+#[global_allocator]
+static ALLOC: dbuffer_fuzzer::CountingAlloc = dbuffer_fuzzer::CountingAlloc;

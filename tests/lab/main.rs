@@ -1,0 +1,8 @@
+//! The lab as a user drives it: the whole eframe app headless on the wgpu (lavapipe) adapter
+//! through egui_kittest, its widgets, the mouse and dropped files. Snapshot thresholds are in
+//! `kittest.toml`; the images are in `tests/snapshots/`.
+
+mod support;
+
+mod app_fused;
+mod app_lab;
