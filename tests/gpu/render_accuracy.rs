@@ -1,6 +1,7 @@
-//! The GPU render core against the ray-cast reference (docs/method/metrics.md), V(t) exact: on the convex
-//! built-ins the class mismatch is at most 2 % and the penumbra MAE at most 0.08. Every built-in is
-//! measured and printed (`cargo test --test render_accuracy -- --nocapture`).
+//! The GPU render core against the ray-cast reference (docs/method/metrics.md), V(t) exact, on
+//! every built-in disk scene: each holds a bound on its class mismatch and penumbra MAE, stated
+//! with the reason that scene's bound is what it is (`BOUNDS`). Every built-in is measured and
+//! printed (`cargo test --test gpu render_accuracy -- --nocapture`).
 
 use dbuffer::geometry::bvh::Bvh;
 use dbuffer::geometry::metrics::{self, Metrics};
@@ -47,6 +48,112 @@ fn measure(offline: &mut Offline, name: &str) -> Metrics {
     m
 }
 
+/// What each built-in disk scene must hold in this test's configuration (128², D-buffer 1024²,
+/// K = 256): `(scene, class mismatch % at most, penumbra MAE at most, why)`. Measured on
+/// 2026-12-01 on lavapipe (llvmpipe, LLVM 15); each bound is the measured figure plus 25 %, and
+/// at least 0.3 percentage points and 0.005 above it, rounded up: room for another adapter's
+/// rasterisation and the reference's own noise (about 0.005 at K = 256), none for a regression
+/// of the method. Where a scene breaks Assumption 1 of Jakobsen et al. 2004 (one chord splits the
+/// light), its bound is that failure's size, not the method's on convex casters.
+const BOUNDS: &[(&str, f64, f64, &str)] = &[
+    (
+        "fig1-large-light",
+        2.3,
+        0.101,
+        "light 6x the cube: silhouettes change across the light",
+    ),
+    (
+        "fig7-concave",
+        0.6,
+        0.043,
+        "concave caster: its volumes overlap, Assumption 1 fails",
+    ),
+    (
+        "fig8a-distance",
+        0.5,
+        0.049,
+        "convex spheres, penumbrae apart: the method's exact case",
+    ),
+    (
+        "fig8b-light-size",
+        0.9,
+        0.055,
+        "convex caster, large light: a wide penumbra, still exact",
+    ),
+    (
+        "fig8c-complex",
+        2.0,
+        0.067,
+        "torus knot shadows itself: several chords, holes of light",
+    ),
+    (
+        "table1-224",
+        0.6,
+        0.033,
+        "convex caster: only boundary pixels and texels disagree",
+    ),
+    (
+        "table1-960",
+        0.5,
+        0.020,
+        "convex caster, small light: narrow penumbra, fewest errors",
+    ),
+    (
+        "table1-1440",
+        0.6,
+        0.055,
+        "convex; many small faces: silhouette steps within a texel",
+    ),
+    (
+        "table1-5760",
+        0.7,
+        0.064,
+        "convex; smaller faces still: more silhouette steps",
+    ),
+    (
+        "bunny",
+        2.1,
+        0.088,
+        "scanned mesh: concave ears and an open base break Assumption 1",
+    ),
+    (
+        "overlap",
+        0.9,
+        0.080,
+        "two casters' penumbrae overlap: one chord cannot split the light",
+    ),
+    (
+        "no-umbra",
+        2.6,
+        0.123,
+        "penumbra only: every pixel carries V(t)'s approximation",
+    ),
+    (
+        "acute-corner",
+        0.9,
+        0.064,
+        "15-degree silhouette corner: two edges cut the light at once",
+    ),
+    (
+        "fusion-cross",
+        3.7,
+        0.100,
+        "two bars fuse: two chords where the method has one",
+    ),
+    (
+        "fusion-links",
+        0.9,
+        0.092,
+        "interlocked rings fuse at different heights",
+    ),
+    (
+        "fusion-many",
+        9.6,
+        0.276,
+        "sixteen casters in front of the light at once: worst case",
+    ),
+];
+
 #[test]
 fn gpu_against_the_reference_on_every_built_in() {
     let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
@@ -55,27 +162,41 @@ fn gpu_against_the_reference_on_every_built_in() {
         offline.ctx.adapter_description()
     );
     println!("| scene | class mismatch % | MAE | penumbra MAE | p99 | penumbra px |");
-    let convex = [
-        "fig8a-distance",
-        "fig8b-light-size",
-        "table1-224",
-        "table1-960",
-        "table1-1440",
-        "table1-5760",
-    ];
-    for name in scene::builtin::names() {
-        if name.starts_with("line-") {
-            continue; // the D-buffer needs a disk light (tests/line_methods.rs has the rest)
-        }
+    let disk_scenes: Vec<&str> = scene::builtin::names()
+        .iter()
+        .copied()
+        .filter(|name| {
+            // The D-buffer needs a disk light (`gpu::linear_ssm` holds the line-light method).
+            let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+            scene.light.as_disk().is_some()
+        })
+        .collect();
+    let mut failures = Vec::new();
+    for name in &disk_scenes {
+        let Some(&(_, mismatch, penumbra_mae, why)) = BOUNDS.iter().find(|b| b.0 == *name) else {
+            failures.push(format!(
+                "{name}: no bound in BOUNDS (measure it and add a row)"
+            ));
+            continue;
+        };
         let m = measure(&mut offline, name);
         assert!(m.pixels > 5000, "{name}: the view must show the scene");
-        if convex.contains(name) {
-            assert!(
-                m.penumbra_pixels > 200,
-                "{name}: the view must show a penumbra"
-            );
-            assert!(m.class_mismatch_pct <= 2.0, "{name}: {m:?}");
-            assert!(m.penumbra_mae <= 0.08, "{name}: {m:?}");
+        assert!(
+            m.penumbra_pixels > 200,
+            "{name}: the view must show a penumbra"
+        );
+        if m.class_mismatch_pct > mismatch || m.penumbra_mae > penumbra_mae {
+            failures.push(format!(
+                "{name}: class mismatch {:.2} % (at most {mismatch}), penumbra MAE {:.4} (at \
+                 most {penumbra_mae}); bound because {why}",
+                m.class_mismatch_pct, m.penumbra_mae
+            ));
         }
     }
+    for (name, ..) in BOUNDS {
+        if !disk_scenes.contains(name) {
+            failures.push(format!("{name}: a bound for no built-in disk scene"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
