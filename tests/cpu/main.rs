@@ -1,7 +1,9 @@
 //! The tests that need no GPU: the scenes and their parsers (with the fuzzer's short run), the
-//! geometry and its CPU twins against the ray-cast oracle, and the files `render` writes. One
-//! module per topic; run one with `cargo test --test cpu scene_files`.
+//! geometry and its CPU twins against the ray-cast oracle, the files `render` writes, and the
+//! documentation against the code. One module per topic; run one with
+//! `cargo test --test cpu scene_files`.
 
+mod docs;
 mod fused_vs_oracle;
 mod fuzz_parsers;
 mod gltf_models;
