@@ -29,7 +29,7 @@ const ANCHOR_SAMPLES: u32 = 3u;
 const LUT_OFFSETS: u32 = 128u;
 const PI: f32 = 3.14159265358979;
 
-// The paper's V at the pixel: methods/dbuffer.wgsl's lookup (tests/render_fused.rs holds the
+// The paper's V at the pixel: methods/dbuffer.wgsl's lookup (tests/gpu/render_fused.rs holds the
 // overflowing pixels to the paper's V).
 fn paper_visibility(l: LightLookup, hidden: bool) -> Visibility {
     let d = l.d;

@@ -15,7 +15,7 @@
 //!   of several penumbrae — overlapping casters, the parts of a concave one — starts at the
 //!   nearest entry. The paper's "farthest wins" would call the points between two entries lit; on
 //!   the built-ins it triples the class mismatch of the concave and overlapping scenes (measured in
-//!   `tests/twin_builtins.rs`). For a single convex caster the two rules agree.
+//!   `tests/cpu/twin_builtins.rs`). For a single convex caster the two rules agree.
 //! - `|cx_s|`: eq. (2) from the fragment that won each volume channel, so it is kept per volume
 //!   (`s_u`, `s_p`), as `dbuffer.exr` + `dbuffer_s.exr` store it.
 //!

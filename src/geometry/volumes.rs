@@ -492,7 +492,7 @@ fn over_volume_budget(name: &str, at_least: usize, max: usize) -> String {
 
 /// `v` moved `far` further along the ray from the rim point `p` through it. Quads and fans both
 /// extrude with this one function, so the end rays they share are bit-identical and the volume
-/// surfaces stay closed (`tests/twin_builtins.rs` welds them by position).
+/// surfaces stay closed (`tests/cpu/twin_builtins.rs` welds them by position).
 fn extrude_away(v: Vec3, p: Vec3, far: f32) -> Vec3 {
     v + (v - p).normalize_or_zero() * far
 }

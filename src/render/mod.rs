@@ -28,7 +28,7 @@ pub use methods::{Knobs, Method};
 pub use session::Session;
 
 /// The expanded source of an embedded shader. The embedded set is fixed at compile time and
-/// `tests/shaders.rs` expands and validates every file of it, so a failure here is a build defect;
+/// `tests/gpu/shaders.rs` expands and validates every file of it, so a failure here is a build defect;
 /// it still yields WGSL (an empty module) rather than a panic, and pipeline creation then reports it.
 ///
 /// For shader work, `DBUFFER_SHADER_DIR=shaders` reads them from that folder instead, so an edit
@@ -295,7 +295,7 @@ pub enum RenderError {
 }
 
 /// GPU vertex of a scene surface (every pass that draws the scene). Layout checked against the
-/// WGSL `SurfaceIn` by `tests/render_layout.rs`.
+/// WGSL `SurfaceIn` by `tests/gpu/render_layout.rs`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SurfaceVertex {

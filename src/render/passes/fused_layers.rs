@@ -31,7 +31,7 @@ pub const RECEIVER_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Floa
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// `FusedUniforms` of `shaders/shared/fused.wgsl`: the light view, the disk and the method's
-/// numbers, read by every pass of `dbuffer-fused` (layout checked by `tests/render_layout.rs`).
+/// numbers, read by every pass of `dbuffer-fused` (layout checked by `tests/gpu/render_layout.rs`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct FusedUniforms {

@@ -1,5 +1,5 @@
 //! The view pass's CPU twin: the same views drawn from a frame read back into a [`Frame`]. The
-//! GPU pass ([`super::view`]) is what the lab shows; this twin is what `tests/view_pass.rs` holds
+//! GPU pass ([`super::view`]) is what the lab shows; this twin is what `tests/gpu/view_pass.rs` holds
 //! it to, and what a picture of a read-back frame is drawn with.
 
 use super::view::{ColorMap, Mapping, View, ViewParams};
