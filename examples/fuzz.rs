@@ -1,5 +1,5 @@
-//! The long run of the parser fuzzer (the `dbuffer-fuzzer` crate, `tests/fuzzer/`): scene TOML, OBJ and glTF, in-process,
-//! structure-aware, with a counting allocator and a hang watchdog.
+//! The long run of the parser fuzzer (the `dbuffer-fuzzer` crate, `tests/fuzzer/`): scene TOML,
+//! OBJ and glTF, in-process, structure-aware, with a counting allocator and a hang watchdog.
 //!
 //!     cargo run --release --example fuzz -- --execs 10000000
 //!     cargo run --release --example fuzz -- --execs 1000000 --target obj --seed 7 --jobs 1

@@ -1,4 +1,5 @@
-//! libFuzzer target: OBJ meshes, through the checks of the `dbuffer-fuzzer` crate (`tests/fuzzer/`).
+//! libFuzzer target: OBJ meshes, through the checks of the `dbuffer-fuzzer` crate
+//! (`tests/fuzzer/`).
 #![no_main]
 
 use dbuffer_fuzzer as fuzz;
