@@ -442,7 +442,10 @@ impl LabApp {
         if core.session.poll_geometry(&core.ctx) {
             ctx.request_repaint_after(std::time::Duration::from_millis(15));
         }
-        for (i, results) in core.probe_results().into_iter().enumerate() {
+        // A scripted (deterministic) window waits for its answers here, so it settles in a
+        // known number of frames whatever the load on the GPU: a test's `run()` then never
+        // runs out of steps while lavapipe is still busy with the frame the probe reads.
+        for (i, results) in core.probe_results(self.deterministic).into_iter().enumerate() {
             if !results.is_empty() {
                 // The panels drawn before the viewport show them on the next frame.
                 ctx.request_repaint();
