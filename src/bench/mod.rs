@@ -17,8 +17,7 @@ use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{PreparedCasters, VolumeParams, VtVariant};
-use crate::render::methods::reference::{MAX_SAMPLES, SAMPLES};
-use crate::render::methods::{linear_ssm, pcss, sampled};
+use crate::render::methods::pcss;
 use crate::render::passes::floor::Floor;
 use crate::render::passes::view::{Mapping, View, ViewParams};
 use crate::render::readback::map_now;
@@ -64,8 +63,9 @@ pub struct Case {
 }
 
 impl Case {
-    /// Every method of the registry, with the knobs the issue names: PCSS with 16 blocker and
-    /// 32 filter taps, 16 light samples, and the reference as a single 1-sample-per-pixel pass.
+    /// Every method of the registry, with the knobs its module names for the bench (PCSS with 16
+    /// blocker and 32 filter taps, 16 light samples, the reference as a single
+    /// 1-sample-per-pixel pass).
     pub fn all() -> Vec<Case> {
         Method::all()
             .iter()
@@ -74,32 +74,16 @@ impl Case {
             .collect()
     }
 
+    /// The method as its [`MethodSpec::bench`](crate::render::methods::MethodSpec) says: its
+    /// label and the knobs it sets, the others at their defaults.
     pub fn for_method(method: Method) -> Case {
-        let defaults = Knobs::default();
-        let (label, knobs) = match method.name() {
-            "pcss" => (
-                "pcss 16/32".to_string(),
-                defaults
-                    .with(&pcss::BLOCKER_TAPS, 16)
-                    .with(&pcss::FILTER_TAPS, 32),
-            ),
-            "sampled" => (
-                "sampled 16".to_string(),
-                defaults.with(&sampled::LIGHTS, 16),
-            ),
-            "linear-ssm" => (
-                "linear-ssm 2".to_string(),
-                defaults.with(&linear_ssm::SAMPLES, 2),
-            ),
-            // Each timed frame takes one more sample per pixel, of a budget that never ends.
-            "reference" => (
-                "reference 1 spp".to_string(),
-                defaults.with(&SAMPLES, MAX_SAMPLES),
-            ),
-            _ => (method.name().to_string(), defaults),
-        };
+        let bench = &method.spec().bench;
+        let knobs = bench
+            .knobs
+            .iter()
+            .fold(Knobs::default(), |k, &(knob, value)| k.with(knob, value));
         Case {
-            label,
+            label: bench.label.unwrap_or(method.name()).to_string(),
             method,
             knobs,
         }
@@ -1121,7 +1105,7 @@ pub fn targets(report: &Report) -> Vec<Target> {
         )
     });
     let camera_pcss = worst(&|s| {
-        let p = report.timing(s, size, "pcss".parse().ok()?)?;
+        let p = report.timing(s, size, Method::of(&pcss::PCSS)?)?;
         ratio(dbuffer(s)?.pass("camera_pass"), p.pass("camera_pass"))
     });
     let display = |s: &str, sz: u32| report.display.iter().find(|d| d.scene == s && d.size == sz);
@@ -1208,6 +1192,7 @@ fn host_description() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::methods::reference::{MAX_SAMPLES, SAMPLES};
 
     #[test]
     fn stat_median_and_min() {
