@@ -1,4 +1,4 @@
-//! `dbuffer render`'s files (docs/guide/scene-format.md): every file written from a small synthetic render reads
+//! `dbuffer render`'s files (docs/guide/outputs.md): every file written from a small synthetic render reads
 //! back exactly; bad input is refused with a message naming the file and the field, before anything
 //! on disk changes; a failing call leaves the output folder as it was, with no temporary folder.
 

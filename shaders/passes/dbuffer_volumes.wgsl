@@ -50,7 +50,7 @@ fn vs_volume(v: VolumeIn) -> VolumeOut {
     return out;
 }
 
-// |cx_s| (eq. 2 as the brief defines it in words): the distance along the ray from c to the plane
+// |cx_s| (eq. 2 as its definition in words has it, docs/method/dbuffer.md): the distance along the ray from c to the plane
 // through the silhouette edge parallel to the disk, at the edge point this fragment was extruded
 // from. A silhouette face is its own edge. Twin: VolumeVertex::edge_plane_distance.
 fn edge_plane_distance(f: VolumeOut, to_fragment: vec3<f32>, d: f32) -> f32 {

@@ -1,7 +1,7 @@
 //! `dbuffer-fused`: the D-buffer with every silhouette chord a receiver needs, so that the parts
 //! of the disk hidden by different casters (or different parts of one caster) combine as they do
 //! in reality. This is its CPU twin, the model the GPU passes are to be tested against;
-//! `docs/fused.md` describes the method, its GPU mapping and what it still gets wrong.
+//! `docs/method/dbuffer-fused.md` describes the method, its GPU mapping and what it still gets wrong.
 //!
 //! **The chord of an edge.** For a receiver `x` and an edge `e = (a, b)`, the plane through `x`
 //! and `e` meets the light's plane in a line: the exact chord that edge cuts from the disk as
@@ -118,7 +118,7 @@ const PATCH_BULGE: f32 = 0.5;
 const FACING_TOL: f32 = 16.0 * f32::EPSILON;
 
 /// A candidate silhouette edge: what the light pass rasterises and the camera pass reads, per edge
-/// (the GPU's storage-buffer record, 5 × `vec4<f32>`: see `docs/fused.md`).
+/// (the GPU's storage-buffer record, 5 × `vec4<f32>`: see `docs/method/dbuffer-fused.md`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FusedEdge {
     pub a: Vec3,
