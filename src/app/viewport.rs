@@ -16,7 +16,7 @@ use crate::render::passes::probe::ProbeRequest;
 use crate::render::passes::view::{Mapping, View, ViewParams};
 use crate::render::passes::view_twin::NO_DATA;
 use crate::render::session::FrameJob;
-use crate::render::{FrameRequest, Knobs, Method};
+use crate::render::{FrameRequest, Method};
 use crate::scene::{Camera, Light};
 
 /// Everything that decides a frame's pixels.
@@ -190,10 +190,7 @@ impl LabApp {
     }
 
     pub(super) fn base_request(&self, width: u32, height: u32) -> FrameRequest {
-        let mut knobs = Knobs::default();
-        for (name, value) in &self.settings.knobs {
-            let _ = knobs.set(name, *value);
-        }
+        let knobs = self.settings.knobs;
         FrameRequest {
             width,
             height,

@@ -13,8 +13,8 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{
-    CameraBindings, Channel, Empty, FrameInputs, LightMaps, MethodPipeline, MethodSpec,
-    MethodState, SharedMaps,
+    AdapterNeeds, Bench, CameraBindings, Channel, Empty, FrameInputs, LightMaps, MethodPipeline,
+    MethodSpec, MethodState, SharedMaps,
 };
 use crate::geometry::volume_vertices::{light_view_rect, sort_near_first, volume_vertices_within};
 use crate::geometry::VtVariant;
@@ -31,20 +31,30 @@ use crate::scene::{DiskLight, LightKind};
 pub static DBUFFER: MethodSpec = MethodSpec {
     name: "dbuffer",
     description: "D-buffer soft shadows (Jakobsen et al. 2004)",
+    shader: SHADER,
     knobs: &[],
     cpu_side: false,
     hard: false,
-    needs: Some(LightKind::Disk), // its volumes are the disk's
+    lights: Some(LightKind::Disk), // its volumes are the disk's
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(DBuffer::new(ctx, false)),
 };
 
 pub static DBUFFER_CENTER: MethodSpec = MethodSpec {
     name: "dbuffer-center",
     description: "D-buffer with silhouettes from the light centre only",
+    shader: SHADER,
     knobs: &[],
     cpu_side: false,
     hard: false,
-    needs: Some(LightKind::Disk), // its volumes are the disk's
+    lights: Some(LightKind::Disk), // its volumes are the disk's
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(DBuffer::new(ctx, true)),
 };
 
