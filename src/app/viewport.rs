@@ -442,7 +442,11 @@ impl LabApp {
         // A scripted (deterministic) window waits for its answers here, so it settles in a
         // known number of frames whatever the load on the GPU: a test's `run()` then never
         // runs out of steps while lavapipe is still busy with the frame the probe reads.
-        for (i, results) in core.probe_results(self.deterministic).into_iter().enumerate() {
+        for (i, results) in core
+            .probe_results(self.deterministic)
+            .into_iter()
+            .enumerate()
+        {
             if !results.is_empty() {
                 // The panels drawn before the viewport show them on the next frame.
                 ctx.request_repaint();

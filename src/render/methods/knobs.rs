@@ -254,10 +254,21 @@ fn knob_slot(name: &str) -> Option<usize> {
 
 /// The value of every knob (defaults where not set), as the flags write them: what the command
 /// line parses into, the lab keeps (and saves) and a frame request carries to the methods.
-#[derive(Clone, Copy, PartialEq, Eq)]
+#[derive(Clone, Copy)]
 pub struct Knobs {
     values: [Option<u32>; MAX_KNOBS],
 }
+
+/// Two sets are the same request when every knob has the same value: a knob set to its default
+/// equals one left unset (the lab stores a value once its control was touched), so neither
+/// renders a frame again.
+impl PartialEq for Knobs {
+    fn eq(&self, other: &Self) -> bool {
+        all_knobs().into_iter().all(|k| self.raw(k) == other.raw(k))
+    }
+}
+
+impl Eq for Knobs {}
 
 impl Default for Knobs {
     fn default() -> Self {
@@ -359,6 +370,13 @@ impl<'de> Deserialize<'de> for Knobs {
 mod tests {
     use super::super::{hybrid, pcf, planar, sampled, shadow_volume};
     use super::*;
+
+    #[test]
+    fn a_knob_set_to_its_default_is_the_same_request_as_one_left_unset() {
+        let unset = Knobs::default();
+        assert_eq!(unset, unset.with(&pcf::RADIUS, pcf::RADIUS.default));
+        assert_ne!(unset, unset.with(&pcf::RADIUS, pcf::RADIUS.default + 1));
+    }
 
     #[test]
     fn knobs_fit_and_validate_by_flag() {
