@@ -4,7 +4,7 @@
 // disk samples added up from the centre (bit-sliced 5-bit counters), L(c) from the light pass's
 // caster crossings, then V: exact where the disk is one layer deep, else the lit fraction of the
 // samples. An overflowing list gets the paper's V. Its CPU twin is FusedTwin::sample
-// (src/geometry/fused.rs) with MaskEval::Lut, function by function.
+// (src/geometry/fused/twin.rs) with MaskEval::Lut, function by function.
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 // #include shared/fused.wgsl

@@ -23,7 +23,7 @@ struct VolumeIn {
     @location(0) position: vec3<f32>,
     @location(1) kind: u32,
     // The edge point's height below the light's plane is base + num / den, num and den affine
-    // over the triangle (render::methods::dbuffer::volume_vertices says why).
+    // over the triangle (geometry::volume_vertices::volume_vertices says why).
     @location(2) base: f32,
     @location(3) num: f32,
     @location(4) den: f32,

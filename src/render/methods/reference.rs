@@ -6,7 +6,8 @@
 use std::sync::Arc;
 
 use super::{
-    CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec, MethodState, SharedMaps,
+    AdapterNeeds, Bench, CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec,
+    MethodState, SharedMaps,
 };
 use crate::geometry::VtVariant;
 use crate::render::timer::Recorder;
@@ -16,22 +17,30 @@ use crate::render::{texture_entry, view_entry, GpuContext, RenderError};
 pub const MAX_SAMPLES: u32 = crate::budget::MAX_REFERENCE_SAMPLES;
 
 /// K, the disk samples per pixel.
-pub static SAMPLES: Knob = Knob {
-    name: "samples",
-    help: "reference: rays to this many stratified disk samples per pixel (K)",
-    min: 1,
-    max: MAX_SAMPLES,
-    default: crate::geometry::oracle::DEFAULT_SAMPLES as u32,
-    max_name: Some("MAX_REFERENCE_SAMPLES"),
-};
+pub static SAMPLES: Knob = Knob::int(
+    "samples",
+    "reference: rays to this many stratified disk samples per pixel (K)",
+    1..=MAX_SAMPLES,
+    crate::geometry::oracle::DEFAULT_SAMPLES as u32,
+)
+.budget("MAX_REFERENCE_SAMPLES");
 
 pub static REFERENCE: MethodSpec = MethodSpec {
     name: "reference",
     description: "ray-cast ground truth (K disk samples per pixel)",
+    shader: SHADER,
     knobs: &[&SAMPLES],
     cpu_side: true,
     hard: false,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench {
+        // Each timed frame takes one more sample per pixel, of a budget that never ends.
+        label: Some("reference 1 spp"),
+        knobs: &[(&SAMPLES, MAX_SAMPLES)],
+    },
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(Reference::new(ctx)),
 };
 

@@ -10,7 +10,10 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use super::{CameraBindings, FrameInputs, MethodPipeline, MethodSpec, MethodState, SharedMaps};
+use super::{
+    AdapterNeeds, Bench, CameraBindings, FrameInputs, MethodPipeline, MethodSpec, MethodState,
+    SharedMaps,
+};
 use crate::geometry::VtVariant;
 use crate::render::timer::Recorder;
 use crate::render::{texture_entry, view_entry, GpuContext, RenderError, Texture};
@@ -19,10 +22,15 @@ use crate::scene::Camera;
 pub static REFERENCE_HARD: MethodSpec = MethodSpec {
     name: "reference-hard",
     description: "exact hard shadow: one ray per pixel to the light centre",
+    shader: SHADER,
     knobs: &[],
     cpu_side: true,
     hard: true,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(ReferenceHard::new(ctx)),
 };
 
