@@ -12,7 +12,7 @@ use super::frame::{
     LightMapsData,
 };
 use super::gpu_scene::GpuScene;
-use super::methods::{External, FrameInputs, LightMaps, Method, MethodState, SharedMaps};
+use super::methods::{External, FrameInputs, LightMaps, Method, MethodState, Prepare, SharedMaps};
 use super::passes::camera::{Camera, ScreenView};
 use super::passes::probe::ProbeRequest;
 use super::passes::shadow_map::ShadowMap;
@@ -595,7 +595,7 @@ impl Session {
                 label: Some("Session::prepare_only"),
             });
         let mut rec = Recorder::new(&mut encoder, None);
-        state.prepare(&inputs, &mut self.shared, &mut rec)?;
+        state.prepare(Prepare(&inputs, &mut self.shared, &mut rec))?;
         ctx.queue.submit([encoder.finish()]);
         Ok(())
     }
