@@ -170,7 +170,9 @@ pub fn record_frame(
         surfaces,
     } = parts;
     let (ctx, scene) = (inputs.ctx, inputs.scene);
-    let group = method.prepare(Prepare(&inputs, shared, rec))?;
+    let group = rec.group(&format!("{}: its passes", request.method), |rec| {
+        method.prepare(Prepare(&inputs, shared, rec))
+    })?;
     let Some(bindings) = group.bindings(&ctx.device, request.vt) else {
         return Err(RenderError::Gpu("the method has no camera pipeline".into()));
     };
