@@ -1,4 +1,4 @@
-//! Writes the large OBJ files the README's memory table was measured with, to standard output:
+//! Writes the large OBJ files the memory table of docs/guide/limits.md was measured with, to standard output:
 //!
 //!     cargo run --release --example big_obj -- torus 4096 2047 > torus16m.obj   # closed, 16.77M triangles
 //!     cargo run --release --example big_obj -- strip 8388600 > strip16m.obj     # open, 3 edges per triangle

@@ -3,7 +3,7 @@
 //!
 //!     cargo run --release --example mem_stages -- SCENE [WxH] [DBUFFER_SIZE]
 //!
-//! How the README's memory table of `dbuffer render` was measured and broken down by stage.
+//! How the memory table (docs/guide/limits.md) of `dbuffer render` was measured and broken down by stage.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};

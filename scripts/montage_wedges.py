@@ -7,7 +7,7 @@ Pillow):
     done
     python3 scripts/montage_wedges.py out
 
-docs/wedges-vs-dbuffer.png: one row per scene, reference | wedges | dbuffer | |ΔV| wedges |
+docs/images/wedges-vs-dbuffer.png: one row per scene, reference | wedges | dbuffer | |ΔV| wedges |
 |ΔV| dbuffer (compare's METHOD-error.png heatmaps, their legend strip once under the last row)."""
 
 import sys
@@ -52,7 +52,7 @@ def main(root):
         y = HEADER + TILE * len(SCENES)
         for c in (3, 4):
             img.paste(legend, (LABEL + c * TILE, y))
-    img.save("docs/wedges-vs-dbuffer.png", optimize=True)
+    img.save("docs/images/wedges-vs-dbuffer.png", optimize=True)
 
 
 if __name__ == "__main__":

@@ -5,16 +5,16 @@
 
 Each image is scaled to SIZE pixels wide. The README's pictures made with it, and their runs:
 
-docs/elm-fig8c-complex.png (the extended light map's patterns and its 8-bit distances):
+docs/images/elm-fig8c-complex.png (the extended light map's patterns and its 8-bit distances):
     dbuffer render fig8c-complex --method extended-light-map --out out/elm-spot
     dbuffer render fig8c-complex --method extended-light-map --elm-pattern 1 --out out/elm-gobo
     dbuffer render fig8c-complex --method extended-light-map --elm-depth-bits 8 --out out/elm-8
-    python3 scripts/side_by_side.py docs/elm-fig8c-complex.png 256 \\
+    python3 scripts/side_by_side.py docs/images/elm-fig8c-complex.png 256 \\
         "out/elm-spot/image.png=spot (--elm-pattern 0)" \\
         "out/elm-gobo/image.png=projected texture (1)" "out/elm-8/image.png=8-bit distances"
 
-docs/open-meshes.png (shadow-volume on open meshes): the commands in docs/open-meshes.toml, then
-    python3 scripts/side_by_side.py docs/open-meshes.png 320 \\
+docs/images/open-meshes.png (shadow-volume on open meshes): the commands in docs/images/open-meshes.toml, then
+    python3 scripts/side_by_side.py docs/images/open-meshes.png 320 \\
         "out/open/exact/image.png=reference-hard" \\
         "out/open/sv1/image.png=shadow-volume --sv-open 1" \\
         "out/open/sv0/image.png=shadow-volume --sv-open 0" \\

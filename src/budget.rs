@@ -6,9 +6,9 @@
 //! read, an OBJ's triangles while its lines are counted. An input over a limit gets an error
 //! that names the limit (the constant's name), its value, and the key or flag that asked for
 //! more. Under the budget, `dbuffer inspect` stays within [`MEMORY_BOUND_BYTES`] (measured on
-//! the worst inputs, see the README's "Limits").
+//! the worst inputs, see docs/guide/limits.md).
 //!
-//! `dbuffer --help` prints [`summary`]; the README's "Limits" section lists the same values.
+//! `dbuffer --help` prints [`summary`]; docs/guide/limits.md lists the same values.
 
 /// Largest scene file (`.toml`) read, in bytes: 1 MiB. The built-in scenes are under 2 KB; a
 /// megabyte holds some 20 000 objects.

@@ -44,11 +44,23 @@ pub struct ByteBudget {
     pub what: &'static str,
 }
 
-/// What kind of thing `meta` describes, for messages: "a directory", "a FIFO", ...
-fn kind_of(meta: &fs::Metadata) -> &'static str {
+/// What kind of thing `meta` describes, for messages: "a regular file", "a directory", "a FIFO
+/// (named pipe)", ... The one answer every message that names a file's kind gives: reading
+/// refuses anything but a regular file before a byte is read ([`open_regular`]), writing never
+/// replaces anything but one ([`check_replaceable`]), and `--out` is checked before any work
+/// (`output::check_out_dir`, `output::check_out_file`) — each says exactly what it found. The
+/// callers take `fs::metadata` (symlinks followed), so "a symbolic link" shows only for a
+/// `symlink_metadata`.
+pub(crate) fn kind_of(meta: &fs::Metadata) -> &'static str {
     let t = meta.file_type();
+    if t.is_file() {
+        return "a regular file";
+    }
     if t.is_dir() {
         return "a directory";
+    }
+    if t.is_symlink() {
+        return "a symbolic link";
     }
     #[cfg(unix)]
     {
@@ -66,7 +78,7 @@ fn kind_of(meta: &fs::Metadata) -> &'static str {
             return "a socket";
         }
     }
-    "not a file"
+    "a special file"
 }
 
 /// Opens `path` for reading if it is a regular file (after following symlinks) of at most
@@ -182,6 +194,42 @@ mod tests {
             .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
             .collect();
         assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// One answer per kind, for reading and for writing alike: a regular file is named as one (an
+    /// output folder that is a file says so, not "not a file"), a device or a FIFO by what it is
+    /// (not "a device, FIFO or socket"), and a link seen without following it as a link.
+    #[test]
+    fn kinds_are_named_exactly() {
+        let dir = std::env::temp_dir().join(format!("dbuffer-fsutil-kind-{}", std::process::id()));
+        fs::create_dir_all(&dir).expect("temp dir");
+        let file = dir.join("file");
+        fs::write(&file, b"x").expect("write");
+        let kind = |p: &Path| kind_of(&fs::metadata(p).expect("metadata"));
+        assert_eq!(kind(&file), "a regular file");
+        assert_eq!(kind(&dir), "a directory");
+        #[cfg(unix)]
+        {
+            assert_eq!(kind(Path::new("/dev/null")), "a character device");
+            let link = dir.join("link");
+            let _ = fs::remove_file(&link);
+            std::os::unix::fs::symlink(&file, &link).expect("symlink");
+            assert_eq!(kind(&link), "a regular file", "followed");
+            let meta = fs::symlink_metadata(&link).expect("symlink metadata");
+            assert_eq!(kind_of(&meta), "a symbolic link");
+            let fifo = dir.join("fifo");
+            let _ = fs::remove_file(&fifo);
+            let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+            if made.is_ok_and(|s| s.success()) {
+                assert_eq!(kind(&fifo), "a FIFO (named pipe)");
+                let e = check_replaceable(&fifo).unwrap_err().to_string();
+                assert!(
+                    e.contains("is a FIFO (named pipe), not a regular file"),
+                    "{e}"
+                );
+            }
+        }
         let _ = fs::remove_dir_all(&dir);
     }
 

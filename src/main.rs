@@ -9,7 +9,7 @@ mod cli;
 /// A lab for boundary-correct real-time soft shadows from a disk light
 /// (the D-buffer of Jakobsen et al., CGI 2004).
 #[derive(Parser)]
-#[command(name = "dbuffer", version, about, long_about = None)]
+#[command(name = env!("CARGO_BIN_NAME"), version, about, long_about = None)]
 struct Args {
     #[command(subcommand)]
     command: Option<Command>,
@@ -143,7 +143,7 @@ enum Command {
         #[arg(long, default_value = "exact")]
         vt: String,
         /// Whose CPU twin to compare: dbuffer (the paper's method) or dbuffer-fused.
-        #[arg(long, default_value = "dbuffer")]
+        #[arg(long, default_value = dbuffer::render::Method::DBUFFER.name())]
         method: String,
         /// Also write the comparison as a PNG: method | reference | |ΔV| (0 … 0.25).
         #[arg(long)]

@@ -158,7 +158,7 @@ fn split_view_dbuffer_against_dbuffer_fused() {
 }
 
 /// The knot in the lab's split view, dbuffer | dbuffer-fused, at full resolution: the README's
-/// picture of what the fused D-buffer changes (`docs/lab-fused-split-knot.png` is this snapshot).
+/// picture of what the fused D-buffer changes (`docs/images/lab-fused-split-knot.png` is this snapshot).
 /// Inside the knot's shadow the paper's method is brighter where loops hide the disk together.
 #[test]
 fn the_knot_in_split_view() {

@@ -299,7 +299,7 @@ fn more_samples_converge_to_the_line_reference() {
     }
 }
 
-/// Seed 003 Fig. 6: under the gap, points see the middle of the light but neither end. With two
+/// Heidrich et al. 2000, Fig. 6: under the gap, points see the middle of the light but neither end. With two
 /// samples they come out in umbra (the paper's undersampling artefact); with 8 (spacing 2/7,
 /// below the 0.6 m window a ground point sees through the gap) none does.
 #[test]
@@ -312,7 +312,7 @@ fn two_samples_put_the_gap_in_umbra_and_eight_do_not() {
     assert_eq!(eight.confusion[1][2], 0, "{eight:?}");
 }
 
-/// A thin bar that both ends of the light see past. Seed 003 §3.2 assumes a point seen by both
+/// A thin bar that both ends of the light see past. Heidrich et al. (2000, §3.2) assume a point seen by both
 /// samples sees the whole light, but under the bar the skins of each end's map (from the bar's
 /// edges down to where the other end's shadow of it falls) lie in front of the ground in the
 /// other sample's view, so their values replace the channels' halves: two samples read about
@@ -355,7 +355,7 @@ fn no_caster_means_fully_lit_for_any_sample_count() {
     }
 }
 
-/// Seed 003 Fig. 2: a receiver parallel to the light, so the truth is linear across the
+/// Heidrich et al. 2000, Fig. 2: a receiver parallel to the light, so the truth is linear across the
 /// penumbra of an edge across the light, which is what the skins interpolate: two samples are
 /// already close to the reference; and an edge along the light stays hard.
 #[test]

@@ -1,4 +1,4 @@
-//! `dbuffer render`'s files (docs/guide/scene-format.md): every file written from a small synthetic render reads
+//! `dbuffer render`'s files (docs/guide/outputs.md): every file written from a small synthetic render reads
 //! back exactly; bad input is refused with a message naming the file and the field, before anything
 //! on disk changes; a failing call leaves the output folder as it was, with no temporary folder.
 
@@ -393,7 +393,7 @@ fn a_file_in_place_of_the_folder_is_an_error_and_nothing_is_created() {
 }
 
 /// A previous `image.png` (a sentinel) survives calls that fail, and no temporary folder is left.
-/// (A failure at every single step of writing is injected by the unit tests in `src/output.rs`.)
+/// (A failure at every single step of writing is injected by the unit tests in `src/output/tests.rs`.)
 #[test]
 fn a_failing_call_leaves_the_previous_contents() {
     let dir = fresh_path("sentinel");

@@ -65,7 +65,7 @@ fn gpu_against_the_reference_on_every_built_in() {
     ];
     for name in scene::builtin::names() {
         if name.starts_with("line-") {
-            continue; // the D-buffer needs a disk light (tests/line_methods.rs has the rest)
+            continue; // the D-buffer needs a disk light (tests/linear_ssm.rs measures the line scenes)
         }
         let m = measure(&mut offline, name);
         assert!(m.pixels > 5000, "{name}: the view must show the scene");

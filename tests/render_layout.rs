@@ -38,15 +38,7 @@ fn uniforms_match_their_wgsl() {
     }
     // Every method's shader includes the camera pass's half; the map methods the lookup.
     for method in dbuffer::render::Method::all() {
-        // `methods/NAME.wgsl` with `-` as `_`, or the family's (`dbuffer-center` → `dbuffer`).
-        let name = method.name();
-        let shader = shader_source::load(&format!("methods/{}.wgsl", name.replace('-', "_")))
-            .unwrap_or_else(|_| {
-                source(&format!(
-                    "methods/{}.wgsl",
-                    name.split('-').next().unwrap_or("")
-                ))
-            });
+        let shader = source(method.spec().shader);
         assert_wgsl_layout!(
             CameraUniforms,
             &shader,

@@ -1,10 +1,10 @@
 // `dbuffer-fused`: the D-buffer with every silhouette chord a receiver needs
-// (src/render/methods/dbuffer_fused.rs; docs/fused.md). Per pixel: its list texel's edges (the
+// (src/render/methods/dbuffer_fused.rs; docs/method/dbuffer-fused.md). Per pixel: its list texel's edges (the
 // light pass's lists), each edge's chord as seen from x, the layers between x and each of 128
 // disk samples added up from the centre (bit-sliced 5-bit counters), L(c) from the light pass's
 // caster crossings, then V: exact where the disk is one layer deep, else the lit fraction of the
 // samples. An overflowing list gets the paper's V. Its CPU twin is FusedTwin::sample
-// (src/geometry/fused.rs) with MaskEval::Lut, function by function.
+// (src/geometry/fused/twin.rs) with MaskEval::Lut, function by function.
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 // #include shared/fused.wgsl

@@ -23,7 +23,7 @@ struct VolumeIn {
     @location(0) position: vec3<f32>,
     @location(1) kind: u32,
     // The edge point's height below the light's plane is base + num / den, num and den affine
-    // over the triangle (render::methods::dbuffer::volume_vertices says why).
+    // over the triangle (geometry::volume_vertices::volume_vertices says why).
     @location(2) base: f32,
     @location(3) num: f32,
     @location(4) den: f32,
@@ -50,7 +50,7 @@ fn vs_volume(v: VolumeIn) -> VolumeOut {
     return out;
 }
 
-// |cx_s| (eq. 2 as the brief defines it in words): the distance along the ray from c to the plane
+// |cx_s| (eq. 2 as its definition in words has it, docs/method/dbuffer.md): the distance along the ray from c to the plane
 // through the silhouette edge parallel to the disk, at the edge point this fragment was extruded
 // from. A silhouette face is its own edge. Twin: VolumeVertex::edge_plane_distance.
 fn edge_plane_distance(f: VolumeOut, to_fragment: vec3<f32>, d: f32) -> f32 {

@@ -1,6 +1,6 @@
 // dbuffer-fused, what its light passes (passes/fused_layers.wgsl, passes/fused_lists.wgsl) and its
 // camera pass (methods/dbuffer_fused.wgsl) share: the uniforms, the candidate edge's record and
-// the geometry of an edge seen from a point. The CPU twin is src/geometry/fused.rs (docs/fused.md
+// the geometry of an edge seen from a point. The CPU twin is src/geometry/fused/ (docs/method/dbuffer-fused.md
 // describes the method); every function here names the twin's it follows, line for line, in f32.
 
 // As render::passes::fused_layers::FusedUniforms lays it out.

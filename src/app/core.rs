@@ -137,15 +137,13 @@ impl Core {
     }
 
     /// Probe answers that have arrived, per slot.
-    pub fn probe_results(&mut self) -> [Vec<ProbeResult>; 2] {
+    pub fn probe_results(&mut self, wait: bool) -> [Vec<ProbeResult>; 2] {
         let ctx = &self.ctx;
         let [a, b] = &mut self.slots;
-        [a, b].map(|slot| {
-            slot.targets
-                .probe
-                .as_mut()
-                .map(|p| p.poll(ctx))
-                .unwrap_or_default()
+        [a, b].map(|slot| match slot.targets.probe.as_mut() {
+            Some(p) if wait && p.pending() => p.wait(ctx),
+            Some(p) => p.poll(ctx),
+            None => Vec::new(),
         })
     }
 

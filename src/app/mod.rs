@@ -488,7 +488,8 @@ pub fn run(options: LabOptions) -> anyhow::Result<()> {
     let outcome = Arc::new(std::sync::Mutex::new(None::<Result<(), String>>));
     let sink = Arc::clone(&outcome);
     eframe::run_native(
-        "dbuffer",
+        // The window's title and where eframe keeps the settings: the program's name.
+        env!("CARGO_PKG_NAME"),
         native,
         Box::new(move |cc| {
             let mut app = LabApp::new(cc, options);

@@ -13,8 +13,8 @@ use super::{LabApp, Selection};
 use crate::geometry::{FaceClass, VolumeMesh};
 use crate::render::passes::view::View;
 use crate::render::passes::view_twin::BRANCH_COLORS;
-use crate::render::{Knobs, Method};
-use crate::scene::{Light, LineLight};
+use crate::render::Method;
+use crate::scene::Light;
 
 /// At most this many lines per volume overlay and triangles of class faces: volumes of big
 /// meshes have hundreds of thousands, which would make the window crawl. The legend says when
@@ -93,18 +93,6 @@ fn volume_edges(v: &VolumeMesh, umbra: bool, out: &mut Vec<[Vec3; 2]>, cap: usiz
     total
 }
 
-/// What the volume and silhouette overlays mean for a method that is not a D-buffer method, one
-/// line for the overlay notes; `None` for the D-buffer's own.
-pub fn method_overlay_note(method: Method) -> Option<&'static str> {
-    match method.name() {
-        "shadow-volume" => Some("shadow-volume: from the light centre; umbra volume = Crow's"),
-        "hybrid" => Some("hybrid: silhouette edges = rebuilt from the depth map"),
-        "planar" => Some("planar: shadows on flat objects only, no volumes"),
-        "extended-light-map" => Some("extended-light-map: its channels are in the View panel"),
-        _ => None,
-    }
-}
-
 impl LabApp {
     pub(super) fn draw_overlays(&mut self, painter: &Painter, rect: Rect) {
         let Some(core) = self.core.as_ref() else {
@@ -126,7 +114,7 @@ impl LabApp {
             || overlays.penumbra_volume
             || overlays.silhouettes;
         if wants_geometry {
-            if let Some(note) = method_overlay_note(shown) {
+            if let Some(note) = shown.spec().overlay_note {
                 self.overlay_notes.push(note.to_string());
             }
         }
@@ -264,11 +252,10 @@ impl LabApp {
                     );
                 }
             }
-            for q in line_sample_points(
-                &line,
-                self.settings.method(),
-                &self.base_request(1, 1).knobs,
-            ) {
+            // The points on the segment the shown method samples (its shadow maps' origins).
+            let samples = self.settings.method().spec().line_samples;
+            let knobs = self.base_request(1, 1).knobs;
+            for q in samples.map_or_else(Vec::new, |points| points(&line, &knobs)) {
                 if let Some(p) = projector.point(q) {
                     painter.circle_filled(p, 2.5, color);
                 }
@@ -502,22 +489,6 @@ fn box_edges(lo: Vec3, hi: Vec3) -> Vec<(Vec3, Vec3)> {
         }
     }
     edges
-}
-
-/// The points on a line light the shown method samples (its shadow maps' origins), to draw on
-/// the segment: `sampled`'s stratum centres, `linear-ssm`'s evenly spaced samples with both ends.
-fn line_sample_points(line: &LineLight, method: Method, knobs: &Knobs) -> Vec<Vec3> {
-    use crate::render::methods::{linear_ssm, sampled};
-    match method.name() {
-        "sampled" => {
-            let n = knobs.get(&sampled::LIGHTS).max(1);
-            (0..n)
-                .map(|i| line.at((i as f32 + 0.5) / n as f32))
-                .collect()
-        }
-        "linear-ssm" => linear_ssm::sample_points(line, knobs.get(&linear_ssm::SAMPLES)),
-        _ => Vec::new(),
-    }
 }
 
 #[cfg(test)]

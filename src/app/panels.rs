@@ -6,6 +6,7 @@ use eframe::egui::{self, Color32, DragValue, RichText, Slider};
 use super::doc::{normal_from, tilt_azimuth};
 use super::{LabApp, Level, Selection};
 use crate::geometry::VtVariant;
+use crate::render::methods::{Knob, KnobKind};
 use crate::render::passes::view::{ColorMap, View};
 use crate::render::Method;
 use crate::scene::file::Scale;
@@ -549,31 +550,71 @@ impl LabApp {
         if self.settings.split {
             shown.push(self.settings.split_method());
         }
-        for knob in shown.iter().flat_map(|m| m.knobs()) {
+        // A knob two shown methods share (`sv-open`) is shown once.
+        let mut knobs: Vec<&'static Knob> = Vec::new();
+        for &knob in shown.iter().flat_map(|m| m.knobs()) {
+            if !knobs.iter().any(|k| k.name == knob.name) {
+                knobs.push(knob);
+            }
+        }
+        for knob in knobs {
             if knob.name == crate::render::methods::reference::SAMPLES.name {
                 continue;
             }
-            let mut value = self
-                .settings
-                .knobs
-                .iter()
-                .find(|(n, _)| n == knob.name)
-                .map_or(knob.default, |(_, v)| *v);
-            let changed = ui
-                .horizontal(|ui| {
-                    let l = ui.label(knob.name);
-                    ui.add(DragValue::new(&mut value).range(knob.min..=knob.max))
-                        .labelled_by(l.id)
-                        .on_hover_text(knob.help)
-                        .changed()
-                })
-                .inner;
-            if changed {
-                self.settings.knobs.retain(|(n, _)| n != knob.name);
-                self.settings.knobs.push((knob.name.to_string(), value));
+            let mut value = self.settings.knobs.raw(knob);
+            if knob_control(ui, knob, &mut value) {
+                self.settings.knobs = self.settings.knobs.with(knob, value);
             }
         }
     }
+}
+
+/// The lab's control of `knob` as its kind asks (a slider, a checkbox, a picker, a slider of the
+/// fraction), editing `value`, the whole number its flag takes; whether it changed.
+fn knob_control(ui: &mut egui::Ui, knob: &Knob, value: &mut u32) -> bool {
+    let (min, max) = knob.range();
+    let response = match knob.kind {
+        KnobKind::Switch => {
+            let mut on = *value != 0;
+            let r = ui.checkbox(&mut on, knob.name);
+            *value = u32::from(on);
+            r
+        }
+        KnobKind::Choice { choices } => {
+            let shown = choices.get(*value as usize).copied().unwrap_or("?");
+            let mut r = egui::ComboBox::from_label(knob.name)
+                .selected_text(shown)
+                .show_ui(ui, |ui| {
+                    let mut changed = false;
+                    for (i, name) in (0u32..).zip(choices) {
+                        changed |= ui.selectable_value(value, i, *name).changed();
+                    }
+                    changed
+                });
+            if r.inner == Some(true) {
+                r.response.mark_changed();
+            }
+            r.response
+        }
+        KnobKind::Int { .. } => ui.add(
+            Slider::new(value, min..=max)
+                .text(knob.name)
+                .logarithmic(max >= 64 * min.max(1)),
+        ),
+        KnobKind::Scaled { per, .. } => {
+            let per = f64::from(per.max(1));
+            let mut fraction = f64::from(*value) / per;
+            let r = ui.add(
+                Slider::new(&mut fraction, f64::from(min) / per..=f64::from(max) / per)
+                    .text(knob.name)
+                    .step_by(1.0 / per)
+                    .fixed_decimals(per.log10().ceil() as usize),
+            );
+            *value = (fraction * per).round() as u32;
+            r
+        }
+    };
+    response.on_hover_text(knob.help).changed()
 }
 
 /// Controls, for the Help menu and the README.

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::VtVariant;
 use crate::render::passes::view::{Mapping, View};
-use crate::render::Method;
+use crate::render::{Knobs, Method};
 
 /// The scene `dbuffer` opens with no arguments.
 pub const DEFAULT_SCENE: &str = "fig7-concave";
@@ -39,8 +39,9 @@ pub struct Settings {
     pub render_scale: f32,
     /// Reference samples per pixel (K).
     pub reference_samples: u32,
-    /// The methods' knobs the user set (the others keep their defaults).
-    pub knobs: Vec<(String, u32)>,
+    /// The methods' knobs the user set (the others keep their defaults), saved as the
+    /// `(name, value)` pairs they always were.
+    pub knobs: Knobs,
     pub recent: Vec<String>,
 }
 
@@ -85,7 +86,7 @@ impl Default for Settings {
             dbuffer_size: 1024,
             render_scale: 1.0,
             reference_samples: 256,
-            knobs: Vec::new(),
+            knobs: Knobs::default(),
             recent: Vec::new(),
         }
     }
@@ -156,13 +157,8 @@ impl Settings {
         self.reference_samples = self
             .reference_samples
             .clamp(1, crate::render::methods::reference::MAX_SAMPLES);
-        // Knobs this build does not know, or out of their range, are dropped.
-        let knobs = crate::render::methods::all_knobs();
-        self.knobs.retain(|(name, v)| {
-            knobs
-                .iter()
-                .any(|k| k.name == name && (k.min..=k.max).contains(v))
-        });
+        // Knobs this build does not know were dropped as the file loaded; out of range, here.
+        self.knobs.drop_invalid();
         self.recent.truncate(MAX_RECENT);
     }
 }
@@ -197,5 +193,19 @@ mod tests {
         assert_eq!(s.vt(), VtVariant::Smoothstep);
         assert_eq!(s.render_scale, 1.0);
         assert_eq!(s.dbuffer_size, 64);
+    }
+
+    #[test]
+    fn saved_knobs_load_as_they_were_written() {
+        // The pairs an older build saved (and this one saves): unknown names and values out of
+        // range are dropped, the others kept.
+        let text = r#"{"knobs": [["pcf-radius", 4], ["gone-knob", 1], ["sv-open", 9]]}"#;
+        let mut s: Settings = serde_json::from_str(text).unwrap();
+        s.sanitize();
+        let pcf = &crate::render::methods::pcf::RADIUS;
+        assert_eq!(s.knobs.get(pcf), 4);
+        assert_eq!(s.knobs.set_ones().count(), 1);
+        let saved = serde_json::to_value(&s).unwrap();
+        assert_eq!(saved["knobs"], serde_json::json!([["pcf-radius", 4]]));
     }
 }

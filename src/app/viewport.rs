@@ -16,7 +16,7 @@ use crate::render::passes::probe::ProbeRequest;
 use crate::render::passes::view::{Mapping, View, ViewParams};
 use crate::render::passes::view_twin::NO_DATA;
 use crate::render::session::FrameJob;
-use crate::render::{FrameRequest, Knobs, Method};
+use crate::render::{FrameRequest, Method};
 use crate::scene::{Camera, Light};
 
 /// Everything that decides a frame's pixels.
@@ -190,10 +190,7 @@ impl LabApp {
     }
 
     pub(super) fn base_request(&self, width: u32, height: u32) -> FrameRequest {
-        let mut knobs = Knobs::default();
-        for (name, value) in &self.settings.knobs {
-            let _ = knobs.set(name, *value);
-        }
+        let knobs = self.settings.knobs;
         FrameRequest {
             width,
             height,
@@ -442,7 +439,14 @@ impl LabApp {
         if core.session.poll_geometry(&core.ctx) {
             ctx.request_repaint_after(std::time::Duration::from_millis(15));
         }
-        for (i, results) in core.probe_results().into_iter().enumerate() {
+        // A scripted (deterministic) window waits for its answers here, so it settles in a
+        // known number of frames whatever the load on the GPU: a test's `run()` then never
+        // runs out of steps while lavapipe is still busy with the frame the probe reads.
+        for (i, results) in core
+            .probe_results(self.deterministic)
+            .into_iter()
+            .enumerate()
+        {
             if !results.is_empty() {
                 // The panels drawn before the viewport show them on the next frame.
                 ctx.request_repaint();

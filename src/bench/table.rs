@@ -6,6 +6,60 @@ use std::fmt::Write;
 use super::{FrameSource, Report, Stat, Timing};
 use crate::render::Method;
 
+/// How a column's cells line up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Align {
+    Left,
+    Right,
+}
+
+/// A Markdown table written into a report row by row: a header, the rule under it, then rows,
+/// each `| a | b |` with an empty cell as `| |`. Every table of the bench report is one, so they
+/// all have one shape.
+pub struct Table<'a> {
+    out: &'a mut String,
+}
+
+impl<'a> Table<'a> {
+    /// Start a table in `out` with these columns: its header and rule.
+    pub fn new<S: AsRef<str>>(out: &'a mut String, columns: &[(S, Align)]) -> Table<'a> {
+        let mut t = Table { out };
+        t.row(columns.iter().map(|(c, _)| c.as_ref()));
+        t.out.push('|');
+        for (_, align) in columns {
+            t.out.push_str(match align {
+                Align::Left => "---|",
+                Align::Right => "---:|",
+            });
+        }
+        t.out.push('\n');
+        t
+    }
+
+    /// One row of cells.
+    pub fn row<S: AsRef<str>>(&mut self, cells: impl IntoIterator<Item = S>) {
+        self.out.push('|');
+        for cell in cells {
+            let cell = cell.as_ref();
+            if !cell.is_empty() {
+                self.out.push(' ');
+                self.out.push_str(cell);
+            }
+            self.out.push_str(" |");
+        }
+        self.out.push('\n');
+    }
+}
+
+/// A column headed `name` whose cells line up left (names) or right (numbers).
+fn left(name: impl Into<String>) -> (String, Align) {
+    (name.into(), Align::Left)
+}
+
+fn right(name: impl Into<String>) -> (String, Align) {
+    (name.into(), Align::Right)
+}
+
 fn ms(v: f64) -> String {
     if v < 1.0 {
         format!("{v:.3}")
@@ -83,11 +137,21 @@ pub fn markdown(r: &Report) -> String {
 
 fn table1(out: &mut String, r: &Report) {
     let _ = writeln!(out, "### Table 1 (Jakobsen et al. 2004), D-buffer\n");
-    let _ = writeln!(
+    let mut t = Table::new(
         out,
-        "| scene | caster tris | size | geometry ms (CPU) | light pass ms (GPU) | camera pass ms (GPU) | frame ms | fps | fps, geometry every frame | wall ms (incl. readback) |"
+        &[
+            left("scene"),
+            right("caster tris"),
+            right("size"),
+            right("geometry ms (CPU)"),
+            right("light pass ms (GPU)"),
+            right("camera pass ms (GPU)"),
+            right("frame ms"),
+            right("fps"),
+            right("fps, geometry every frame"),
+            right("wall ms (incl. readback)"),
+        ],
     );
-    let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for s in &r.scenes {
         for size in r.sizes() {
             let Some(run) = r.run(&s.name, size, Method::DBUFFER) else {
@@ -95,32 +159,31 @@ fn table1(out: &mut String, r: &Report) {
             };
             let geo = s.geometry_ms.median;
             match &run.timing {
-                Some(t) => {
-                    let frame = t.frame_ms.median;
-                    let _ = writeln!(
-                        out,
-                        "| `{}` | {} | {size}² | {} | {} | {} | {}{} | {:.0} | {:.0} | {} |",
-                        s.name,
+                Some(timing) => {
+                    let frame = timing.frame_ms.median;
+                    t.row([
+                        format!("`{}`", s.name),
                         thousands(s.caster_triangles),
+                        format!("{size}²"),
                         ms(geo),
-                        ms_opt(t.light_ms),
-                        ms_opt(t.pass("camera_pass")),
-                        ms(frame),
-                        source_note(t),
-                        t.fps,
-                        1e3 / (frame + geo),
-                        ms(t.wall_ms.median)
-                    );
+                        ms_opt(timing.light_ms),
+                        ms_opt(timing.pass("camera_pass")),
+                        format!("{}{}", ms(frame), source_note(timing)),
+                        format!("{:.0}", timing.fps),
+                        format!("{:.0}", 1e3 / (frame + geo)),
+                        ms(timing.wall_ms.median),
+                    ]);
                 }
                 None => {
-                    let _ = writeln!(
-                        out,
-                        "| `{}` | {} | {size}² | {} | {} | | | | | |",
-                        s.name,
+                    let mut cells = vec![
+                        format!("`{}`", s.name),
                         thousands(s.caster_triangles),
+                        format!("{size}²"),
                         ms(geo),
-                        na(&run.error)
-                    );
+                        na(&run.error),
+                    ];
+                    cells.resize(10, String::new());
+                    t.row(cells);
                 }
             }
         }
@@ -140,11 +203,20 @@ fn display(out: &mut String, r: &Report) {
         return;
     }
     let _ = writeln!(out, "### The lab's display path (D-buffer)\n");
-    let _ = writeln!(
+    let mut t = Table::new(
         out,
-        "| scene | size | floor GPU ms | lab frame, light still: wall (GPU) | light moving: wall (GPU) | fps, light moving | readback path: wall (GPU) | lab / readback | D-buffer frame / floor |"
+        &[
+            left("scene"),
+            right("size"),
+            right("floor GPU ms"),
+            right("lab frame, light still: wall (GPU)"),
+            right("light moving: wall (GPU)"),
+            right("fps, light moving"),
+            right("readback path: wall (GPU)"),
+            right("lab / readback"),
+            right("D-buffer frame / floor"),
+        ],
     );
-    let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for d in &r.display {
         let frame = r
             .timing(&d.scene, d.size, Method::DBUFFER)
@@ -167,16 +239,17 @@ fn display(out: &mut String, r: &Report) {
         } else {
             "–".into()
         };
-        let _ = writeln!(
-            out,
-            "| `{}` | {}² | {} | {} | {} | {fps} | {} | {ratio} | {over_floor} |",
-            d.scene,
-            d.size,
+        t.row([
+            format!("`{}`", d.scene),
+            format!("{}²", d.size),
             ms_opt(d.floor_gpu_ms),
             pair(&d.lab_still),
             pair(&d.lab_moving),
+            fps,
             pair(&d.readback),
-        );
+            ratio,
+            over_floor,
+        ]);
     }
     let _ = writeln!(
         out,
@@ -194,24 +267,18 @@ fn competition(out: &mut String, r: &Report) {
         out,
         "### The competition: frame ms (ratio to the D-buffer), median over the scenes\n"
     );
-    let mut header = "| method |".to_string();
-    let mut rule = "|---|".to_string();
-    for s in &sizes {
-        let _ = write!(header, " {s}² |");
-        rule.push_str("---:|");
-    }
-    let _ = write!(
-        header,
-        " camera pass ms at {}² |",
+    let mut columns = vec![left("method")];
+    columns.extend(sizes.iter().map(|s| right(format!("{s}²"))));
+    columns.push(right(format!(
+        "camera pass ms at {}²",
         sizes.last().unwrap_or(&0)
-    );
-    rule.push_str("---:|");
-    let _ = writeln!(out, "{header}\n{rule}");
+    )));
+    let mut t = Table::new(out, &columns);
     for (label, method) in r.labels() {
         let Ok(method) = method.parse::<Method>() else {
             continue;
         };
-        let mut row = format!("| {label} |");
+        let mut row = vec![label.clone()];
         for &size in &sizes {
             let cells: Vec<(f64, f64, bool)> = r
                 .scenes
@@ -236,7 +303,7 @@ fn competition(out: &mut String, r: &Report) {
                     .iter()
                     .find(|x| x.size == size && x.label == label)
                     .and_then(|x| x.error.clone());
-                let _ = write!(row, " {} |", na(&err));
+                row.push(na(&err));
                 continue;
             }
             let frame = median(cells.iter().map(|c| c.0).collect());
@@ -246,7 +313,7 @@ fn competition(out: &mut String, r: &Report) {
             } else {
                 ""
             };
-            let _ = write!(row, " {}{wall} ({ratio:.2}×) |", ms(frame));
+            row.push(format!("{}{wall} ({ratio:.2}×)", ms(frame)));
         }
         let last = sizes.last().copied().unwrap_or(0);
         let cams: Vec<f64> = r
@@ -260,12 +327,12 @@ fn competition(out: &mut String, r: &Report) {
                 Some(run.timing.as_ref()?.pass("camera_pass")?.median)
             })
             .collect();
-        if cams.is_empty() {
-            row.push_str(" – |");
+        row.push(if cams.is_empty() {
+            "–".into()
         } else {
-            let _ = write!(row, " {} |", ms(median(cams)));
-        }
-        let _ = writeln!(out, "{row}");
+            ms(median(cams))
+        });
+        t.row(row);
     }
     let _ = writeln!(
         out,
@@ -300,15 +367,11 @@ fn hard_methods(out: &mut String, r: &Report) {
         out,
         "### Hard-shadow techniques: frame ms (× hard shadow map, × D-buffer), median over the scenes\n"
     );
-    let mut header = "| method |".to_string();
-    let mut rule = "|---|".to_string();
-    for s in &sizes {
-        let _ = write!(header, " {s}² |");
-        rule.push_str("---:|");
-    }
-    let _ = writeln!(out, "{header}\n{rule}");
+    let mut columns = vec![left("method")];
+    columns.extend(sizes.iter().map(|s| right(format!("{s}²"))));
+    let mut t = Table::new(out, &columns);
     for (label, method) in &hard {
-        let mut row = format!("| {label} |");
+        let mut row = vec![label.clone()];
         for &size in &sizes {
             let cells: Vec<(f64, f64, f64)> = r
                 .scenes
@@ -323,18 +386,17 @@ fn hard_methods(out: &mut String, r: &Report) {
                 })
                 .collect();
             if cells.is_empty() {
-                row.push_str(" n/a |");
+                row.push("n/a".into());
                 continue;
             }
-            let _ = write!(
-                row,
-                " {} ({:.2}× hard, {:.2}× D) |",
+            row.push(format!(
+                "{} ({:.2}× hard, {:.2}× D)",
                 ms(median(cells.iter().map(|c| c.0).collect())),
                 median(cells.iter().map(|c| c.1).collect()),
                 median(cells.iter().map(|c| c.2).collect())
-            );
+            ));
         }
-        let _ = writeln!(out, "{row}");
+        t.row(row);
     }
     let filled: Vec<&(String, Method)> = hard
         .iter()
@@ -347,29 +409,20 @@ fn hard_methods(out: &mut String, r: &Report) {
             "\nStencil fill at {last}²: volume fragments per pixel (every volume triangle over its \
              whole footprint, no test; what the stencil methods pay in fill rate)\n"
         );
-        let mut header = "| scene |".to_string();
-        let mut rule = "|---|".to_string();
-        for (label, _) in &filled {
-            let _ = write!(header, " {label} |");
-            rule.push_str("---:|");
-        }
-        let _ = writeln!(out, "{header}\n{rule}");
+        let mut columns = vec![left("scene")];
+        columns.extend(filled.iter().map(|(label, _)| right(label.as_str())));
+        let mut t = Table::new(out, &columns);
         for s in &r.scenes {
-            let mut row = format!("| `{}` |", s.name);
+            let mut row = vec![format!("`{}`", s.name)];
             for (label, _) in &filled {
                 let fill = r
                     .runs
                     .iter()
                     .find(|x| x.scene == s.name && x.size == last && x.label == *label)
                     .and_then(|x| x.fill);
-                match fill {
-                    Some(f) => {
-                        let _ = write!(row, " {f:.2} |");
-                    }
-                    None => row.push_str(" – |"),
-                }
+                row.push(fill.map_or_else(|| "–".into(), |f| format!("{f:.2}")));
             }
-            let _ = writeln!(out, "{row}");
+            t.row(row);
         }
     }
     let _ = writeln!(out);
@@ -384,7 +437,16 @@ fn against_dbuffer_and_hard(out: &mut String, r: &Report) {
     let _ = writeln!(
         out,
         "### Every method at {size}²: frame as a ratio to the D-buffer and to the hard shadow \
-         map\n\n| method | frame ms | × dbuffer | × hard |\n|---|---:|---:|---:|"
+         map\n"
+    );
+    let mut t = Table::new(
+        out,
+        &[
+            left("method"),
+            right("frame ms"),
+            right("× dbuffer"),
+            right("× hard"),
+        ],
     );
     for (label, method) in r.labels() {
         let Ok(method) = method.parse::<Method>() else {
@@ -412,7 +474,7 @@ fn against_dbuffer_and_hard(out: &mut String, r: &Report) {
                 .iter()
                 .find(|x| x.size == size && x.label == label)
                 .and_then(|x| x.error.clone());
-            let _ = writeln!(out, "| {label} | {} | | |", na(&err));
+            t.row([label, na(&err), String::new(), String::new()]);
             continue;
         }
         let ratio = |v: Vec<f64>| {
@@ -422,13 +484,7 @@ fn against_dbuffer_and_hard(out: &mut String, r: &Report) {
                 format!("{:.2}×", median(v))
             }
         };
-        let _ = writeln!(
-            out,
-            "| {label} | {} | {} | {} |",
-            ms(median(frames)),
-            ratio(to_dbuffer),
-            ratio(to_hard)
-        );
+        t.row([label, ms(median(frames)), ratio(to_dbuffer), ratio(to_hard)]);
     }
     let _ = writeln!(
         out,
@@ -459,28 +515,38 @@ fn coherence(out: &mut String, r: &Report) {
         "### Frame coherence (Jakobsen et al. 2004, §6.1): `{}` at {}², D-buffer\n",
         c.scene, c.size
     );
-    let _ = writeln!(
+    let mut t = Table::new(
         out,
-        "| steady frame | wall ms (median / min) | GPU passes ms | geometry ms (CPU) | geometry builds |"
+        &[
+            left("steady frame"),
+            right("wall ms (median / min)"),
+            right("GPU passes ms"),
+            right("geometry ms (CPU)"),
+            right("geometry builds"),
+        ],
     );
-    let _ = writeln!(out, "|---|---:|---:|---:|---:|");
-    let _ = writeln!(
-        out,
-        "| geometry cached | {} / {} | {} | 0 | 0 |",
-        ms(c.cached_wall_ms.median),
-        ms(c.cached_wall_ms.min),
-        ms_opt(c.cached_gpu_ms)
-    );
-    let _ = writeln!(
-        out,
-        "| geometry rebuilt every frame | {} / {} | {} | {} | {} in {} frames |",
-        ms(c.rebuilt_wall_ms.median),
-        ms(c.rebuilt_wall_ms.min),
+    t.row([
+        "geometry cached".to_string(),
+        format!(
+            "{} / {}",
+            ms(c.cached_wall_ms.median),
+            ms(c.cached_wall_ms.min)
+        ),
+        ms_opt(c.cached_gpu_ms),
+        "0".into(),
+        "0".into(),
+    ]);
+    t.row([
+        "geometry rebuilt every frame".to_string(),
+        format!(
+            "{} / {}",
+            ms(c.rebuilt_wall_ms.median),
+            ms(c.rebuilt_wall_ms.min)
+        ),
         ms_opt(c.rebuilt_gpu_ms),
         ms_opt(c.rebuilt_geometry_ms),
-        c.rebuilds,
-        c.frames
-    );
+        format!("{} in {} frames", c.rebuilds, c.frames),
+    ]);
     let _ = writeln!(
         out,
         "\nRebuilt by: {}; cached and rebuilt frames alternate. A rebuilt frame adds the geometry \
@@ -497,29 +563,38 @@ fn scaling(out: &mut String, r: &Report) {
         out,
         "### Geometry scaling (CPU): UV spheres under a tilted light\n"
     );
-    let _ = writeln!(
+    let mut t = Table::new(
         out,
-        "| caster triangles | per light move ms (median / min) | volume triangles | adjacency ms (once per mesh) |"
+        &[
+            right("caster triangles"),
+            right("per light move ms (median / min)"),
+            right("volume triangles"),
+            right("adjacency ms (once per mesh)"),
+        ],
     );
-    let _ = writeln!(out, "|---:|---:|---:|---:|");
     for p in &r.scaling {
-        let _ = writeln!(
-            out,
-            "| {} | {} / {} | {} | {} |",
+        t.row([
             thousands(p.triangles),
-            ms(p.build_ms.median),
-            ms(p.build_ms.min),
+            format!("{} / {}", ms(p.build_ms.median), ms(p.build_ms.min)),
             thousands(p.volume_triangles),
-            ms(p.prepare_ms)
-        );
+            ms(p.prepare_ms),
+        ]);
     }
     let _ = writeln!(out);
 }
 
 fn targets(out: &mut String, r: &Report) {
     let _ = writeln!(out, "### Targets\n");
-    let _ = writeln!(out, "| target | measured | limit | result | where |");
-    let _ = writeln!(out, "|---|---:|---:|---|---|");
+    let mut table = Table::new(
+        out,
+        &[
+            left("target"),
+            right("measured"),
+            right("limit"),
+            left("result"),
+            left("where"),
+        ],
+    );
     for t in &r.targets {
         let (measured, result) = match (t.measured, t.pass()) {
             (Some(m), Some(true)) => (format!("{m:.3} {}", t.unit), "PASS"),
@@ -537,11 +612,13 @@ fn targets(out: &mut String, r: &Report) {
         let limit = t
             .limit
             .map_or_else(|| "–".to_string(), |l| format!("{op} {l} {}", t.unit));
-        let _ = writeln!(
-            out,
-            "| {} | {measured} | {limit} | {result} | {} |",
-            t.name, t.detail
-        );
+        table.row([
+            t.name.clone(),
+            measured,
+            limit,
+            result.into(),
+            t.detail.clone(),
+        ]);
     }
 }
 

@@ -13,7 +13,7 @@ use dbuffer::geometry::fused::{FusedParams, FusedPath, FusedTwin};
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
 use dbuffer::output;
-use dbuffer::render::methods::all_knobs;
+use dbuffer::render::methods::{all_knobs, KnobKind};
 use dbuffer::render::offline::Offline;
 use dbuffer::render::{FrameRequest, Knobs, Method};
 use dbuffer::scene;
@@ -59,18 +59,19 @@ pub use compare::{compare, CompareArgs};
 /// (`--pcf-radius`, `--lights`, …): each method's module declares its own.
 #[derive(Clone, Debug, Default)]
 pub struct MethodFlags {
-    /// The knobs given on the command line.
-    pub given: Vec<(&'static str, u32)>,
+    /// The knobs given on the command line, not yet checked against their ranges.
+    pub given: Knobs,
 }
 
 impl clap::FromArgMatches for MethodFlags {
     fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
-        Ok(MethodFlags {
-            given: all_knobs()
-                .into_iter()
-                .filter_map(|k| m.get_one::<u32>(k.name).map(|v| (k.name, *v)))
-                .collect(),
-        })
+        let mut given = Knobs::default();
+        for k in all_knobs() {
+            if let Some(&v) = m.get_one::<u32>(k.name) {
+                given = given.with(k, v);
+            }
+        }
+        Ok(MethodFlags { given })
     }
 
     fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
@@ -82,14 +83,20 @@ impl clap::FromArgMatches for MethodFlags {
 impl clap::Args for MethodFlags {
     fn augment_args(mut cmd: clap::Command) -> clap::Command {
         for k in all_knobs() {
+            let (min, max) = k.range();
+            // Every kind takes the whole number it is kept as; a switch also takes true/false.
+            let parser = match k.kind {
+                KnobKind::Switch => clap::builder::ValueParser::new(parse_switch),
+                _ => clap::value_parser!(u32).into(),
+            };
             cmd = cmd.arg(
                 clap::Arg::new(k.name)
                     .long(k.name)
                     .value_name("N")
-                    .value_parser(clap::value_parser!(u32))
+                    .value_parser(parser)
                     .help(format!(
-                        "{}, {} to {} (default {})",
-                        k.help, k.min, k.max, k.default
+                        "{}, {min} to {max} (default {})",
+                        k.help, k.default
                     )),
             );
         }
@@ -101,15 +108,21 @@ impl clap::Args for MethodFlags {
     }
 }
 
+/// An on/off knob's value: a whole number (checked against 0 to 1 with the others), `true` or
+/// `false`.
+fn parse_switch(text: &str) -> Result<u32, std::num::ParseIntError> {
+    match text {
+        "true" => Ok(1),
+        "false" => Ok(0),
+        _ => text.parse(),
+    }
+}
+
 impl MethodFlags {
     /// The knobs, each checked against its range (the message names the flag).
     pub fn knobs(&self) -> Result<Knobs> {
-        let mut knobs = Knobs::default();
-        for &(name, value) in &self.given {
-            knobs.set(name, value).map_err(anyhow::Error::msg)?;
-        }
-        knobs.validate().map_err(anyhow::Error::msg)?;
-        Ok(knobs)
+        self.given.validate().map_err(anyhow::Error::msg)?;
+        Ok(self.given)
     }
 }
 
@@ -252,14 +265,28 @@ enum TwinMethod {
 }
 
 impl TwinMethod {
+    /// Every one, with the registry's method it is the twin of.
+    const ALL: [(TwinMethod, Method); 2] = [
+        (TwinMethod::DBuffer, Method::DBUFFER),
+        (TwinMethod::Fused, Method::DBUFFER_FUSED),
+    ];
+
     fn parse(text: &str) -> Result<TwinMethod> {
-        match text {
-            "dbuffer" => Ok(TwinMethod::DBuffer),
-            "dbuffer-fused" => Ok(TwinMethod::Fused),
-            _ => bail!(
-                "--method for inspect expects dbuffer or dbuffer-fused (the methods with a CPU \
-                 twin), found '{text}'"
+        match TwinMethod::ALL.iter().find(|(_, m)| m.name() == text) {
+            Some(&(twin, _)) => Ok(twin),
+            None => bail!(
+                "--method for inspect expects {} or {} (the methods with a CPU twin), found \
+                 '{text}'",
+                Method::DBUFFER,
+                Method::DBUFFER_FUSED
             ),
+        }
+    }
+
+    fn method(self) -> Method {
+        match self {
+            TwinMethod::DBuffer => Method::DBUFFER,
+            TwinMethod::Fused => Method::DBUFFER_FUSED,
         }
     }
 }
@@ -481,10 +508,7 @@ fn compare_twin(
     let method_v: Vec<f32> = rows.iter().map(|r| r.0).collect();
     let m = metrics::compare(&reference, &method_v, &mask);
     let rays = mask.iter().filter(|&&m| m).count() * k;
-    let name = match method {
-        TwinMethod::DBuffer => "dbuffer",
-        TwinMethod::Fused => "dbuffer-fused",
-    };
+    let name = method.method();
     outln!(
         "twin ({name}) vs oracle ({width}x{height}, {} px facing the light, V(t) {vt}, K = {k}):",
         m.pixels

@@ -113,8 +113,13 @@ impl Progress {
 pub fn reference_samples() -> Box<dyn FnMut(usize, usize)> {
     let mut job: Option<Progress> = None;
     Box::new(move |done, total| {
-        let p = job
-            .get_or_insert_with(|| Progress::new("reference", total as u64, "samples per pixel"));
+        let p = job.get_or_insert_with(|| {
+            Progress::new(
+                dbuffer::render::Method::REFERENCE.name(),
+                total as u64,
+                "samples per pixel",
+            )
+        });
         p.set(done as u64);
         if done >= total {
             p.finish();

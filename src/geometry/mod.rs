@@ -3,7 +3,8 @@
 //! Data flow for one light position (Jakobsen et al. 2004, §2.1): [`adjacency`] prepares each caster once
 //! (welding, edges); [`classify`] sorts its faces against the disk; [`silhouette`] finds the umbra
 //! and penumbra silhouettes and their extrusion points; [`volumes`] extrudes and closes the
-//! volumes. [`twin`] is the CPU twin of the D-buffer lookup; the visibility oracle is the ground
+//! volumes, and [`volume_vertices`] lays them out as the D-buffer's light pass draws them. [`twin`] is
+//! the CPU twin of the D-buffer lookup; the visibility oracle is the ground
 //! truth every test compares against.
 
 pub mod adjacency;
@@ -25,6 +26,7 @@ pub mod ssm;
 pub mod twin;
 pub mod view;
 pub mod visibility;
+pub mod volume_vertices;
 pub mod volumes;
 pub mod wedges;
 

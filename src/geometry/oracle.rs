@@ -1,7 +1,7 @@
 //! The ray-cast ground truth: `V(x)`, the fraction of the light visible from a point.
 //!
 //! `V(x)` is estimated with shadow rays from `x` to `K` stratified sample points on the light
-//! (design §4). On a disk, the samples are the cells of a jittered grid on the unit square,
+//! (docs/method/metrics.md). On a disk, the samples are the cells of a jittered grid on the unit square,
 //! mapped to the disk by Shirley and Chiu's area-preserving concentric map, so every sample
 //! stands for the same area `πr²/K`. On a line light ([`line_samples`]), sample `i` is jittered
 //! inside the `i`-th of `K` equal pieces of the segment, so it stands for the length `L/K`; the
@@ -400,7 +400,7 @@ mod tests {
     fn points_on_a_convex_caster_do_not_shadow_themselves() {
         // A UV sphere (convex polyhedron): from a point on a facet, the caster lies behind the
         // facet's plane, so V is 1 when the whole disk is in front of that plane and 0 when it
-        // is all behind (the face classes of design §2), whatever the rounding of the point.
+        // is all behind (the face classes of docs/method/dbuffer.md), whatever the rounding of the point.
         let l = DiskLight {
             center: Vec3::new(0.3, 3.0, -0.2),
             normal: Vec3::new(-0.1, -1.0, 0.05).normalize(),

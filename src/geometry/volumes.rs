@@ -93,7 +93,7 @@ pub struct VolumeVertex {
 
 impl VolumeVertex {
     /// `|cx_s|`: the distance along the ray from `c` (unit direction `dir`) to the plane through
-    /// the silhouette edge parallel to the disk — eq. (2) as the brief defines it in words. The
+    /// the silhouette edge parallel to the disk — eq. (2) as its definition in words has it (docs/method/dbuffer.md). The
     /// edge point used is the one the fragment was extruded from (on the line from the extrusion
     /// point through the fragment), so it is exact per fragment even for edges that are not
     /// parallel to the disk. On a silhouette face the face is its own edge: `|cx_s| = |cx|`.

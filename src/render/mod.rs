@@ -326,20 +326,9 @@ impl SurfaceVertex {
     }
 }
 
-/// GPU vertex of a shadow volume: position, kind, and what `|cx_s|` needs — the height below the
-/// light's plane of the edge point the fragment was extruded from, as `base + num / den` with
-/// `num` and `den` affine over the triangle (so interpolating them is exact; see
-/// `render::methods::dbuffer::volume_vertices`). Which way a ray crosses the triangle is its
-/// winding, which the pipelines' culling reads.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct VolumeVertex {
-    pub position: [f32; 3],
-    pub kind: u32,
-    pub base: f32,
-    pub num: f32,
-    pub den: f32,
-}
+/// The vertex layout of a shadow-volume triangle ([`VolumeVertex`], defined with the CPU code
+/// that makes it in `geometry::volume_vertices`).
+pub use crate::geometry::volume_vertices::VolumeVertex;
 
 impl VolumeVertex {
     pub const ATTRIBUTES: [wgpu::VertexAttribute; 5] = [

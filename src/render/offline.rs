@@ -103,9 +103,10 @@ pub fn render_in(
             key.samples,
             progress,
         );
-        report
-            .cpu_ms
-            .push(("reference".into(), t.elapsed().as_secs_f64() * 1e3));
+        report.cpu_ms.push((
+            super::Method::REFERENCE.name().into(),
+            t.elapsed().as_secs_f64() * 1e3,
+        ));
         report.cpu_ms.push(("reference_rays".into(), r.rays_ms));
         report.reference_rays = Some((key.samples, r.hit_pixels));
         session.set_reference(ctx, key, &r.visibility, (key.samples, key.samples))?;

@@ -12,36 +12,46 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{
-    require, CameraGroup, Channel, Empty, FrameInputs, LightMaps, MethodSpec, MethodState, Prepare,
-    SharedMaps,
+    require, AdapterNeeds, Bench, CameraGroup, Channel, Empty, FrameInputs, LightMaps, MethodSpec,
+    MethodState, Prepare, SharedMaps,
 };
-use crate::geometry::light_view::LightView;
-use crate::geometry::{CasterGeometry, SceneGeometry, VolumeParams};
+use crate::geometry::volume_vertices::{light_view_rect, sort_near_first, volume_vertices_within};
+use crate::geometry::{SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::dbuffer_volumes::{disjoint_groups, CasterVolumes, DBufferVolumes};
 use crate::render::passes::shadow_map::{lookup_entries, LightUniforms, ShadowUniforms};
 use crate::render::{
-    buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError, VolumeVertex,
+    buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError,
 };
 use crate::scene::{DiskLight, LightKind};
 
 pub static DBUFFER: MethodSpec = MethodSpec {
     name: "dbuffer",
     description: "D-buffer soft shadows (Jakobsen et al. 2004)",
+    shader: SHADER,
     knobs: &[],
     cpu_side: false,
     hard: false,
-    needs: Some(LightKind::Disk), // its volumes are the disk's
+    lights: Some(LightKind::Disk), // its volumes are the disk's
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(DBuffer::new(ctx, false)),
 };
 
 pub static DBUFFER_CENTER: MethodSpec = MethodSpec {
     name: "dbuffer-center",
     description: "D-buffer with silhouettes from the light centre only",
+    shader: SHADER,
     knobs: &[],
     cpu_side: false,
     hard: false,
-    needs: Some(LightKind::Disk), // its volumes are the disk's
+    lights: Some(LightKind::Disk), // its volumes are the disk's
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(DBuffer::new(ctx, true)),
 };
 
@@ -307,234 +317,5 @@ impl MethodState for DBuffer {
 
     fn invalidate(&mut self) {
         self.made_for = None;
-    }
-}
-
-/// The caster's volume triangles as GPU vertices, umbra and penumbra apart (their winding says
-/// which way a ray crosses them).
-///
-/// `|cx_s|` (eq. 2 in words) needs the height `h` below the light's plane of the edge point `e`
-/// a fragment `q` was extruded from: `e` is where the line from the extrusion point `p` through
-/// `q` meets the edge (the twin finds it as the closest point of the two lines). On the quad's
-/// plane `q = p + μ(e − p)`; for any `w` across the edge, `μ = (q − p)·w / (a − p)·w` is affine in
-/// `q`, so `h = (p − c)·n + ((q − p)·n) ((a − p)·w) / ((q − p)·w)` is `base + num/den` with `num`
-/// and `den` affine over the triangle: their vertex values interpolate exactly, and the fragment
-/// shader does one division instead of solving for `e`. A fan (its edge is its apex) and an edge
-/// its extrusion point lies on have a constant `h`.
-pub fn volume_vertices(
-    g: &CasterGeometry,
-    light: &crate::scene::DiskLight,
-) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
-    volume_vertices_within(g, light, None, None)
-}
-
-/// [`volume_vertices`], each volume ended at its reach when one is given ([`end_at`]), made in
-/// one pass: no full copy of a volume is held besides the one returned.
-pub fn volume_vertices_within(
-    g: &CasterGeometry,
-    light: &crate::scene::DiskLight,
-    umbra_reach: Option<f32>,
-    penumbra_reach: Option<f32>,
-) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
-    let (c, n) = (light.center, light.normal);
-    let triangles = g.volumes.triangle_count();
-    let umbrae = (0..triangles)
-        .filter(|&i| g.volumes.triangle(i).1.kind.is_umbra())
-        .count();
-    let (mut umbra, mut penumbra) = (
-        Vec::with_capacity(3 * umbrae),
-        Vec::with_capacity(3 * (triangles - umbrae)),
-    );
-    for i in 0..triangles {
-        let (corners, attrs) = g.volumes.triangle(i);
-        let [a, b] = attrs.edge;
-        let p = attrs.extrusion;
-        let along = (b - a).normalize_or_zero();
-        let w = (p - a) - along * (p - a).dot(along);
-        let ratio = w.length_squared() > 1e-12 * (p - a).length_squared().max(1e-30);
-        let (out, reach) = if attrs.kind.is_umbra() {
-            (&mut umbra, umbra_reach)
-        } else {
-            (&mut penumbra, penumbra_reach)
-        };
-        let t = corners.map(|q| {
-            let (base, num, den) = if ratio {
-                let k = (a - p).dot(w);
-                ((p - c).dot(n), (q - p).dot(n) * k, (q - p).dot(w))
-            } else {
-                ((a - c).dot(n), 0.0, 1.0)
-            };
-            VolumeVertex {
-                position: q.to_array(),
-                kind: attrs.kind.code(),
-                base,
-                num,
-                den,
-            }
-        });
-        match reach {
-            Some(r) => clip_into(t, light, r, out),
-            None => out.extend(t),
-        }
-    }
-    (umbra, penumbra)
-}
-
-/// The parts of volume triangles whose height below the light's plane is at most `reach`.
-///
-/// Along a ray from `c` the height grows with the distance, so a volume crossing beyond the
-/// greatest height of any surface lies behind every receiver on its ray: a penumbra entry there
-/// is never looked up (only points visible from `c` read that channel), and an umbra exit there
-/// reads as "no exit", which is what a receiver in front of it must get anyway. The extruded
-/// quads would otherwise run on to the far plane, and most of their fragments would be
-/// rasterised only to die behind the ground. (Not for umbrae merged over casters: there a
-/// caster's missing exit would let another caster's win.)
-pub fn end_at(
-    volume: &[VolumeVertex],
-    light: &crate::scene::DiskLight,
-    reach: f32,
-) -> Vec<VolumeVertex> {
-    let mut out = Vec::with_capacity(volume.len());
-    for t in volume.chunks_exact(3) {
-        clip_into([t[0], t[1], t[2]], light, reach, &mut out);
-    }
-    out
-}
-
-/// Append the part of triangle `t` whose height below the light's plane is at most `reach`
-/// (none, all of it, a triangle or a quad as two) to `out`.
-fn clip_into(
-    t: [VolumeVertex; 3],
-    light: &crate::scene::DiskLight,
-    reach: f32,
-    out: &mut Vec<VolumeVertex>,
-) {
-    let height = |v: &VolumeVertex| light.height_of(Vec3::from(v.position)) - reach;
-    let h = [height(&t[0]), height(&t[1]), height(&t[2])];
-    if h.iter().all(|&x| x <= 0.0) {
-        out.extend_from_slice(&t);
-        return;
-    }
-    if h.iter().all(|&x| x > 0.0) {
-        return;
-    }
-    // Walk the edges, keeping inside corners and the crossings (Sutherland–Hodgman, one
-    // plane); num and den are affine, so they interpolate exactly.
-    let mut poly: [VolumeVertex; 4] = [t[0]; 4];
-    let mut n = 0;
-    for k in 0..3 {
-        let (p, q) = (t[k], t[(k + 1) % 3]);
-        let (hp, hq) = (h[k], h[(k + 1) % 3]);
-        if hp <= 0.0 {
-            poly[n] = p;
-            n += 1;
-        }
-        if (hp <= 0.0) != (hq <= 0.0) {
-            let s = hp / (hp - hq);
-            let lerp = |a: f32, b: f32| a + (b - a) * s;
-            let (pp, qp) = (Vec3::from(p.position), Vec3::from(q.position));
-            poly[n] = VolumeVertex {
-                position: (pp + (qp - pp) * s).to_array(),
-                num: lerp(p.num, q.num),
-                den: lerp(p.den, q.den),
-                ..t[0]
-            };
-            n += 1;
-        }
-    }
-    for k in 1..n.saturating_sub(1) {
-        out.extend([poly[0], poly[k], poly[k + 1]]);
-    }
-}
-
-/// Reorder the triangles of `volume` by the distance of their centroid from `c`, nearest first.
-fn sort_near_first(volume: &mut [VolumeVertex], c: Vec3) {
-    // In place, by whole triangles (no copy: a 1.4M-triangle volume is 118 MB).
-    let whole = volume.len() / 3 * 3;
-    let tris: &mut [[VolumeVertex; 3]] = bytemuck::cast_slice_mut(&mut volume[..whole]);
-    let key = |t: &[VolumeVertex; 3]| {
-        let centroid = t.iter().map(|v| Vec3::from(v.position)).sum::<Vec3>() / 3.0;
-        (centroid - c).length_squared()
-    };
-    tris.sort_unstable_by(|a, b| key(a).total_cmp(&key(b)));
-}
-
-/// The part `[x0, y0, x1, y1]` of the light view's image (`[0, 1]²`, y down) that triangles
-/// with these corners can cover; all of it if a corner lies behind the light centre.
-fn light_view_rect(view: &LightView, points: impl Iterator<Item = Vec3>) -> [f32; 4] {
-    let vp = view.view_projection();
-    let mut rect = [f32::MAX, f32::MAX, f32::MIN, f32::MIN];
-    for p in points {
-        let c = vp * p.extend(1.0);
-        if c.w.is_nan() || c.w <= 1e-6 {
-            return [0.0, 0.0, 1.0, 1.0];
-        }
-        let (u, v) = (c.x / c.w * 0.5 + 0.5, 0.5 - c.y / c.w * 0.5);
-        rect = [
-            rect[0].min(u),
-            rect[1].min(v),
-            rect[2].max(u),
-            rect[3].max(v),
-        ];
-    }
-    if rect[0] > rect[2] {
-        return [0.0; 4];
-    }
-    [
-        rect[0].clamp(0.0, 1.0),
-        rect[1].clamp(0.0, 1.0),
-        rect[2].clamp(0.0, 1.0),
-        rect[3].clamp(0.0, 1.0),
-    ]
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn tri(points: [[f32; 3]; 3]) -> Vec<VolumeVertex> {
-        points
-            .iter()
-            .map(|p| VolumeVertex {
-                position: *p,
-                kind: 3,
-                base: 0.5,
-                // Affine in position: num = x + 2y, den = 1 + z.
-                num: p[0] + 2.0 * p[1],
-                den: 1.0 + p[2],
-            })
-            .collect()
-    }
-
-    #[test]
-    fn ending_volumes_keeps_the_part_in_reach_with_exact_attributes_and_winding() {
-        let light = crate::scene::DiskLight {
-            center: Vec3::new(0.0, 4.0, 0.0),
-            normal: Vec3::NEG_Y,
-            radius: 0.5,
-            intensity: 1.0,
-        };
-        // Heights below the light: 4 - y. A triangle from y = 3 (height 1) down to y = -1 (5).
-        let t = tri([[0.0, 3.0, 0.0], [2.0, -1.0, 0.0], [0.0, -1.0, 2.0]]);
-        assert_eq!(end_at(&t, &light, 10.0), t, "all in reach");
-        assert!(end_at(&t, &light, 0.5).is_empty(), "all beyond");
-        let kept = end_at(&t, &light, 3.0);
-        assert_eq!(kept.len(), 3, "one corner in reach: one triangle");
-        let normal = |v: &[VolumeVertex]| {
-            let p = |i: usize| Vec3::from(v[i].position);
-            (p(1) - p(0)).cross(p(2) - p(0))
-        };
-        for k in kept.chunks_exact(3) {
-            assert!(normal(k).dot(normal(&t)) > 0.0, "winding kept");
-            for v in k {
-                let [x, y, z] = v.position;
-                assert!(4.0 - y <= 3.0 + 1e-5, "{y}");
-                assert!((v.num - (x + 2.0 * y)).abs() < 1e-5 && (v.den - (1.0 + z)).abs() < 1e-5);
-                assert_eq!((v.kind, v.base), (3, 0.5));
-            }
-        }
-        // Two corners in reach: a quad, two triangles.
-        let t2 = tri([[0.0, 3.0, 0.0], [2.0, 3.0, 0.0], [0.0, -1.0, 2.0]]);
-        assert_eq!(end_at(&t2, &light, 3.0).len(), 6);
     }
 }

@@ -1,4 +1,4 @@
-//! `dbuffer-fused` (issue 12; `docs/fused.md`): the D-buffer with every silhouette chord a
+//! `dbuffer-fused` (issue 12; `docs/method/dbuffer-fused.md`): the D-buffer with every silhouette chord a
 //! receiver needs, so that the parts of the disk hidden by different casters, or different parts
 //! of one caster, combine as they do in reality. CPU twin: `geometry::fused::FusedTwin`.
 //!
@@ -24,8 +24,8 @@ use std::time::Instant;
 
 use super::dbuffer::DBuffer;
 use super::{
-    require, CameraGroup, Channel, Empty, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
-    Prepare, SharedMaps,
+    require, AdapterNeeds, Bench, CameraGroup, Channel, Empty, FrameInputs, Knob, LightMaps,
+    MethodSpec, MethodState, Prepare, SharedMaps,
 };
 use crate::budget::{bytes, MAX_FUSED_EDGES, MAX_FUSED_LIST_BYTES};
 use crate::geometry::fused::{
@@ -42,42 +42,41 @@ use crate::render::{
 };
 
 /// Texels per side of the grid of edge lists.
-pub static LIST_SIZE: Knob = Knob {
-    name: "list-size",
-    help: "dbuffer-fused: texels per side of the grid of edge lists",
-    min: 8,
-    max: 2048,
-    default: 256,
-    max_name: None,
-};
+pub static LIST_SIZE: Knob = Knob::int(
+    "list-size",
+    "dbuffer-fused: texels per side of the grid of edge lists",
+    8..=2048,
+    256,
+);
 
 /// Edge ids one list holds.
-pub static LIST_CAP: Knob = Knob {
-    name: "list-cap",
-    help: "dbuffer-fused: edges one list holds (a longer list falls back to dbuffer's V)",
-    min: 1,
-    max: 1024,
-    default: DEFAULT_CAP as u32,
-    max_name: None,
-};
+pub static LIST_CAP: Knob = Knob::int(
+    "list-cap",
+    "dbuffer-fused: edges one list holds (a longer list falls back to dbuffer's V)",
+    1..=1024,
+    DEFAULT_CAP as u32,
+);
 
 /// Disk samples of the mask.
-pub static MASK_SAMPLES: Knob = Knob {
-    name: "mask-samples",
-    help: "dbuffer-fused: disk samples of the mask where the disk is more than one layer deep",
-    min: 1,
-    max: 128,
-    default: DEFAULT_SAMPLES as u32,
-    max_name: None,
-};
+pub static MASK_SAMPLES: Knob = Knob::int(
+    "mask-samples",
+    "dbuffer-fused: disk samples of the mask where the disk is more than one layer deep",
+    1..=128,
+    DEFAULT_SAMPLES as u32,
+);
 
 pub static DBUFFER_FUSED: MethodSpec = MethodSpec {
     name: "dbuffer-fused",
     description: "D-buffer with every silhouette chord (occluder fusion)",
+    shader: SHADER,
     knobs: &[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES],
     cpu_side: false,
     hard: false,
-    needs: Some(LightKind::Disk), // its chords cut the disk
+    lights: Some(LightKind::Disk), // its chords cut the disk
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(DBufferFused::new(ctx)),
 };
 

@@ -15,8 +15,8 @@
 use glam::{Mat4, Vec3, Vec4};
 
 use super::{
-    require, CameraGroup, Channel, Empty, FrameInputs, Knob, Knobs, LightMaps, MethodSpec,
-    MethodState, Prepare, SharedMaps,
+    require, AdapterNeeds, Bench, CameraGroup, Channel, Choice, Empty, FrameInputs, Knob, Knobs,
+    LightMaps, MethodSpec, MethodState, Prepare, SharedMaps,
 };
 use crate::geometry::light_view::LightView;
 use crate::render::passes::extended_light_map::{ElmParams, ExtendedLightMap, Pattern};
@@ -24,34 +24,35 @@ use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
 use crate::render::{buffer_entry, uniform_buffer, view_entry, GpuContext, RenderError};
 
 /// Bits of the distance in the alpha channel.
-pub static DEPTH_BITS: Knob = Knob {
-    name: "elm-depth-bits",
-    help: "extended-light-map: bits of the light's distance in the map's alpha channel (8 = the \
-           2000 hardware's alpha channel)",
-    min: 8,
-    max: 24,
-    default: 16,
-    max_name: None,
-};
+pub static DEPTH_BITS: Knob = Knob::int(
+    "elm-depth-bits",
+    "extended-light-map: bits of the light's distance in the map's alpha channel (8 = the \
+     2000 hardware's alpha channel)",
+    8..=24,
+    16,
+);
 
 /// What the RGB holds.
-pub static PATTERN: Knob = Knob {
-    name: "elm-pattern",
-    help: "extended-light-map: the light in RGB: 0 = a spotlight's falloff, 1 = the spotlight \
-           through the projected texture assets/gobo.png, 2 = uniform",
-    min: 0,
-    max: 2,
-    default: 0,
-    max_name: None,
-};
+pub static PATTERN: Choice = Choice::new(
+    "elm-pattern",
+    "extended-light-map: the light in RGB: 0 = a spotlight's falloff, 1 = the spotlight \
+     through the projected texture assets/gobo.png, 2 = uniform",
+    &["spotlight", "gobo", "uniform"],
+    0,
+);
 
 pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec {
     name: "extended-light-map",
     description: "extended light map (Brabec et al. 2000): light colour in RGB, distance in A",
-    knobs: &[&DEPTH_BITS, &PATTERN],
+    shader: SHADER,
+    knobs: &[&DEPTH_BITS, &PATTERN.0],
     cpu_side: false,
     hard: true,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: Some("extended-light-map: its channels are in the View panel"),
+    line_samples: None,
     new: |ctx| Box::new(ElmMethod::new(ctx)),
 };
 

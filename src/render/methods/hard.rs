@@ -2,20 +2,27 @@
 //! slope-scaled bias (`shaders/methods/hard.wgsl`).
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::MethodSpec;
+use super::{AdapterNeeds, Bench, MethodSpec};
 
 pub static HARD: MethodSpec = MethodSpec {
     name: "hard",
     description: "hard shadow map from the light centre",
+    shader: SHADER,
     knobs: &[],
     cpu_side: false,
     hard: true,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
 };
 
+const SHADER: &str = "methods/hard.wgsl";
+
 static FLAVOR: Flavor = Flavor {
-    shader: "methods/hard.wgsl",
+    shader: SHADER,
     knobs: |_| [0.0; 4],
     extra: None,
 };

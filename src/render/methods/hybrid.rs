@@ -13,8 +13,8 @@
 //! [`MethodState::geometry`] holds them as silhouette edges, a frame after the walls were made.
 
 use super::{
-    require, v_texture_entries, CameraGroup, Knob, Knobs, MethodSpec, MethodState, Prepare,
-    SharedMaps,
+    require, v_texture_entries, AdapterNeeds, Bench, CameraGroup, Knobs, MethodSpec, MethodState,
+    Prepare, Scaled, SharedMaps, Switch,
 };
 use crate::geometry::hybrid::WallParams;
 use crate::geometry::silhouette::SilhouetteEdge;
@@ -24,45 +24,43 @@ use crate::render::passes::stencil_volumes::ScreenPass;
 use crate::render::{view_entry, GpuContext, RenderError};
 
 /// τ in thousandths.
-pub static THRESHOLD: Knob = Knob {
-    name: "hybrid-threshold",
-    help: "hybrid: the relative depth jump between neighbouring texels that makes an edge, in \
-           thousandths (20 = 2 %)",
-    min: 1,
-    max: 500,
-    default: 20,
-    max_name: None,
-};
+pub static THRESHOLD: Scaled = Scaled::new(
+    "hybrid-threshold",
+    "hybrid: the relative depth jump between neighbouring texels that makes an edge, in \
+     thousandths (20 = 2 %)",
+    1..=500,
+    20,
+    1000,
+);
 
 /// Templates or the plain staircase.
-pub static TEMPLATES: Knob = Knob {
-    name: "hybrid-templates",
-    help: "hybrid: 1 = marching-squares templates (straight and 45° cuts), 0 = the staircase \
-           along texel borders",
-    min: 0,
-    max: 1,
-    default: 1,
-    max_name: None,
-};
+pub static TEMPLATES: Switch = Switch::new(
+    "hybrid-templates",
+    "hybrid: 1 = marching-squares templates (straight and 45° cuts), 0 = the staircase \
+     along texel borders",
+    true,
+);
 
 /// The edge detector: the plain jump, or a jump neither side's slope predicts.
-pub static EDGES: Knob = Knob {
-    name: "hybrid-edges",
-    help: "hybrid: 0 = every jump above the threshold is an edge, 1 = only jumps neither \
-           neighbour's slope predicts (no walls on steep continuous surfaces)",
-    min: 0,
-    max: 1,
-    default: 1,
-    max_name: None,
-};
+pub static EDGES: Switch = Switch::new(
+    "hybrid-edges",
+    "hybrid: 0 = every jump above the threshold is an edge, 1 = only jumps neither \
+     neighbour's slope predicts (no walls on steep continuous surfaces)",
+    true,
+);
 
 pub static HYBRID: MethodSpec = MethodSpec {
     name: "hybrid",
     description: "shadow volumes rebuilt from the light's depth map (McCool 2000), one stencil bit",
-    knobs: &[&THRESHOLD, &TEMPLATES, &EDGES],
+    shader: SHADER,
+    knobs: &[&THRESHOLD.0, &TEMPLATES.0, &EDGES.0],
     cpu_side: false,
     hard: true,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: Some("hybrid: silhouette edges = rebuilt from the depth map"),
+    line_samples: None,
     new: |ctx| Box::new(HybridMethod::new(ctx)),
 };
 
@@ -74,10 +72,10 @@ const LOOKUP_BIAS: f32 = 2e-3;
 /// The reconstruction's parameters from the knobs; walls with nothing behind them reach `far`.
 pub fn wall_params(knobs: &Knobs, far: f32) -> WallParams {
     WallParams {
-        threshold: knobs.get(&THRESHOLD) as f32 / 1000.0,
-        templates: knobs.get(&TEMPLATES) != 0,
+        threshold: knobs.get(&THRESHOLD),
+        templates: knobs.get(&TEMPLATES),
         far,
-        slope_test: knobs.get(&EDGES) != 0,
+        slope_test: knobs.get(&EDGES),
     }
 }
 

@@ -16,7 +16,7 @@
 
 use glam::{Mat4, Vec3};
 
-use super::{require, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
+use super::{require, AdapterNeeds, Bench, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
 use crate::render::passes::sample_maps::{lights_at, SampleMaps};
 use crate::render::passes::shadow_map::{BIAS_CONSTANT, BIAS_SLOPE};
 use crate::render::passes::ssm::{Ssm, SsmSample, MAX_SSM_SAMPLES};
@@ -26,22 +26,28 @@ use crate::render::{
 use crate::scene::{LightKind, LineLight};
 
 /// N, the samples on the segment.
-pub static SAMPLES: Knob = Knob {
-    name: "ssm-samples",
-    help: "linear-ssm: light samples on the segment, its ends included (the paper's 2)",
-    min: 2,
-    max: MAX_SSM_SAMPLES,
-    default: 2,
-    max_name: None,
-};
+pub static SAMPLES: Knob = Knob::int(
+    "ssm-samples",
+    "linear-ssm: light samples on the segment, its ends included (the paper's 2)",
+    2..=MAX_SSM_SAMPLES,
+    2,
+);
 
 pub static LINEAR_SSM: MethodSpec = MethodSpec {
     name: "linear-ssm",
     description: "soft shadow maps for a linear light (Heidrich et al. 2000)",
+    shader: SHADER,
     knobs: &[&SAMPLES],
     cpu_side: false,
     hard: false,
-    needs: Some(LightKind::Line), // Heidrich et al.'s maps along a segment
+    lights: Some(LightKind::Line), // Heidrich et al.'s maps along a segment
+    adapter: AdapterNeeds::NONE,
+    bench: Bench {
+        label: Some("linear-ssm 2"),
+        knobs: &[(&SAMPLES, 2)],
+    },
+    overlay_note: None,
+    line_samples: Some(|line, knobs| sample_points(line, knobs.get(&SAMPLES))),
     new: |ctx| Box::new(LinearSsm::new(ctx)),
 };
 

@@ -1,7 +1,10 @@
 //! The shadow methods. Each is one module here with its passes, its WGSL
 //! (`shaders/methods/NAME.wgsl`: the method's `method_visibility`, pasted into the shared camera
 //! pass), its knobs and its CPU twin where it has one. [`ALL`] is the registry: adding a method is
-//! its module and one line there.
+//! its module (with its WGSL and snapshot), a `pub mod` line and one line in [`ALL`]. Everything
+//! the rest of the program knows about a method — its shader, knobs, bench label, overlay note,
+//! light sample points — is in its [`MethodSpec`], so nothing else matches on its name (the
+//! shader table is built from `shaders/` by `build.rs`; `tests/registry.rs` walks [`ALL`]).
 //!
 //! A method's per-scene GPU state is a [`MethodState`]: it brings its light-space products
 //! (D-buffer, shadow maps) up to date only when the light or a caster moved, and hands the
@@ -25,13 +28,16 @@ pub mod sampled;
 pub mod shadow_volume;
 pub mod wedges;
 
+mod knobs;
+pub use knobs::{all_knobs, Choice, Knob, KnobKind, KnobType, Knobs, Scaled, Switch, MAX_KNOBS};
+
 use std::any::Any;
 use std::cell::OnceCell;
 use std::fmt;
 use std::str::FromStr;
 use std::sync::{Arc, OnceLock};
 
-use glam::Mat4;
+use glam::{Mat4, Vec3};
 
 use super::gpu_scene::GpuScene;
 use super::passes::camera::ScreenView;
@@ -40,7 +46,7 @@ use super::timer::Recorder;
 use super::{GpuContext, RenderError};
 use crate::geometry::light_view::LightView;
 use crate::geometry::{PreparedCasters, SceneGeometry, VtVariant};
-use crate::scene::{DiskLight, LightKind, Scene};
+use crate::scene::{DiskLight, LightKind, LineLight, Scene};
 
 /// Every method, in the order pickers, `compare` and `bench` list them. The registry.
 pub const ALL: &[Method] = &[
@@ -61,23 +67,72 @@ pub const ALL: &[Method] = &[
     Method(&reference_hard::REFERENCE_HARD),
 ];
 
-/// What a method is, for the registry.
+/// What a method is, for the registry: everything the rest of the program needs to know about
+/// it, so that nothing outside its module matches on its name.
 pub struct MethodSpec {
     /// The command-line name (`--method`, pickers, `report.json`).
     pub name: &'static str,
     /// One line for menus and `--help`.
     pub description: &'static str,
-    /// Its knobs (command-line flags, lab sliders).
+    /// Its camera shader under `shaders/` (`methods/NAME.wgsl`: its `method_visibility`).
+    pub shader: &'static str,
+    /// Its knobs (command-line flags, lab controls); a [`Switch`], [`Choice`] or [`Scaled`] is
+    /// listed by the [`Knob`] it wraps (`&OPEN.0`).
     pub knobs: &'static [&'static Knob],
     /// V is computed on the CPU (the ray-cast reference): only wall time measures it.
     pub cpu_side: bool,
     /// A hard shadow from the light's centre as a point light: `compare` scores it against
     /// `reference-hard` too.
     pub hard: bool,
-    /// The kind of light it needs, if it cannot take both (docs/method/README.md).
-    pub needs: Option<LightKind>,
+    /// The kind of light it takes, if it cannot take both (docs/method/README.md).
+    pub lights: Option<LightKind>,
+    /// What it needs of the adapter beyond what every method needs.
+    pub adapter: AdapterNeeds,
+    /// How `dbuffer bench` times it.
+    pub bench: Bench,
+    /// What the lab's volume and silhouette overlays mean under it, one line for the overlay
+    /// notes; `None` for the D-buffer's own meaning.
+    pub overlay_note: Option<&'static str>,
+    /// The points on a line light it samples (its shadow maps' origins), which the lab draws on
+    /// the segment; `None` for a method that samples none.
+    pub line_samples: Option<fn(&LineLight, &Knobs) -> Vec<Vec3>>,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
+}
+
+/// What a method needs of the adapter beyond what every method needs (none so far: the field is
+/// where a method that needs an optional feature will say so).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AdapterNeeds {
+    pub features: wgpu::Features,
+}
+
+impl AdapterNeeds {
+    /// Nothing beyond what every method needs.
+    pub const NONE: AdapterNeeds = AdapterNeeds {
+        features: wgpu::Features::empty(),
+    };
+
+    /// Whether an adapter with `features` has what the method needs.
+    pub fn met_by(&self, features: wgpu::Features) -> bool {
+        features.contains(self.features)
+    }
+}
+
+/// How `dbuffer bench` times a method: the label of its rows and the knobs it sets.
+pub struct Bench {
+    /// The rows' label; `None`: the method's name.
+    pub label: Option<&'static str>,
+    /// Knobs set for the run (as their flags write them); the others keep their defaults.
+    pub knobs: &'static [(&'static Knob, u32)],
+}
+
+impl Bench {
+    /// Under its name, with the default knobs.
+    pub const DEFAULTS: Bench = Bench {
+        label: None,
+        knobs: &[],
+    };
 }
 
 /// A method of [`ALL`].
@@ -100,6 +155,11 @@ impl Method {
 
     pub fn all() -> &'static [Method] {
         ALL
+    }
+
+    /// The registry's method made from `spec` (`None` for a spec [`ALL`] does not list).
+    pub fn of(spec: &'static MethodSpec) -> Option<Method> {
+        ALL.iter().copied().find(|m| std::ptr::eq(m.0, spec))
     }
 
     pub fn spec(self) -> &'static MethodSpec {
@@ -134,7 +194,7 @@ impl Method {
 
     /// The kind of light the method needs, if it cannot take both (docs/method/README.md).
     pub fn needs(self) -> Option<LightKind> {
-        self.0.needs
+        self.0.lights
     }
 
     /// The method a `light` light gets when none is named: the first of the registry made for
@@ -214,106 +274,6 @@ impl FromStr for Method {
             let names: Vec<&str> = ALL.iter().map(|m| m.name()).collect();
             format!("unknown method '{s}': expected one of {}", names.join(", "))
         })
-    }
-}
-
-/// A method's knob: a command-line flag `--NAME` and a slider in the lab.
-#[derive(Debug)]
-pub struct Knob {
-    /// The flag without its dashes, e.g. `pcf-radius`.
-    pub name: &'static str,
-    pub help: &'static str,
-    pub min: u32,
-    pub max: u32,
-    pub default: u32,
-    /// The resource-budget constant (`crate::budget`) `max` is, named in the error when a
-    /// value is over it.
-    pub max_name: Option<&'static str>,
-}
-
-/// At most this many distinct knobs over all methods (checked by a test).
-pub const MAX_KNOBS: usize = 24;
-
-/// Every distinct knob of the registry, in registry order.
-pub fn all_knobs() -> Vec<&'static Knob> {
-    let mut out: Vec<&'static Knob> = Vec::new();
-    for m in ALL {
-        for &k in m.knobs() {
-            if !out.iter().any(|o| o.name == k.name) {
-                out.push(k);
-            }
-        }
-    }
-    out
-}
-
-fn knob_slot(name: &str) -> Option<usize> {
-    all_knobs()
-        .iter()
-        .position(|k| k.name == name)
-        .filter(|&i| i < MAX_KNOBS)
-}
-
-/// The value of every knob (defaults where not set): what a frame request carries.
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub struct Knobs {
-    values: [Option<u32>; MAX_KNOBS],
-}
-
-impl Default for Knobs {
-    fn default() -> Self {
-        Knobs {
-            values: [None; MAX_KNOBS],
-        }
-    }
-}
-
-impl fmt::Debug for Knobs {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let mut m = f.debug_map();
-        for k in all_knobs() {
-            m.entry(&k.name, &self.get(k));
-        }
-        m.finish()
-    }
-}
-
-impl Knobs {
-    /// The value of `knob`, its default if not set.
-    pub fn get(&self, knob: &Knob) -> u32 {
-        knob_slot(knob.name)
-            .and_then(|i| self.values[i])
-            .unwrap_or(knob.default)
-    }
-
-    /// Set the knob called `name` (no range check: see [`Knobs::validate`]).
-    pub fn set(&mut self, name: &str, value: u32) -> Result<(), String> {
-        let i = knob_slot(name).ok_or_else(|| format!("unknown knob '{name}'"))?;
-        self.values[i] = Some(value);
-        Ok(())
-    }
-
-    /// `self` with `knob` set to `value`.
-    pub fn with(mut self, knob: &Knob, value: u32) -> Knobs {
-        if let Some(i) = knob_slot(knob.name) {
-            self.values[i] = Some(value);
-        }
-        self
-    }
-
-    /// Every knob in its range, or which one is not and what was expected (naming the flag).
-    pub fn validate(&self) -> Result<(), String> {
-        for k in all_knobs() {
-            let v = self.get(k);
-            if !(k.min..=k.max).contains(&v) {
-                let budget = k.max_name.map(|n| format!(" ({n})")).unwrap_or_default();
-                return Err(format!(
-                    "--{} expects {} to {}{budget}, found {v}",
-                    k.name, k.min, k.max
-                ));
-            }
-        }
-        Ok(())
     }
 }
 
@@ -631,21 +591,5 @@ mod tests {
             assert!(ALL[..i].iter().all(|o| o.name() != m.name()), "{m} twice");
         }
         assert!("nope".parse::<Method>().unwrap_err().contains("dbuffer, "));
-    }
-
-    #[test]
-    fn knobs_fit_and_validate_by_flag() {
-        assert!(all_knobs().len() <= MAX_KNOBS);
-        let k = Knobs::default();
-        assert_eq!(k.get(&pcf::RADIUS), pcf::RADIUS.default);
-        k.validate().unwrap();
-        let bad = k.with(&pcf::RADIUS, 99);
-        assert_eq!(bad.get(&pcf::RADIUS), 99);
-        let e = bad.validate().unwrap_err();
-        assert!(e.contains("--pcf-radius") && e.contains("99"), "{e}");
-        let mut named = Knobs::default();
-        named.set("lights", 4).unwrap();
-        assert_eq!(named.get(&sampled::LIGHTS), 4);
-        assert!(named.set("nope", 1).is_err());
     }
 }

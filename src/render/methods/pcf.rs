@@ -3,30 +3,35 @@
 //! (`shaders/methods/pcf.wgsl`).
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{Knob, MethodSpec};
+use super::{AdapterNeeds, Bench, Knob, MethodSpec};
 
 /// The kernel radius R in shadow-map texels.
-pub static RADIUS: Knob = Knob {
-    name: "pcf-radius",
-    help: "pcf: kernel radius in shadow-map texels ((2R+1)² taps)",
-    min: 0,
-    max: 8,
-    default: 2,
-    max_name: None,
-};
+pub static RADIUS: Knob = Knob::int(
+    "pcf-radius",
+    "pcf: kernel radius in shadow-map texels ((2R+1)² taps)",
+    0..=8,
+    2,
+);
 
 pub static PCF: MethodSpec = MethodSpec {
     name: "pcf",
     description: "percentage-closer filtering of the shadow map",
+    shader: SHADER,
     knobs: &[&RADIUS],
     cpu_side: false,
     hard: true,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
 };
 
+const SHADER: &str = "methods/pcf.wgsl";
+
 static FLAVOR: Flavor = Flavor {
-    shader: "methods/pcf.wgsl",
+    shader: SHADER,
     knobs: |f| [f.knobs.get(&RADIUS) as f32, 0.0, 0.0, 0.0],
     extra: None,
 };

@@ -4,42 +4,48 @@
 //! (`shaders/methods/pcss.wgsl`).
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{FrameInputs, Knob, MethodSpec};
+use super::{AdapterNeeds, Bench, FrameInputs, Knob, MethodSpec};
 use crate::scene::{LightKind, Scene};
 
-pub static BLOCKER_TAPS: Knob = Knob {
-    name: "blocker-taps",
-    help: "pcss: blocker-search taps (rotated Poisson disk)",
-    min: 1,
-    max: POISSON_POINTS as u32,
-    default: 16,
-    max_name: None,
-};
+pub static BLOCKER_TAPS: Knob = Knob::int(
+    "blocker-taps",
+    "pcss: blocker-search taps (rotated Poisson disk)",
+    1..=POISSON_POINTS as u32,
+    16,
+);
 
-pub static FILTER_TAPS: Knob = Knob {
-    name: "filter-taps",
-    help: "pcss: filter taps (rotated Poisson disk)",
-    min: 1,
-    max: POISSON_POINTS as u32,
-    default: 32,
-    max_name: None,
-};
+pub static FILTER_TAPS: Knob = Knob::int(
+    "filter-taps",
+    "pcss: filter taps (rotated Poisson disk)",
+    1..=POISSON_POINTS as u32,
+    32,
+);
 
 pub static PCSS: MethodSpec = MethodSpec {
     name: "pcss",
     description: "percentage-closer soft shadows (Fernando 2005)",
+    shader: SHADER,
     knobs: &[&BLOCKER_TAPS, &FILTER_TAPS],
     cpu_side: false,
     hard: false,
-    needs: Some(LightKind::Disk), // a blocker search over a disk
+    lights: Some(LightKind::Disk), // a blocker search over a disk
+    adapter: AdapterNeeds::NONE,
+    bench: Bench {
+        label: Some("pcss 16/32"),
+        knobs: &[(&BLOCKER_TAPS, 16), (&FILTER_TAPS, 32)],
+    },
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
 };
 
 /// Points of the Poisson disk (`PoissonDisk` of the shader: two per vec4).
 pub const POISSON_POINTS: usize = 64;
 
+const SHADER: &str = "methods/pcss.wgsl";
+
 static FLAVOR: Flavor = Flavor {
-    shader: "methods/pcss.wgsl",
+    shader: SHADER,
     knobs: pcss_knobs,
     extra: Some(((POISSON_POINTS * 8) as u64, poisson_bytes)),
 };

@@ -14,7 +14,8 @@
 use std::sync::Arc;
 
 use super::{
-    require, v_texture_entries, CameraGroup, FrameInputs, Knob, MethodSpec, MethodState, Prepare,
+    require, v_texture_entries, AdapterNeeds, Bench, CameraGroup, FrameInputs, MethodSpec,
+    MethodState, Prepare, Scaled,
 };
 use crate::geometry::planar::{planar_receivers, PlanarReceiver};
 use crate::render::gpu_scene::VertexChunks;
@@ -23,23 +24,27 @@ use crate::render::passes::stencil_volumes::ScreenPass;
 use crate::render::{view_entry, GpuContext, RenderError};
 
 /// How much light a projected shadow takes, in percent.
-pub static OPACITY: Knob = Knob {
-    name: "planar-opacity",
-    help: "planar: the light a projected shadow takes, percent (100: all); below 100 shows that \
-           the stencil darkens each pixel once where projected triangles overlap",
-    min: 0,
-    max: 100,
-    default: 100,
-    max_name: None,
-};
+pub static OPACITY: Scaled = Scaled::new(
+    "planar-opacity",
+    "planar: the light a projected shadow takes, percent (100: all); below 100 shows that \
+     the stencil darkens each pixel once where projected triangles overlap",
+    0..=100,
+    100,
+    100,
+);
 
 pub static PLANAR: MethodSpec = MethodSpec {
     name: "planar",
     description: "planar projected shadows (Blinn 1988) onto the flat receivers, stencilled",
-    knobs: &[&OPACITY],
+    shader: SHADER,
+    knobs: &[&OPACITY.0],
     cpu_side: false,
     hard: true,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: Some("planar: shadows on flat objects only, no volumes"),
+    line_samples: None,
     new: |ctx| Box::new(PlanarShadows::new(ctx)),
 };
 
@@ -128,7 +133,7 @@ impl MethodState for PlanarShadows {
         self.screen.begin(ctx, &inputs.view);
         let targets = require(self.screen.targets(), "the screen targets were not made")?;
         self.screen.record_prepass(rec, inputs.surfaces);
-        let shadow_v = 1.0 - inputs.knobs.get(&OPACITY) as f32 / 100.0;
+        let shadow_v = 1.0 - inputs.knobs.get(&OPACITY);
         let uniforms = PlanarUniforms::new(
             inputs.view.infinite_view_proj,
             inputs.view.eye,

@@ -3,29 +3,39 @@
 //! texture (the session's), and the camera pass shades it like every other method's
 //! (`shaders/methods/reference.wgsl`).
 
-use super::{v_texture_entries, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
+use super::{
+    v_texture_entries, AdapterNeeds, Bench, CameraGroup, Knob, MethodSpec, MethodState, Prepare,
+};
 use crate::render::{view_entry, GpuContext, RenderError};
 
 /// The most disk samples per pixel (the budget's).
 pub const MAX_SAMPLES: u32 = crate::budget::MAX_REFERENCE_SAMPLES;
 
 /// K, the disk samples per pixel.
-pub static SAMPLES: Knob = Knob {
-    name: "samples",
-    help: "reference: rays to this many stratified disk samples per pixel (K)",
-    min: 1,
-    max: MAX_SAMPLES,
-    default: crate::geometry::oracle::DEFAULT_SAMPLES as u32,
-    max_name: Some("MAX_REFERENCE_SAMPLES"),
-};
+pub static SAMPLES: Knob = Knob::int(
+    "samples",
+    "reference: rays to this many stratified disk samples per pixel (K)",
+    1..=MAX_SAMPLES,
+    crate::geometry::oracle::DEFAULT_SAMPLES as u32,
+)
+.budget("MAX_REFERENCE_SAMPLES");
 
 pub static REFERENCE: MethodSpec = MethodSpec {
     name: "reference",
     description: "ray-cast ground truth (K disk samples per pixel)",
+    shader: SHADER,
     knobs: &[&SAMPLES],
     cpu_side: true,
     hard: false,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench {
+        // Each timed frame takes one more sample per pixel, of a budget that never ends.
+        label: Some("reference 1 spp"),
+        knobs: &[(&SAMPLES, MAX_SAMPLES)],
+    },
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(Reference::new(ctx)),
 };
 

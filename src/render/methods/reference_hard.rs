@@ -9,7 +9,9 @@
 
 use std::time::Instant;
 
-use super::{v_texture_entries, CameraGroup, MethodSpec, MethodState, Prepare};
+use super::{
+    v_texture_entries, AdapterNeeds, Bench, CameraGroup, MethodSpec, MethodState, Prepare,
+};
 use crate::render::passes::next_generation;
 use crate::render::{view_entry, GpuContext, RenderError, Texture};
 use crate::scene::Camera;
@@ -17,10 +19,15 @@ use crate::scene::Camera;
 pub static REFERENCE_HARD: MethodSpec = MethodSpec {
     name: "reference-hard",
     description: "exact hard shadow: one ray per pixel to the light centre",
+    shader: SHADER,
     knobs: &[],
     cpu_side: true,
     hard: true,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(ReferenceHard::new(ctx)),
 };
 

@@ -2,34 +2,53 @@
 //! segment), averaged (light-source sampling, Heckbert & Herf 1997): the brute-force area light (maps from `passes::sample_maps`, camera pass
 //! `shaders/methods/sampled.wgsl`).
 
-use super::{require, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
+use glam::Vec3;
+
+use super::{
+    require, AdapterNeeds, Bench, CameraGroup, Knob, Knobs, MethodSpec, MethodState, Prepare,
+};
 use crate::render::passes::sample_maps::{sample_lights, SampleMaps, MAX_LIGHTS};
 use crate::render::passes::shadow_map::{BIAS_CONSTANT, BIAS_SLOPE};
 use crate::render::{
     buffer_entry, texture_entry, uniform_entry, view_entry, GpuContext, RenderError,
 };
+use crate::scene::LineLight;
 
 /// How many point lights.
-pub static LIGHTS: Knob = Knob {
-    name: "lights",
-    help: "sampled: shadow maps from this many stratified points on the light (disk or segment)",
-    min: 1,
-    max: MAX_LIGHTS,
-    default: 16,
-    max_name: None,
-};
+pub static LIGHTS: Knob = Knob::int(
+    "lights",
+    "sampled: shadow maps from this many stratified points on the light (disk or segment)",
+    1..=MAX_LIGHTS,
+    16,
+);
 
 pub static SAMPLED: MethodSpec = MethodSpec {
     name: "sampled",
     description: "N shadow maps from points on the light, averaged",
+    shader: SHADER,
     knobs: &[&LIGHTS],
     cpu_side: false,
     hard: false,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench {
+        label: Some("sampled 16"),
+        knobs: &[(&LIGHTS, 16)],
+    },
+    overlay_note: None,
+    line_samples: Some(stratum_centres),
     new: |ctx| Box::new(Sampled::new(ctx)),
 };
 
 const SHADER: &str = "methods/sampled.wgsl";
+
+/// The points on a line light the lab draws for this method: the centres of its `n` strata.
+fn stratum_centres(line: &LineLight, knobs: &Knobs) -> Vec<Vec3> {
+    let n = knobs.get(&LIGHTS).max(1);
+    (0..n)
+        .map(|i| line.at((i as f32 + 0.5) / n as f32))
+        .collect()
+}
 
 pub struct Sampled {
     /// Bound for the maps' generation.

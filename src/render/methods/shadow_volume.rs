@@ -21,7 +21,8 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{
-    v_texture_entries, CameraGroup, FrameInputs, Knob, Knobs, MethodSpec, MethodState, Prepare,
+    v_texture_entries, AdapterNeeds, Bench, CameraGroup, FrameInputs, Knobs, MethodSpec,
+    MethodState, Prepare, Switch,
 };
 use crate::geometry::hard_volume::{scene_volumes, Caps, HardVolume, OpenMeshes};
 use crate::geometry::silhouette::find_silhouettes;
@@ -32,23 +33,25 @@ use crate::render::passes::stencil_volumes::ScreenPass;
 use crate::render::{view_entry, GpuContext, RenderError};
 
 /// What open meshes get.
-pub static OPEN: Knob = Knob {
-    name: "sv-open",
-    help: "shadow-volume: volumes of meshes that are not closed: 0 = Crow's one-sided (only \
-           faces facing the light cast), 1 = two-sided (every face; exact for open meshes)",
-    min: 0,
-    max: 1,
-    default: 1,
-    max_name: None,
-};
+pub static OPEN: Switch = Switch::new(
+    "sv-open",
+    "shadow-volume: volumes of meshes that are not closed: 0 = Crow's one-sided (only \
+     faces facing the light cast), 1 = two-sided (every face; exact for open meshes)",
+    true,
+);
 
 pub static SHADOW_VOLUME: MethodSpec = MethodSpec {
     name: "shadow-volume",
     description: "stencil shadow volumes from the light centre (Crow 1977), z-fail with caps",
-    knobs: &[&OPEN],
+    shader: SHADER,
+    knobs: &[&OPEN.0],
     cpu_side: false,
     hard: true,
-    needs: None,
+    lights: None,
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: Some("shadow-volume: from the light centre; umbra volume = Crow's"),
+    line_samples: None,
     new: |ctx| Box::new(ShadowVolume::new(ctx)),
 };
 
@@ -56,7 +59,7 @@ const SHADER: &str = "methods/shadow_volume.wgsl";
 
 /// The `--sv-open` choice.
 pub fn open_meshes(knobs: &Knobs) -> OpenMeshes {
-    if knobs.get(&OPEN) == 0 {
+    if !knobs.get(&OPEN) {
         OpenMeshes::OneSided
     } else {
         OpenMeshes::TwoSided

@@ -22,7 +22,8 @@ use glam::Vec3;
 
 use super::shadow_volume::{build_volumes, open_meshes, OPEN};
 use super::{
-    require, v_texture_entries, CameraGroup, Knob, Knobs, MethodSpec, MethodState, Prepare,
+    require, v_texture_entries, AdapterNeeds, Bench, CameraGroup, Knobs, MethodSpec, MethodState,
+    Prepare, Switch,
 };
 use crate::geometry::hard_volume::{scene_volumes, OpenMeshes};
 use crate::geometry::volumes::{VolumeKind, VolumeMesh, VolumeVertex};
@@ -37,24 +38,26 @@ use crate::render::{
 use crate::scene::{DiskLight, LightKind};
 
 /// `--wedges-horizon`: clip the disk by the receiver's own plane.
-pub static HORIZON: Knob = Knob {
-    name: "wedges-horizon",
-    help: "wedges: 1 = a receiver gets at most the part of the disk in front of its own plane \
-           (V = min(V, that part)); 0 = the papers' wedges as they are (lit where a caster's own \
-           face cuts the disk)",
-    min: 0,
-    max: 1,
-    default: 1,
-    max_name: None,
-};
+pub static HORIZON: Switch = Switch::new(
+    "wedges-horizon",
+    "wedges: 1 = a receiver gets at most the part of the disk in front of its own plane \
+     (V = min(V, that part)); 0 = the papers' wedges as they are (lit where a caster's own \
+     face cuts the disk)",
+    true,
+);
 
 pub static WEDGES: MethodSpec = MethodSpec {
     name: "wedges",
     description: "penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)",
-    knobs: &[&OPEN, &HORIZON],
+    shader: SHADER,
+    knobs: &[&OPEN.0, &HORIZON.0],
     cpu_side: false,
     hard: false,
-    needs: Some(LightKind::Disk), // the coverage of a disk
+    lights: Some(LightKind::Disk), // the coverage of a disk
+    adapter: AdapterNeeds::NONE,
+    bench: Bench::DEFAULTS,
+    overlay_note: None,
+    line_samples: None,
     new: |ctx| Box::new(WedgesMethod::new(ctx)),
 };
 
@@ -79,7 +82,7 @@ fn camera_entries() -> [wgpu::BindGroupLayoutEntry; 3] {
 type WedgeOptions = [f32; 4];
 
 fn wedge_options(knobs: &Knobs) -> WedgeOptions {
-    [knobs.get(&HORIZON) as f32, 0.0, 0.0, 0.0]
+    [f32::from(knobs.get(&HORIZON)), 0.0, 0.0, 0.0]
 }
 
 /// The wedges of every side edge of `volumes`' hard volumes, as GPU vertices, and the overlay's

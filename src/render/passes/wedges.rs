@@ -314,7 +314,8 @@ impl Wedges {
         let Some((coverage, resolve, _)) = &self.groups else {
             return;
         };
-        let span = rec.span("wedges");
+        // The method's one pass of its own, timed under the method's name.
+        let span = rec.span(crate::render::methods::wedges::WEDGES.name);
         {
             let mut pass = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("Wedges::coverage"),

@@ -1,0 +1,360 @@
+//! The camera pass's mask: the disk samples, the look-up tables of half-plane masks the GPU reads,
+//! and the count of layers per sample over a receiver's edges (see the module docs of [`super`]:
+//! "Why chords add up", "`L(c)`", "Exact where one layer deep").
+
+use glam::{Vec2, Vec3};
+
+use super::chord::{edge_chord, EdgeChord, FusedEdge};
+use super::{ANCHOR_SAMPLES, COUNTER_BITS, MAX_LUT_SAMPLES, MAX_SAMPLES};
+use crate::geometry::oracle::disk_samples;
+use crate::scene::DiskLight;
+
+/// How the camera pass decides which samples a half-plane holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MaskEval {
+    /// Every sample tested against every line (`u A + v B + C > 0`, in `f32`).
+    #[default]
+    Exact,
+    /// Through look-up tables of precomputed half-plane masks (Schwarz & Stamminger 2007): lines
+    /// through the centre by angle (`LUT_ANGLES` bins, uniform in [`diamond_angle`]), chords by
+    /// angle and distance from the centre (`LUT_ANGLES` × `LUT_OFFSETS`). What the GPU does.
+    Lut,
+}
+
+/// Angle bins of the half-plane look-up tables.
+pub const LUT_ANGLES: usize = 256;
+/// Distance bins (over `(0, 1)`) of the chord look-up table.
+pub const LUT_OFFSETS: usize = 128;
+
+type Bits = [u64; 4];
+
+fn bit_set(bits: &mut Bits, i: usize) {
+    bits[i / 64] |= 1 << (i % 64);
+}
+
+fn bit(bits: &Bits, i: usize) -> bool {
+    bits[i / 64] >> (i % 64) & 1 == 1
+}
+
+fn and(a: Bits, b: Bits) -> Bits {
+    [a[0] & b[0], a[1] & b[1], a[2] & b[2], a[3] & b[3]]
+}
+
+fn xor(a: Bits, b: Bits) -> Bits {
+    [a[0] ^ b[0], a[1] ^ b[1], a[2] ^ b[2], a[3] ^ b[3]]
+}
+
+/// The disk samples of the camera pass's mask, and its look-up tables.
+#[derive(Clone, Debug)]
+pub struct DiskMask {
+    /// Unit-disk coordinates, the oracle's stratified pattern for `N` samples.
+    pub samples: Vec<Vec2>,
+    pub eval: MaskEval,
+    /// `LUT_ANGLES` masks of `{p : p·n_k > 0}` (`n_k` the direction of angle bin `k`).
+    through_centre: Vec<Bits>,
+    /// `LUT_ANGLES × LUT_OFFSETS` masks of `{p : p·n_k > ρ}`.
+    chords: Vec<Bits>,
+}
+
+impl DiskMask {
+    /// `samples` is clamped to `1..=MAX_SAMPLES` (`1..=MAX_LUT_SAMPLES` with look-up tables).
+    pub fn new(samples: usize, eval: MaskEval) -> DiskMask {
+        let max = match eval {
+            MaskEval::Exact => MAX_SAMPLES,
+            MaskEval::Lut => MAX_LUT_SAMPLES,
+        };
+        let samples = disk_samples(samples.clamp(1, max));
+        let (mut through_centre, mut chords) = (Vec::new(), Vec::new());
+        if eval == MaskEval::Lut {
+            for k in 0..LUT_ANGLES {
+                let n = lut_direction(k);
+                let mut m = Bits::default();
+                for (i, p) in samples.iter().enumerate() {
+                    if p.dot(n) > 0.0 {
+                        bit_set(&mut m, i);
+                    }
+                }
+                through_centre.push(m);
+                for j in 0..LUT_OFFSETS {
+                    let rho = (j as f32 + 0.5) / LUT_OFFSETS as f32;
+                    let mut m = Bits::default();
+                    for (i, p) in samples.iter().enumerate() {
+                        if p.dot(n) > rho {
+                            bit_set(&mut m, i);
+                        }
+                    }
+                    chords.push(m);
+                }
+            }
+        }
+        DiskMask {
+            samples,
+            eval,
+            through_centre,
+            chords,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+
+    /// The look-up tables as the GPU reads them, 128 bits (four `u32`, sample `i` is bit `i % 32`
+    /// of word `i / 32`) per mask: the [`LUT_ANGLES`] masks through the centre, then the
+    /// [`LUT_ANGLES`] × [`LUT_OFFSETS`] chord masks (angle-major). Empty unless the mask was made
+    /// with [`MaskEval::Lut`] and at most 128 samples (what the GPU's counter holds).
+    pub fn lut_words(&self) -> Vec<[u32; 4]> {
+        if self.eval != MaskEval::Lut || self.samples.len() > 128 {
+            return Vec::new();
+        }
+        let words = |b: &Bits| {
+            [
+                b[0] as u32,
+                (b[0] >> 32) as u32,
+                b[1] as u32,
+                (b[1] >> 32) as u32,
+            ]
+        };
+        self.through_centre
+            .iter()
+            .chain(&self.chords)
+            .map(words)
+            .collect()
+    }
+
+    /// Adds `ch.delta` to the counter of every sample in the edge's region; returns whether any
+    /// sample was in it.
+    pub fn add_region(&self, ch: &EdgeChord, count: &mut [i32]) -> bool {
+        match self.eval {
+            MaskEval::Exact => {
+                let mut any = false;
+                for (k, &p) in count.iter_mut().zip(&self.samples) {
+                    if ch.contains(p) {
+                        *k += ch.delta;
+                        any = true;
+                    }
+                }
+                any
+            }
+            MaskEval::Lut => {
+                let bits = self.lut_region(ch);
+                for (i, k) in count.iter_mut().enumerate() {
+                    if bit(&bits, i) {
+                        *k += ch.delta;
+                    }
+                }
+                bits != Bits::default()
+            }
+        }
+    }
+
+    /// The samples in an edge's region, through the look-up tables.
+    fn lut_region(&self, ch: &EdgeChord) -> Bits {
+        let [a, b, c] = ch.chord;
+        let len = (a * a + b * b).sqrt();
+        // C < 0: the chord lies at ρ = −C/|(A, B)| > 0 from the centre.
+        let rho = -c / len;
+        if len.is_nan() || len <= 0.0 || rho.is_nan() || rho >= 1.0 || self.chords.is_empty() {
+            return Bits::default();
+        }
+        let j = ((rho * LUT_OFFSETS as f32) as usize).min(LUT_OFFSETS - 1);
+        let beyond = self.chords[lut_bin(a, b) * LUT_OFFSETS + j];
+        let sa = self.through_centre[lut_bin(ch.end_a[0], ch.end_a[1])];
+        let sb = self.through_centre[lut_bin(ch.end_b[0], ch.end_b[1])];
+        and(beyond, xor(sa, sb))
+    }
+}
+
+/// The unit direction of angle bin `k`: the bins are uniform in the "diamond angle"
+/// ([`diamond_angle`]), which a GPU computes with one division where an angle takes an arc
+/// tangent.
+fn lut_direction(k: usize) -> Vec2 {
+    let d = k as f32 / LUT_ANGLES as f32 * 4.0;
+    let v = if d < 1.0 {
+        Vec2::new(1.0 - d, d)
+    } else if d < 2.0 {
+        Vec2::new(1.0 - d, 2.0 - d)
+    } else if d < 3.0 {
+        Vec2::new(d - 3.0, 2.0 - d)
+    } else {
+        Vec2::new(d - 3.0, d - 4.0)
+    };
+    v.normalize()
+}
+
+/// A monotone stand-in for the angle of `(a, b)`, in `[0, 4)`: the position along the diamond
+/// `|u| + |v| = 1` where the ray through `(a, b)` meets it, counter-clockwise from `(1, 0)`.
+/// `shaders/methods/dbuffer_fused.wgsl` computes it the same way.
+pub fn diamond_angle(a: f32, b: f32) -> f32 {
+    let s = a.abs() + b.abs();
+    if s.is_nan() || s <= 0.0 {
+        return 0.0;
+    }
+    let (x, y) = (a / s, b / s);
+    if y >= 0.0 {
+        if x >= 0.0 {
+            y
+        } else {
+            1.0 - x
+        }
+    } else if x < 0.0 {
+        2.0 - y
+    } else {
+        3.0 + x
+    }
+}
+
+/// The angle bin of the normal `(a, b)`, rounded to the nearest.
+fn lut_bin(a: f32, b: f32) -> usize {
+    ((diamond_angle(a, b) * (LUT_ANGLES as f32 / 4.0)).round() as usize) % LUT_ANGLES
+}
+
+/// Wraps a layer count to the camera pass's `COUNTER_BITS`-bit two's complement.
+pub(super) fn wrap(v: i32) -> i32 {
+    let span = 1 << COUNTER_BITS;
+    (v + span / 2).rem_euclid(span) - span / 2
+}
+
+/// The result of the mask for one receiver.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MaskResult {
+    /// Samples visible.
+    pub visible: u32,
+    pub samples: u32,
+    /// `L(c)` as anchored.
+    pub anchor: i32,
+    /// Edges that changed some sample.
+    pub active_edges: u32,
+    /// Layers of a crossing (2 for closed casters; 0 when no chord crosses the disk).
+    pub layers: u32,
+    /// Where every sample sees zero or one layer's worth, the exact visible fraction.
+    pub exact: Option<f64>,
+}
+
+impl MaskResult {
+    /// The visible fraction of the samples.
+    pub fn v_samples(&self) -> f64 {
+        f64::from(self.visible) / f64::from(self.samples.max(1))
+    }
+
+    /// V: exact one layer deep, else the samples' fraction.
+    pub fn v(&self) -> f64 {
+        self.exact.unwrap_or_else(|| self.v_samples())
+    }
+}
+
+/// What the camera pass knows of `L(c)`, the layers between `x` and the disk centre.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CentreLayers {
+    /// Exactly (the light pass counted the caster surfaces along the ray, and `x` lies beyond
+    /// them all).
+    Known(i32),
+    /// Only whether `x` is hidden from `c` (the D-buffer's `|cx_o|` test).
+    Hidden(bool),
+}
+
+/// The camera pass's mask over `edges` (any superset of the edges that matter) at `x`.
+pub fn mask_visibility<'a>(
+    edges: impl IntoIterator<Item = &'a FusedEdge>,
+    x: Vec3,
+    centre: CentreLayers,
+    light: &DiskLight,
+    mask: &DiskMask,
+) -> MaskResult {
+    mask_details(edges, x, centre, light, mask).result
+}
+
+/// What the mask saw at one receiver: the result, the chord of every edge that is one there
+/// (with its position in the edges given), and each sample's `Δ` (the layers the path from the
+/// centre to it crosses, wrapped to the GPU counter's `COUNTER_BITS` bits).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaskDetails {
+    pub result: MaskResult,
+    pub chords: Vec<(usize, EdgeChord)>,
+    pub delta: Vec<i32>,
+}
+
+/// [`mask_visibility`] with what it saw ([`MaskDetails`]).
+pub fn mask_details<'a>(
+    edges: impl IntoIterator<Item = &'a FusedEdge>,
+    x: Vec3,
+    centre: CentreLayers,
+    light: &DiskLight,
+    mask: &DiskMask,
+) -> MaskDetails {
+    let n = mask.len();
+    let mut count = vec![0i32; n];
+    let mut active = 0;
+    // ∫Δ over the disk, exactly, and the layers of a crossing.
+    let mut integral = 0.0f64;
+    let mut layers = 0;
+    let mut chords = Vec::new();
+    for (k, e) in edges.into_iter().enumerate() {
+        let Some(ch) = edge_chord(e, x, light) else {
+            continue;
+        };
+        if ch.area > 0.0 {
+            integral += f64::from(ch.delta) * ch.area;
+            layers = layers.max(ch.delta.abs());
+        }
+        if mask.add_region(&ch, &mut count) {
+            active += 1;
+        }
+        chords.push((k, ch));
+    }
+    let count: Vec<i32> = count.into_iter().map(wrap).collect();
+    // The smallest Δ, ignoring up to ANCHOR_SAMPLES − 1 samples below it (the ANCHOR_SAMPLES-th
+    // smallest): a sample that a look-up table's quantised line put on the wrong side of one edge
+    // of a silhouette and not of its neighbour reads ±layers off, and must not shift every
+    // sample's count.
+    let min = {
+        let mut sorted = count.clone();
+        sorted.sort_unstable();
+        sorted
+            .get(ANCHOR_SAMPLES.min(sorted.len()).max(1) - 1)
+            .copied()
+            .unwrap_or(0)
+    };
+    let (floor, hidden) = match centre {
+        CentreLayers::Known(k) => (k, k > 0),
+        CentreLayers::Hidden(h) => (i32::from(h), h),
+    };
+    let anchor = (-min).max(floor);
+    let visible = count.iter().filter(|&&k| k + anchor <= 0).count() as u32;
+    // One layer deep: where every sample sees 0 or `layers` layers (L(c) = `layers` if hidden),
+    // the hidden fraction is the mean of L / layers, which the chords give exactly.
+    let exact = if layers == 0 {
+        Some(if hidden { 0.0 } else { 1.0 })
+    } else {
+        let lc = match centre {
+            CentreLayers::Known(k) => k,
+            CentreLayers::Hidden(h) => {
+                if h {
+                    layers
+                } else {
+                    0
+                }
+            }
+        };
+        count
+            .iter()
+            .all(|&k| k + lc == 0 || k + lc == layers)
+            .then(|| (1.0 - (f64::from(lc) + integral) / f64::from(layers)).clamp(0.0, 1.0))
+    };
+    MaskDetails {
+        result: MaskResult {
+            visible,
+            samples: n as u32,
+            anchor,
+            active_edges: active,
+            layers: layers as u32,
+            exact,
+        },
+        chords,
+        delta: count,
+    }
+}

@@ -1,0 +1,322 @@
+//! The casters' shadow volumes as the D-buffer's light pass draws them: each volume triangle's
+//! vertices with what `|cx_s|` needs ([`volume_vertices`]), the volumes ended where no receiver
+//! lies beyond ([`end_at`]), ordered nearest the light first ([`sort_near_first`]), and the part of
+//! the light view they can cover ([`light_view_rect`]). Plain CPU geometry: the render method
+//! (`render::methods::dbuffer`) uploads what these return, and the tests reach them here.
+
+use glam::Vec3;
+
+use super::light_view::LightView;
+use super::volumes::CasterGeometry;
+use crate::scene::DiskLight;
+
+/// The vertex of a shadow-volume triangle the light pass draws: position, kind, and what
+/// `|cx_s|` needs — the height below the light's plane of the edge point the fragment was
+/// extruded from, as `base + num / den` with `num` and `den` affine over the triangle (so
+/// interpolating them is exact; see [`volume_vertices`]). Which way a ray crosses the triangle is
+/// its winding, which the pipelines' culling reads. Laid out for the GPU (`render::VolumeVertex`
+/// is this type, with its vertex-buffer layout); not [`super::volumes::VolumeVertex`], the
+/// geometry stage's record of where a volume vertex came from.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct VolumeVertex {
+    pub position: [f32; 3],
+    pub kind: u32,
+    pub base: f32,
+    pub num: f32,
+    pub den: f32,
+}
+
+/// The caster's volume triangles as GPU vertices, umbra and penumbra apart (their winding says
+/// which way a ray crosses them).
+///
+/// `|cx_s|` (eq. 2 in words) needs the height `h` below the light's plane of the edge point `e`
+/// a fragment `q` was extruded from: `e` is where the line from the extrusion point `p` through
+/// `q` meets the edge (the CPU twin finds it as the closest point of the two lines). On the quad's
+/// plane `q = p + μ(e − p)`; for any `w` across the edge, `μ = (q − p)·w / (a − p)·w` is affine in
+/// `q`, so `h = (p − c)·n + ((q − p)·n) ((a − p)·w) / ((q − p)·w)` is `base + num/den` with `num`
+/// and `den` affine over the triangle: their vertex values interpolate exactly, and the fragment
+/// shader does one division instead of solving for `e`. A fan (its edge is its apex) and an edge
+/// its extrusion point lies on have a constant `h`.
+pub fn volume_vertices(
+    g: &CasterGeometry,
+    light: &DiskLight,
+) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
+    volume_vertices_within(g, light, None, None)
+}
+
+/// [`volume_vertices`], each volume ended at its reach when one is given ([`end_at`]), made in
+/// one pass: no full copy of a volume is held besides the one returned.
+pub fn volume_vertices_within(
+    g: &CasterGeometry,
+    light: &DiskLight,
+    umbra_reach: Option<f32>,
+    penumbra_reach: Option<f32>,
+) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
+    let (c, n) = (light.center, light.normal);
+    let triangles = g.volumes.triangle_count();
+    let umbrae = (0..triangles)
+        .filter(|&i| g.volumes.triangle(i).1.kind.is_umbra())
+        .count();
+    let (mut umbra, mut penumbra) = (
+        Vec::with_capacity(3 * umbrae),
+        Vec::with_capacity(3 * (triangles - umbrae)),
+    );
+    for i in 0..triangles {
+        let (corners, attrs) = g.volumes.triangle(i);
+        let [a, b] = attrs.edge;
+        let p = attrs.extrusion;
+        let along = (b - a).normalize_or_zero();
+        let w = (p - a) - along * (p - a).dot(along);
+        let ratio = w.length_squared() > 1e-12 * (p - a).length_squared().max(1e-30);
+        let (out, reach) = if attrs.kind.is_umbra() {
+            (&mut umbra, umbra_reach)
+        } else {
+            (&mut penumbra, penumbra_reach)
+        };
+        let t = corners.map(|q| {
+            let (base, num, den) = if ratio {
+                let k = (a - p).dot(w);
+                ((p - c).dot(n), (q - p).dot(n) * k, (q - p).dot(w))
+            } else {
+                ((a - c).dot(n), 0.0, 1.0)
+            };
+            VolumeVertex {
+                position: q.to_array(),
+                kind: attrs.kind.code(),
+                base,
+                num,
+                den,
+            }
+        });
+        match reach {
+            Some(r) => clip_into(t, light, r, out),
+            None => out.extend(t),
+        }
+    }
+    (umbra, penumbra)
+}
+
+/// The parts of volume triangles whose height below the light's plane is at most `reach`.
+///
+/// Along a ray from `c` the height grows with the distance, so a volume crossing beyond the
+/// greatest height of any surface lies behind every receiver on its ray: a penumbra entry there
+/// is never looked up (only points visible from `c` read that channel), and an umbra exit there
+/// reads as "no exit", which is what a receiver in front of it must get anyway. The extruded
+/// quads would otherwise run on to the far plane, and most of their fragments would be
+/// rasterised only to die behind the ground. (Not for umbrae merged over casters: there a
+/// caster's missing exit would let another caster's win.)
+pub fn end_at(volume: &[VolumeVertex], light: &DiskLight, reach: f32) -> Vec<VolumeVertex> {
+    let mut out = Vec::with_capacity(volume.len());
+    for t in volume.chunks_exact(3) {
+        clip_into([t[0], t[1], t[2]], light, reach, &mut out);
+    }
+    out
+}
+
+/// Append the part of triangle `t` whose height below the light's plane is at most `reach`
+/// (none, all of it, a triangle or a quad as two) to `out`.
+fn clip_into(t: [VolumeVertex; 3], light: &DiskLight, reach: f32, out: &mut Vec<VolumeVertex>) {
+    let height = |v: &VolumeVertex| light.height_of(Vec3::from(v.position)) - reach;
+    let h = [height(&t[0]), height(&t[1]), height(&t[2])];
+    if h.iter().all(|&x| x <= 0.0) {
+        out.extend_from_slice(&t);
+        return;
+    }
+    if h.iter().all(|&x| x > 0.0) {
+        return;
+    }
+    // Walk the edges, keeping inside corners and the crossings (Sutherland–Hodgman, one
+    // plane); num and den are affine, so they interpolate exactly.
+    let mut poly: [VolumeVertex; 4] = [t[0]; 4];
+    let mut n = 0;
+    for k in 0..3 {
+        let (p, q) = (t[k], t[(k + 1) % 3]);
+        let (hp, hq) = (h[k], h[(k + 1) % 3]);
+        if hp <= 0.0 {
+            poly[n] = p;
+            n += 1;
+        }
+        if (hp <= 0.0) != (hq <= 0.0) {
+            let s = hp / (hp - hq);
+            let lerp = |a: f32, b: f32| a + (b - a) * s;
+            let (pp, qp) = (Vec3::from(p.position), Vec3::from(q.position));
+            poly[n] = VolumeVertex {
+                position: (pp + (qp - pp) * s).to_array(),
+                num: lerp(p.num, q.num),
+                den: lerp(p.den, q.den),
+                ..t[0]
+            };
+            n += 1;
+        }
+    }
+    for k in 1..n.saturating_sub(1) {
+        out.extend([poly[0], poly[k], poly[k + 1]]);
+    }
+}
+
+/// Reorder the triangles of `volume` by the distance of their centroid from `c`, nearest first.
+pub fn sort_near_first(volume: &mut [VolumeVertex], c: Vec3) {
+    // In place, by whole triangles (no copy: a 1.4M-triangle volume is 118 MB).
+    let whole = volume.len() / 3 * 3;
+    let tris: &mut [[VolumeVertex; 3]] = bytemuck::cast_slice_mut(&mut volume[..whole]);
+    let key = |t: &[VolumeVertex; 3]| {
+        let centroid = t.iter().map(|v| Vec3::from(v.position)).sum::<Vec3>() / 3.0;
+        (centroid - c).length_squared()
+    };
+    tris.sort_unstable_by(|a, b| key(a).total_cmp(&key(b)));
+}
+
+/// The part `[x0, y0, x1, y1]` of the light view's image (`[0, 1]²`, y down) that triangles
+/// with these corners can cover; all of it if a corner lies behind the light centre.
+pub fn light_view_rect(view: &LightView, points: impl Iterator<Item = Vec3>) -> [f32; 4] {
+    let vp = view.view_projection();
+    let mut rect = [f32::MAX, f32::MAX, f32::MIN, f32::MIN];
+    for p in points {
+        let c = vp * p.extend(1.0);
+        if c.w.is_nan() || c.w <= 1e-6 {
+            return [0.0, 0.0, 1.0, 1.0];
+        }
+        let (u, v) = (c.x / c.w * 0.5 + 0.5, 0.5 - c.y / c.w * 0.5);
+        rect = [
+            rect[0].min(u),
+            rect[1].min(v),
+            rect[2].max(u),
+            rect[3].max(v),
+        ];
+    }
+    if rect[0] > rect[2] {
+        return [0.0; 4];
+    }
+    [
+        rect[0].clamp(0.0, 1.0),
+        rect[1].clamp(0.0, 1.0),
+        rect[2].clamp(0.0, 1.0),
+        rect[3].clamp(0.0, 1.0),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(points: [[f32; 3]; 3]) -> Vec<VolumeVertex> {
+        points
+            .iter()
+            .map(|p| VolumeVertex {
+                position: *p,
+                kind: 3,
+                base: 0.5,
+                // Affine in position: num = x + 2y, den = 1 + z.
+                num: p[0] + 2.0 * p[1],
+                den: 1.0 + p[2],
+            })
+            .collect()
+    }
+
+    #[test]
+    fn ending_volumes_keeps_the_part_in_reach_with_exact_attributes_and_winding() {
+        let light = DiskLight {
+            center: Vec3::new(0.0, 4.0, 0.0),
+            normal: Vec3::NEG_Y,
+            radius: 0.5,
+            intensity: 1.0,
+        };
+        // Heights below the light: 4 - y. A triangle from y = 3 (height 1) down to y = -1 (5).
+        let t = tri([[0.0, 3.0, 0.0], [2.0, -1.0, 0.0], [0.0, -1.0, 2.0]]);
+        assert_eq!(end_at(&t, &light, 10.0), t, "all in reach");
+        assert!(end_at(&t, &light, 0.5).is_empty(), "all beyond");
+        let kept = end_at(&t, &light, 3.0);
+        assert_eq!(kept.len(), 3, "one corner in reach: one triangle");
+        let normal = |v: &[VolumeVertex]| {
+            let p = |i: usize| Vec3::from(v[i].position);
+            (p(1) - p(0)).cross(p(2) - p(0))
+        };
+        for k in kept.chunks_exact(3) {
+            assert!(normal(k).dot(normal(&t)) > 0.0, "winding kept");
+            for v in k {
+                let [x, y, z] = v.position;
+                assert!(4.0 - y <= 3.0 + 1e-5, "{y}");
+                assert!((v.num - (x + 2.0 * y)).abs() < 1e-5 && (v.den - (1.0 + z)).abs() < 1e-5);
+                assert_eq!((v.kind, v.base), (3, 0.5));
+            }
+        }
+        // Two corners in reach: a quad, two triangles.
+        let t2 = tri([[0.0, 3.0, 0.0], [2.0, 3.0, 0.0], [0.0, -1.0, 2.0]]);
+        assert_eq!(end_at(&t2, &light, 3.0).len(), 6);
+    }
+
+    fn builtin_scene() -> crate::scene::Scene {
+        match crate::scene::builtin::get("fig7-concave") {
+            Some(Ok(scene)) => scene,
+            _ => panic!("the built-in scene fig7-concave"),
+        }
+    }
+
+    #[test]
+    fn volumes_ended_in_one_pass_are_the_whole_volumes_ended_after() {
+        // A built-in scene's first caster: its volumes whole, and ended at reaches from above
+        // the caster to below the ground.
+        let scene = builtin_scene();
+        let light = scene.light.disk_or_centre();
+        let prepared = crate::geometry::PreparedCasters::new(&scene);
+        let geometry = prepared.build(&light, &crate::geometry::VolumeParams::for_scene(&scene));
+        let g = &geometry.casters[0];
+        let (umbra, penumbra) = volume_vertices(g, &light);
+        assert!(!umbra.is_empty() && !penumbra.is_empty());
+        let mut shortened = 0;
+        for reach in [0.5, 1.0, 2.0, 3.0, 4.0, 6.0, 100.0] {
+            let (u, p) = volume_vertices_within(g, &light, Some(reach), Some(reach));
+            assert_eq!(u, end_at(&umbra, &light, reach), "umbra, reach {reach}");
+            assert_eq!(
+                p,
+                end_at(&penumbra, &light, reach),
+                "penumbra, reach {reach}"
+            );
+            shortened += usize::from(p != penumbra && !p.is_empty());
+        }
+        assert!(shortened > 0, "no reach ended a volume part way");
+        let (u, p) = volume_vertices_within(g, &light, None, Some(3.0));
+        assert_eq!((u, p), (umbra, end_at(&penumbra, &light, 3.0)));
+    }
+
+    #[test]
+    fn triangles_are_sorted_whole_nearest_first() {
+        let c = Vec3::new(0.0, 4.0, 0.0);
+        let far = tri([[0.0, -2.0, 0.0], [1.0, -2.0, 0.0], [0.0, -2.0, 1.0]]);
+        let near = tri([[0.0, 3.0, 0.0], [1.0, 3.0, 0.0], [0.0, 3.0, 1.0]]);
+        let mid = tri([[0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 1.0]]);
+        let mut v: Vec<VolumeVertex> = [far.clone(), near.clone(), mid.clone()].concat();
+        sort_near_first(&mut v, c);
+        assert_eq!(v, [near, mid, far].concat());
+    }
+
+    #[test]
+    fn the_light_view_rect_holds_the_corners_and_is_all_of_it_behind_the_light() {
+        let scene = builtin_scene();
+        let view = LightView::fit(&scene);
+        let vp = view.view_projection();
+        let corners: Vec<Vec3> = scene
+            .casters()
+            .flat_map(|o| o.mesh.triangle_corners())
+            .flatten()
+            .collect();
+        let r = light_view_rect(&view, corners.iter().copied());
+        assert!(r.iter().all(|v| (0.0..=1.0).contains(v)), "{r:?}");
+        assert!(r[0] < r[2] && r[1] < r[3], "{r:?}");
+        for &p in &corners {
+            let c = vp * p.extend(1.0);
+            let (u, v) = (c.x / c.w * 0.5 + 0.5, 0.5 - c.y / c.w * 0.5);
+            assert!(
+                (r[0]..=r[2]).contains(&u) && (r[1]..=r[3]).contains(&v),
+                "{u} {v} {r:?}"
+            );
+        }
+        // No corners: an empty rect; a corner behind the light centre: the whole image.
+        assert_eq!(light_view_rect(&view, std::iter::empty()), [0.0; 4]);
+        let light = scene.light.disk_or_centre();
+        let behind = light.center - light.normal;
+        let whole = light_view_rect(&view, corners.iter().copied().chain([behind]));
+        assert_eq!(whole, [0.0, 0.0, 1.0, 1.0]);
+    }
+}
