@@ -12,8 +12,8 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{
-    require, AdapterNeeds, Bench, CameraGroup, Channel, Empty, FrameInputs, LightMaps, MethodSpec,
-    MethodState, Prepare, SharedMaps,
+    require, CameraGroup, Channel, Empty, FrameInputs, LightMaps, MethodSpec, MethodState, Prepare,
+    SharedMaps,
 };
 use crate::geometry::volume_vertices::{light_view_rect, sort_near_first, volume_vertices_within};
 use crate::geometry::{SceneGeometry, VolumeParams};
@@ -25,35 +25,16 @@ use crate::render::{
 };
 use crate::scene::{DiskLight, LightKind};
 
-pub static DBUFFER: MethodSpec = MethodSpec {
-    name: "dbuffer",
-    description: "D-buffer soft shadows (Jakobsen et al. 2004)",
-    shader: SHADER,
-    knobs: &[],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Disk), // its volumes are the disk's
-    adapter: AdapterNeeds::NONE,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(DBuffer::new(ctx, false)),
-};
+pub static DBUFFER: MethodSpec =
+    MethodSpec::new("dbuffer", SHADER, |ctx| Box::new(DBuffer::new(ctx, false)))
+        .about("D-buffer soft shadows (Jakobsen et al. 2004)")
+        .lights(LightKind::Disk); // its volumes are the disk's
 
-pub static DBUFFER_CENTER: MethodSpec = MethodSpec {
-    name: "dbuffer-center",
-    description: "D-buffer with silhouettes from the light centre only",
-    shader: SHADER,
-    knobs: &[],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Disk), // its volumes are the disk's
-    adapter: AdapterNeeds::NONE,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(DBuffer::new(ctx, true)),
-};
+pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER, |ctx| {
+    Box::new(DBuffer::new(ctx, true))
+})
+.about("D-buffer with silhouettes from the light centre only")
+.lights(LightKind::Disk); // its volumes are the disk's
 
 const SHADER: &str = "methods/dbuffer.wgsl";
 

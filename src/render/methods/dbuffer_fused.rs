@@ -24,8 +24,8 @@ use std::time::Instant;
 
 use super::dbuffer::DBuffer;
 use super::{
-    require, AdapterNeeds, Bench, CameraGroup, Channel, Empty, FrameInputs, Knob, LightMaps,
-    MethodSpec, MethodState, Prepare, SharedMaps,
+    require, CameraGroup, Channel, Empty, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
+    Prepare, SharedMaps,
 };
 use crate::budget::{bytes, MAX_FUSED_EDGES, MAX_FUSED_LIST_BYTES};
 use crate::geometry::fused::{
@@ -65,20 +65,12 @@ pub static MASK_SAMPLES: Knob = Knob::int(
     DEFAULT_SAMPLES as u32,
 );
 
-pub static DBUFFER_FUSED: MethodSpec = MethodSpec {
-    name: "dbuffer-fused",
-    description: "D-buffer with every silhouette chord (occluder fusion)",
-    shader: SHADER,
-    knobs: &[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Disk), // its chords cut the disk
-    adapter: AdapterNeeds::NONE,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(DBufferFused::new(ctx)),
-};
+pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, |ctx| {
+    Box::new(DBufferFused::new(ctx))
+})
+.about("D-buffer with every silhouette chord (occluder fusion)")
+.knobs(&[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES])
+.lights(LightKind::Disk); // its chords cut the disk
 
 const SHADER: &str = "methods/dbuffer_fused.wgsl";
 

@@ -15,8 +15,8 @@
 use glam::{Mat4, Vec3, Vec4};
 
 use super::{
-    require, AdapterNeeds, Bench, CameraGroup, Channel, Choice, Empty, FrameInputs, Knob, Knobs,
-    LightMaps, MethodSpec, MethodState, Prepare, SharedMaps,
+    require, CameraGroup, Channel, Choice, Empty, FrameInputs, Knob, Knobs, LightMaps, MethodSpec,
+    MethodState, Prepare, SharedMaps,
 };
 use crate::geometry::light_view::LightView;
 use crate::render::passes::extended_light_map::{ElmParams, ExtendedLightMap, Pattern};
@@ -41,20 +41,13 @@ pub static PATTERN: Choice = Choice::new(
     0,
 );
 
-pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec {
-    name: "extended-light-map",
-    description: "extended light map (Brabec et al. 2000): light colour in RGB, distance in A",
-    shader: SHADER,
-    knobs: &[&DEPTH_BITS, &PATTERN.0],
-    cpu_side: false,
-    hard: true,
-    lights: None,
-    adapter: AdapterNeeds::NONE,
-    bench: Bench::DEFAULTS,
-    overlay_note: Some("extended-light-map: its channels are in the View panel"),
-    line_samples: None,
-    new: |ctx| Box::new(ElmMethod::new(ctx)),
-};
+pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec::new("extended-light-map", SHADER, |ctx| {
+    Box::new(ElmMethod::new(ctx))
+})
+.about("extended light map (Brabec et al. 2000): light colour in RGB, distance in A")
+.knobs(&[&DEPTH_BITS, &PATTERN.0])
+.hard()
+.overlay_note("extended-light-map: its channels are in the View panel");
 
 const SHADER: &str = "methods/extended_light_map.wgsl";
 

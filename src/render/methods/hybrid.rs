@@ -13,8 +13,8 @@
 //! [`MethodState::geometry`] holds them as silhouette edges, a frame after the walls were made.
 
 use super::{
-    require, v_texture_entries, AdapterNeeds, Bench, CameraGroup, Knobs, MethodSpec, MethodState,
-    Prepare, Scaled, SharedMaps, Switch,
+    require, v_texture_entries, CameraGroup, Knobs, MethodSpec, MethodState, Prepare, Scaled,
+    SharedMaps, Switch,
 };
 use crate::geometry::hybrid::WallParams;
 use crate::geometry::silhouette::SilhouetteEdge;
@@ -49,20 +49,12 @@ pub static EDGES: Switch = Switch::new(
     true,
 );
 
-pub static HYBRID: MethodSpec = MethodSpec {
-    name: "hybrid",
-    description: "shadow volumes rebuilt from the light's depth map (McCool 2000), one stencil bit",
-    shader: SHADER,
-    knobs: &[&THRESHOLD.0, &TEMPLATES.0, &EDGES.0],
-    cpu_side: false,
-    hard: true,
-    lights: None,
-    adapter: AdapterNeeds::NONE,
-    bench: Bench::DEFAULTS,
-    overlay_note: Some("hybrid: silhouette edges = rebuilt from the depth map"),
-    line_samples: None,
-    new: |ctx| Box::new(HybridMethod::new(ctx)),
-};
+pub static HYBRID: MethodSpec =
+    MethodSpec::new("hybrid", SHADER, |ctx| Box::new(HybridMethod::new(ctx)))
+        .about("shadow volumes rebuilt from the light's depth map (McCool 2000), one stencil bit")
+        .knobs(&[&THRESHOLD.0, &TEMPLATES.0, &EDGES.0])
+        .hard()
+        .overlay_note("hybrid: silhouette edges = rebuilt from the depth map");
 
 const SHADER: &str = "methods/hybrid.wgsl";
 

@@ -16,7 +16,7 @@
 
 use glam::{Mat4, Vec3};
 
-use super::{require, AdapterNeeds, Bench, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
+use super::{require, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
 use crate::render::passes::sample_maps::{lights_at, SampleMaps};
 use crate::render::passes::shadow_map::{BIAS_CONSTANT, BIAS_SLOPE};
 use crate::render::passes::ssm::{Ssm, SsmSample, MAX_SSM_SAMPLES};
@@ -33,23 +33,13 @@ pub static SAMPLES: Knob = Knob::int(
     2,
 );
 
-pub static LINEAR_SSM: MethodSpec = MethodSpec {
-    name: "linear-ssm",
-    description: "soft shadow maps for a linear light (Heidrich et al. 2000)",
-    shader: SHADER,
-    knobs: &[&SAMPLES],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Line), // Heidrich et al.'s maps along a segment
-    adapter: AdapterNeeds::NONE,
-    bench: Bench {
-        label: Some("linear-ssm 2"),
-        knobs: &[(&SAMPLES, 2)],
-    },
-    overlay_note: None,
-    line_samples: Some(|line, knobs| sample_points(line, knobs.get(&SAMPLES))),
-    new: |ctx| Box::new(LinearSsm::new(ctx)),
-};
+pub static LINEAR_SSM: MethodSpec =
+    MethodSpec::new("linear-ssm", SHADER, |ctx| Box::new(LinearSsm::new(ctx)))
+        .about("soft shadow maps for a linear light (Heidrich et al. 2000)")
+        .knobs(&[&SAMPLES])
+        .lights(LightKind::Line) // Heidrich et al.'s maps along a segment
+        .bench("linear-ssm 2", &[(&SAMPLES, 2)])
+        .line_samples(|line, knobs| sample_points(line, knobs.get(&SAMPLES)));
 
 const SHADER: &str = "methods/linear_ssm.wgsl";
 

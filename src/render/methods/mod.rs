@@ -100,6 +100,89 @@ pub struct MethodSpec {
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
 }
 
+impl MethodSpec {
+    /// The method `name` with its camera `shader` and per-scene state `new`: no knobs, every
+    /// kind of light, a soft shadow computed on the GPU, timed by the bench under its name. The
+    /// calls below say where a method differs, so a spec reads as what is particular to it.
+    pub const fn new(
+        name: &'static str,
+        shader: &'static str,
+        new: fn(&GpuContext) -> Box<dyn MethodState>,
+    ) -> MethodSpec {
+        MethodSpec {
+            name,
+            description: "",
+            shader,
+            knobs: &[],
+            cpu_side: false,
+            hard: false,
+            lights: None,
+            adapter: AdapterNeeds::NONE,
+            bench: Bench::DEFAULTS,
+            overlay_note: None,
+            line_samples: None,
+            new,
+        }
+    }
+
+    /// Its one line for menus and `--help`.
+    pub const fn about(mut self, description: &'static str) -> Self {
+        self.description = description;
+        self
+    }
+
+    pub const fn knobs(mut self, knobs: &'static [&'static Knob]) -> Self {
+        self.knobs = knobs;
+        self
+    }
+
+    /// V comes from the CPU (the ray-cast references).
+    pub const fn cpu_side(mut self) -> Self {
+        self.cpu_side = true;
+        self
+    }
+
+    /// A hard shadow from the light's centre (scored against `reference-hard` too).
+    pub const fn hard(mut self) -> Self {
+        self.hard = true;
+        self
+    }
+
+    /// It takes this kind of light only.
+    pub const fn lights(mut self, kind: LightKind) -> Self {
+        self.lights = Some(kind);
+        self
+    }
+
+    pub const fn adapter(mut self, needs: AdapterNeeds) -> Self {
+        self.adapter = needs;
+        self
+    }
+
+    /// The bench times it under `label` with `knobs` set.
+    pub const fn bench(
+        mut self,
+        label: &'static str,
+        knobs: &'static [(&'static Knob, u32)],
+    ) -> Self {
+        self.bench = Bench {
+            label: Some(label),
+            knobs,
+        };
+        self
+    }
+
+    pub const fn overlay_note(mut self, note: &'static str) -> Self {
+        self.overlay_note = Some(note);
+        self
+    }
+
+    pub const fn line_samples(mut self, points: fn(&LineLight, &Knobs) -> Vec<Vec3>) -> Self {
+        self.line_samples = Some(points);
+        self
+    }
+}
+
 /// What a method needs of the adapter beyond what every method needs (none so far: the field is
 /// where a method that needs an optional feature will say so).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -14,8 +14,7 @@
 use std::sync::Arc;
 
 use super::{
-    require, v_texture_entries, AdapterNeeds, Bench, CameraGroup, FrameInputs, MethodSpec,
-    MethodState, Prepare, Scaled,
+    require, v_texture_entries, CameraGroup, FrameInputs, MethodSpec, MethodState, Prepare, Scaled,
 };
 use crate::geometry::planar::{planar_receivers, PlanarReceiver};
 use crate::render::gpu_scene::VertexChunks;
@@ -33,20 +32,12 @@ pub static OPACITY: Scaled = Scaled::new(
     100,
 );
 
-pub static PLANAR: MethodSpec = MethodSpec {
-    name: "planar",
-    description: "planar projected shadows (Blinn 1988) onto the flat receivers, stencilled",
-    shader: SHADER,
-    knobs: &[&OPACITY.0],
-    cpu_side: false,
-    hard: true,
-    lights: None,
-    adapter: AdapterNeeds::NONE,
-    bench: Bench::DEFAULTS,
-    overlay_note: Some("planar: shadows on flat objects only, no volumes"),
-    line_samples: None,
-    new: |ctx| Box::new(PlanarShadows::new(ctx)),
-};
+pub static PLANAR: MethodSpec =
+    MethodSpec::new("planar", SHADER, |ctx| Box::new(PlanarShadows::new(ctx)))
+        .about("planar projected shadows (Blinn 1988) onto the flat receivers, stencilled")
+        .knobs(&[&OPACITY.0])
+        .hard()
+        .overlay_note("planar: shadows on flat objects only, no volumes");
 
 const SHADER: &str = "methods/planar.wgsl";
 

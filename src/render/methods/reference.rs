@@ -3,9 +3,7 @@
 //! texture (the session's), and the camera pass shades it like every other method's
 //! (`shaders/methods/reference.wgsl`).
 
-use super::{
-    v_texture_entries, AdapterNeeds, Bench, CameraGroup, Knob, MethodSpec, MethodState, Prepare,
-};
+use super::{v_texture_entries, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
 use crate::render::{view_entry, GpuContext, RenderError};
 
 /// The most disk samples per pixel (the budget's).
@@ -20,24 +18,13 @@ pub static SAMPLES: Knob = Knob::int(
 )
 .budget("MAX_REFERENCE_SAMPLES");
 
-pub static REFERENCE: MethodSpec = MethodSpec {
-    name: "reference",
-    description: "ray-cast ground truth (K disk samples per pixel)",
-    shader: SHADER,
-    knobs: &[&SAMPLES],
-    cpu_side: true,
-    hard: false,
-    lights: None,
-    adapter: AdapterNeeds::NONE,
-    bench: Bench {
+pub static REFERENCE: MethodSpec =
+    MethodSpec::new("reference", SHADER, |ctx| Box::new(Reference::new(ctx)))
+        .about("ray-cast ground truth (K disk samples per pixel)")
+        .knobs(&[&SAMPLES])
+        .cpu_side()
         // Each timed frame takes one more sample per pixel, of a budget that never ends.
-        label: Some("reference 1 spp"),
-        knobs: &[(&SAMPLES, MAX_SAMPLES)],
-    },
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(Reference::new(ctx)),
-};
+        .bench("reference 1 spp", &[(&SAMPLES, MAX_SAMPLES)]);
 
 const SHADER: &str = "methods/reference.wgsl";
 

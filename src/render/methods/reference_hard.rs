@@ -9,27 +9,17 @@
 
 use std::time::Instant;
 
-use super::{
-    v_texture_entries, AdapterNeeds, Bench, CameraGroup, MethodSpec, MethodState, Prepare,
-};
+use super::{v_texture_entries, CameraGroup, MethodSpec, MethodState, Prepare};
 use crate::render::passes::next_generation;
 use crate::render::{view_entry, GpuContext, RenderError, Texture};
 use crate::scene::Camera;
 
-pub static REFERENCE_HARD: MethodSpec = MethodSpec {
-    name: "reference-hard",
-    description: "exact hard shadow: one ray per pixel to the light centre",
-    shader: SHADER,
-    knobs: &[],
-    cpu_side: true,
-    hard: true,
-    lights: None,
-    adapter: AdapterNeeds::NONE,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(ReferenceHard::new(ctx)),
-};
+pub static REFERENCE_HARD: MethodSpec = MethodSpec::new("reference-hard", SHADER, |ctx| {
+    Box::new(ReferenceHard::new(ctx))
+})
+.about("exact hard shadow: one ray per pixel to the light centre")
+.cpu_side()
+.hard();
 
 /// The area reference's camera shader: V from a texture at the pixel.
 const SHADER: &str = "methods/reference.wgsl";

@@ -4,9 +4,7 @@
 
 use glam::Vec3;
 
-use super::{
-    require, AdapterNeeds, Bench, CameraGroup, Knob, Knobs, MethodSpec, MethodState, Prepare,
-};
+use super::{require, CameraGroup, Knob, Knobs, MethodSpec, MethodState, Prepare};
 use crate::render::passes::sample_maps::{sample_lights, SampleMaps, MAX_LIGHTS};
 use crate::render::passes::shadow_map::{BIAS_CONSTANT, BIAS_SLOPE};
 use crate::render::{
@@ -22,23 +20,12 @@ pub static LIGHTS: Knob = Knob::int(
     16,
 );
 
-pub static SAMPLED: MethodSpec = MethodSpec {
-    name: "sampled",
-    description: "N shadow maps from points on the light, averaged",
-    shader: SHADER,
-    knobs: &[&LIGHTS],
-    cpu_side: false,
-    hard: false,
-    lights: None,
-    adapter: AdapterNeeds::NONE,
-    bench: Bench {
-        label: Some("sampled 16"),
-        knobs: &[(&LIGHTS, 16)],
-    },
-    overlay_note: None,
-    line_samples: Some(stratum_centres),
-    new: |ctx| Box::new(Sampled::new(ctx)),
-};
+pub static SAMPLED: MethodSpec =
+    MethodSpec::new("sampled", SHADER, |ctx| Box::new(Sampled::new(ctx)))
+        .about("N shadow maps from points on the light, averaged")
+        .knobs(&[&LIGHTS])
+        .bench("sampled 16", &[(&LIGHTS, 16)])
+        .line_samples(stratum_centres);
 
 const SHADER: &str = "methods/sampled.wgsl";
 

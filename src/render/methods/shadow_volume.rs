@@ -21,8 +21,7 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{
-    v_texture_entries, AdapterNeeds, Bench, CameraGroup, FrameInputs, Knobs, MethodSpec,
-    MethodState, Prepare, Switch,
+    v_texture_entries, CameraGroup, FrameInputs, Knobs, MethodSpec, MethodState, Prepare, Switch,
 };
 use crate::geometry::hard_volume::{scene_volumes, Caps, HardVolume, OpenMeshes};
 use crate::geometry::silhouette::find_silhouettes;
@@ -40,20 +39,13 @@ pub static OPEN: Switch = Switch::new(
     true,
 );
 
-pub static SHADOW_VOLUME: MethodSpec = MethodSpec {
-    name: "shadow-volume",
-    description: "stencil shadow volumes from the light centre (Crow 1977), z-fail with caps",
-    shader: SHADER,
-    knobs: &[&OPEN.0],
-    cpu_side: false,
-    hard: true,
-    lights: None,
-    adapter: AdapterNeeds::NONE,
-    bench: Bench::DEFAULTS,
-    overlay_note: Some("shadow-volume: from the light centre; umbra volume = Crow's"),
-    line_samples: None,
-    new: |ctx| Box::new(ShadowVolume::new(ctx)),
-};
+pub static SHADOW_VOLUME: MethodSpec = MethodSpec::new("shadow-volume", SHADER, |ctx| {
+    Box::new(ShadowVolume::new(ctx))
+})
+.about("stencil shadow volumes from the light centre (Crow 1977), z-fail with caps")
+.knobs(&[&OPEN.0])
+.hard()
+.overlay_note("shadow-volume: from the light centre; umbra volume = Crow's");
 
 const SHADER: &str = "methods/shadow_volume.wgsl";
 

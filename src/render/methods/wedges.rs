@@ -22,8 +22,7 @@ use glam::Vec3;
 
 use super::shadow_volume::{build_volumes, open_meshes, OPEN};
 use super::{
-    require, v_texture_entries, AdapterNeeds, Bench, CameraGroup, Knobs, MethodSpec, MethodState,
-    Prepare, Switch,
+    require, v_texture_entries, CameraGroup, Knobs, MethodSpec, MethodState, Prepare, Switch,
 };
 use crate::geometry::hard_volume::{scene_volumes, OpenMeshes};
 use crate::geometry::volumes::{VolumeKind, VolumeMesh, VolumeVertex};
@@ -46,20 +45,11 @@ pub static HORIZON: Switch = Switch::new(
     true,
 );
 
-pub static WEDGES: MethodSpec = MethodSpec {
-    name: "wedges",
-    description: "penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)",
-    shader: SHADER,
-    knobs: &[&OPEN.0, &HORIZON.0],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Disk), // the coverage of a disk
-    adapter: AdapterNeeds::NONE,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(WedgesMethod::new(ctx)),
-};
+pub static WEDGES: MethodSpec =
+    MethodSpec::new("wedges", SHADER, |ctx| Box::new(WedgesMethod::new(ctx)))
+        .about("penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)")
+        .knobs(&[&OPEN.0, &HORIZON.0])
+        .lights(LightKind::Disk); // the coverage of a disk
 
 const SHADER: &str = "methods/wedges.wgsl";
 
