@@ -1,10 +1,9 @@
 //! Image snapshot tests: compare a rendered RGBA8 image with `tests/snapshots/NAME.png`.
 //!
-//! Include it from a test file with
+//! A module of the gpu test binary; a test module uses it with
 //!
 //! ```ignore
-//! #[path = "support/snapshot.rs"]
-//! mod snapshot;
+//! use crate::support::snapshot;
 //!
 //! snapshot::check_snapshot("plane_disk_light", 64, 64, &pixels);
 //! ```

@@ -1,11 +1,10 @@
 //! WGSL struct layouts from naga, to test that a Rust `#[repr(C)]` GPU struct matches the WGSL
 //! struct it is uploaded into (style item 5: a test, not a "keep in sync" comment).
 //!
-//! Include it from a test file with
+//! A module of the gpu test binary; a test module uses it with
 //!
 //! ```ignore
-//! #[path = "support/wgsl_layout.rs"]
-//! mod wgsl_layout;
+//! use crate::support::wgsl_layout;
 //!
 //! wgsl_layout::assert_layout::<Params>(
 //!     &dbuffer::shader_source::load("penumbra.wgsl").unwrap(),
