@@ -426,7 +426,7 @@ impl LabApp {
 
 /// The render core's context on a device eframe (or the test harness) opened.
 fn context_of(rs: &egui_wgpu::RenderState) -> GpuContext {
-    GpuContext::new(rs.device.clone(), rs.queue.clone(), rs.adapter.get_info())
+    GpuContext::with_adapter(rs.device.clone(), rs.queue.clone(), &rs.adapter)
 }
 
 impl eframe::App for LabApp {
@@ -460,7 +460,7 @@ impl eframe::App for LabApp {
 /// Open the lab window (blocks until it is closed).
 pub fn run(options: LabOptions) -> anyhow::Result<()> {
     let smoke = options.smoke_screenshot.clone();
-    let setup = egui_wgpu::WgpuSetupCreateNew {
+    let mut setup = egui_wgpu::WgpuSetupCreateNew {
         // What `GpuContext::from_adapter` asks for: timestamp queries where the adapter has them,
         // so the stats show GPU time per pass.
         device_descriptor: Arc::new(|adapter: &egui_wgpu::wgpu::Adapter| {
@@ -473,6 +473,10 @@ pub fn run(options: LabOptions) -> anyhow::Result<()> {
         }),
         ..egui_wgpu::WgpuSetupCreateNew::without_display_handle()
     };
+    // `--backend` as for the headless commands (eframe reads `WGPU_BACKEND` itself).
+    if let Some(backends) = crate::render::adapter::backend() {
+        setup.instance_descriptor.backends = backends;
+    }
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title("dbuffer lab")

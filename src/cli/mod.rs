@@ -47,11 +47,13 @@ macro_rules! errln {
     };
 }
 
+pub mod adapters;
 mod animate;
 pub mod bench;
 mod compare;
 pub mod print;
 mod progress;
+pub use adapters::{chosen, error_lines, set_verbose};
 pub use animate::{animate, AnimateArgs};
 pub use compare::{compare, CompareArgs};
 
@@ -168,8 +170,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         bail!("{why}");
     }
     let offline = Offline::new()?;
-    if args.verbose {
-        errln!("adapter   {}", offline.ctx.adapter_description());
+    chosen(&offline.ctx);
+    // Before any work: a device that lacks what the method needs says what, in one line.
+    if let Some(why) = method.refuses_on(&offline.ctx.caps) {
+        bail!("{why}");
     }
     let request = FrameRequest {
         width,

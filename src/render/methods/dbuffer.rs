@@ -13,8 +13,8 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{
-    AdapterNeeds, Bench, CameraBindings, Channel, Empty, FrameInputs, LightMaps, MethodPipeline,
-    MethodSpec, MethodState, SharedMaps,
+    Bench, CameraBindings, Channel, Empty, FrameInputs, LightMaps, MethodPipeline, MethodSpec,
+    MethodState, SharedMaps,
 };
 use crate::geometry::volume_vertices::{light_view_rect, sort_near_first, volume_vertices_within};
 use crate::geometry::VtVariant;
@@ -36,7 +36,7 @@ pub static DBUFFER: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: false,
     lights: Some(LightKind::Disk), // its volumes are the disk's
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::DBUFFER,
     bench: Bench::DEFAULTS,
     overlay_note: None,
     line_samples: None,
@@ -51,7 +51,7 @@ pub static DBUFFER_CENTER: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: false,
     lights: Some(LightKind::Disk), // its volumes are the disk's
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::DBUFFER,
     bench: Bench::DEFAULTS,
     overlay_note: None,
     line_samples: None,

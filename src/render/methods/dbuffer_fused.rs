@@ -25,8 +25,8 @@ use std::time::Instant;
 
 use super::dbuffer::DBuffer;
 use super::{
-    AdapterNeeds, Bench, CameraBindings, Channel, Empty, FrameInputs, Knob, LightMaps,
-    MethodPipeline, MethodSpec, MethodState, SharedMaps,
+    Bench, CameraBindings, Channel, Empty, FrameInputs, Knob, LightMaps, MethodPipeline,
+    MethodSpec, MethodState, SharedMaps,
 };
 use crate::budget::{bytes, MAX_FUSED_EDGES, MAX_FUSED_LIST_BYTES};
 use crate::geometry::fused::{
@@ -75,7 +75,7 @@ pub static DBUFFER_FUSED: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: false,
     lights: Some(LightKind::Disk), // its chords cut the disk
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::DBUFFER_FUSED,
     bench: Bench::DEFAULTS,
     overlay_note: None,
     line_samples: None,

@@ -17,8 +17,8 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3, Vec4};
 
 use super::{
-    AdapterNeeds, Bench, CameraBindings, Channel, Choice, Empty, FrameInputs, Knob, Knobs,
-    LightMaps, MethodPipeline, MethodSpec, MethodState, SharedMaps,
+    Bench, CameraBindings, Channel, Choice, Empty, FrameInputs, Knob, Knobs, LightMaps,
+    MethodPipeline, MethodSpec, MethodState, SharedMaps,
 };
 use crate::geometry::light_view::LightView;
 use crate::geometry::VtVariant;
@@ -53,7 +53,7 @@ pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: true,
     lights: None,
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::EXTENDED_LIGHT_MAP,
     bench: Bench::DEFAULTS,
     overlay_note: Some("extended-light-map: its channels are in the View panel"),
     line_samples: None,

@@ -2,7 +2,7 @@
 //! slope-scaled bias (`shaders/methods/hard.wgsl`).
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{AdapterNeeds, Bench, MethodSpec};
+use super::{Bench, MethodSpec};
 
 pub static HARD: MethodSpec = MethodSpec {
     name: "hard",
@@ -12,7 +12,7 @@ pub static HARD: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: true,
     lights: None,
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::SHADOW_MAPPED,
     bench: Bench::DEFAULTS,
     overlay_note: None,
     line_samples: None,

@@ -16,8 +16,8 @@ use std::sync::Arc;
 
 use super::shadow_volume::screen_v_entries;
 use super::{
-    AdapterNeeds, Bench, CameraBindings, FrameInputs, Knobs, MethodPipeline, MethodSpec,
-    MethodState, Scaled, SharedMaps, Switch,
+    Bench, CameraBindings, FrameInputs, Knobs, MethodPipeline, MethodSpec, MethodState, Scaled,
+    SharedMaps, Switch,
 };
 use crate::geometry::hybrid::WallParams;
 use crate::geometry::silhouette::SilhouetteEdge;
@@ -61,7 +61,7 @@ pub static HYBRID: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: true,
     lights: None,
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::HYBRID,
     bench: Bench::DEFAULTS,
     overlay_note: Some("hybrid: silhouette edges = rebuilt from the depth map"),
     line_samples: None,

@@ -19,8 +19,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 
 use super::{
-    AdapterNeeds, Bench, CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec,
-    MethodState, SharedMaps,
+    Bench, CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec, MethodState, SharedMaps,
 };
 use crate::geometry::VtVariant;
 use crate::render::passes::sample_maps::{lights_at, SampleMaps};
@@ -48,7 +47,7 @@ pub static LINEAR_SSM: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: false,
     lights: Some(LightKind::Line), // Heidrich et al.'s maps along a segment
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::LINEAR_SSM,
     bench: Bench {
         label: Some("linear-ssm 2"),
         knobs: &[(&SAMPLES, 2)],

@@ -3,7 +3,7 @@
 //! (`shaders/methods/pcf.wgsl`).
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{AdapterNeeds, Bench, Knob, MethodSpec};
+use super::{Bench, Knob, MethodSpec};
 
 /// The kernel radius R in shadow-map texels.
 pub static RADIUS: Knob = Knob::int(
@@ -21,7 +21,7 @@ pub static PCF: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: true,
     lights: None,
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::SHADOW_MAPPED,
     bench: Bench::DEFAULTS,
     overlay_note: None,
     line_samples: None,

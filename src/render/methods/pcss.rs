@@ -4,7 +4,7 @@
 //! (`shaders/methods/pcss.wgsl`).
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{AdapterNeeds, Bench, FrameInputs, Knob, MethodSpec};
+use super::{Bench, FrameInputs, Knob, MethodSpec};
 use crate::scene::{LightKind, Scene};
 
 pub static BLOCKER_TAPS: Knob = Knob::int(
@@ -29,7 +29,7 @@ pub static PCSS: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: false,
     lights: Some(LightKind::Disk), // a blocker search over a disk
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::SHADOW_MAPPED,
     bench: Bench {
         label: Some("pcss 16/32"),
         knobs: &[(&BLOCKER_TAPS, 16), (&FILTER_TAPS, 32)],

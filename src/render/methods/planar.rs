@@ -15,8 +15,7 @@ use std::sync::Arc;
 
 use super::shadow_volume::screen_v_entries;
 use super::{
-    AdapterNeeds, Bench, CameraBindings, FrameInputs, MethodPipeline, MethodSpec, MethodState,
-    Scaled, SharedMaps,
+    Bench, CameraBindings, FrameInputs, MethodPipeline, MethodSpec, MethodState, Scaled, SharedMaps,
 };
 use crate::geometry::planar::{planar_receivers, PlanarReceiver};
 use crate::geometry::VtVariant;
@@ -44,7 +43,7 @@ pub static PLANAR: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: true,
     lights: None,
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::PLANAR,
     bench: Bench::DEFAULTS,
     overlay_note: Some("planar: shadows on flat objects only, no volumes"),
     line_samples: None,

@@ -6,8 +6,7 @@
 use std::sync::Arc;
 
 use super::{
-    AdapterNeeds, Bench, CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec,
-    MethodState, SharedMaps,
+    Bench, CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec, MethodState, SharedMaps,
 };
 use crate::geometry::VtVariant;
 use crate::render::timer::Recorder;
@@ -33,7 +32,7 @@ pub static REFERENCE: MethodSpec = MethodSpec {
     cpu_side: true,
     hard: false,
     lights: None,
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::CAMERA_ONLY,
     bench: Bench {
         // Each timed frame takes one more sample per pixel, of a budget that never ends.
         label: Some("reference 1 spp"),

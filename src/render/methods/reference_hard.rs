@@ -11,8 +11,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use super::{
-    AdapterNeeds, Bench, CameraBindings, FrameInputs, MethodPipeline, MethodSpec, MethodState,
-    SharedMaps,
+    Bench, CameraBindings, FrameInputs, MethodPipeline, MethodSpec, MethodState, SharedMaps,
 };
 use crate::geometry::VtVariant;
 use crate::render::timer::Recorder;
@@ -27,7 +26,7 @@ pub static REFERENCE_HARD: MethodSpec = MethodSpec {
     cpu_side: true,
     hard: true,
     lights: None,
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::CAMERA_ONLY,
     bench: Bench::DEFAULTS,
     overlay_note: None,
     line_samples: None,

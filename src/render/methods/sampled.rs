@@ -7,8 +7,8 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::{
-    AdapterNeeds, Bench, CameraBindings, FrameInputs, Knob, Knobs, MethodPipeline, MethodSpec,
-    MethodState, SharedMaps,
+    Bench, CameraBindings, FrameInputs, Knob, Knobs, MethodPipeline, MethodSpec, MethodState,
+    SharedMaps,
 };
 use crate::geometry::VtVariant;
 use crate::render::passes::sample_maps::{sample_lights, SampleMaps, MAX_LIGHTS};
@@ -35,7 +35,7 @@ pub static SAMPLED: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: false,
     lights: None,
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::SAMPLED,
     bench: Bench {
         label: Some("sampled 16"),
         knobs: &[(&LIGHTS, 16)],

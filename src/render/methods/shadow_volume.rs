@@ -22,8 +22,8 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{
-    AdapterNeeds, Bench, CameraBindings, FrameInputs, Knobs, MethodPipeline, MethodSpec,
-    MethodState, SharedMaps, Switch,
+    Bench, CameraBindings, FrameInputs, Knobs, MethodPipeline, MethodSpec, MethodState, SharedMaps,
+    Switch,
 };
 use crate::geometry::hard_volume::{scene_volumes, Caps, HardVolume, OpenMeshes};
 use crate::geometry::silhouette::find_silhouettes;
@@ -50,7 +50,7 @@ pub static SHADOW_VOLUME: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: true,
     lights: None,
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::SHADOW_VOLUME,
     bench: Bench::DEFAULTS,
     overlay_note: Some("shadow-volume: from the light centre; umbra volume = Crow's"),
     line_samples: None,

@@ -23,8 +23,8 @@ use glam::Vec3;
 
 use super::shadow_volume::{build_volumes, open_meshes, screen_v_entries, OPEN};
 use super::{
-    AdapterNeeds, Bench, CameraBindings, FrameInputs, Knobs, MethodPipeline, MethodSpec,
-    MethodState, SharedMaps, Switch,
+    Bench, CameraBindings, FrameInputs, Knobs, MethodPipeline, MethodSpec, MethodState, SharedMaps,
+    Switch,
 };
 use crate::geometry::hard_volume::{scene_volumes, OpenMeshes};
 use crate::geometry::volumes::{VolumeKind, VolumeMesh, VolumeVertex};
@@ -56,7 +56,7 @@ pub static WEDGES: MethodSpec = MethodSpec {
     cpu_side: false,
     hard: false,
     lights: Some(LightKind::Disk), // the coverage of a disk
-    adapter: AdapterNeeds::NONE,
+    adapter: super::needs::WEDGES,
     bench: Bench::DEFAULTS,
     overlay_note: None,
     line_samples: None,

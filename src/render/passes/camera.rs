@@ -224,7 +224,9 @@ pub struct CameraTargets {
     pub width: u32,
     pub height: u32,
     pub color: Texture,
-    /// `color` as its bytes (Rgba8Unorm): what the view pass copies.
+    /// `color` as its bytes (Rgba8Unorm): what the view pass copies. On a device without view
+    /// formats (GL) the sRGB view itself: the lab's display of it decodes sRGB (darker mid-tones),
+    /// while readback copies the bytes and is exact.
     pub color_bytes: wgpu::TextureView,
     pub data: Texture,
     pub depth: Texture,
@@ -233,7 +235,8 @@ pub struct CameraTargets {
 }
 
 impl CameraTargets {
-    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> CameraTargets {
+    /// `bytes_view`: the device takes a second view format (`DownlevelFlags::VIEW_FORMATS`).
+    pub fn new(device: &wgpu::Device, width: u32, height: u32, bytes_view: bool) -> CameraTargets {
         use wgpu::TextureUsages as U;
         let usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
         let color = device.create_texture(&wgpu::TextureDescriptor {
@@ -248,12 +251,20 @@ impl CameraTargets {
             dimension: wgpu::TextureDimension::D2,
             format: COLOR_FORMAT,
             usage,
-            view_formats: &[COLOR_BYTES_FORMAT],
+            view_formats: if bytes_view {
+                &[COLOR_BYTES_FORMAT]
+            } else {
+                &[]
+            },
         });
         let color_view = color.create_view(&wgpu::TextureViewDescriptor::default());
         let color_bytes = color.create_view(&wgpu::TextureViewDescriptor {
             label: Some("CameraTargets::color_bytes"),
-            format: Some(COLOR_BYTES_FORMAT),
+            format: Some(if bytes_view {
+                COLOR_BYTES_FORMAT
+            } else {
+                COLOR_FORMAT
+            }),
             ..Default::default()
         });
         CameraTargets {
