@@ -193,6 +193,7 @@ pub fn record_frame(
         CameraTargets::new(&ctx.device, request.width, request.height, bytes_view)
     });
     camera.record(ctx, rec, &uniforms, camera_targets, bindings, surfaces);
+    camera_targets.copy_bytes(rec.encoder);
     *rendered = Some(Rendered {
         request: *request,
         view_proj,

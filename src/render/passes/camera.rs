@@ -224,10 +224,12 @@ pub struct CameraTargets {
     pub width: u32,
     pub height: u32,
     pub color: Texture,
-    /// `color` as its bytes (Rgba8Unorm): what the view pass copies. On a device without view
-    /// formats (GL) the sRGB view itself: the lab's display of it decodes sRGB (darker mid-tones),
-    /// while readback copies the bytes and is exact.
+    /// `color` as its bytes (Rgba8Unorm): what the view pass copies and the lab shows.
     pub color_bytes: wgpu::TextureView,
+    /// On a device without view formats (GL): the texture `color_bytes` views, an Rgba8Unorm
+    /// copy of `color` made after each camera pass ([`CameraTargets::copy_bytes`]; a copy
+    /// between formats that differ only in sRGB-ness moves the bytes as they are).
+    pub bytes_copy: Option<Texture>,
     pub data: Texture,
     pub depth: Texture,
     /// Changes whenever the textures are made again (whoever binds them binds again).
@@ -258,15 +260,25 @@ impl CameraTargets {
             },
         });
         let color_view = color.create_view(&wgpu::TextureViewDescriptor::default());
-        let color_bytes = color.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("CameraTargets::color_bytes"),
-            format: Some(if bytes_view {
-                COLOR_BYTES_FORMAT
-            } else {
-                COLOR_FORMAT
-            }),
-            ..Default::default()
+        let bytes_copy = (!bytes_view).then(|| {
+            Texture::new(
+                device,
+                "CameraTargets::bytes_copy",
+                (width, height),
+                COLOR_BYTES_FORMAT,
+                U::COPY_DST | U::TEXTURE_BINDING,
+            )
         });
+        let color_bytes = match &bytes_copy {
+            Some(copy) => copy
+                .texture
+                .create_view(&wgpu::TextureViewDescriptor::default()),
+            None => color.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("CameraTargets::color_bytes"),
+                format: Some(COLOR_BYTES_FORMAT),
+                ..Default::default()
+            }),
+        };
         CameraTargets {
             width,
             height,
@@ -275,6 +287,7 @@ impl CameraTargets {
                 view: color_view,
             },
             color_bytes,
+            bytes_copy,
             data: Texture::new(
                 device,
                 "CameraTargets::data",
@@ -290,6 +303,19 @@ impl CameraTargets {
                 usage,
             ),
             generation: next_generation(),
+        }
+    }
+}
+
+impl CameraTargets {
+    /// Bring `bytes_copy` (if there is one) up to date with `color`.
+    pub fn copy_bytes(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(copy) = &self.bytes_copy {
+            encoder.copy_texture_to_texture(
+                self.color.texture.as_image_copy(),
+                copy.texture.as_image_copy(),
+                self.color.texture.size(),
+            );
         }
     }
 }
