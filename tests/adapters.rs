@@ -339,6 +339,29 @@ fn the_weakest_device_renders_or_refuses_every_method() {
         if what == "downlevel" {
             assert!(rendered.contains(&"dbuffer"), "{what}: {rendered:?}");
         }
+        // `compare` on it lists what the device cannot run as "n/a — needs …", with the rest.
+        let request = dbuffer::compare::CompareRequest {
+            width: 32,
+            height: 32,
+            dbuffer_size: 32,
+            vt: dbuffer::geometry::VtVariant::Exact,
+            knobs: dbuffer::render::Knobs::default(),
+        };
+        let c = dbuffer::compare::run(&mut offline, "table1-224", &disk, &request, |_| {})
+            .unwrap_or_else(|e| panic!("{what}: compare: {e}"));
+        let errors = offline.ctx.take_uncaptured_errors();
+        assert!(errors.is_empty(), "{what}: compare: {errors:?}");
+        let table = dbuffer::compare::report::Report::new(&c).table();
+        for &m in Method::all() {
+            if m.refuses_on(&offline.ctx.caps).is_some() {
+                assert!(table.contains(&format!("| {m} | n/a — needs ")), "{table}");
+            } else if takes(m, &disk) {
+                assert!(
+                    c.results.iter().any(|r| r.method == m),
+                    "{what}: {m} not drawn"
+                );
+            }
+        }
     }
 }
 
