@@ -6,7 +6,9 @@
 use glam::{Mat4, Vec3};
 
 use super::gpu_scene::GpuScene;
-use super::methods::{Channel, FrameInputs, Knobs, LightMaps, Method, MethodState, SharedMaps};
+use super::methods::{
+    Channel, FrameInputs, Knobs, LightMaps, Method, MethodState, Prepare, SharedMaps,
+};
 use super::passes::camera::{Camera, CameraTargets, CameraUniforms};
 use super::passes::probe::Probe;
 use super::passes::view::{View, ViewInputs, ViewParams, ViewTarget};
@@ -168,8 +170,10 @@ pub fn record_frame(
         surfaces,
     } = parts;
     let (ctx, scene) = (inputs.ctx, inputs.scene);
-    method.prepare(&inputs, shared, rec)?;
-    let Some(bindings) = method.camera(&ctx.device, request.vt) else {
+    let group = rec.group(&format!("{}: its passes", request.method), |rec| {
+        method.prepare(Prepare(&inputs, shared, rec))
+    })?;
+    let Some(bindings) = group.bindings(&ctx.device, request.vt) else {
         return Err(RenderError::Gpu("the method has no camera pipeline".into()));
     };
     let view_proj = inputs.view.view_proj;

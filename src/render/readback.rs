@@ -125,6 +125,7 @@ impl Readback {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("Readback::encoder"),
             });
+            encoder.push_debug_group("readback");
             let mut bands = Vec::new();
             for (k, r) in reads.iter().enumerate() {
                 let (row, rows) = plans[k];
@@ -156,6 +157,7 @@ impl Readback {
                 );
                 bands.push((k, y, n, row));
             }
+            encoder.pop_debug_group();
             ctx.queue.submit([encoder.finish()]);
             for &(k, _, n, row) in &bands {
                 self.staging[k]

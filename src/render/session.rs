@@ -12,14 +12,14 @@ use super::frame::{
     LightMapsData,
 };
 use super::gpu_scene::GpuScene;
-use super::methods::{External, FrameInputs, LightMaps, Method, MethodState, SharedMaps};
+use super::methods::{External, FrameInputs, LightMaps, Method, MethodState, Prepare, SharedMaps};
 use super::passes::camera::{Camera, ScreenView};
 use super::passes::probe::ProbeRequest;
 use super::passes::shadow_map::ShadowMap;
 use super::passes::view::ViewParams;
 use super::readback::Readback;
 use super::reference::{self, ReferenceKey};
-use super::timer::{PassTimer, Recorder};
+use super::timer::{groups_span_passes, PassTimer, Recorder};
 use super::{GpuContext, RenderError, Texture};
 use crate::geometry::light_view::LightView;
 use crate::geometry::progressive::ProgressiveReference;
@@ -474,41 +474,52 @@ impl Session {
         let view_reference = reference
             .filter(|r| r.key == current)
             .map(|r| (&r.texture.view, r.generation));
-        let mut rec = Recorder::new(encoder, self.timer.as_ref());
-        if job.render || job.targets.rendered.is_none() {
-            record_frame(
-                FrameParts {
-                    inputs,
-                    request: &request,
-                    method: state.as_mut(),
-                    shared: &mut self.shared,
-                    camera: &self.camera,
-                    surfaces: &self.surfaces,
-                },
-                job.targets,
-                job.view.as_ref().map(|v| (v, view_reference)),
-                &mut rec,
-            )?;
-        } else if let Some(params) = &job.view {
-            super::frame::record_view(
-                ctx,
-                job.targets,
-                params,
-                view_reference,
-                state.light_maps(&self.shared),
-                &mut rec,
-            );
-        }
+        let mut rec = Recorder::new(encoder, self.timer.as_ref())
+            .with_groups(groups_span_passes(&ctx.adapter));
+        // The frame's debug groups (docs/development/architecture.md): the frame, in it the
+        // method's passes, the camera pass and the view; then the probes' readbacks.
+        let frame = format!("frame: {method} {}×{}", request.width, request.height);
+        rec.group(&frame, |rec| {
+            if job.render || job.targets.rendered.is_none() {
+                record_frame(
+                    FrameParts {
+                        inputs,
+                        request: &request,
+                        method: state.as_mut(),
+                        shared: &mut self.shared,
+                        camera: &self.camera,
+                        surfaces: &self.surfaces,
+                    },
+                    job.targets,
+                    job.view.as_ref().map(|v| (v, view_reference)),
+                    rec,
+                )?;
+            } else if let Some(params) = &job.view {
+                super::frame::record_view(
+                    ctx,
+                    job.targets,
+                    params,
+                    view_reference,
+                    state.light_maps(&self.shared),
+                    rec,
+                );
+            }
+            Ok::<_, RenderError>(())
+        })?;
         let mut bytes = 0;
-        for p in &job.probes {
-            bytes += super::passes::probe::record(
-                ctx,
-                job.targets,
-                p,
-                view_reference,
-                state.light_maps(&self.shared),
-                &mut rec,
-            );
+        if !job.probes.is_empty() {
+            rec.group("readbacks: probes", |rec| {
+                for p in &job.probes {
+                    bytes += super::passes::probe::record(
+                        ctx,
+                        job.targets,
+                        p,
+                        view_reference,
+                        state.light_maps(&self.shared),
+                        rec,
+                    );
+                }
+            });
         }
         Ok(bytes)
     }
@@ -598,8 +609,11 @@ impl Session {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("Session::prepare_only"),
             });
-        let mut rec = Recorder::new(&mut encoder, None);
-        state.prepare(&inputs, &mut self.shared, &mut rec)?;
+        let mut rec =
+            Recorder::new(&mut encoder, None).with_groups(groups_span_passes(&ctx.adapter));
+        rec.group(&format!("{method}: its light-space maps alone"), |rec| {
+            state.prepare(Prepare(&inputs, &mut self.shared, rec))
+        })?;
         ctx.queue.submit([encoder.finish()]);
         Ok(())
     }

@@ -15,20 +15,160 @@ pub const MAX_SPANS: u32 = 16;
 /// Staging buffers in flight.
 const RING: usize = 3;
 
-/// A frame's encoder and its pass timer.
+/// A frame's encoder, its pass timer, and the debug groups it is recorded in.
+///
+/// The groups give a capture (RenderDoc, Xcode, PIX) the frame's structure by name: a
+/// [`Recorder::group`] around a stretch of work (the frame, a method's passes, the readbacks),
+/// and around each timed [`Recorder::span`] one group named as the span, which lasts until the
+/// next span or group begins or its own group ends. Spans are leaves of that tree, groups are
+/// its inner nodes, and every group a recorder opens it closes: a frame is balanced by
+/// construction, not by calls kept in pairs by hand. A group reaches the encoder when the first
+/// span inside it opens, so one with no pass in it (a method whose maps are up to date) leaves
+/// nothing behind. Outside every group a span is timed but opens no group (nothing would close
+/// it). Where the driver cannot take a group around passes ([`groups_span_passes`]) the
+/// bookkeeping runs and the encoder is told nothing.
 pub struct Recorder<'a> {
     pub encoder: &'a mut wgpu::CommandEncoder,
     pub timer: Option<&'a PassTimer>,
+    groups: Groups,
+    /// The encoder gets the groups.
+    labels: bool,
 }
 
 impl<'a> Recorder<'a> {
     pub fn new(encoder: &'a mut wgpu::CommandEncoder, timer: Option<&'a PassTimer>) -> Self {
-        Recorder { encoder, timer }
+        Recorder {
+            encoder,
+            timer,
+            groups: Groups::default(),
+            labels: true,
+        }
     }
 
-    /// A timed span named `name` (one or more render passes in a row).
-    pub fn span(&self, name: &'static str) -> Span {
+    /// The same, telling the encoder its debug groups only where `on`.
+    pub fn with_groups(mut self, on: bool) -> Self {
+        self.labels = on;
+        self
+    }
+
+    /// A timed span named `name` (one or more passes in a row), in a debug group of that name.
+    pub fn span(&mut self, name: &'static str) -> Span {
+        let ops = self.groups.span(name);
+        self.apply(ops);
         Span(self.timer.and_then(|t| t.open(name)))
+    }
+
+    /// Record `f` in a debug group named `name`.
+    pub fn group<R>(&mut self, name: &str, f: impl FnOnce(&mut Self) -> R) -> R {
+        let ops = self.groups.group(name);
+        self.apply(ops);
+        let out = f(self);
+        let ops = self.groups.close();
+        self.apply(ops);
+        out
+    }
+
+    fn apply(&mut self, ops: Vec<GroupOp>) {
+        if !self.labels {
+            return;
+        }
+        for op in ops {
+            match op {
+                GroupOp::Push(name) => self.encoder.push_debug_group(&name),
+                GroupOp::Pop => self.encoder.pop_debug_group(),
+            }
+        }
+    }
+}
+
+/// Whether the driver under `adapter` takes debug groups around passes. wgpu records each pass
+/// into a command buffer of its own, so a group around passes begins in one command buffer and
+/// ends in another, as Vulkan allows; Mesa's Vulkan drivers before 24 (lavapipe 22.3 here) keep
+/// the labels per command buffer, pop past the empty stack of the one a group ends in, and crash
+/// at a later label. (wgpu hands labels to Vulkan only with `InstanceFlags::DEBUG`: a debug
+/// build, or `WGPU_DEBUG=1`, which a RenderDoc capture wants anyway.)
+pub fn groups_span_passes(adapter: &wgpu::AdapterInfo) -> bool {
+    adapter.backend != wgpu::Backend::Vulkan
+        || mesa_major(&adapter.driver_info).is_none_or(|v| v >= 24)
+}
+
+/// The major version of Mesa in a driver's description ("Mesa 22.3.6 (LLVM 15.0.6)"), if it is
+/// Mesa.
+fn mesa_major(driver_info: &str) -> Option<u32> {
+    let version = driver_info.split("Mesa ").nth(1)?;
+    version.split('.').next()?.trim().parse().ok()
+}
+
+/// What the encoder is told.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum GroupOp {
+    Push(String),
+    Pop,
+}
+
+/// One open group: opened by a span or not, its name, and whether the encoder has it yet.
+#[derive(Debug)]
+struct Open {
+    span: bool,
+    name: String,
+    pushed: bool,
+}
+
+/// The debug groups open in a recorder, innermost last: the bookkeeping apart from the encoder
+/// (it answers with what to tell the encoder), so a test can follow it.
+#[derive(Debug, Default)]
+struct Groups {
+    open: Vec<Open>,
+}
+
+impl Groups {
+    /// Open a group named `name` (ending the span open here, if any); the encoder gets it with
+    /// the first span inside it.
+    fn group(&mut self, name: &str) -> Vec<GroupOp> {
+        let ops = self.end_span();
+        self.open.push(Open {
+            span: false,
+            name: name.to_string(),
+            pushed: false,
+        });
+        ops
+    }
+
+    /// Open the span `name` (ending the span open here, if any) with every group around it
+    /// that the encoder does not have yet; none outside every group.
+    fn span(&mut self, name: &str) -> Vec<GroupOp> {
+        let mut ops = self.end_span();
+        if self.open.is_empty() {
+            return ops;
+        }
+        for g in self.open.iter_mut().filter(|g| !g.pushed) {
+            ops.push(GroupOp::Push(g.name.clone()));
+            g.pushed = true;
+        }
+        ops.push(GroupOp::Push(name.to_string()));
+        self.open.push(Open {
+            span: true,
+            name: name.to_string(),
+            pushed: true,
+        });
+        ops
+    }
+
+    /// Close the innermost [`Groups::group`] and the span open in it.
+    fn close(&mut self) -> Vec<GroupOp> {
+        let mut ops = self.end_span();
+        if self.open.pop().is_some_and(|g| g.pushed) {
+            ops.push(GroupOp::Pop);
+        }
+        ops
+    }
+
+    fn end_span(&mut self) -> Vec<GroupOp> {
+        if self.open.last().is_some_and(|g| g.span) {
+            self.open.pop();
+            return vec![GroupOp::Pop];
+        }
+        Vec::new()
     }
 }
 
@@ -153,9 +293,11 @@ impl PassTimer {
         };
         let count = 2 * names.len() as u32;
         let bytes = u64::from(count) * 8;
+        encoder.push_debug_group("readbacks: pass timings");
         encoder.resolve_query_set(&self.queries, 0..count, &self.resolve, 0);
         let slot = &mut self.ring[k];
         encoder.copy_buffer_to_buffer(&self.resolve, 0, &slot.buffer, 0, bytes);
+        encoder.pop_debug_group();
         slot.names = names;
         slot.pending = true;
         slot.ready.store(false, Ordering::Release);
@@ -223,4 +365,131 @@ fn read_slot(slot: &mut Slot, period_ms: f64) -> Vec<(String, f64)> {
     slot.pending = false;
     slot.ready.store(false, Ordering::Release);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{mesa_major, GroupOp, Groups};
+
+    #[test]
+    fn mesa_versions_are_read_from_the_driver_description() {
+        assert_eq!(mesa_major("Mesa 22.3.6 (LLVM 15.0.6)"), Some(22));
+        assert_eq!(mesa_major("Mesa 24.0.5-1ubuntu1"), Some(24));
+        assert_eq!(mesa_major("535.104.05"), None);
+        assert_eq!(mesa_major(""), None);
+    }
+
+    /// What the encoder is told for `script` (a frame as `record_frame` records it), as an
+    /// outline of (depth, name), and the depth at the end; fails on a pop with nothing open.
+    fn outline(script: &[(&str, &str)]) -> (Vec<(usize, String)>, usize) {
+        let mut groups = Groups::default();
+        let mut depth = 0usize;
+        let mut out = Vec::new();
+        for &(op, name) in script {
+            let ops = match op {
+                "group" => groups.group(name),
+                "span" => groups.span(name),
+                _ => groups.close(),
+            };
+            for o in ops {
+                match o {
+                    GroupOp::Push(n) => {
+                        out.push((depth, n));
+                        depth += 1;
+                    }
+                    GroupOp::Pop => {
+                        assert!(depth > 0, "pops a group it never pushed at {op} {name}");
+                        depth -= 1;
+                    }
+                }
+            }
+            let pushed = groups.open.iter().filter(|g| g.pushed).count();
+            assert_eq!(depth, pushed, "the encoder's depth is what is open");
+        }
+        (out, depth)
+    }
+
+    fn named(outline: &[(usize, &str)]) -> Vec<(usize, String)> {
+        outline.iter().map(|&(d, n)| (d, n.to_string())).collect()
+    }
+
+    #[test]
+    fn spans_nest_in_groups_and_every_group_closes() {
+        let (out, depth) = outline(&[
+            ("group", "frame"),
+            ("group", "method"),
+            ("span", "shadow_map"),
+            ("span", "dbuffer_volumes"),
+            ("close", ""),
+            ("span", "camera_pass"),
+            ("span", "view_pass"),
+            ("close", ""),
+            ("group", "readbacks"),
+            ("span", "probe"),
+            ("close", ""),
+        ]);
+        let expected = [
+            (0, "frame"),
+            (1, "method"),
+            (2, "shadow_map"),
+            (2, "dbuffer_volumes"),
+            (1, "camera_pass"),
+            (1, "view_pass"),
+            (0, "readbacks"),
+            (1, "probe"),
+        ];
+        assert_eq!(out, named(&expected));
+        assert_eq!(depth, 0, "balanced");
+    }
+
+    #[test]
+    fn a_group_with_no_span_in_it_reaches_no_encoder() {
+        // A method whose maps are up to date records nothing in its group.
+        let (out, depth) = outline(&[
+            ("group", "frame"),
+            ("group", "method"),
+            ("close", ""),
+            ("span", "camera_pass"),
+            ("close", ""),
+            ("group", "maps alone"),
+            ("close", ""),
+        ]);
+        assert_eq!(out, named(&[(0, "frame"), (1, "camera_pass")]));
+        assert_eq!(depth, 0);
+    }
+
+    #[test]
+    fn a_span_outside_every_group_opens_none() {
+        let (out, depth) = outline(&[("span", "sample_maps"), ("span", "ssm_skins")]);
+        assert!(out.is_empty());
+        assert_eq!(depth, 0);
+        let (out, depth) = outline(&[
+            ("span", "floor"),
+            ("group", "frame"),
+            ("span", "camera_pass"),
+            ("close", ""),
+        ]);
+        assert_eq!(out, named(&[(0, "frame"), (1, "camera_pass")]));
+        assert_eq!(depth, 0);
+    }
+
+    #[test]
+    fn a_group_opened_inside_a_span_ends_the_span() {
+        let (out, depth) = outline(&[
+            ("group", "frame"),
+            ("span", "shadow_map"),
+            ("group", "method"),
+            ("span", "camera_pass"),
+            ("close", ""),
+            ("close", ""),
+        ]);
+        let expected = [
+            (0, "frame"),
+            (1, "shadow_map"),
+            (1, "method"),
+            (2, "camera_pass"),
+        ];
+        assert_eq!(out, named(&expected));
+        assert_eq!(depth, 0);
+    }
 }

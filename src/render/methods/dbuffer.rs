@@ -7,56 +7,36 @@
 //! (`|cx_o|`) and the volume channels (`passes::dbuffer_volumes`). Per frame: the camera pass
 //! with `shaders/methods/dbuffer.wgsl`. CPU twin: `geometry::DBufferTwin`.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
 
 use super::{
-    Bench, CameraBindings, Channel, Empty, FrameInputs, LightMaps, MethodPipeline, MethodSpec,
-    MethodState, SharedMaps,
+    require, CameraGroup, Channel, Empty, FrameInputs, LightMaps, MethodSpec, MethodState, Prepare,
+    SharedMaps,
 };
 use crate::geometry::volume_vertices::{light_view_rect, sort_near_first, volume_vertices_within};
-use crate::geometry::VtVariant;
 use crate::geometry::{SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::dbuffer_volumes::{disjoint_groups, CasterVolumes, DBufferVolumes};
 use crate::render::passes::shadow_map::{lookup_entries, LightUniforms, ShadowUniforms};
-use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError,
 };
 use crate::scene::{DiskLight, LightKind};
 
-pub static DBUFFER: MethodSpec = MethodSpec {
-    name: "dbuffer",
-    description: "D-buffer soft shadows (Jakobsen et al. 2004)",
-    shader: SHADER,
-    knobs: &[],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Disk), // its volumes are the disk's
-    adapter: super::needs::DBUFFER,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(DBuffer::new(ctx, false)),
-};
+pub static DBUFFER: MethodSpec =
+    MethodSpec::new("dbuffer", SHADER, |ctx| Box::new(DBuffer::new(ctx, false)))
+        .adapter(super::needs::DBUFFER)
+        .about("D-buffer soft shadows (Jakobsen et al. 2004)")
+        .lights(LightKind::Disk); // its volumes are the disk's
 
-pub static DBUFFER_CENTER: MethodSpec = MethodSpec {
-    name: "dbuffer-center",
-    description: "D-buffer with silhouettes from the light centre only",
-    shader: SHADER,
-    knobs: &[],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Disk), // its volumes are the disk's
-    adapter: super::needs::DBUFFER,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(DBuffer::new(ctx, true)),
-};
+pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER, |ctx| {
+    Box::new(DBuffer::new(ctx, true))
+})
+.adapter(super::needs::DBUFFER)
+.about("D-buffer with silhouettes from the light centre only")
+.lights(LightKind::Disk); // its volumes are the disk's
 
 const SHADER: &str = "methods/dbuffer.wgsl";
 
@@ -96,7 +76,8 @@ pub const CHANNELS: &[Channel] = &[
 
 pub struct DBuffer {
     center_silhouettes: bool,
-    pipeline: Arc<MethodPipeline>,
+    /// Bound for the generations of the shadow map and the volume channels ([`Bound`]).
+    camera: CameraGroup,
     uniforms: wgpu::Buffer,
     /// The geometry, and the revision it was built for.
     geometry: Option<(SceneGeometry, u64)>,
@@ -107,11 +88,25 @@ pub struct DBuffer {
     /// Where the penumbra entries can be in the light view's image.
     penumbra_rect: [f32; 4],
     volumes: DBufferVolumes,
-    /// The revision, size and shadow map generation the volume channels hold.
-    made_for: Option<(u64, u32, u64)>,
+    /// What the volume channels hold.
+    made_for: Option<Made>,
     view_proj: glam::Mat4,
-    /// The bind group and the (shadow map, volume targets) generations it binds.
-    bind_group: Option<(wgpu::BindGroup, (u64, u64))>,
+}
+
+/// What the volume channels were drawn for.
+#[derive(Clone, Copy, PartialEq)]
+struct Made {
+    revision: u64,
+    map_size: u32,
+    /// The shadow map's generation (the penumbra channel is drawn over its depth).
+    map: u64,
+}
+
+/// What the camera bind group binds: the shadow map's and the volume channels' generations.
+#[derive(PartialEq)]
+struct Bound {
+    map: u64,
+    volumes: u64,
 }
 
 impl DBuffer {
@@ -131,7 +126,7 @@ impl DBuffer {
         ]);
         DBuffer {
             center_silhouettes,
-            pipeline: MethodPipeline::get(ctx, SHADER, &entries),
+            camera: CameraGroup::new(ctx, SHADER, &entries),
             uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "DBuffer::uniforms"),
             geometry: None,
             builds: 0,
@@ -142,7 +137,6 @@ impl DBuffer {
             volumes: DBufferVolumes::new(ctx),
             made_for: None,
             view_proj: glam::Mat4::IDENTITY,
-            bind_group: None,
         }
     }
 
@@ -226,27 +220,22 @@ impl DBuffer {
 }
 
 impl MethodState for DBuffer {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, shared, rec) = p;
         let light = *inputs.disk(if self.center_silhouettes {
             DBUFFER_CENTER.name
         } else {
             DBUFFER.name
         })?;
         self.update_geometry(inputs, light);
-        shared.shadow_map.update(inputs, rec);
-        let Some(map) = shared.shadow_map.targets() else {
-            return Err(RenderError::Gpu("the shadow map was not made".into()));
+        let map = shared.shadow_map.update(inputs, rec)?;
+        let key = Made {
+            revision: inputs.revision,
+            map_size: map.size,
+            map: map.generation,
         };
-        let key = (inputs.revision, map.size, map.generation);
         if self.made_for != Some(key) {
-            let Some(depth) = shared.shadow_map.depth_for_drawing(inputs, rec) else {
-                return Err(RenderError::Gpu("the shadow map was not made".into()));
-            };
+            let depth = shared.shadow_map.depth_for_drawing(inputs, rec)?;
             self.volumes.record(
                 inputs.ctx,
                 rec,
@@ -259,62 +248,46 @@ impl MethodState for DBuffer {
             self.made_for = Some(key);
             self.view_proj = inputs.light_view.view_projection();
         }
-        let Some(map) = shared.shadow_map.targets() else {
-            return Err(RenderError::Gpu("the shadow map was not made".into()));
-        };
+        let map = shared.shadow_map.made()?;
         let uniforms = ShadowUniforms::new(inputs.light_view, map.size, [0.0; 4]);
         inputs
             .ctx
             .queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-        let Some(v) = self.volumes.targets() else {
-            return Err(RenderError::Gpu(
-                "the D-buffer's targets were not made".into(),
-            ));
+        let v = require(
+            self.volumes.targets(),
+            "the D-buffer's targets were not made",
+        )?;
+        let bound = Bound {
+            map: map.generation,
+            volumes: v.generation,
         };
-        let generations = (map.generation, v.generation);
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, g)| *g != generations)
-        {
-            let group = inputs
-                .ctx
-                .device
-                .create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("DBuffer::bind_group"),
-                    layout: &self.pipeline.layout,
-                    entries: &[
-                        buffer_entry(0, &self.uniforms),
-                        view_entry(1, &map.distance.view),
-                        view_entry(2, &v.umbra.view),
-                        view_entry(3, &v.penumbra.view),
-                    ],
-                });
-            self.bind_group = Some((group, generations));
-        }
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        self.camera.bind(
+            &inputs.ctx.device,
+            bound,
+            &[
+                buffer_entry(0, &self.uniforms),
+                view_entry(1, &map.distance.view),
+                view_entry(2, &v.umbra.view),
+                view_entry(3, &v.penumbra.view),
+            ],
+        );
+        Ok(&self.camera)
     }
 
     fn light_maps<'a>(&'a self, shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
         self.made_for?;
         let map = shared.shadow_map.targets()?;
         let v = self.volumes.targets()?;
-        Some(LightMaps {
-            size: v.size,
-            view_proj: self.view_proj,
-            textures: [&map.distance.view, &v.umbra.view, &v.penumbra.view],
-            raw: [&map.distance.texture, &v.umbra.texture, &v.penumbra.texture],
-            channels: CHANNELS,
-            generation: map.generation ^ v.generation.rotate_left(32),
-        })
+        let generation = map.generation ^ v.generation.rotate_left(32);
+        let textures = [&map.distance, &v.umbra, &v.penumbra];
+        Some(LightMaps::new(
+            v.size,
+            self.view_proj,
+            textures,
+            CHANNELS,
+            generation,
+        ))
     }
 
     fn geometry(&self) -> Option<&SceneGeometry> {

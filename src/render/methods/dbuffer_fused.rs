@@ -20,25 +20,23 @@
 //! the adapter's storage bindings hold).
 
 use crate::scene::LightKind;
-use std::sync::Arc;
 use std::time::Instant;
 
 use super::dbuffer::DBuffer;
 use super::{
-    Bench, CameraBindings, Channel, Empty, FrameInputs, Knob, LightMaps, MethodPipeline,
-    MethodSpec, MethodState, SharedMaps,
+    require, CameraGroup, Channel, Empty, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
+    Prepare, SharedMaps,
 };
 use crate::budget::{bytes, MAX_FUSED_EDGES, MAX_FUSED_LIST_BYTES};
 use crate::geometry::fused::{
     candidate_edges, proxy_hull, DiskMask, FusedEdge, MaskEval, DEFAULT_CAP, DEFAULT_SAMPLES,
 };
-use crate::geometry::{SceneGeometry, VtVariant};
+use crate::geometry::SceneGeometry;
 use crate::render::passes::fused_layers::{FusedLayers, FusedSizes, FusedUniforms};
 use crate::render::passes::fused_lists::{
     list_bytes, EdgeBuffers, FusedLists, EDGE_BYTES, HULL_BYTES, HULL_CORNERS,
 };
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
-use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
 };
@@ -67,20 +65,13 @@ pub static MASK_SAMPLES: Knob = Knob::int(
     DEFAULT_SAMPLES as u32,
 );
 
-pub static DBUFFER_FUSED: MethodSpec = MethodSpec {
-    name: "dbuffer-fused",
-    description: "D-buffer with every silhouette chord (occluder fusion)",
-    shader: SHADER,
-    knobs: &[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Disk), // its chords cut the disk
-    adapter: super::needs::DBUFFER_FUSED,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(DBufferFused::new(ctx)),
-};
+pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, |ctx| {
+    Box::new(DBufferFused::new(ctx))
+})
+.adapter(super::needs::DBUFFER_FUSED)
+.about("D-buffer with every silhouette chord (occluder fusion)")
+.knobs(&[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES])
+.lights(LightKind::Disk); // its chords cut the disk
 
 const SHADER: &str = "methods/dbuffer_fused.wgsl";
 
@@ -136,7 +127,8 @@ struct Edges {
 
 pub struct DBufferFused {
     paper: DBuffer,
-    pipeline: Arc<MethodPipeline>,
+    /// Bound for the generations of what it reads ([`Bound`]).
+    camera: CameraGroup,
     shadow_uniforms: wgpu::Buffer,
     uniforms: wgpu::Buffer,
     layers: FusedLayers,
@@ -145,10 +137,31 @@ pub struct DBufferFused {
     /// The look-up tables and the sample count they were made for.
     lut: Option<(wgpu::Buffer, u32)>,
     geometry_ms: f64,
-    /// What the light passes hold: revision, D-buffer size, list size, cap, edges generation.
-    made_for: Option<(u64, u32, u32, u32, u64)>,
+    /// What the light passes hold.
+    made_for: Option<Made>,
     view_proj: glam::Mat4,
-    bind_group: Option<(wgpu::BindGroup, [u64; 5])>,
+}
+
+/// What the light passes were recorded for.
+#[derive(Clone, Copy, PartialEq)]
+struct Made {
+    revision: u64,
+    map_size: u32,
+    list_size: u32,
+    cap: u32,
+    /// The candidate edges' generation.
+    edges: u64,
+}
+
+/// What the camera bind group binds: the generations of the shadow map, the paper's volume
+/// channels, the lists and the edges, and the sample count of the look-up tables.
+#[derive(PartialEq)]
+struct Bound {
+    map: u64,
+    paper: u64,
+    lists: u64,
+    edges: u64,
+    samples: u32,
 }
 
 impl DBufferFused {
@@ -179,7 +192,7 @@ impl DBufferFused {
         let uniforms = uniform_buffer::<FusedUniforms>(&ctx.device, "DBufferFused::uniforms");
         DBufferFused {
             paper: DBuffer::new(ctx, false),
-            pipeline: MethodPipeline::get(ctx, SHADER, &entries),
+            camera: CameraGroup::new(ctx, SHADER, &entries),
             shadow_uniforms: uniform_buffer::<ShadowUniforms>(
                 &ctx.device,
                 "DBufferFused::shadow_uniforms",
@@ -192,7 +205,6 @@ impl DBufferFused {
             geometry_ms: 0.0,
             made_for: None,
             view_proj: glam::Mat4::IDENTITY,
-            bind_group: None,
         }
     }
 
@@ -285,12 +297,8 @@ fn update_edges(
 }
 
 impl MethodState for DBufferFused {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, shared, rec) = p;
         let list_size = inputs.knobs.get(&LIST_SIZE);
         let cap = inputs.knobs.get(&LIST_CAP);
         let samples = inputs.knobs.get(&MASK_SAMPLES).clamp(1, 128);
@@ -308,20 +316,16 @@ impl MethodState for DBufferFused {
             )));
         }
         // The paper's D-buffer: |cx_o| and the fallback, and the geometry (face classes).
-        self.paper.prepare(inputs, shared, rec)?;
-        let Some(geometry) = self.paper.geometry() else {
-            return Err(RenderError::Gpu(
-                "the D-buffer's geometry was not made".into(),
-            ));
-        };
+        self.paper
+            .prepare(Prepare(inputs, &mut *shared, &mut *rec))?;
+        let geometry = require(
+            self.paper.geometry(),
+            "the D-buffer's geometry was not made",
+        )?;
         if let Some(ms) = update_edges(&mut self.edges, inputs, geometry, list_size, max_binding) {
             self.geometry_ms = ms;
         }
-        let Some(edges) = self.edges.as_ref() else {
-            return Err(RenderError::Gpu(
-                "dbuffer-fused's edges were not made".into(),
-            ));
-        };
+        let edges = require(self.edges.as_ref(), "dbuffer-fused's edges were not made")?;
         if self.lut.as_ref().is_none_or(|(_, s)| *s != samples) {
             use wgpu::util::DeviceExt;
             let words = DiskMask::new(samples as usize, MaskEval::Lut).lut_words();
@@ -331,7 +335,6 @@ impl MethodState for DBufferFused {
                 usage: wgpu::BufferUsages::STORAGE,
             });
             self.lut = Some((buffer, samples));
-            self.bind_group = None;
         }
         let uniforms = FusedUniforms::new(
             &inputs.scene.light.disk_or_centre(),
@@ -350,29 +353,26 @@ impl MethodState for DBufferFused {
             .ctx
             .queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-        let key = (
-            inputs.revision,
-            inputs.map_size,
+        let key = Made {
+            revision: inputs.revision,
+            map_size: inputs.map_size,
             list_size,
             cap,
-            edges.buffers.generation,
-        );
+            edges: edges.buffers.generation,
+        };
         if self.made_for != Some(key) {
             self.layers
                 .record(inputs.ctx, rec, inputs.surfaces, inputs.map_size, list_size);
-            let Some(layers) = self.layers.targets() else {
-                return Err(RenderError::Gpu(
-                    "dbuffer-fused's layers were not made".into(),
-                ));
-            };
+            let layers = require(
+                self.layers.targets(),
+                "dbuffer-fused's layers were not made",
+            )?;
             self.lists
                 .record(inputs.ctx, rec, layers, &edges.buffers, cap);
             self.made_for = Some(key);
             self.view_proj = inputs.light_view.view_projection();
         }
-        let Some(map) = shared.shadow_map.targets() else {
-            return Err(RenderError::Gpu("the shadow map was not made".into()));
-        };
+        let map = shared.shadow_map.made()?;
         let shadow = ShadowUniforms::new(inputs.light_view, map.size, [0.0; 4]);
         inputs
             .ctx
@@ -387,62 +387,45 @@ impl MethodState for DBufferFused {
                 "dbuffer-fused's maps were not made".into(),
             ));
         };
-        let generations = [
-            map.generation,
-            paper.generation,
-            lists.generation,
-            edges.buffers.generation,
-            u64::from(samples),
-        ];
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, g)| *g != generations)
-        {
-            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("DBufferFused::bind_group"),
-                layout: &self.pipeline.layout,
-                entries: &[
-                    buffer_entry(0, &self.shadow_uniforms),
-                    view_entry(1, &map.distance.view),
-                    view_entry(2, paper.textures[1]),
-                    view_entry(3, paper.textures[2]),
-                    view_entry(4, &lists.maps.view),
-                    buffer_entry(5, &self.uniforms),
-                    buffer_entry(6, &edges.buffers.edges),
-                    buffer_entry(7, &lists.counts),
-                    buffer_entry(8, &lists.lists),
-                    buffer_entry(9, lut),
-                ],
-            });
-            self.bind_group = Some((group, generations));
-        }
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        let bound = Bound {
+            map: map.generation,
+            paper: paper.generation,
+            lists: lists.generation,
+            edges: edges.buffers.generation,
+            samples,
+        };
+        self.camera.bind(
+            device,
+            bound,
+            &[
+                buffer_entry(0, &self.shadow_uniforms),
+                view_entry(1, &map.distance.view),
+                view_entry(2, paper.textures[1]),
+                view_entry(3, paper.textures[2]),
+                view_entry(4, &lists.maps.view),
+                buffer_entry(5, &self.uniforms),
+                buffer_entry(6, &edges.buffers.edges),
+                buffer_entry(7, &lists.counts),
+                buffer_entry(8, &lists.lists),
+                buffer_entry(9, lut),
+            ],
+        );
+        Ok(&self.camera)
     }
 
     fn light_maps<'a>(&'a self, shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
         self.made_for?;
         let map = shared.shadow_map.targets()?;
         let lists = self.lists.targets()?;
-        Some(LightMaps {
-            size: lists.map_size,
-            view_proj: self.view_proj,
-            textures: [&map.distance.view, &lists.maps.view, &lists.maps.view],
-            raw: [
-                &map.distance.texture,
-                &lists.maps.texture,
-                &lists.maps.texture,
-            ],
-            channels: CHANNELS,
-            generation: map.generation ^ lists.generation.rotate_left(32),
-        })
+        let generation = map.generation ^ lists.generation.rotate_left(32);
+        let textures = [&map.distance, &lists.maps, &lists.maps];
+        Some(LightMaps::new(
+            lists.map_size,
+            self.view_proj,
+            textures,
+            CHANNELS,
+            generation,
+        ))
     }
 
     fn geometry(&self) -> Option<&SceneGeometry> {

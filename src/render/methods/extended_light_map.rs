@@ -12,19 +12,15 @@
 //! light sees (blocky under magnification, wrong beside silhouettes where a texel belongs to
 //! another surface).
 
-use std::sync::Arc;
-
 use glam::{Mat4, Vec3, Vec4};
 
 use super::{
-    Bench, CameraBindings, Channel, Choice, Empty, FrameInputs, Knob, Knobs, LightMaps,
-    MethodPipeline, MethodSpec, MethodState, SharedMaps,
+    require, CameraGroup, Channel, Choice, Empty, FrameInputs, Knob, Knobs, LightMaps, MethodSpec,
+    MethodState, Prepare, SharedMaps,
 };
 use crate::geometry::light_view::LightView;
-use crate::geometry::VtVariant;
 use crate::render::passes::extended_light_map::{ElmParams, ExtendedLightMap, Pattern};
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
-use crate::render::timer::Recorder;
 use crate::render::{buffer_entry, uniform_buffer, view_entry, GpuContext, RenderError};
 
 /// Bits of the distance in the alpha channel.
@@ -45,20 +41,14 @@ pub static PATTERN: Choice = Choice::new(
     0,
 );
 
-pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec {
-    name: "extended-light-map",
-    description: "extended light map (Brabec et al. 2000): light colour in RGB, distance in A",
-    shader: SHADER,
-    knobs: &[&DEPTH_BITS, &PATTERN.0],
-    cpu_side: false,
-    hard: true,
-    lights: None,
-    adapter: super::needs::EXTENDED_LIGHT_MAP,
-    bench: Bench::DEFAULTS,
-    overlay_note: Some("extended-light-map: its channels are in the View panel"),
-    line_samples: None,
-    new: |ctx| Box::new(ElmMethod::new(ctx)),
-};
+pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec::new("extended-light-map", SHADER, |ctx| {
+    Box::new(ElmMethod::new(ctx))
+})
+.adapter(super::needs::EXTENDED_LIGHT_MAP)
+.about("extended light map (Brabec et al. 2000): light colour in RGB, distance in A")
+.knobs(&[&DEPTH_BITS, &PATTERN.0])
+.hard()
+.overlay_note("extended-light-map: its channels are in the View panel");
 
 const SHADER: &str = "methods/extended_light_map.wgsl";
 
@@ -177,34 +167,28 @@ struct Made {
 
 pub struct ElmMethod {
     elm: ExtendedLightMap,
-    pipeline: Arc<MethodPipeline>,
+    /// Bound for the map's generation.
+    camera: CameraGroup,
     uniforms: wgpu::Buffer,
     made: Option<Made>,
     view_proj: Mat4,
-    /// The bind group and the map generation it binds.
-    bind_group: Option<(wgpu::BindGroup, u64)>,
 }
 
 impl ElmMethod {
     pub fn new(ctx: &GpuContext) -> ElmMethod {
         ElmMethod {
             elm: ExtendedLightMap::new(ctx),
-            pipeline: MethodPipeline::get(ctx, SHADER, &lookup_entries()),
+            camera: CameraGroup::new(ctx, SHADER, &lookup_entries()),
             uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "ElmMethod::uniforms"),
             made: None,
             view_proj: Mat4::IDENTITY,
-            bind_group: None,
         }
     }
 }
 
 impl MethodState for ElmMethod {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        _shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, _, rec) = p;
         let ctx = inputs.ctx;
         let params = elm_params(inputs);
         let made = Made {
@@ -218,11 +202,7 @@ impl MethodState for ElmMethod {
             self.view_proj = params.view_proj;
             self.made = Some(made);
         }
-        let Some(map) = self.elm.targets() else {
-            return Err(RenderError::Gpu(
-                "the extended light map was not made".into(),
-            ));
-        };
+        let map = require(self.elm.targets(), "the extended light map was not made")?;
         let uniforms = ShadowUniforms::new(
             inputs.light_view,
             map.size,
@@ -230,41 +210,24 @@ impl MethodState for ElmMethod {
         );
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, g)| *g != map.generation)
-        {
-            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("ElmMethod::bind_group"),
-                layout: &self.pipeline.layout,
-                entries: &[
-                    buffer_entry(0, &self.uniforms),
-                    view_entry(1, &map.map.view),
-                ],
-            });
-            self.bind_group = Some((group, map.generation));
-        }
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        let entries = [
+            buffer_entry(0, &self.uniforms),
+            view_entry(1, &map.map.view),
+        ];
+        self.camera.bind(&ctx.device, map.generation, &entries);
+        Ok(&self.camera)
     }
 
     fn light_maps<'a>(&'a self, _shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
         let t = self.elm.targets().filter(|_| self.made.is_some())?;
-        Some(LightMaps {
-            size: t.size,
-            view_proj: self.view_proj,
-            textures: [&t.map.view, &t.map.view, &t.map.view],
-            raw: [&t.map.texture, &t.map.texture, &t.map.texture],
-            channels: CHANNELS,
-            generation: t.generation,
-        })
+        let textures = [&t.map, &t.map, &t.map];
+        Some(LightMaps::new(
+            t.size,
+            self.view_proj,
+            textures,
+            CHANNELS,
+            t.generation,
+        ))
     }
 
     fn invalidate(&mut self) {

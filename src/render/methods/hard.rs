@@ -2,22 +2,14 @@
 //! slope-scaled bias (`shaders/methods/hard.wgsl`).
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{Bench, MethodSpec};
+use super::MethodSpec;
 
-pub static HARD: MethodSpec = MethodSpec {
-    name: "hard",
-    description: "hard shadow map from the light centre",
-    shader: SHADER,
-    knobs: &[],
-    cpu_side: false,
-    hard: true,
-    lights: None,
-    adapter: super::needs::SHADOW_MAPPED,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
-};
+pub static HARD: MethodSpec = MethodSpec::new("hard", SHADER, |ctx| {
+    Box::new(OnShadowMap::new(ctx, &FLAVOR))
+})
+.adapter(super::needs::SHADOW_MAPPED)
+.about("hard shadow map from the light centre")
+.hard();
 
 const SHADER: &str = "methods/hard.wgsl";
 

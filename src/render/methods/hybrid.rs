@@ -12,19 +12,15 @@
 //! leaks). The reconstructed edges (the walls' tops) are the lab's overlay: this method's
 //! [`MethodState::geometry`] holds them as silhouette edges, a frame after the walls were made.
 
-use std::sync::Arc;
-
-use super::shadow_volume::screen_v_entries;
 use super::{
-    Bench, CameraBindings, FrameInputs, Knobs, MethodPipeline, MethodSpec, MethodState, Scaled,
+    require, v_texture_entries, CameraGroup, Knobs, MethodSpec, MethodState, Prepare, Scaled,
     SharedMaps, Switch,
 };
 use crate::geometry::hybrid::WallParams;
 use crate::geometry::silhouette::SilhouetteEdge;
-use crate::geometry::{CasterGeometry, GeometryStats, SceneGeometry, VolumeParams, VtVariant};
+use crate::geometry::{CasterGeometry, GeometryStats, SceneGeometry, VolumeParams};
 use crate::render::passes::hybrid::{Hybrid, HybridFrame, HybridUniforms};
 use crate::render::passes::stencil_volumes::ScreenPass;
-use crate::render::timer::Recorder;
 use crate::render::{view_entry, GpuContext, RenderError};
 
 /// τ in thousandths.
@@ -53,20 +49,13 @@ pub static EDGES: Switch = Switch::new(
     true,
 );
 
-pub static HYBRID: MethodSpec = MethodSpec {
-    name: "hybrid",
-    description: "shadow volumes rebuilt from the light's depth map (McCool 2000), one stencil bit",
-    shader: SHADER,
-    knobs: &[&THRESHOLD.0, &TEMPLATES.0, &EDGES.0],
-    cpu_side: false,
-    hard: true,
-    lights: None,
-    adapter: super::needs::HYBRID,
-    bench: Bench::DEFAULTS,
-    overlay_note: Some("hybrid: silhouette edges = rebuilt from the depth map"),
-    line_samples: None,
-    new: |ctx| Box::new(HybridMethod::new(ctx)),
-};
+pub static HYBRID: MethodSpec =
+    MethodSpec::new("hybrid", SHADER, |ctx| Box::new(HybridMethod::new(ctx)))
+        .adapter(super::needs::HYBRID)
+        .about("shadow volumes rebuilt from the light's depth map (McCool 2000), one stencil bit")
+        .knobs(&[&THRESHOLD.0, &TEMPLATES.0, &EDGES.0])
+        .hard()
+        .overlay_note("hybrid: silhouette edges = rebuilt from the depth map");
 
 const SHADER: &str = "methods/hybrid.wgsl";
 
@@ -94,9 +83,9 @@ struct Made {
 pub struct HybridMethod {
     screen: ScreenPass,
     hybrid: Hybrid,
-    pipeline: Arc<MethodPipeline>,
+    /// Bound for the generation of the screen targets.
+    camera: CameraGroup,
     made: Option<Made>,
-    bind_group: Option<(wgpu::BindGroup, u64)>,
     geometry: Option<SceneGeometry>,
 }
 
@@ -107,9 +96,8 @@ impl HybridMethod {
         HybridMethod {
             screen,
             hybrid,
-            pipeline: MethodPipeline::get(ctx, SHADER, &screen_v_entries()),
+            camera: CameraGroup::new(ctx, SHADER, &v_texture_entries()),
             made: None,
-            bind_group: None,
             geometry: None,
         }
     }
@@ -159,18 +147,11 @@ impl HybridMethod {
 }
 
 impl MethodState for HybridMethod {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, shared, rec) = p;
         let ctx = inputs.ctx;
         let _ = self.take_walls();
-        shared.shadow_map.update(inputs, rec);
-        let Some(map) = shared.shadow_map.targets() else {
-            return Err(RenderError::Gpu("the shadow map was not made".into()));
-        };
+        let map = shared.shadow_map.update(inputs, rec)?;
         let params = wall_params(inputs.knobs, VolumeParams::for_scene(inputs.scene).far);
         let frame = HybridFrame {
             light_view_proj: inputs.light_view.view_projection(),
@@ -201,32 +182,13 @@ impl MethodState for HybridMethod {
             self.made = Some(made);
         }
         self.screen.begin(ctx, &inputs.view);
-        let Some(targets) = self.screen.targets() else {
-            return Err(RenderError::Gpu("the screen targets were not made".into()));
-        };
+        let targets = require(self.screen.targets(), "the screen targets were not made")?;
         self.screen.record_prepass(rec, inputs.surfaces);
         self.hybrid.record_walls(rec, targets);
         self.hybrid.record_resolve(rec, targets);
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, g)| *g != targets.generation)
-        {
-            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("HybridMethod::bind_group"),
-                layout: &self.pipeline.layout,
-                entries: &[view_entry(0, &targets.visibility.view)],
-            });
-            self.bind_group = Some((group, targets.generation));
-        }
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        let entries = [view_entry(0, &targets.visibility.view)];
+        self.camera.bind(&ctx.device, targets.generation, &entries);
+        Ok(&self.camera)
     }
 
     fn light_maps<'a>(&'a self, shared: &'a SharedMaps) -> Option<super::LightMaps<'a>> {

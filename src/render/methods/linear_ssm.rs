@@ -14,18 +14,12 @@
 //! (`line-fig8-overlap`), and the transition is linear in the image where the truth is rational
 //! (`line-fig3-tilted`).
 
-use std::sync::Arc;
-
 use glam::{Mat4, Vec3};
 
-use super::{
-    Bench, CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec, MethodState, SharedMaps,
-};
-use crate::geometry::VtVariant;
+use super::{require, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
 use crate::render::passes::sample_maps::{lights_at, SampleMaps};
 use crate::render::passes::shadow_map::{BIAS_CONSTANT, BIAS_SLOPE};
 use crate::render::passes::ssm::{Ssm, SsmSample, MAX_SSM_SAMPLES};
-use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, texture_entry, uniform_entry, view_entry, GpuContext, RenderError,
 };
@@ -39,25 +33,18 @@ pub static SAMPLES: Knob = Knob::int(
     2,
 );
 
-pub static LINEAR_SSM: MethodSpec = MethodSpec {
-    name: "linear-ssm",
-    description: "soft shadow maps for a linear light (Heidrich et al. 2000)",
-    shader: SHADER,
-    knobs: &[&SAMPLES],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Line), // Heidrich et al.'s maps along a segment
-    adapter: super::needs::LINEAR_SSM,
-    bench: Bench {
-        label: Some("linear-ssm 2"),
-        knobs: &[(&SAMPLES, 2)],
-    },
-    overlay_note: None,
-    line_samples: Some(|line, knobs| sample_points(line, knobs.get(&SAMPLES))),
-    new: |ctx| Box::new(LinearSsm::new(ctx)),
-};
+pub static LINEAR_SSM: MethodSpec =
+    MethodSpec::new("linear-ssm", SHADER, |ctx| Box::new(LinearSsm::new(ctx)))
+        .adapter(super::needs::LINEAR_SSM)
+        .about("soft shadow maps for a linear light (Heidrich et al. 2000)")
+        .knobs(&[&SAMPLES])
+        .lights(LightKind::Line) // Heidrich et al.'s maps along a segment
+        .bench("linear-ssm 2", &[(&SAMPLES, 2)])
+        .line_samples(|line, knobs| sample_points(line, knobs.get(&SAMPLES)));
 
 const SHADER: &str = "methods/linear_ssm.wgsl";
+
+const NOT_MADE: &str = "the linear-ssm maps were not made";
 
 /// The `n` samples: `a + k/(n − 1) · (b − a)`, `k = 0 … n − 1` (both ends, evenly spaced).
 pub fn sample_points(line: &LineLight, n: u32) -> Vec<Vec3> {
@@ -66,13 +53,27 @@ pub fn sample_points(line: &LineLight, n: u32) -> Vec<Vec3> {
 }
 
 pub struct LinearSsm {
-    pipeline: Arc<MethodPipeline>,
+    /// Bound for the generations of the maps and the channels ([`Bound`]).
+    camera: CameraGroup,
     maps: SampleMaps,
     ssm: Ssm,
-    /// The revision, size and sample count the maps and channels hold.
-    made_for: Option<(u64, u32, u32)>,
-    /// The bind group and the generations (maps, channels) it binds.
-    bind_group: Option<(wgpu::BindGroup, u64, u64)>,
+    /// What the maps and channels hold.
+    made_for: Option<Made>,
+}
+
+/// What the maps and channels were made for.
+#[derive(Clone, Copy, PartialEq)]
+struct Made {
+    revision: u64,
+    map_size: u32,
+    samples: u32,
+}
+
+/// What the camera bind group binds: the maps' and the channels' generations.
+#[derive(PartialEq)]
+struct Bound {
+    maps: u64,
+    channels: u64,
 }
 
 impl LinearSsm {
@@ -84,11 +85,10 @@ impl LinearSsm {
             texture_entry(2, wgpu::ShaderStages::FRAGMENT, array()),
         ];
         LinearSsm {
-            pipeline: MethodPipeline::get(ctx, SHADER, &entries),
+            camera: CameraGroup::new(ctx, SHADER, &entries),
             maps: SampleMaps::new(ctx),
             ssm: Ssm::new(ctx),
             made_for: None,
-            bind_group: None,
         }
     }
 
@@ -99,12 +99,8 @@ impl LinearSsm {
 }
 
 impl MethodState for LinearSsm {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        _shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, _, rec) = p;
         let Some(line) = inputs.scene.light.as_line() else {
             return Err(RenderError::Request(format!(
                 "method '{}' needs a line light, and this scene's light is a disk",
@@ -112,7 +108,11 @@ impl MethodState for LinearSsm {
             )));
         };
         let n = inputs.knobs.get(&SAMPLES).clamp(2, MAX_SSM_SAMPLES);
-        let key = (inputs.revision, inputs.map_size, n);
+        let key = Made {
+            revision: inputs.revision,
+            map_size: inputs.map_size,
+            samples: n,
+        };
         if self.made_for != Some(key) {
             let view = inputs.light_view;
             let points = sample_points(line, n);
@@ -124,9 +124,7 @@ impl MethodState for LinearSsm {
                 (BIAS_CONSTANT, BIAS_SLOPE),
             );
             self.maps.record(inputs.ctx, rec, inputs.surfaces, &lights);
-            let Some(maps) = self.maps.targets() else {
-                return Err(RenderError::Gpu("the linear-ssm maps were not made".into()));
-            };
+            let maps = require(self.maps.targets(), NOT_MADE)?;
             let samples: Vec<SsmSample> = lights.lights[..n as usize]
                 .iter()
                 .enumerate()
@@ -149,36 +147,22 @@ impl MethodState for LinearSsm {
             )?;
             self.made_for = Some(key);
         }
-        let (Some(maps), Some(channels)) = (self.maps.targets(), self.ssm.targets()) else {
-            return Err(RenderError::Gpu("the linear-ssm maps were not made".into()));
+        let maps = require(self.maps.targets(), NOT_MADE)?;
+        let channels = require(self.ssm.targets(), NOT_MADE)?;
+        let bound = Bound {
+            maps: maps.generation,
+            channels: channels.generation,
         };
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, m, c)| (*m, *c) != (maps.generation, channels.generation))
-        {
-            let group = inputs
-                .ctx
-                .device
-                .create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("LinearSsm::bind_group"),
-                    layout: &self.pipeline.layout,
-                    entries: &[
-                        buffer_entry(0, &self.maps.uniforms),
-                        view_entry(1, &maps.array_view),
-                        view_entry(2, &channels.array_view),
-                    ],
-                });
-            self.bind_group = Some((group, maps.generation, channels.generation));
-        }
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        self.camera.bind(
+            &inputs.ctx.device,
+            bound,
+            &[
+                buffer_entry(0, &self.maps.uniforms),
+                view_entry(1, &maps.array_view),
+                view_entry(2, &channels.array_view),
+            ],
+        );
+        Ok(&self.camera)
     }
 
     fn invalidate(&mut self) {

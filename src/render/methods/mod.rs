@@ -8,8 +8,9 @@
 //!
 //! A method's per-scene GPU state is a [`MethodState`]: it brings its light-space products
 //! (D-buffer, shadow maps) up to date only when the light or a caster moved, and hands the
-//! camera pass its pipeline and bind group. What every method shares — the surfaces, shading,
-//! V(t), the targets — is the camera pass's ([`super::passes::camera`]).
+//! camera pass its pipeline and bind group, a [`CameraGroup`] (made again only when what it
+//! binds was). What every method shares — the surfaces, shading, V(t), the targets — is the
+//! camera pass's ([`super::passes::camera`]).
 
 pub mod dbuffer;
 pub mod dbuffer_fused;
@@ -31,6 +32,7 @@ mod knobs;
 pub mod needs;
 pub use knobs::{all_knobs, Choice, Knob, KnobKind, KnobType, Knobs, Scaled, Switch, MAX_KNOBS};
 
+use std::any::Any;
 use std::cell::OnceCell;
 use std::fmt;
 use std::str::FromStr;
@@ -98,6 +100,90 @@ pub struct MethodSpec {
     pub line_samples: Option<fn(&LineLight, &Knobs) -> Vec<Vec3>>,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
+}
+
+impl MethodSpec {
+    /// The method `name` with its camera `shader` and per-scene state `new`: no knobs, every
+    /// kind of light, a soft shadow computed on the GPU, timed by the bench under its name. The
+    /// calls below say where a method differs, so a spec reads as what is particular to it.
+    pub const fn new(
+        name: &'static str,
+        shader: &'static str,
+        new: fn(&GpuContext) -> Box<dyn MethodState>,
+    ) -> MethodSpec {
+        MethodSpec {
+            name,
+            description: "",
+            shader,
+            knobs: &[],
+            cpu_side: false,
+            hard: false,
+            lights: None,
+            adapter: AdapterNeeds::NONE,
+            bench: Bench::DEFAULTS,
+            overlay_note: None,
+            line_samples: None,
+            new,
+        }
+    }
+
+    /// Its one line for menus and `--help`.
+    pub const fn about(mut self, description: &'static str) -> Self {
+        self.description = description;
+        self
+    }
+
+    pub const fn knobs(mut self, knobs: &'static [&'static Knob]) -> Self {
+        self.knobs = knobs;
+        self
+    }
+
+    /// V comes from the CPU (the ray-cast references).
+    pub const fn cpu_side(mut self) -> Self {
+        self.cpu_side = true;
+        self
+    }
+
+    /// A hard shadow from the light's centre (scored against `reference-hard` too).
+    pub const fn hard(mut self) -> Self {
+        self.hard = true;
+        self
+    }
+
+    /// It takes this kind of light only.
+    pub const fn lights(mut self, kind: LightKind) -> Self {
+        self.lights = Some(kind);
+        self
+    }
+
+    /// What it needs of the adapter beyond the camera pass's (an entry of [`needs`]).
+    pub const fn adapter(mut self, needs: AdapterNeeds) -> Self {
+        self.adapter = needs;
+        self
+    }
+
+    /// The bench times it under `label` with `knobs` set.
+    pub const fn bench(
+        mut self,
+        label: &'static str,
+        knobs: &'static [(&'static Knob, u32)],
+    ) -> Self {
+        self.bench = Bench {
+            label: Some(label),
+            knobs,
+        };
+        self
+    }
+
+    pub const fn overlay_note(mut self, note: &'static str) -> Self {
+        self.overlay_note = Some(note);
+        self
+    }
+
+    pub const fn line_samples(mut self, points: fn(&LineLight, &Knobs) -> Vec<Vec3>) -> Self {
+        self.line_samples = Some(points);
+        self
+    }
 }
 
 /// What a method needs of the adapter beyond what every method needs ([`AdapterNeeds::BASE`],
@@ -460,6 +546,15 @@ impl FrameInputs<'_> {
     }
 }
 
+/// What [`MethodState::prepare`] works with: the frame's inputs, the light-space maps the
+/// session shares between methods, and the frame's encoder (a method takes them apart with
+/// `let Prepare(inputs, shared, rec) = p;`).
+pub struct Prepare<'p, 'r>(
+    pub &'p FrameInputs<'p>,
+    pub &'p mut SharedMaps,
+    pub &'p mut Recorder<'r>,
+);
+
 /// V per pixel handed in from outside, and a number that changes when its texture does.
 #[derive(Clone, Copy)]
 pub struct External<'a> {
@@ -480,6 +575,27 @@ pub struct LightMaps<'a> {
     pub channels: &'static [Channel],
     /// Changes whenever the textures are made again (whoever binds them binds again).
     pub generation: u64,
+}
+
+impl<'a> LightMaps<'a> {
+    /// The maps of `textures` (a slot may repeat another), `size`² texels seen through
+    /// `view_proj`.
+    pub fn new(
+        size: u32,
+        view_proj: Mat4,
+        textures: [&'a super::Texture; 3],
+        channels: &'static [Channel],
+        generation: u64,
+    ) -> LightMaps<'a> {
+        LightMaps {
+            size,
+            view_proj,
+            textures: textures.map(|t| &t.view),
+            raw: textures.map(|t| &t.texture),
+            channels,
+            generation,
+        }
+    }
 }
 
 /// One channel of [`LightMaps`].
@@ -574,6 +690,78 @@ pub struct CameraBindings<'a> {
     pub bind_group: &'a wgpu::BindGroup,
 }
 
+/// What every method's camera pass is made of: its pipelines ([`MethodPipeline`], shared by
+/// the device) and its bind group (group 1), made again only when what it binds was made again.
+///
+/// [`CameraGroup::bind`] takes the entries and a key that says what they are made of — the
+/// generation of each texture or buffer bound that can be replaced, as a named struct where
+/// there are several (a bind group made from a comparable description, as rerun's
+/// `BindGroupDesc`). A key equal to the last one keeps the group: no bind group per frame, and
+/// none that binds a texture since replaced.
+pub struct CameraGroup {
+    pipeline: Arc<MethodPipeline>,
+    /// The group and the key it was made for.
+    bound: Option<(wgpu::BindGroup, Box<dyn Any + Send>)>,
+}
+
+impl CameraGroup {
+    /// The camera pipelines of `shader` (`methods/NAME.wgsl`) whose group 1 has `layout`.
+    pub fn new(
+        ctx: &GpuContext,
+        shader: &'static str,
+        layout: &[wgpu::BindGroupLayoutEntry],
+    ) -> CameraGroup {
+        CameraGroup {
+            pipeline: MethodPipeline::get(ctx, shader, layout),
+            bound: None,
+        }
+    }
+
+    /// Make the bind group of `entries` unless the one held was made for `key`.
+    pub fn bind<K: PartialEq + Send + 'static>(
+        &mut self,
+        device: &wgpu::Device,
+        key: K,
+        entries: &[wgpu::BindGroupEntry<'_>],
+    ) {
+        let current = self.bound.as_ref().and_then(|(_, k)| k.downcast_ref::<K>());
+        if current == Some(&key) {
+            return;
+        }
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.pipeline.shader),
+            layout: &self.pipeline.layout,
+            entries,
+        });
+        self.bound = Some((group, Box::new(key)));
+    }
+
+    /// The pipeline for V(t) variant `vt` and the group; `None` before the first
+    /// [`CameraGroup::bind`] (a method returns its group from [`MethodState::prepare`] once it
+    /// has bound it).
+    pub fn bindings(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
+        self.bound.as_ref().map(|(group, _)| CameraBindings {
+            pipeline: self.pipeline.pipeline(device, vt),
+            bind_group: group,
+        })
+    }
+}
+
+/// Group 1 of a method whose V per pixel is a texture: the screen passes' visibility
+/// (`shaders/shared/screen_v.wgsl`) or the reference's V handed in (`methods/reference.wgsl`).
+pub fn v_texture_entries() -> [wgpu::BindGroupLayoutEntry; 1] {
+    [super::texture_entry(
+        0,
+        wgpu::ShaderStages::FRAGMENT,
+        wgpu::TextureViewDimension::D2,
+    )]
+}
+
+/// `value`, or the GPU error `missing` (a pass that should have made it did not).
+pub fn require<T>(value: Option<T>, missing: &str) -> Result<T, RenderError> {
+    value.ok_or_else(|| RenderError::Gpu(missing.into()))
+}
+
 /// The session's light-space products several methods share (the centre shadow map of `hard`,
 /// `pcf`, `pcss` and the D-buffer's `|cx_o|`), each made once per revision.
 pub struct SharedMaps {
@@ -583,17 +771,9 @@ pub struct SharedMaps {
 /// A method's GPU state for one scene.
 pub trait MethodState: Send {
     /// Bring the light-space products up to date for `inputs`, recording the passes that make
-    /// them only when they are stale, and write this frame's uniforms.
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError>;
-
-    /// Its camera pipeline for V(t) variant `vt` and its bind group; `None` before the first
-    /// [`MethodState::prepare`].
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>>;
+    /// them only when they are stale, and write this frame's uniforms; what the camera pass
+    /// draws the frame with (its [`CameraGroup`], bound for this frame).
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError>;
 
     /// Its light-space maps, if it has any.
     fn light_maps<'a>(&'a self, _shared: &'a SharedMaps) -> Option<LightMaps<'a>> {

@@ -96,5 +96,5 @@ pub const WEDGES: AdapterNeeds = AdapterNeeds::formats(&[
     },
 ]);
 
-/// `reference`, `reference-hard`: V from the CPU, drawn by the camera pass alone.
-pub const CAMERA_ONLY: AdapterNeeds = AdapterNeeds::NONE;
+// `reference` and `reference-hard` draw V from the CPU with the camera pass alone: they need
+// only `AdapterNeeds::BASE`, and state nothing.

@@ -3,12 +3,8 @@
 //! method has its own camera shader, the map's `ShadowUniforms` with its knobs, and maybe one
 //! uniform buffer of its own (binding 2).
 
-use std::sync::Arc;
-
-use super::{CameraBindings, FrameInputs, LightMaps, MethodPipeline, MethodState, SharedMaps};
-use crate::geometry::VtVariant;
+use super::{CameraGroup, FrameInputs, LightMaps, MethodState, Prepare, SharedMaps};
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
-use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
 };
@@ -28,11 +24,10 @@ pub struct Flavor {
 
 pub struct OnShadowMap {
     flavor: &'static Flavor,
-    pipeline: Arc<MethodPipeline>,
+    /// Bound for the shadow map's generation.
+    camera: CameraGroup,
     uniforms: wgpu::Buffer,
     extra: Option<wgpu::Buffer>,
-    /// The bind group and the shadow map generation it binds.
-    bind_group: Option<(wgpu::BindGroup, u64)>,
 }
 
 impl OnShadowMap {
@@ -41,7 +36,7 @@ impl OnShadowMap {
         if flavor.extra.is_some() {
             entries.push(uniform_entry(2, wgpu::ShaderStages::FRAGMENT));
         }
-        let pipeline = MethodPipeline::get(ctx, flavor.shader, &entries);
+        let camera = CameraGroup::new(ctx, flavor.shader, &entries);
         let extra = flavor.extra.map(|(size, contents)| {
             let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("OnShadowMap::extra"),
@@ -54,61 +49,33 @@ impl OnShadowMap {
         });
         OnShadowMap {
             flavor,
-            pipeline,
+            camera,
             uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "OnShadowMap::uniforms"),
             extra,
-            bind_group: None,
         }
     }
 }
 
 impl MethodState for OnShadowMap {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
-        shared.shadow_map.update(inputs, rec);
-        let Some(map) = shared.shadow_map.targets() else {
-            return Err(RenderError::Gpu("the shadow map was not made".into()));
-        };
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, shared, rec) = p;
+        let map = shared.shadow_map.update(inputs, rec)?;
         let uniforms =
             ShadowUniforms::new(inputs.light_view, map.size, (self.flavor.knobs)(inputs));
         inputs
             .ctx
             .queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, g)| *g != map.generation)
-        {
-            let mut entries = vec![
-                buffer_entry(0, &self.uniforms),
-                view_entry(1, &map.distance.view),
-            ];
-            if let Some(extra) = &self.extra {
-                entries.push(buffer_entry(2, extra));
-            }
-            let group = inputs
-                .ctx
-                .device
-                .create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(self.flavor.shader),
-                    layout: &self.pipeline.layout,
-                    entries: &entries,
-                });
-            self.bind_group = Some((group, map.generation));
+        let mut entries = vec![
+            buffer_entry(0, &self.uniforms),
+            view_entry(1, &map.distance.view),
+        ];
+        if let Some(extra) = &self.extra {
+            entries.push(buffer_entry(2, extra));
         }
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        self.camera
+            .bind(&inputs.ctx.device, map.generation, &entries);
+        Ok(&self.camera)
     }
 
     fn light_maps<'a>(&'a self, shared: &'a SharedMaps) -> Option<LightMaps<'a>> {

@@ -3,7 +3,7 @@
 //! (`shaders/methods/pcf.wgsl`).
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{Bench, Knob, MethodSpec};
+use super::{Knob, MethodSpec};
 
 /// The kernel radius R in shadow-map texels.
 pub static RADIUS: Knob = Knob::int(
@@ -13,20 +13,13 @@ pub static RADIUS: Knob = Knob::int(
     2,
 );
 
-pub static PCF: MethodSpec = MethodSpec {
-    name: "pcf",
-    description: "percentage-closer filtering of the shadow map",
-    shader: SHADER,
-    knobs: &[&RADIUS],
-    cpu_side: false,
-    hard: true,
-    lights: None,
-    adapter: super::needs::SHADOW_MAPPED,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
-};
+pub static PCF: MethodSpec = MethodSpec::new("pcf", SHADER, |ctx| {
+    Box::new(OnShadowMap::new(ctx, &FLAVOR))
+})
+.adapter(super::needs::SHADOW_MAPPED)
+.about("percentage-closer filtering of the shadow map")
+.knobs(&[&RADIUS])
+.hard();
 
 const SHADER: &str = "methods/pcf.wgsl";
 

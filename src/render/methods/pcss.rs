@@ -4,7 +4,7 @@
 //! (`shaders/methods/pcss.wgsl`).
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{Bench, FrameInputs, Knob, MethodSpec};
+use super::{FrameInputs, Knob, MethodSpec};
 use crate::scene::{LightKind, Scene};
 
 pub static BLOCKER_TAPS: Knob = Knob::int(
@@ -21,23 +21,14 @@ pub static FILTER_TAPS: Knob = Knob::int(
     32,
 );
 
-pub static PCSS: MethodSpec = MethodSpec {
-    name: "pcss",
-    description: "percentage-closer soft shadows (Fernando 2005)",
-    shader: SHADER,
-    knobs: &[&BLOCKER_TAPS, &FILTER_TAPS],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Disk), // a blocker search over a disk
-    adapter: super::needs::SHADOW_MAPPED,
-    bench: Bench {
-        label: Some("pcss 16/32"),
-        knobs: &[(&BLOCKER_TAPS, 16), (&FILTER_TAPS, 32)],
-    },
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(OnShadowMap::new(ctx, &FLAVOR)),
-};
+pub static PCSS: MethodSpec = MethodSpec::new("pcss", SHADER, |ctx| {
+    Box::new(OnShadowMap::new(ctx, &FLAVOR))
+})
+.adapter(super::needs::SHADOW_MAPPED)
+.about("percentage-closer soft shadows (Fernando 2005)")
+.knobs(&[&BLOCKER_TAPS, &FILTER_TAPS])
+.lights(LightKind::Disk) // a blocker search over a disk
+.bench("pcss 16/32", &[(&BLOCKER_TAPS, 16), (&FILTER_TAPS, 32)]);
 
 /// Points of the Poisson disk (`PoissonDisk` of the shader: two per vec4).
 pub const POISSON_POINTS: usize = 64;

@@ -13,16 +13,13 @@
 
 use std::sync::Arc;
 
-use super::shadow_volume::screen_v_entries;
 use super::{
-    Bench, CameraBindings, FrameInputs, MethodPipeline, MethodSpec, MethodState, Scaled, SharedMaps,
+    require, v_texture_entries, CameraGroup, FrameInputs, MethodSpec, MethodState, Prepare, Scaled,
 };
 use crate::geometry::planar::{planar_receivers, PlanarReceiver};
-use crate::geometry::VtVariant;
 use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::planar::{Planar, PlanarUniforms, ReceiverDraws};
 use crate::render::passes::stencil_volumes::ScreenPass;
-use crate::render::timer::Recorder;
 use crate::render::{view_entry, GpuContext, RenderError};
 
 /// How much light a projected shadow takes, in percent.
@@ -35,33 +32,25 @@ pub static OPACITY: Scaled = Scaled::new(
     100,
 );
 
-pub static PLANAR: MethodSpec = MethodSpec {
-    name: "planar",
-    description: "planar projected shadows (Blinn 1988) onto the flat receivers, stencilled",
-    shader: SHADER,
-    knobs: &[&OPACITY.0],
-    cpu_side: false,
-    hard: true,
-    lights: None,
-    adapter: super::needs::PLANAR,
-    bench: Bench::DEFAULTS,
-    overlay_note: Some("planar: shadows on flat objects only, no volumes"),
-    line_samples: None,
-    new: |ctx| Box::new(PlanarShadows::new(ctx)),
-};
+pub static PLANAR: MethodSpec =
+    MethodSpec::new("planar", SHADER, |ctx| Box::new(PlanarShadows::new(ctx)))
+        .adapter(super::needs::PLANAR)
+        .about("planar projected shadows (Blinn 1988) onto the flat receivers, stencilled")
+        .knobs(&[&OPACITY.0])
+        .hard()
+        .overlay_note("planar: shadows on flat objects only, no volumes");
 
 const SHADER: &str = "methods/planar.wgsl";
 
 pub struct PlanarShadows {
     screen: ScreenPass,
     planar: Planar,
-    pipeline: Arc<MethodPipeline>,
+    /// Bound for the generation of the screen targets.
+    camera: CameraGroup,
     receivers: Vec<PlanarReceiver>,
     draws: Vec<ReceiverDraws>,
     warnings: Vec<String>,
     built_for: Option<u64>,
-    /// The bind group and the generation of the screen targets it binds.
-    bind_group: Option<(wgpu::BindGroup, u64)>,
 }
 
 impl PlanarShadows {
@@ -71,12 +60,11 @@ impl PlanarShadows {
         PlanarShadows {
             screen,
             planar,
-            pipeline: MethodPipeline::get(ctx, SHADER, &screen_v_entries()),
+            camera: CameraGroup::new(ctx, SHADER, &v_texture_entries()),
             receivers: Vec::new(),
             draws: Vec::new(),
             warnings: Vec::new(),
             built_for: None,
-            bind_group: None,
         }
     }
 
@@ -128,20 +116,14 @@ impl PlanarShadows {
 }
 
 impl MethodState for PlanarShadows {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        _shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, _, rec) = p;
         let ctx = inputs.ctx;
         if self.built_for != Some(inputs.revision) {
             self.build(inputs);
         }
         self.screen.begin(ctx, &inputs.view);
-        let Some(targets) = self.screen.targets() else {
-            return Err(RenderError::Gpu("the screen targets were not made".into()));
-        };
+        let targets = require(self.screen.targets(), "the screen targets were not made")?;
         self.screen.record_prepass(rec, inputs.surfaces);
         let shadow_v = 1.0 - inputs.knobs.get(&OPACITY);
         let uniforms = PlanarUniforms::new(
@@ -153,28 +135,12 @@ impl MethodState for PlanarShadows {
         );
         self.planar
             .record(ctx, rec, targets, &uniforms, &self.draws);
-        let Some(shade) = self.planar.shade() else {
-            return Err(RenderError::Gpu("the planar shadows were not drawn".into()));
-        };
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, g)| *g != targets.generation)
-        {
-            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("PlanarShadows::bind_group"),
-                layout: &self.pipeline.layout,
-                entries: &[view_entry(0, &shade.view)],
-            });
-            self.bind_group = Some((group, targets.generation));
-        }
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        let shade = require(self.planar.shade(), "the planar shadows were not drawn")?;
+        self.camera.bind(
+            &ctx.device,
+            targets.generation,
+            &[view_entry(0, &shade.view)],
+        );
+        Ok(&self.camera)
     }
 }

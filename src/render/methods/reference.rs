@@ -3,14 +3,8 @@
 //! texture (the session's), and the camera pass shades it like every other method's
 //! (`shaders/methods/reference.wgsl`).
 
-use std::sync::Arc;
-
-use super::{
-    Bench, CameraBindings, FrameInputs, Knob, MethodPipeline, MethodSpec, MethodState, SharedMaps,
-};
-use crate::geometry::VtVariant;
-use crate::render::timer::Recorder;
-use crate::render::{texture_entry, view_entry, GpuContext, RenderError};
+use super::{v_texture_entries, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
+use crate::render::{view_entry, GpuContext, RenderError};
 
 /// The most disk samples per pixel (the budget's).
 pub const MAX_SAMPLES: u32 = crate::budget::MAX_REFERENCE_SAMPLES;
@@ -24,81 +18,39 @@ pub static SAMPLES: Knob = Knob::int(
 )
 .budget("MAX_REFERENCE_SAMPLES");
 
-pub static REFERENCE: MethodSpec = MethodSpec {
-    name: "reference",
-    description: "ray-cast ground truth (K disk samples per pixel)",
-    shader: SHADER,
-    knobs: &[&SAMPLES],
-    cpu_side: true,
-    hard: false,
-    lights: None,
-    adapter: super::needs::CAMERA_ONLY,
-    bench: Bench {
+pub static REFERENCE: MethodSpec =
+    MethodSpec::new("reference", SHADER, |ctx| Box::new(Reference::new(ctx)))
+        .about("ray-cast ground truth (K disk samples per pixel)")
+        .knobs(&[&SAMPLES])
+        .cpu_side()
         // Each timed frame takes one more sample per pixel, of a budget that never ends.
-        label: Some("reference 1 spp"),
-        knobs: &[(&SAMPLES, MAX_SAMPLES)],
-    },
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(Reference::new(ctx)),
-};
+        .bench("reference 1 spp", &[(&SAMPLES, MAX_SAMPLES)]);
 
 const SHADER: &str = "methods/reference.wgsl";
 
 pub struct Reference {
-    pipeline: Arc<MethodPipeline>,
-    /// The bind group and the generation of the texture it binds.
-    bind_group: Option<(wgpu::BindGroup, u64)>,
+    /// Bound for the generation of the V handed in.
+    camera: CameraGroup,
 }
 
 impl Reference {
     pub fn new(ctx: &GpuContext) -> Reference {
-        let entries = [texture_entry(
-            0,
-            wgpu::ShaderStages::FRAGMENT,
-            wgpu::TextureViewDimension::D2,
-        )];
         Reference {
-            pipeline: MethodPipeline::get(ctx, SHADER, &entries),
-            bind_group: None,
+            camera: CameraGroup::new(ctx, SHADER, &v_texture_entries()),
         }
     }
 }
 
 impl MethodState for Reference {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        _shared: &mut SharedMaps,
-        _rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, ..) = p;
         let Some(v) = inputs.external else {
             return Err(RenderError::Request(
                 "the reference needs V per pixel: none has been computed for this frame".into(),
             ));
         };
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, g)| *g != v.generation)
-        {
-            let group = inputs
-                .ctx
-                .device
-                .create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("Reference::bind_group"),
-                    layout: &self.pipeline.layout,
-                    entries: &[view_entry(0, v.view)],
-                });
-            self.bind_group = Some((group, v.generation));
-        }
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        self.camera
+            .bind(&inputs.ctx.device, v.generation, &[view_entry(0, v.view)]);
+        Ok(&self.camera)
     }
 }

@@ -4,34 +4,22 @@
 //! again when the camera, the light, a mesh or the image size changed (or the bench asks, by
 //! [`MethodState::invalidate`]); the camera pass shades it like the area reference
 //! (`shaders/methods/reference.wgsl`). The lab casts those rays on a worker thread instead and
-//! hands V in (`Session::set_reference_hard`, seen here as [`FrameInputs::external`]): a frame
-//! with V handed in only binds it, and never casts a ray on the thread that records it.
+//! hands V in (`Session::set_reference_hard`, seen here as [`super::FrameInputs::external`]):
+//! a frame with V handed in only binds it, and never casts a ray on the thread that records it.
 
-use std::sync::Arc;
 use std::time::Instant;
 
-use super::{
-    Bench, CameraBindings, FrameInputs, MethodPipeline, MethodSpec, MethodState, SharedMaps,
-};
-use crate::geometry::VtVariant;
-use crate::render::timer::Recorder;
-use crate::render::{texture_entry, view_entry, GpuContext, RenderError, Texture};
+use super::{v_texture_entries, CameraGroup, MethodSpec, MethodState, Prepare};
+use crate::render::passes::next_generation;
+use crate::render::{view_entry, GpuContext, RenderError, Texture};
 use crate::scene::Camera;
 
-pub static REFERENCE_HARD: MethodSpec = MethodSpec {
-    name: "reference-hard",
-    description: "exact hard shadow: one ray per pixel to the light centre",
-    shader: SHADER,
-    knobs: &[],
-    cpu_side: true,
-    hard: true,
-    lights: None,
-    adapter: super::needs::CAMERA_ONLY,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(ReferenceHard::new(ctx)),
-};
+pub static REFERENCE_HARD: MethodSpec = MethodSpec::new("reference-hard", SHADER, |ctx| {
+    Box::new(ReferenceHard::new(ctx))
+})
+.about("exact hard shadow: one ray per pixel to the light centre")
+.cpu_side()
+.hard();
 
 /// The area reference's camera shader: V from a texture at the pixel.
 const SHADER: &str = "methods/reference.wgsl";
@@ -45,19 +33,19 @@ struct Key {
     height: u32,
 }
 
-/// Which texture the bind group holds.
+/// Which texture the bind group holds, by its generation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Bound {
     /// This method's own texture (rays cast in `prepare`).
-    Own,
-    /// V handed in from outside, by its generation.
+    Own(u64),
+    /// V handed in from outside.
     External(u64),
 }
 
 pub struct ReferenceHard {
-    pipeline: Arc<MethodPipeline>,
-    texture: Option<Texture>,
-    bind_group: Option<(wgpu::BindGroup, Bound)>,
+    camera: CameraGroup,
+    /// Its own texture and that texture's generation.
+    texture: Option<(Texture, u64)>,
     key: Option<Key>,
     builds: u64,
     ms: f64,
@@ -65,15 +53,9 @@ pub struct ReferenceHard {
 
 impl ReferenceHard {
     pub fn new(ctx: &GpuContext) -> ReferenceHard {
-        let entries = [texture_entry(
-            0,
-            wgpu::ShaderStages::FRAGMENT,
-            wgpu::TextureViewDimension::D2,
-        )];
         ReferenceHard {
-            pipeline: MethodPipeline::get(ctx, SHADER, &entries),
+            camera: CameraGroup::new(ctx, SHADER, &v_texture_entries()),
             texture: None,
-            bind_group: None,
             key: None,
             builds: 0,
             ms: 0.0,
@@ -81,34 +63,15 @@ impl ReferenceHard {
     }
 }
 
-impl ReferenceHard {
-    fn bind(&self, device: &wgpu::Device, view: &wgpu::TextureView) -> wgpu::BindGroup {
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ReferenceHard::bind_group"),
-            layout: &self.pipeline.layout,
-            entries: &[view_entry(0, view)],
-        })
-    }
-}
-
 impl MethodState for ReferenceHard {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        _shared: &mut SharedMaps,
-        _rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, ..) = p;
+        let device = &inputs.ctx.device;
         if let Some(v) = inputs.external {
             // Computed off this thread for exactly this view: bind it.
-            if self
-                .bind_group
-                .as_ref()
-                .is_none_or(|(_, b)| *b != Bound::External(v.generation))
-            {
-                let group = self.bind(&inputs.ctx.device, v.view);
-                self.bind_group = Some((group, Bound::External(v.generation)));
-            }
-            return Ok(());
+            let bound = Bound::External(v.generation);
+            self.camera.bind(device, bound, &[view_entry(0, v.view)]);
+            return Ok(&self.camera);
         }
         let (w, h) = (inputs.view.width, inputs.view.height);
         let key = Key {
@@ -117,66 +80,44 @@ impl MethodState for ReferenceHard {
             width: w,
             height: h,
         };
-        if self.key == Some(key) {
-            if let (Some(t), Some((_, Bound::External(_)))) = (&self.texture, &self.bind_group) {
-                let group = self.bind(&inputs.ctx.device, &t.view);
-                self.bind_group = Some((group, Bound::Own));
-            }
-            return Ok(());
-        }
-        let t = Instant::now();
-        let computed = crate::render::reference::compute_hard(inputs.scene, w, h);
-        let device = &inputs.ctx.device;
-        let mut fresh = false;
-        if self
-            .texture
-            .as_ref()
-            .is_none_or(|t| (t.texture.width(), t.texture.height()) != (w, h))
-        {
-            let texture = Texture::new(
-                device,
-                "ReferenceHard::visibility",
-                (w, h),
-                wgpu::TextureFormat::R32Float,
-                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            );
-            self.texture = Some(texture);
-            fresh = true;
-        }
-        if fresh
-            || self
-                .bind_group
+        if self.key != Some(key) {
+            let t = Instant::now();
+            let computed = crate::render::reference::compute_hard(inputs.scene, w, h);
+            if self
+                .texture
                 .as_ref()
-                .is_none_or(|(_, b)| *b != Bound::Own)
-        {
-            if let Some(t) = &self.texture {
-                let group = self.bind(device, &t.view);
-                self.bind_group = Some((group, Bound::Own));
+                .is_none_or(|(t, _)| (t.texture.width(), t.texture.height()) != (w, h))
+            {
+                let texture = Texture::new(
+                    device,
+                    "ReferenceHard::visibility",
+                    (w, h),
+                    wgpu::TextureFormat::R32Float,
+                    wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                );
+                self.texture = Some((texture, next_generation()));
             }
+            if let Some((texture, _)) = &self.texture {
+                inputs.ctx.queue.write_texture(
+                    texture.texture.as_image_copy(),
+                    bytemuck::cast_slice(&computed.visibility),
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(w * 4),
+                        rows_per_image: Some(h),
+                    },
+                    texture.texture.size(),
+                );
+            }
+            self.key = Some(key);
+            self.builds += 1;
+            self.ms = t.elapsed().as_secs_f64() * 1e3;
         }
-        if let Some(texture) = &self.texture {
-            inputs.ctx.queue.write_texture(
-                texture.texture.as_image_copy(),
-                bytemuck::cast_slice(&computed.visibility),
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(w * 4),
-                    rows_per_image: Some(h),
-                },
-                texture.texture.size(),
-            );
+        if let Some((t, generation)) = &self.texture {
+            let bound = Bound::Own(*generation);
+            self.camera.bind(device, bound, &[view_entry(0, &t.view)]);
         }
-        self.key = Some(key);
-        self.builds += 1;
-        self.ms = t.elapsed().as_secs_f64() * 1e3;
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        Ok(&self.camera)
     }
 
     /// The rays of the last image: how many images were made and the last one's milliseconds.

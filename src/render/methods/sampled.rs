@@ -2,18 +2,11 @@
 //! segment), averaged (light-source sampling, Heckbert & Herf 1997): the brute-force area light (maps from `passes::sample_maps`, camera pass
 //! `shaders/methods/sampled.wgsl`).
 
-use std::sync::Arc;
-
 use glam::Vec3;
 
-use super::{
-    Bench, CameraBindings, FrameInputs, Knob, Knobs, MethodPipeline, MethodSpec, MethodState,
-    SharedMaps,
-};
-use crate::geometry::VtVariant;
+use super::{require, CameraGroup, Knob, Knobs, MethodSpec, MethodState, Prepare};
 use crate::render::passes::sample_maps::{sample_lights, SampleMaps, MAX_LIGHTS};
 use crate::render::passes::shadow_map::{BIAS_CONSTANT, BIAS_SLOPE};
-use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, texture_entry, uniform_entry, view_entry, GpuContext, RenderError,
 };
@@ -27,23 +20,13 @@ pub static LIGHTS: Knob = Knob::int(
     16,
 );
 
-pub static SAMPLED: MethodSpec = MethodSpec {
-    name: "sampled",
-    description: "N shadow maps from points on the light, averaged",
-    shader: SHADER,
-    knobs: &[&LIGHTS],
-    cpu_side: false,
-    hard: false,
-    lights: None,
-    adapter: super::needs::SAMPLED,
-    bench: Bench {
-        label: Some("sampled 16"),
-        knobs: &[(&LIGHTS, 16)],
-    },
-    overlay_note: None,
-    line_samples: Some(stratum_centres),
-    new: |ctx| Box::new(Sampled::new(ctx)),
-};
+pub static SAMPLED: MethodSpec =
+    MethodSpec::new("sampled", SHADER, |ctx| Box::new(Sampled::new(ctx)))
+        .adapter(super::needs::SAMPLED)
+        .about("N shadow maps from points on the light, averaged")
+        .knobs(&[&LIGHTS])
+        .bench("sampled 16", &[(&LIGHTS, 16)])
+        .line_samples(stratum_centres);
 
 const SHADER: &str = "methods/sampled.wgsl";
 
@@ -56,12 +39,19 @@ fn stratum_centres(line: &LineLight, knobs: &Knobs) -> Vec<Vec3> {
 }
 
 pub struct Sampled {
-    pipeline: Arc<MethodPipeline>,
+    /// Bound for the maps' generation.
+    camera: CameraGroup,
     maps: SampleMaps,
-    /// The revision, size and light count the maps hold.
-    made_for: Option<(u64, u32, u32)>,
-    /// The bind group and the maps' generation it binds.
-    bind_group: Option<(wgpu::BindGroup, u64)>,
+    /// What the maps hold.
+    made_for: Option<Made>,
+}
+
+/// What the maps were made for.
+#[derive(Clone, Copy, PartialEq)]
+struct Made {
+    revision: u64,
+    map_size: u32,
+    lights: u32,
 }
 
 impl Sampled {
@@ -75,23 +65,22 @@ impl Sampled {
             ),
         ];
         Sampled {
-            pipeline: MethodPipeline::get(ctx, SHADER, &entries),
+            camera: CameraGroup::new(ctx, SHADER, &entries),
             maps: SampleMaps::new(ctx),
             made_for: None,
-            bind_group: None,
         }
     }
 }
 
 impl MethodState for Sampled {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        _shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, _, rec) = p;
         let n = inputs.knobs.get(&LIGHTS);
-        let key = (inputs.revision, inputs.map_size, n);
+        let key = Made {
+            revision: inputs.revision,
+            map_size: inputs.map_size,
+            lights: n,
+        };
         if self.made_for != Some(key) {
             let lights = sample_lights(
                 &inputs.scene.light,
@@ -103,35 +92,16 @@ impl MethodState for Sampled {
             self.maps.record(inputs.ctx, rec, inputs.surfaces, &lights);
             self.made_for = Some(key);
         }
-        let Some(t) = self.maps.targets() else {
-            return Err(RenderError::Gpu("the sampled maps were not made".into()));
-        };
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, g)| *g != t.generation)
-        {
-            let group = inputs
-                .ctx
-                .device
-                .create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("Sampled::bind_group"),
-                    layout: &self.pipeline.layout,
-                    entries: &[
-                        buffer_entry(0, &self.maps.uniforms),
-                        view_entry(1, &t.array_view),
-                    ],
-                });
-            self.bind_group = Some((group, t.generation));
-        }
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        let t = require(self.maps.targets(), "the sampled maps were not made")?;
+        self.camera.bind(
+            &inputs.ctx.device,
+            t.generation,
+            &[
+                buffer_entry(0, &self.maps.uniforms),
+                view_entry(1, &t.array_view),
+            ],
+        );
+        Ok(&self.camera)
     }
 
     fn invalidate(&mut self) {

@@ -16,23 +16,20 @@
 //! `--sv-open 1` (the default) the two-sided count, exact for any triangle soup at about twice
 //! the fill.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
 
 use super::{
-    Bench, CameraBindings, FrameInputs, Knobs, MethodPipeline, MethodSpec, MethodState, SharedMaps,
-    Switch,
+    v_texture_entries, CameraGroup, FrameInputs, Knobs, MethodSpec, MethodState, Prepare, Switch,
 };
 use crate::geometry::hard_volume::{scene_volumes, Caps, HardVolume, OpenMeshes};
 use crate::geometry::silhouette::find_silhouettes;
 use crate::geometry::volumes::{VolumeKind, VolumeMesh, VolumeParams, VolumeVertex};
-use crate::geometry::{CasterGeometry, FaceClass, GeometryStats, SceneGeometry, VtVariant};
+use crate::geometry::{CasterGeometry, FaceClass, GeometryStats, SceneGeometry};
 use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::stencil_volumes::ScreenPass;
-use crate::render::timer::Recorder;
-use crate::render::{texture_entry, view_entry, GpuContext, RenderError};
+use crate::render::{view_entry, GpuContext, RenderError};
 
 /// What open meshes get.
 pub static OPEN: Switch = Switch::new(
@@ -42,20 +39,14 @@ pub static OPEN: Switch = Switch::new(
     true,
 );
 
-pub static SHADOW_VOLUME: MethodSpec = MethodSpec {
-    name: "shadow-volume",
-    description: "stencil shadow volumes from the light centre (Crow 1977), z-fail with caps",
-    shader: SHADER,
-    knobs: &[&OPEN.0],
-    cpu_side: false,
-    hard: true,
-    lights: None,
-    adapter: super::needs::SHADOW_VOLUME,
-    bench: Bench::DEFAULTS,
-    overlay_note: Some("shadow-volume: from the light centre; umbra volume = Crow's"),
-    line_samples: None,
-    new: |ctx| Box::new(ShadowVolume::new(ctx)),
-};
+pub static SHADOW_VOLUME: MethodSpec = MethodSpec::new("shadow-volume", SHADER, |ctx| {
+    Box::new(ShadowVolume::new(ctx))
+})
+.adapter(super::needs::SHADOW_VOLUME)
+.about("stencil shadow volumes from the light centre (Crow 1977), z-fail with caps")
+.knobs(&[&OPEN.0])
+.hard()
+.overlay_note("shadow-volume: from the light centre; umbra volume = Crow's");
 
 const SHADER: &str = "methods/shadow_volume.wgsl";
 
@@ -66,16 +57,6 @@ pub fn open_meshes(knobs: &Knobs) -> OpenMeshes {
     } else {
         OpenMeshes::TwoSided
     }
-}
-
-/// The camera pass's group 1 for a method whose V comes from the screen passes: the visibility
-/// texture (`shaders/shared/screen_v.wgsl`).
-pub fn screen_v_entries() -> [wgpu::BindGroupLayoutEntry; 1] {
-    [texture_entry(
-        0,
-        wgpu::ShaderStages::FRAGMENT,
-        wgpu::TextureViewDimension::D2,
-    )]
 }
 
 /// The hard volumes of every caster, as homogeneous vertices for the GPU and as the geometry
@@ -159,39 +140,33 @@ fn overlay_mesh(volume: &HardVolume, far: f32) -> VolumeMesh {
 
 pub struct ShadowVolume {
     screen: ScreenPass,
-    pipeline: Arc<MethodPipeline>,
+    /// Bound for the generation of the screen targets.
+    camera: CameraGroup,
     volumes: VertexChunks,
     /// The revision and open-mesh choice the volumes were built for.
     built_for: Option<(u64, OpenMeshes)>,
     geometry: Option<SceneGeometry>,
     builds: u64,
     geometry_ms: f64,
-    /// The bind group and the generation of the targets it binds.
-    bind_group: Option<(wgpu::BindGroup, u64)>,
 }
 
 impl ShadowVolume {
     pub fn new(ctx: &GpuContext) -> ShadowVolume {
         ShadowVolume {
             screen: ScreenPass::new(ctx),
-            pipeline: MethodPipeline::get(ctx, SHADER, &screen_v_entries()),
+            camera: CameraGroup::new(ctx, SHADER, &v_texture_entries()),
             volumes: VertexChunks::empty(),
             built_for: None,
             geometry: None,
             builds: 0,
             geometry_ms: 0.0,
-            bind_group: None,
         }
     }
 }
 
 impl MethodState for ShadowVolume {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        _shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, _, rec) = p;
         let ctx = inputs.ctx;
         let open = open_meshes(inputs.knobs);
         if self.built_for != Some((inputs.revision, open)) {
@@ -209,29 +184,12 @@ impl MethodState for ShadowVolume {
             self.built_for = Some((inputs.revision, open));
         }
         let targets = self.screen.begin(ctx, &inputs.view);
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, g)| *g != targets.generation)
-        {
-            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("ShadowVolume::bind_group"),
-                layout: &self.pipeline.layout,
-                entries: &[view_entry(0, &targets.visibility.view)],
-            });
-            self.bind_group = Some((group, targets.generation));
-        }
+        let entries = [view_entry(0, &targets.visibility.view)];
+        self.camera.bind(&ctx.device, targets.generation, &entries);
         self.screen.record_prepass(rec, inputs.surfaces);
         self.screen.record_zfail(rec, &self.volumes);
         self.screen.record_resolve(rec);
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        Ok(&self.camera)
     }
 
     fn geometry(&self) -> Option<&SceneGeometry> {

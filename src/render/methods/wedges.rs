@@ -16,24 +16,21 @@
 //! overlapping edges or casters summed, not combined (`overlap`, `fig7-concave`,
 //! `fig8c-complex`, `bunny`); the sum is clamped, which hides some of it.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
 
-use super::shadow_volume::{build_volumes, open_meshes, screen_v_entries, OPEN};
+use super::shadow_volume::{build_volumes, open_meshes, OPEN};
 use super::{
-    Bench, CameraBindings, FrameInputs, Knobs, MethodPipeline, MethodSpec, MethodState, SharedMaps,
-    Switch,
+    require, v_texture_entries, CameraGroup, Knobs, MethodSpec, MethodState, Prepare, Switch,
 };
 use crate::geometry::hard_volume::{scene_volumes, OpenMeshes};
 use crate::geometry::volumes::{VolumeKind, VolumeMesh, VolumeVertex};
 use crate::geometry::wedges::{wedge_hull, wedge_reach};
-use crate::geometry::{SceneGeometry, VtVariant};
+use crate::geometry::SceneGeometry;
 use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::stencil_volumes::ScreenPass;
 use crate::render::passes::wedges::{WedgeVertex, Wedges};
-use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
 };
@@ -48,27 +45,19 @@ pub static HORIZON: Switch = Switch::new(
     true,
 );
 
-pub static WEDGES: MethodSpec = MethodSpec {
-    name: "wedges",
-    description: "penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)",
-    shader: SHADER,
-    knobs: &[&OPEN.0, &HORIZON.0],
-    cpu_side: false,
-    hard: false,
-    lights: Some(LightKind::Disk), // the coverage of a disk
-    adapter: super::needs::WEDGES,
-    bench: Bench::DEFAULTS,
-    overlay_note: None,
-    line_samples: None,
-    new: |ctx| Box::new(WedgesMethod::new(ctx)),
-};
+pub static WEDGES: MethodSpec =
+    MethodSpec::new("wedges", SHADER, |ctx| Box::new(WedgesMethod::new(ctx)))
+        .adapter(super::needs::WEDGES)
+        .about("penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)")
+        .knobs(&[&OPEN.0, &HORIZON.0])
+        .lights(LightKind::Disk); // the coverage of a disk
 
 const SHADER: &str = "methods/wedges.wgsl";
 
 /// The camera pass's group 1: the screen visibility (`shared/screen_v.wgsl`), the coverage sum
 /// and the options ([`WedgeOptions`]).
 fn camera_entries() -> [wgpu::BindGroupLayoutEntry; 3] {
-    let [v] = screen_v_entries();
+    let [v] = v_texture_entries();
     [
         v,
         crate::render::texture_entry(
@@ -131,14 +120,14 @@ pub fn build_wedges(
 pub struct WedgesMethod {
     screen: ScreenPass,
     wedges: Wedges,
-    pipeline: Arc<MethodPipeline>,
+    /// Bound for the generation of the screen targets.
+    camera: CameraGroup,
     volumes: VertexChunks,
     wedge_vertices: VertexChunks,
     built_for: Option<(u64, OpenMeshes)>,
     geometry: Option<SceneGeometry>,
     builds: u64,
     geometry_ms: f64,
-    bind_group: Option<(wgpu::BindGroup, u64)>,
     options: wgpu::Buffer,
 }
 
@@ -149,26 +138,21 @@ impl WedgesMethod {
         WedgesMethod {
             screen,
             wedges,
-            pipeline: MethodPipeline::get(ctx, SHADER, &camera_entries()),
+            camera: CameraGroup::new(ctx, SHADER, &camera_entries()),
             volumes: VertexChunks::empty(),
             wedge_vertices: VertexChunks::empty(),
             built_for: None,
             geometry: None,
             builds: 0,
             geometry_ms: 0.0,
-            bind_group: None,
             options: uniform_buffer::<WedgeOptions>(&ctx.device, "Wedges::options"),
         }
     }
 }
 
 impl MethodState for WedgesMethod {
-    fn prepare(
-        &mut self,
-        inputs: &FrameInputs<'_>,
-        _shared: &mut SharedMaps,
-        rec: &mut Recorder<'_>,
-    ) -> Result<(), RenderError> {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, _, rec) = p;
         let light = *inputs.disk(WEDGES.name)?;
         let ctx = inputs.ctx;
         let open = open_meshes(inputs.knobs);
@@ -218,33 +202,19 @@ impl MethodState for WedgesMethod {
         self.screen.record_zfail(rec, &self.volumes);
         self.wedges
             .record(ctx, rec, &self.screen, &light, &self.wedge_vertices);
-        let (Some(targets), Some(sum)) = (self.screen.targets(), self.wedges.sum()) else {
-            return Err(RenderError::Gpu("the wedges' targets were not made".into()));
-        };
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, g)| *g != generation)
-        {
-            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("Wedges::bind_group"),
-                layout: &self.pipeline.layout,
-                entries: &[
-                    view_entry(0, &targets.visibility.view),
-                    view_entry(1, &sum.view),
-                    buffer_entry(2, &self.options),
-                ],
-            });
-            self.bind_group = Some((group, generation));
-        }
-        Ok(())
-    }
-
-    fn camera(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
-        self.bind_group.as_ref().map(|(g, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
-            bind_group: g,
-        })
+        let missing = "the wedges' targets were not made";
+        let targets = require(self.screen.targets(), missing)?;
+        let sum = require(self.wedges.sum(), missing)?;
+        self.camera.bind(
+            &ctx.device,
+            generation,
+            &[
+                view_entry(0, &targets.visibility.view),
+                view_entry(1, &sum.view),
+                buffer_entry(2, &self.options),
+            ],
+        );
+        Ok(&self.camera)
     }
 
     fn geometry(&self) -> Option<&SceneGeometry> {

@@ -447,6 +447,8 @@ impl Hybrid {
         else {
             return;
         };
+        // The copy of the map the extraction reads belongs to its debug group.
+        let span = rec.span("hybrid_extract");
         rec.encoder.copy_texture_to_buffer(
             map.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
@@ -462,7 +464,6 @@ impl Hybrid {
         ctx.queue.write_buffer(&self.count, 0, &0u32.to_le_bytes());
         ctx.queue
             .write_buffer(&self.candidate_count, 0, &0u32.to_le_bytes());
-        let span = rec.span("hybrid_extract");
         {
             let mut pass = rec
                 .encoder

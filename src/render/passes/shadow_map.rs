@@ -8,12 +8,12 @@ use std::sync::Arc;
 
 use super::next_generation;
 use crate::geometry::light_view::LightView;
-use crate::render::methods::{Channel, Empty, FrameInputs, LightMaps};
+use crate::render::methods::{require, Channel, Empty, FrameInputs, LightMaps};
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, cleared, depth_attachment, depth_test, opaque, pipeline_layout, red,
     render_pipeline, shader_module, uniform_buffer, uniform_entry, GpuContext, PipelineSpec,
-    SurfaceVertex, Texture,
+    RenderError, SurfaceVertex, Texture,
 };
 use crate::scene::Light;
 
@@ -151,18 +151,14 @@ impl ShadowMap {
     /// The map as light-space maps, once it has been made.
     pub fn light_maps(&self) -> Option<LightMaps<'_>> {
         let t = self.targets.as_ref().filter(|_| self.made_for.is_some())?;
-        Some(LightMaps {
-            size: t.size,
-            view_proj: self.view_proj,
-            textures: [&t.distance.view, &t.distance.view, &t.distance.view],
-            raw: [
-                &t.distance.texture,
-                &t.distance.texture,
-                &t.distance.texture,
-            ],
-            channels: CHANNELS,
-            generation: t.generation,
-        })
+        let textures = [&t.distance, &t.distance, &t.distance];
+        Some(LightMaps::new(
+            t.size,
+            self.view_proj,
+            textures,
+            CHANNELS,
+            t.generation,
+        ))
     }
 
     /// The next request remakes the map.
@@ -171,8 +167,22 @@ impl ShadowMap {
     }
 
     /// Make the map hold `inputs.revision` at `inputs.map_size`, recording its pass only when it
-    /// does not yet.
-    pub fn update(&mut self, inputs: &FrameInputs<'_>, rec: &mut Recorder<'_>) {
+    /// does not yet; its targets.
+    pub fn update(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        rec: &mut Recorder<'_>,
+    ) -> Result<&ShadowMapTargets, RenderError> {
+        self.record(inputs, rec);
+        self.made()
+    }
+
+    /// Its targets, or the error that says they were not made.
+    pub fn made(&self) -> Result<&ShadowMapTargets, RenderError> {
+        require(self.targets(), "the shadow map was not made")
+    }
+
+    fn record(&mut self, inputs: &FrameInputs<'_>, rec: &mut Recorder<'_>) {
         let size = inputs.map_size;
         if self.targets.as_ref().is_none_or(|t| t.size != size) {
             use wgpu::TextureUsages as U;
@@ -234,13 +244,13 @@ impl ShadowMap {
         &mut self,
         inputs: &FrameInputs<'_>,
         rec: &mut Recorder<'_>,
-    ) -> Option<&Texture> {
+    ) -> Result<&Texture, RenderError> {
         if self.depth_used {
             self.made_for = None;
         }
-        self.update(inputs, rec);
+        self.record(inputs, rec);
         self.depth_used = true;
-        self.targets.as_ref().map(|t| &t.depth)
+        Ok(&self.made()?.depth)
     }
 }
 
