@@ -190,8 +190,8 @@ fn main() -> ExitCode {
             method,
             out,
         }) => cli::inspect(&scene, samples, &size, &vt, &method, out.as_deref()),
-        None => cli::gui(None),
-        Some(Command::Gui { scene }) => cli::gui(scene),
+        None => cli::gui(None, verbose),
+        Some(Command::Gui { scene }) => cli::gui(scene, verbose),
         Some(Command::Render {
             scene,
             out,

@@ -256,9 +256,10 @@ fn gl_renders_fig1_large_light() {
 }
 
 /// Every built-in with every method the GL adapter can run, each within a stated tolerance of
-/// lavapipe's Vulkan frame: mean |ΔV| under 0.01 and at most 2 % of pixels off by more than
-/// 0.25 (both are llvmpipe underneath, but GL rasterises and rounds its own way); every other
-/// method refused up front.
+/// lavapipe's Vulkan frame: mean |ΔV| under 0.02 and at most 3 % of pixels off by more than
+/// 0.25 (both are llvmpipe underneath, but GL rasterises and rounds its own way: on 2026-12-02
+/// the worst of 262 frames was 0.0095 and 0.95 %); every
+/// other method refused up front.
 #[test]
 fn gl_renders_every_builtin_with_every_method_it_can_run() {
     let Some(gl) = gl_adapter() else {
@@ -273,6 +274,7 @@ fn gl_renders_every_builtin_with_every_method_it_can_run() {
     };
     let (mut gl, mut vk) = (open(&gl), open(&vk));
     let mut ran = 0;
+    let (mut worst_mean, mut worst_far) = (0.0f64, 0.0f64);
     for name in scene::builtin::names() {
         let scene = scene::load(name).unwrap_or_else(|e| panic!("{e}"));
         for &m in Method::all() {
@@ -296,14 +298,20 @@ fn gl_renders_every_builtin_with_every_method_it_can_run() {
             let mean = diffs.iter().sum::<f64>() / n;
             let far = diffs.iter().filter(|d| **d > 0.25).count() as f64 / n;
             assert!(
-                mean < 0.01 && far <= 0.02,
+                mean < 0.02 && far <= 0.03,
                 "{m} on {name}: GL against Vulkan mean |dV| {mean:.4}, {:.1} % off by > 0.25",
                 far * 100.0
             );
             ran += 1;
+            worst_mean = worst_mean.max(mean);
+            worst_far = worst_far.max(far);
         }
     }
-    eprintln!("GL: {ran} (scene, method) frames within tolerance of Vulkan");
+    eprintln!(
+        "GL: {ran} (scene, method) frames within tolerance of Vulkan; worst mean |dV| \
+         {worst_mean:.5}, worst share off by > 0.25: {:.2} %",
+        worst_far * 100.0
+    );
     assert!(ran > 0, "GL ran nothing");
 }
 

@@ -52,6 +52,8 @@ pub struct LabOptions {
     pub fresh_settings: bool,
     /// Tests and snapshots: default settings, and no timings on screen (they differ per run).
     pub deterministic: bool,
+    /// `-v`: say on stderr which adapter eframe chose, and why.
+    pub verbose: bool,
 }
 
 /// What a click picked.
@@ -138,7 +140,19 @@ impl LabApp {
             }
         };
         let core = match cc.wgpu_render_state.as_ref() {
-            Some(rs) => Some(Core::new(context_of(rs), scene)),
+            Some(rs) => {
+                if options.verbose {
+                    // A closed stderr is no reason to stop: never `eprintln!`'s panic.
+                    use std::io::Write as _;
+                    let _ = writeln!(
+                        std::io::stderr(),
+                        "adapter   {}\nchosen by eframe: --backend, else WGPU_BACKEND, else its \
+                         default",
+                        crate::render::adapter::info_line(&rs.adapter.get_info())
+                    );
+                }
+                Some(Core::new(context_of(rs), scene))
+            }
             None => {
                 status = (
                     "no wgpu device: the lab needs eframe's wgpu renderer".into(),

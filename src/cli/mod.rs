@@ -241,12 +241,13 @@ pub fn render(args: &RenderArgs) -> Result<()> {
 
 /// The lab window. `DBUFFER_SMOKE_SCREENSHOT=shot.png` makes it screenshot itself once frames
 /// show and exit (the scripted smoke run under Xvfb).
-pub fn gui(scene: Option<String>) -> Result<()> {
+pub fn gui(scene: Option<String>, verbose: bool) -> Result<()> {
     let smoke_screenshot = std::env::var_os("DBUFFER_SMOKE_SCREENSHOT").map(Into::into);
     dbuffer::app::run(dbuffer::app::LabOptions {
         scene,
         fresh_settings: smoke_screenshot.is_some(),
         smoke_screenshot,
+        verbose,
         ..Default::default()
     })
 }
