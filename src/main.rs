@@ -13,6 +13,13 @@ mod cli;
 struct Args {
     #[command(subcommand)]
     command: Option<Command>,
+    /// The GPU backend: vulkan, gl, metal or dx12 (default: WGPU_BACKEND, else every backend
+    /// wgpu has; `dbuffer adapters` lists what each sees).
+    #[arg(long, global = true, value_name = "BACKEND")]
+    backend: Option<String>,
+    /// Say which adapter was chosen and why (and, for render, the timings and files).
+    #[arg(short, long, global = true)]
+    verbose: bool,
 }
 
 #[derive(Subcommand)]
@@ -42,9 +49,6 @@ enum Command {
         dbuffer_size: u32,
         #[command(flatten)]
         knobs: cli::MethodFlags,
-        /// Print the adapter and the timings.
-        #[arg(short, long)]
-        verbose: bool,
     },
     /// Render every method and the ray-traced reference, and report their errors: each
     /// method's image, visibility EXR and error heatmap (the hard methods' mismatch against
@@ -128,6 +132,8 @@ enum Command {
     },
     /// List the built-in scenes, one a line.
     Scenes,
+    /// List every GPU adapter wgpu sees on every backend, and which methods each can run.
+    Adapters,
     /// Print what the geometry stage makes of a scene: classes, silhouettes, volumes, warnings.
     Inspect {
         /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
@@ -152,6 +158,8 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // Before any thread starts: no window system is asked anything by a headless command.
+    dbuffer::render::adapter::quiet_device_select();
     // `dbuffer --help` ends with the resource budget.
     let matches = Args::command()
         .after_help(dbuffer::budget::summary())
@@ -160,8 +168,20 @@ fn main() -> ExitCode {
         Ok(args) => args,
         Err(e) => e.exit(),
     };
+    if let Some(b) = &args.backend {
+        match dbuffer::render::adapter::parse_backend(b) {
+            Ok(b) => dbuffer::render::adapter::set_backend(b),
+            Err(e) => {
+                cli::print::err(format_args!("dbuffer: {e}\n"));
+                return ExitCode::FAILURE;
+            }
+        }
+    }
+    cli::set_verbose(args.verbose);
+    let verbose = args.verbose;
     let result = match args.command {
         Some(Command::Scenes) => cli::scenes(),
+        Some(Command::Adapters) => cli::adapters::list(),
         Some(Command::Inspect {
             scene,
             samples,
@@ -170,8 +190,8 @@ fn main() -> ExitCode {
             method,
             out,
         }) => cli::inspect(&scene, samples, &size, &vt, &method, out.as_deref()),
-        None => cli::gui(None),
-        Some(Command::Gui { scene }) => cli::gui(scene),
+        None => cli::gui(None, verbose),
+        Some(Command::Gui { scene }) => cli::gui(scene, verbose),
         Some(Command::Render {
             scene,
             out,
@@ -180,7 +200,6 @@ fn main() -> ExitCode {
             vt,
             dbuffer_size,
             knobs,
-            verbose,
         }) => cli::render(&cli::RenderArgs {
             scene: &scene,
             out: &out,
@@ -254,9 +273,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            // One line: the causes joined, newlines in any of them (a path) escaped.
-            let line = format!("dbuffer: {e:#}").replace('\n', "\\n");
-            cli::print::err(format_args!("{line}\n"));
+            cli::print::err(format_args!("{}", cli::error_lines(&e)));
             ExitCode::FAILURE
         }
     }

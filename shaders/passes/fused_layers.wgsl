@@ -13,7 +13,7 @@
 
 @group(0) @binding(0) var<uniform> fused: FusedUniforms;
 // The first receivers' depth (fs_peel).
-@group(1) @binding(0) var first_depth: texture_depth_2d;
+@group(1) @binding(0) var first_depth: texture_2d<f32>;
 
 struct LayerOut {
     @builtin(position) clip: vec4<f32>,
@@ -99,7 +99,7 @@ fn fs_receiver_both(f: LayerOut) -> Both {
 @fragment
 fn fs_peel(f: LayerOut) -> @location(0) vec4<f32> {
     let out = receiver(f);
-    let first = textureLoad(first_depth, vec2<i32>(f.clip.xy), 0);
+    let first = textureLoad(first_depth, vec2<i32>(f.clip.xy), 0).r;
     if f.clip.z <= first {
         discard;
     }

@@ -34,7 +34,7 @@
 
 // fs_maps
 @group(1) @binding(11) var cross_count: texture_2d<f32>;
-@group(1) @binding(12) var cross_far: texture_depth_2d;
+@group(1) @binding(12) var cross_far: texture_2d<f32>;
 @group(1) @binding(13) var<storage, read> counts: array<u32>;
 @group(1) @binding(14) var maps_out: texture_storage_2d<rgba32float, write>;
 
@@ -373,7 +373,7 @@ fn cs_maps(
         let q = origin + vec2<i32>(i32(k % 18u), i32(k / 18u));
         var far = 0.0;
         if all(q >= vec2<i32>(0)) && all(q < vec2<i32>(size)) {
-            far = textureLoad(cross_far, q, 0);
+            far = textureLoad(cross_far, q, 0).r;
         }
         far_tile[k] = far;
     }

@@ -67,7 +67,7 @@ fn probe_pixel() {
     let d = textureLoad(data, p, 0);
     out[4] = d.x;
     out[5] = d.y;
-    let z = textureLoad(depth, p, 0);
+    let z = textureLoad(depth, p, 0).r;
     out[6] = z;
     out[7] = select(0.0, 1.0, z > 0.0);
     if view.has_reference != 0u {

@@ -50,14 +50,14 @@ const NO_FALLBACK: u32 = 255u;
 // the reversed depth (0 where no surface).
 @group(0) @binding(1) var color_bytes: texture_2d<f32>;
 @group(0) @binding(2) var data: texture_2d<f32>;
-@group(0) @binding(3) var depth: texture_depth_2d;
+@group(0) @binding(3) var depth: texture_2d<f32>;
 @group(0) @binding(4) var reference_v: texture_2d<f32>;
 @group(0) @binding(5) var map0: texture_2d<f32>;
 @group(0) @binding(6) var map1: texture_2d<f32>;
 @group(0) @binding(7) var map2: texture_2d<f32>;
 
 fn is_hit(p: vec2<i32>) -> bool {
-    return textureLoad(depth, p, 0) > 0.0;
+    return textureLoad(depth, p, 0).r > 0.0;
 }
 
 fn branch_of(td: f32) -> f32 {

@@ -52,6 +52,8 @@ pub struct LabOptions {
     pub fresh_settings: bool,
     /// Tests and snapshots: default settings, and no timings on screen (they differ per run).
     pub deterministic: bool,
+    /// `-v`: say on stderr which adapter eframe chose, and why.
+    pub verbose: bool,
 }
 
 /// What a click picked.
@@ -138,7 +140,19 @@ impl LabApp {
             }
         };
         let core = match cc.wgpu_render_state.as_ref() {
-            Some(rs) => Some(Core::new(context_of(rs), scene)),
+            Some(rs) => {
+                if options.verbose {
+                    // A closed stderr is no reason to stop: never `eprintln!`'s panic.
+                    use std::io::Write as _;
+                    let _ = writeln!(
+                        std::io::stderr(),
+                        "adapter   {}\nchosen by eframe: --backend, else WGPU_BACKEND, else its \
+                         default",
+                        crate::render::adapter::info_line(&rs.adapter.get_info())
+                    );
+                }
+                Some(Core::new(context_of(rs), scene))
+            }
             None => {
                 status = (
                     "no wgpu device: the lab needs eframe's wgpu renderer".into(),
@@ -426,7 +440,7 @@ impl LabApp {
 
 /// The render core's context on a device eframe (or the test harness) opened.
 fn context_of(rs: &egui_wgpu::RenderState) -> GpuContext {
-    GpuContext::new(rs.device.clone(), rs.queue.clone(), rs.adapter.get_info())
+    GpuContext::with_adapter(rs.device.clone(), rs.queue.clone(), &rs.adapter)
 }
 
 impl eframe::App for LabApp {
@@ -460,7 +474,7 @@ impl eframe::App for LabApp {
 /// Open the lab window (blocks until it is closed).
 pub fn run(options: LabOptions) -> anyhow::Result<()> {
     let smoke = options.smoke_screenshot.clone();
-    let setup = egui_wgpu::WgpuSetupCreateNew {
+    let mut setup = egui_wgpu::WgpuSetupCreateNew {
         // What `GpuContext::from_adapter` asks for: timestamp queries where the adapter has them,
         // so the stats show GPU time per pass.
         device_descriptor: Arc::new(|adapter: &egui_wgpu::wgpu::Adapter| {
@@ -473,6 +487,10 @@ pub fn run(options: LabOptions) -> anyhow::Result<()> {
         }),
         ..egui_wgpu::WgpuSetupCreateNew::without_display_handle()
     };
+    // `--backend` as for the headless commands (eframe reads `WGPU_BACKEND` itself).
+    if let Some(backends) = crate::render::adapter::backend() {
+        setup.instance_descriptor.backends = backends;
+    }
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title("dbuffer lab")

@@ -221,9 +221,15 @@ impl LabApp {
         let current = self.settings.method();
         // Methods that cannot take the scene's light are greyed, their reason on hover.
         let light = self.doc.file.light.kind();
+        // … and so are those the device cannot run (what it lacks on hover).
+        let caps = self.core.as_ref().map(|c| c.ctx.caps.clone());
+        let refuses = |m: Method| {
+            m.refuses(light)
+                .or_else(|| caps.as_ref().and_then(|c| m.refuses_on(c)))
+        };
         ui.horizontal_wrapped(|ui| {
             for &m in Method::all() {
-                let refused = m.refuses(light);
+                let refused = refuses(m);
                 if ui
                     .add_enabled(
                         refused.is_none(),
@@ -253,7 +259,7 @@ impl LabApp {
                 .selected_text(format!("right: {}", split.name()))
                 .show_ui(ui, |ui| {
                     for &m in Method::all() {
-                        let refused = m.refuses(light);
+                        let refused = refuses(m);
                         if ui
                             .add_enabled(
                                 refused.is_none(),

@@ -302,7 +302,10 @@ impl LabApp {
             };
             // A method that cannot take this light draws nothing and says why (never a
             // picture made with another light).
-            if let Some(why) = method.refuses(core.session.scene().light.kind()) {
+            if let Some(why) = method
+                .refuses(core.session.scene().light.kind())
+                .or_else(|| method.refuses_on(&core.ctx.caps))
+            {
                 self.viewport.shown[i] = None;
                 self.viewport.keys[i] = None;
                 self.viewport.views[i] = None;

@@ -296,7 +296,12 @@ fn time_size(
         .iter()
         .map(|case| request(config, size, case))
         .collect();
-    let mut errors: Vec<Option<String>> = vec![None; config.cases.len()];
+    // A method the device cannot run is skipped with its reason, before any frame.
+    let mut errors: Vec<Option<String>> = config
+        .cases
+        .iter()
+        .map(|case| case.method.refuses_on(&ctx.caps))
+        .collect();
     let mut samples: Vec<Samples> = config.cases.iter().map(|_| Samples::default()).collect();
     for round in 0..config.warmup + config.frames {
         for (i, session) in sessions.iter_mut().enumerate() {

@@ -86,10 +86,14 @@ fn thousands(n: usize) -> String {
     out
 }
 
+/// How [`Method::refuses_on`](crate::render::Method::refuses_on) says the adapter lacks something.
+const ADAPTER_LACKS: &str = "which the adapter";
+
 /// Short reason for a method that did not render.
 fn na(error: &Option<String>) -> String {
     match error {
         Some(e) if e.contains("not available") => "n/a (not implemented)".into(),
+        Some(e) if e.contains(ADAPTER_LACKS) => "n/a (the adapter lacks what it needs)".into(),
         Some(_) => "n/a (error)".into(),
         None => "n/a".into(),
     }

@@ -61,6 +61,10 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
     spec.request.method = method;
     let name = scene.name.clone();
     let offline = Offline::new()?;
+    super::chosen(&offline.ctx);
+    if let Some(why) = method.refuses_on(&offline.ctx.caps) {
+        anyhow::bail!("{why}");
+    }
     // One session for the whole orbit: meshes uploaded and casters prepared once, only the
     // light-dependent work redone per frame.
     let mut recording = Recording::start(&offline.ctx, scene, spec, args.out)?;

@@ -71,6 +71,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let config = config(args)?;
     let loaded = bench::load_scenes(&config)?;
     let ctx = GpuContext::headless()?;
+    super::chosen(&ctx);
     errln!(
         "bench on {}: {} scenes × {} sizes × {} methods, {} + {} frames each; about {:.0} s",
         ctx.adapter_description(),
@@ -81,6 +82,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         config.frames,
         config.estimate_s()
     );
+    for case in &config.cases {
+        if let Some(why) = case.method.refuses_on(&ctx.caps) {
+            errln!("skipped   {why}");
+        }
+    }
     // One step per report of bench::run: each scene's geometry, each (scene, size), the
     // coherence run, each point of the scaling curve.
     let steps = config.scenes.len() * (1 + config.sizes.len())

@@ -35,6 +35,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     }
     let mut offline = Offline::new()?;
     errln!("adapter   {}", offline.ctx.adapter_description());
+    super::chosen(&offline.ctx);
     offline.progress = Some(progress::reference_samples());
     let request = CompareRequest {
         width,

@@ -47,11 +47,13 @@ macro_rules! errln {
     };
 }
 
+pub mod adapters;
 mod animate;
 pub mod bench;
 mod compare;
 pub mod print;
 mod progress;
+pub use adapters::{chosen, error_lines, set_verbose};
 pub use animate::{animate, AnimateArgs};
 pub use compare::{compare, CompareArgs};
 
@@ -168,8 +170,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         bail!("{why}");
     }
     let offline = Offline::new()?;
-    if args.verbose {
-        errln!("adapter   {}", offline.ctx.adapter_description());
+    chosen(&offline.ctx);
+    // Before any work: a device that lacks what the method needs says what, in one line.
+    if let Some(why) = method.refuses_on(&offline.ctx.caps) {
+        bail!("{why}");
     }
     let request = FrameRequest {
         width,
@@ -237,12 +241,13 @@ pub fn render(args: &RenderArgs) -> Result<()> {
 
 /// The lab window. `DBUFFER_SMOKE_SCREENSHOT=shot.png` makes it screenshot itself once frames
 /// show and exit (the scripted smoke run under Xvfb).
-pub fn gui(scene: Option<String>) -> Result<()> {
+pub fn gui(scene: Option<String>, verbose: bool) -> Result<()> {
     let smoke_screenshot = std::env::var_os("DBUFFER_SMOKE_SCREENSHOT").map(Into::into);
     dbuffer::app::run(dbuffer::app::LabOptions {
         scene,
         fresh_settings: smoke_screenshot.is_some(),
         smoke_screenshot,
+        verbose,
         ..Default::default()
     })
 }

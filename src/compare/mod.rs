@@ -18,6 +18,7 @@ use std::time::Instant;
 use crate::geometry::bvh::Bvh;
 use crate::geometry::metrics::{self, HardMetrics, Metrics};
 use crate::geometry::{view, VtVariant};
+use crate::render::adapter::Verdict;
 use crate::render::methods::reference::SAMPLES;
 use crate::render::offline::Offline;
 use crate::render::{Frame, FrameRequest, Knobs, Method, RenderError};
@@ -72,8 +73,9 @@ pub struct Comparison {
     /// light.
     pub results: Vec<MethodResult>,
     /// The methods that refuse the scene's light (a disk-only method under a line light, or
-    /// the reverse), each with its one-line reason.
-    pub not_applicable: Vec<(Method, String)>,
+    /// the reverse) or the adapter: each with what it needs (`"disk"`, `"line"`, or what the
+    /// adapter lacks) and its one-line reason.
+    pub not_applicable: Vec<(Method, String, String)>,
     /// Reference shadow rays per second (all cores).
     pub reference_rays_per_s: f64,
 }
@@ -104,6 +106,10 @@ pub fn run(
     mut progress: impl FnMut(&str),
 ) -> Result<Comparison, RenderError> {
     request.knobs.validate().map_err(RenderError::Request)?;
+    // Every method is scored against the reference: without it there is nothing to compare.
+    if let Some(why) = Method::REFERENCE.refuses_on(&offline.ctx.caps) {
+        return Err(RenderError::Request(why));
+    }
     let frame_request = |method| FrameRequest {
         width: request.width,
         height: request.height,
@@ -149,7 +155,15 @@ pub fn run(
         }
         if let Some(why) = method.refuses(scene.light.kind()) {
             progress(&format!("{method}: not applicable ({why})"));
-            not_applicable.push((method, why));
+            let needs = method.needs().map_or("", |k| k.name()).to_string();
+            not_applicable.push((method, needs, why));
+            continue;
+        }
+        // A method the device cannot run is listed with what it lacks, before any work.
+        if let Verdict::Cannot(missing) = method.on(&offline.ctx.caps) {
+            let why = method.refuses_on(&offline.ctx.caps).unwrap_or_default();
+            progress(&format!("{method}: not applicable ({why})"));
+            not_applicable.push((method, missing.join(", "), why));
             continue;
         }
         progress(&format!("{method}: {}", method.description()));

@@ -35,11 +35,12 @@ pub struct Report {
     pub not_applicable: Vec<NotApplicable>,
 }
 
-/// A method `compare` did not draw: it cannot take the scene's light.
+/// A method `compare` did not draw: it cannot take the scene's light, or the adapter lacks
+/// what it needs.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct NotApplicable {
     pub method: String,
-    /// `"disk"` or `"line"`: the light it needs.
+    /// `"disk"` or `"line"`: the light it needs; or what the adapter lacks for it.
     pub needs: String,
     pub reason: String,
 }
@@ -115,9 +116,9 @@ impl Report {
             not_applicable: c
                 .not_applicable
                 .iter()
-                .map(|(m, why)| NotApplicable {
+                .map(|(m, needs, why)| NotApplicable {
                     method: m.name().to_string(),
-                    needs: m.needs().map_or("", |k| k.name()).to_string(),
+                    needs: needs.clone(),
                     reason: why.clone(),
                 })
                 .collect(),
@@ -186,9 +187,14 @@ impl Report {
             ));
         }
         for n in &self.not_applicable {
+            // A light it cannot take ("disk", "line"), or what the adapter lacks.
+            let needs = match n.needs.as_str() {
+                "disk" | "line" => format!("a {} light", n.needs),
+                other => other.to_string(),
+            };
             s.push_str(&format!(
-                "| {} | n/a — needs a {} light | | | | | | |\n",
-                n.method, n.needs
+                "| {} | n/a — needs {needs} | | | | | | |\n",
+                n.method
             ));
         }
         s

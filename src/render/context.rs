@@ -9,6 +9,7 @@ use std::any::{Any, TypeId};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
+use super::adapter::Capabilities;
 use super::RenderError;
 
 /// A device-lifetime object of some pass.
@@ -21,6 +22,10 @@ pub struct GpuContext {
     pub adapter: wgpu::AdapterInfo,
     /// Timestamp queries around passes are available.
     pub timestamps: bool,
+    /// What the device can do, as the methods' needs ask it ([`Method::on`](super::Method::on)).
+    pub caps: Capabilities,
+    /// Why this adapter (`-v`): the backends looked at and how it was picked among them.
+    pub chosen: String,
     /// Validation errors no error scope caught, kept instead of panicking.
     uncaptured: Arc<Mutex<Vec<String>>>,
     /// Why the device was lost, once it is (a driver reset, a removed GPU, `destroy`).
@@ -55,37 +60,64 @@ pub fn wanted_features(adapter: wgpu::Features) -> wgpu::Features {
 }
 
 impl GpuContext {
-    /// Request an adapter and device without a window. `WGPU_BACKEND` and `WGPU_ADAPTER_NAME`
-    /// choose among several.
+    /// Request an adapter and device without a window: `--backend` ([`super::adapter::set_backend`]),
+    /// else `WGPU_BACKEND`, chooses the backends; `WGPU_ADAPTER_NAME` one adapter among several.
     pub fn headless() -> Result<GpuContext, RenderError> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let (instance, backends) = super::adapter::instance();
         let options = wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             ..Default::default()
         };
         let adapter = pollster::block_on(instance.request_adapter(&options))
             .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
-        Self::from_adapter(&adapter)
+        let mut ctx = Self::from_adapter(&adapter)?;
+        ctx.chosen = match std::env::var("WGPU_ADAPTER_NAME") {
+            Ok(name) => format!("{backends}; WGPU_ADAPTER_NAME={name}"),
+            Err(_) => format!("{backends}; wgpu's pick for high performance"),
+        };
+        Ok(ctx)
     }
 
     /// Open a device on `adapter` with the features and limits the render core uses.
     pub fn from_adapter(adapter: &wgpu::Adapter) -> Result<GpuContext, RenderError> {
-        let info = adapter.get_info();
+        Self::open(
+            adapter,
+            wanted_features(adapter.features()),
+            wanted_limits(&adapter.limits()),
+        )
+    }
+
+    /// Open a device on `adapter` with exactly `features` and `limits` (the weakest-device
+    /// test opens one with WebGPU's downlevel limits and no optional features).
+    pub fn open(
+        adapter: &wgpu::Adapter,
+        features: wgpu::Features,
+        limits: wgpu::Limits,
+    ) -> Result<GpuContext, RenderError> {
         let desc = wgpu::DeviceDescriptor {
             label: Some("dbuffer::device"),
-            required_features: wanted_features(adapter.features()),
-            required_limits: wanted_limits(&adapter.limits()),
+            required_features: features,
+            required_limits: limits,
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&desc))
             .map_err(|e| RenderError::Device(e.to_string()))?;
-        Ok(Self::new(device, queue, info))
+        Ok(Self::with_adapter(device, queue, adapter))
     }
 
-    /// Wrap a device someone else opened (eframe's).
+    /// Wrap a device someone else opened on `adapter` (eframe's): its capabilities are asked of
+    /// the adapter, as wgpu validates them.
+    pub fn with_adapter(device: wgpu::Device, queue: wgpu::Queue, adapter: &wgpu::Adapter) -> Self {
+        let caps = Capabilities::of(adapter, device.features(), device.limits());
+        let mut ctx = Self::new(device, queue, adapter.get_info());
+        ctx.caps = caps;
+        ctx
+    }
+
+    /// Wrap a device someone else opened, its adapter unknown: its formats are taken to be
+    /// WebGPU's guaranteed ones (prefer [`GpuContext::with_adapter`]).
     pub fn new(device: wgpu::Device, queue: wgpu::Queue, adapter: wgpu::AdapterInfo) -> GpuContext {
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
         let sink = Arc::clone(&uncaptured);
@@ -106,7 +138,10 @@ impl GpuContext {
             }
         });
         let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let caps = Capabilities::webgpu(&adapter, device.features(), device.limits());
         GpuContext {
+            caps,
+            chosen: "handed over by its caller".into(),
             device,
             queue,
             adapter,
@@ -119,10 +154,7 @@ impl GpuContext {
 
     /// "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu)".
     pub fn adapter_description(&self) -> String {
-        format!(
-            "{} ({:?}, {:?})",
-            self.adapter.name, self.adapter.backend, self.adapter.device_type
-        )
+        super::adapter::describe(&self.adapter)
     }
 
     /// `Err(RenderError::Lost)` once the device is lost: nothing recorded on it will run again.

@@ -189,9 +189,15 @@ pub fn record_frame(
     {
         *camera_targets = None;
     }
-    let camera_targets = camera_targets
-        .get_or_insert_with(|| CameraTargets::new(&ctx.device, request.width, request.height));
+    let camera_targets = camera_targets.get_or_insert_with(|| {
+        let bytes_view = ctx
+            .caps
+            .downlevel
+            .contains(wgpu::DownlevelFlags::VIEW_FORMATS);
+        CameraTargets::new(&ctx.device, request.width, request.height, bytes_view)
+    });
     camera.record(ctx, rec, &uniforms, camera_targets, bindings, surfaces);
+    camera_targets.copy_bytes(rec.encoder);
     *rendered = Some(Rendered {
         request: *request,
         view_proj,
@@ -385,10 +391,23 @@ pub fn read_frame(
             "nothing has been rendered yet".into(),
         ));
     };
+    // A device that cannot copy a depth texture into a buffer (GL) reads an exact float copy.
+    let depth_copy = if ctx
+        .caps
+        .downlevel
+        .contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES)
+    {
+        None
+    } else {
+        Some(super::passes::depth_copy::copy(ctx, &camera.depth)?)
+    };
     let mut reads = vec![
         TextureRead::color(&camera.color.texture, 4),
         TextureRead::color(&camera.data.texture, 8),
-        TextureRead::depth(&camera.depth.texture),
+        match &depth_copy {
+            Some(copy) => TextureRead::color(&copy.texture, 4),
+            None => TextureRead::depth(&camera.depth.texture),
+        },
     ];
     // Each distinct light-map texture once.
     let mut slots = [0usize; 3];

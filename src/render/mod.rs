@@ -11,6 +11,7 @@
 //! - [`readback`], [`timer`], [`gpu_scene`], [`context`]: staging buffers, pass timings, the
 //!   scene's surfaces on the GPU, the device.
 
+pub mod adapter;
 pub mod context;
 pub mod frame;
 pub mod gpu_scene;

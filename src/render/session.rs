@@ -417,6 +417,10 @@ impl Session {
         if let Some(why) = method.refuses(self.scene.light.kind()) {
             return Err(RenderError::Request(why));
         }
+        // Before any of its pipelines is made: a device that lacks what it needs says so.
+        if let Some(why) = method.refuses_on(&ctx.caps) {
+            return Err(RenderError::Request(why));
+        }
         let state = self
             .methods
             .entry(method)

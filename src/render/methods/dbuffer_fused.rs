@@ -68,6 +68,7 @@ pub static MASK_SAMPLES: Knob = Knob::int(
 pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, |ctx| {
     Box::new(DBufferFused::new(ctx))
 })
+.adapter(super::needs::DBUFFER_FUSED)
 .about("D-buffer with every silhouette chord (occluder fusion)")
 .knobs(&[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES])
 .lights(LightKind::Disk); // its chords cut the disk

@@ -44,6 +44,7 @@ pub static PATTERN: Choice = Choice::new(
 pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec::new("extended-light-map", SHADER, |ctx| {
     Box::new(ElmMethod::new(ctx))
 })
+.adapter(super::needs::EXTENDED_LIGHT_MAP)
 .about("extended light map (Brabec et al. 2000): light colour in RGB, distance in A")
 .knobs(&[&DEPTH_BITS, &PATTERN.0])
 .hard()

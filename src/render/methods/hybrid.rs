@@ -51,6 +51,7 @@ pub static EDGES: Switch = Switch::new(
 
 pub static HYBRID: MethodSpec =
     MethodSpec::new("hybrid", SHADER, |ctx| Box::new(HybridMethod::new(ctx)))
+        .adapter(super::needs::HYBRID)
         .about("shadow volumes rebuilt from the light's depth map (McCool 2000), one stencil bit")
         .knobs(&[&THRESHOLD.0, &TEMPLATES.0, &EDGES.0])
         .hard()

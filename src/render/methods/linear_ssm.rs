@@ -35,6 +35,7 @@ pub static SAMPLES: Knob = Knob::int(
 
 pub static LINEAR_SSM: MethodSpec =
     MethodSpec::new("linear-ssm", SHADER, |ctx| Box::new(LinearSsm::new(ctx)))
+        .adapter(super::needs::LINEAR_SSM)
         .about("soft shadow maps for a linear light (Heidrich et al. 2000)")
         .knobs(&[&SAMPLES])
         .lights(LightKind::Line) // Heidrich et al.'s maps along a segment

@@ -29,6 +29,7 @@ pub mod shadow_volume;
 pub mod wedges;
 
 mod knobs;
+pub mod needs;
 pub use knobs::{all_knobs, Choice, Knob, KnobKind, KnobType, Knobs, Scaled, Switch, MAX_KNOBS};
 
 use std::any::Any;
@@ -39,6 +40,7 @@ use std::sync::{Arc, OnceLock};
 
 use glam::{Mat4, Vec3};
 
+use super::adapter::{Capabilities, FormatNeed, Usage, Verdict};
 use super::gpu_scene::GpuScene;
 use super::passes::camera::ScreenView;
 use super::passes::shadow_map::ShadowMap;
@@ -154,6 +156,7 @@ impl MethodSpec {
         self
     }
 
+    /// What it needs of the adapter beyond the camera pass's (an entry of [`needs`]).
     pub const fn adapter(mut self, needs: AdapterNeeds) -> Self {
         self.adapter = needs;
         self
@@ -183,22 +186,141 @@ impl MethodSpec {
     }
 }
 
-/// What a method needs of the adapter beyond what every method needs (none so far: the field is
-/// where a method that needs an optional feature will say so).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// What a method needs of the adapter beyond what every method needs ([`AdapterNeeds::BASE`],
+/// the camera pass's), checked before any work ([`Method::on`]): a device without it refuses the
+/// method in one line instead of failing in one of its pipelines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AdapterNeeds {
+    /// Optional features it cannot do without.
     pub features: wgpu::Features,
+    /// The formats it renders to, blends into, filters or binds as storage (each with its
+    /// fallback, if it has one).
+    pub formats: &'static [FormatNeed],
+    /// Downlevel capabilities it uses (compute shaders, storage written from fragment shaders,
+    /// storage read in vertex shaders).
+    pub downlevel: wgpu::DownlevelFlags,
+    /// Storage buffers one of its shader stages binds at most.
+    pub storage_buffers_per_stage: u32,
+    /// Storage textures one of its shader stages binds at most.
+    pub storage_textures_per_stage: u32,
 }
+
+impl Default for AdapterNeeds {
+    fn default() -> Self {
+        AdapterNeeds::NONE
+    }
+}
+
+/// The centre shadow map (`passes::shadow_map`): distances in `R32Float`, a `Depth32Float` test.
+pub const SHADOW_MAP: [FormatNeed; 2] = [
+    FormatNeed::new(Usage::Render, &[wgpu::TextureFormat::R32Float]),
+    FormatNeed::new(Usage::Depth, &[wgpu::TextureFormat::Depth32Float]),
+];
+
+/// The stencil shadow volumes (`passes::stencil_volumes`): positions and visibility as floats, a
+/// half-float fill count, and a stencil (with 24-bit depth where 32-bit float depth with stencil
+/// is missing: the volumes' depth test is coarser, and `tests/hard_methods.rs` holds
+/// `shadow-volume` on it to at most 0.05 % of pixels off the exact hard shadow).
+pub const STENCIL_VOLUMES: [FormatNeed; 4] = [
+    FormatNeed::new(Usage::Render, &[wgpu::TextureFormat::Rgba32Float]),
+    FormatNeed::new(Usage::Render, &[wgpu::TextureFormat::R32Float]),
+    FormatNeed::new(Usage::Blend, &[wgpu::TextureFormat::R16Float]),
+    FormatNeed {
+        usage: Usage::Depth,
+        formats: &[
+            wgpu::TextureFormat::Depth32FloatStencil8,
+            wgpu::TextureFormat::Depth24PlusStencil8,
+        ],
+        fallback: "24-bit depth under the stencil: at most 0.05 % of pixels change class",
+    },
+];
 
 impl AdapterNeeds {
     /// Nothing beyond what every method needs.
     pub const NONE: AdapterNeeds = AdapterNeeds {
         features: wgpu::Features::empty(),
+        formats: &[],
+        downlevel: wgpu::DownlevelFlags::empty(),
+        storage_buffers_per_stage: 0,
+        storage_textures_per_stage: 0,
     };
 
-    /// Whether an adapter with `features` has what the method needs.
+    /// What every method needs: the camera pass's targets (V and the receiver distance as
+    /// `Rg32Float`, the picture as `Rgba8UnormSrgb`, a `Depth32Float` test).
+    pub const BASE: AdapterNeeds = AdapterNeeds {
+        formats: &[
+            FormatNeed::new(Usage::Render, &[wgpu::TextureFormat::Rg32Float]),
+            FormatNeed::new(Usage::Render, &[wgpu::TextureFormat::Rgba8UnormSrgb]),
+            FormatNeed::new(Usage::Depth, &[wgpu::TextureFormat::Depth32Float]),
+        ],
+        ..AdapterNeeds::NONE
+    };
+
+    /// `formats` and nothing else.
+    pub const fn formats(formats: &'static [FormatNeed]) -> AdapterNeeds {
+        AdapterNeeds {
+            formats,
+            ..AdapterNeeds::NONE
+        }
+    }
+
+    /// Whether an adapter with `features` has the features the method needs.
     pub fn met_by(&self, features: wgpu::Features) -> bool {
         features.contains(self.features)
+    }
+
+    /// What the method gets on `caps`: runs, runs with fallbacks, or what is missing.
+    pub fn check(&self, caps: &Capabilities) -> Verdict {
+        let mut missing = Vec::new();
+        let mut fallbacks = Vec::new();
+        let lacking = self.features - caps.features;
+        if !lacking.is_empty() {
+            missing.push(format!("the feature {lacking:?}"));
+        }
+        for need in AdapterNeeds::BASE.formats.iter().chain(self.formats) {
+            match caps.pick(need) {
+                None => {
+                    let names: Vec<String> =
+                        need.formats.iter().map(|f| format!("{f:?}")).collect();
+                    let item = format!("{} {}", need.usage.verb(), names.join(" or "));
+                    if !missing.contains(&item) {
+                        missing.push(item);
+                    }
+                }
+                Some(f) if Some(&f) != need.formats.first() => {
+                    let item =
+                        format!("{f:?} instead of {:?} ({})", need.formats[0], need.fallback);
+                    if !fallbacks.contains(&item) {
+                        fallbacks.push(item);
+                    }
+                }
+                Some(_) => {}
+            }
+        }
+        let flags = self.downlevel - caps.downlevel;
+        if !flags.is_empty() {
+            missing.push(format!("the downlevel capability {flags:?}"));
+        }
+        let l = &caps.limits;
+        if self.storage_buffers_per_stage > l.max_storage_buffers_per_shader_stage {
+            missing.push(format!(
+                "{} storage buffers per shader stage (the device has {})",
+                self.storage_buffers_per_stage, l.max_storage_buffers_per_shader_stage
+            ));
+        }
+        if self.storage_textures_per_stage > l.max_storage_textures_per_shader_stage {
+            missing.push(format!(
+                "{} storage textures per shader stage (the device has {})",
+                self.storage_textures_per_stage, l.max_storage_textures_per_shader_stage
+            ));
+        }
+        if !missing.is_empty() {
+            Verdict::Cannot(missing)
+        } else if !fallbacks.is_empty() {
+            Verdict::Fallback(fallbacks)
+        } else {
+            Verdict::Runs
+        }
     }
 }
 
@@ -315,6 +437,29 @@ impl Method {
              for a {light} light use {}",
             others.join(", ")
         ))
+    }
+}
+
+impl Method {
+    /// What the method gets on a device with `caps` (its needs and [`AdapterNeeds::BASE`]).
+    pub fn on(self, caps: &Capabilities) -> Verdict {
+        self.0.adapter.check(caps)
+    }
+
+    /// `None` when the method can run on a device with `caps`; else the one-line reason it
+    /// refuses, naming the method, what is missing and the adapter. Checked before any work,
+    /// beside [`Method::refuses`]: `render` exits with it, `compare` and `bench` list the method
+    /// as not applicable, the lab greys its picker entry.
+    pub fn refuses_on(self, caps: &Capabilities) -> Option<String> {
+        match self.on(caps) {
+            Verdict::Cannot(missing) => Some(format!(
+                "method '{self}' needs {}, which the adapter {} does not have; try another \
+                 adapter with --backend (see `dbuffer adapters`)",
+                missing.join(", "),
+                caps.adapter
+            )),
+            _ => None,
+        }
     }
 }
 

@@ -34,6 +34,7 @@ pub static OPACITY: Scaled = Scaled::new(
 
 pub static PLANAR: MethodSpec =
     MethodSpec::new("planar", SHADER, |ctx| Box::new(PlanarShadows::new(ctx)))
+        .adapter(super::needs::PLANAR)
         .about("planar projected shadows (Blinn 1988) onto the flat receivers, stencilled")
         .knobs(&[&OPACITY.0])
         .hard()

@@ -42,6 +42,7 @@ pub static OPEN: Switch = Switch::new(
 pub static SHADOW_VOLUME: MethodSpec = MethodSpec::new("shadow-volume", SHADER, |ctx| {
     Box::new(ShadowVolume::new(ctx))
 })
+.adapter(super::needs::SHADOW_VOLUME)
 .about("stencil shadow volumes from the light centre (Crow 1977), z-fail with caps")
 .knobs(&[&OPEN.0])
 .hard()

@@ -47,6 +47,7 @@ pub static HORIZON: Switch = Switch::new(
 
 pub static WEDGES: MethodSpec =
     MethodSpec::new("wedges", SHADER, |ctx| Box::new(WedgesMethod::new(ctx)))
+        .adapter(super::needs::WEDGES)
         .about("penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)")
         .knobs(&[&OPEN.0, &HORIZON.0])
         .lights(LightKind::Disk); // the coverage of a disk

@@ -224,8 +224,12 @@ pub struct CameraTargets {
     pub width: u32,
     pub height: u32,
     pub color: Texture,
-    /// `color` as its bytes (Rgba8Unorm): what the view pass copies.
+    /// `color` as its bytes (Rgba8Unorm): what the view pass copies and the lab shows.
     pub color_bytes: wgpu::TextureView,
+    /// On a device without view formats (GL): the texture `color_bytes` views, an Rgba8Unorm
+    /// copy of `color` made after each camera pass ([`CameraTargets::copy_bytes`]; a copy
+    /// between formats that differ only in sRGB-ness moves the bytes as they are).
+    pub bytes_copy: Option<Texture>,
     pub data: Texture,
     pub depth: Texture,
     /// Changes whenever the textures are made again (whoever binds them binds again).
@@ -233,7 +237,8 @@ pub struct CameraTargets {
 }
 
 impl CameraTargets {
-    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> CameraTargets {
+    /// `bytes_view`: the device takes a second view format (`DownlevelFlags::VIEW_FORMATS`).
+    pub fn new(device: &wgpu::Device, width: u32, height: u32, bytes_view: bool) -> CameraTargets {
         use wgpu::TextureUsages as U;
         let usage = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
         let color = device.create_texture(&wgpu::TextureDescriptor {
@@ -248,14 +253,32 @@ impl CameraTargets {
             dimension: wgpu::TextureDimension::D2,
             format: COLOR_FORMAT,
             usage,
-            view_formats: &[COLOR_BYTES_FORMAT],
+            view_formats: if bytes_view {
+                &[COLOR_BYTES_FORMAT]
+            } else {
+                &[]
+            },
         });
         let color_view = color.create_view(&wgpu::TextureViewDescriptor::default());
-        let color_bytes = color.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("CameraTargets::color_bytes"),
-            format: Some(COLOR_BYTES_FORMAT),
-            ..Default::default()
+        let bytes_copy = (!bytes_view).then(|| {
+            Texture::new(
+                device,
+                "CameraTargets::bytes_copy",
+                (width, height),
+                COLOR_BYTES_FORMAT,
+                U::COPY_DST | U::TEXTURE_BINDING,
+            )
         });
+        let color_bytes = match &bytes_copy {
+            Some(copy) => copy
+                .texture
+                .create_view(&wgpu::TextureViewDescriptor::default()),
+            None => color.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("CameraTargets::color_bytes"),
+                format: Some(COLOR_BYTES_FORMAT),
+                ..Default::default()
+            }),
+        };
         CameraTargets {
             width,
             height,
@@ -264,6 +287,7 @@ impl CameraTargets {
                 view: color_view,
             },
             color_bytes,
+            bytes_copy,
             data: Texture::new(
                 device,
                 "CameraTargets::data",
@@ -279,6 +303,19 @@ impl CameraTargets {
                 usage,
             ),
             generation: next_generation(),
+        }
+    }
+}
+
+impl CameraTargets {
+    /// Bring `bytes_copy` (if there is one) up to date with `color`.
+    pub fn copy_bytes(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(copy) = &self.bytes_copy {
+            encoder.copy_texture_to_texture(
+                self.color.texture.as_image_copy(),
+                copy.texture.as_image_copy(),
+                self.color.texture.size(),
+            );
         }
     }
 }

@@ -58,20 +58,14 @@ fn storage(
     }
 }
 
-fn texture(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    depth: bool,
-) -> wgpu::BindGroupLayoutEntry {
+/// A texture read with `textureLoad`; a depth texture is bound as an unfilterable float one
+/// too, which every backend can load (GLSL has no `textureLoad` of a depth texture).
+fn texture(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
         ty: wgpu::BindingType::Texture {
-            sample_type: if depth {
-                wgpu::TextureSampleType::Depth
-            } else {
-                wgpu::TextureSampleType::Float { filterable: false }
-            },
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
             view_dimension: wgpu::TextureViewDimension::D2,
             multisampled: false,
         },
@@ -105,11 +99,11 @@ impl FusedListsPass {
             let merge_layout = layout(
                 "FusedListsPass::merge_layout",
                 &[
-                    texture(0, S::COMPUTE, false),
-                    texture(1, S::COMPUTE, false),
-                    texture(2, S::COMPUTE, false),
-                    texture(3, S::COMPUTE, false),
-                    texture(4, S::COMPUTE, false),
+                    texture(0, S::COMPUTE),
+                    texture(1, S::COMPUTE),
+                    texture(2, S::COMPUTE),
+                    texture(3, S::COMPUTE),
+                    texture(4, S::COMPUTE),
                     storage(5, S::COMPUTE, false),
                 ],
             );
@@ -126,8 +120,8 @@ impl FusedListsPass {
             let maps_layout = layout(
                 "FusedListsPass::maps_layout",
                 &[
-                    texture(11, S::COMPUTE, false),
-                    texture(12, S::COMPUTE, true),
+                    texture(11, S::COMPUTE),
+                    texture(12, S::COMPUTE),
                     storage(13, S::COMPUTE, true),
                     wgpu::BindGroupLayoutEntry {
                         binding: 14,

@@ -6,6 +6,7 @@
 
 pub mod camera;
 pub mod dbuffer_volumes;
+pub mod depth_copy;
 pub mod extended_light_map;
 pub mod floor;
 pub mod fused_layers;

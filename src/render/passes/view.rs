@@ -295,8 +295,9 @@ impl ViewLayout {
                     wgpu::BindGroupLayoutEntry {
                         binding: 3,
                         visibility: both,
+                        // An unfilterable float: GLSL has no `textureLoad` of a depth texture.
                         ty: wgpu::BindingType::Texture {
-                            sample_type: wgpu::TextureSampleType::Depth,
+                            sample_type: wgpu::TextureSampleType::Float { filterable: false },
                             view_dimension: D::D2,
                             multisampled: false,
                         },

@@ -1,0 +1,147 @@
+//! `dbuffer adapters`, `-v`'s adapter line, and how an error is printed.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use anyhow::Result;
+use dbuffer::render::adapter::{self, Verdict};
+use dbuffer::render::{GpuContext, Method, RenderError};
+
+static VERBOSE: AtomicBool = AtomicBool::new(false);
+
+/// `-v` was given (on any command).
+pub fn set_verbose(on: bool) {
+    VERBOSE.store(on, Ordering::Relaxed);
+}
+
+/// With `-v`: which adapter `ctx` is on and why it was chosen (on stderr).
+pub fn chosen(ctx: &GpuContext) {
+    if VERBOSE.load(Ordering::Relaxed) {
+        errln!("adapter   {}", adapter::info_line(&ctx.adapter));
+        errln!("chosen by {}", ctx.chosen);
+    }
+}
+
+/// Every adapter on every backend wgpu looks at, and what each method gets on it.
+pub fn list() -> Result<()> {
+    let (adapters, why) = adapter::every_adapter();
+    outln!("backends  {why}");
+    if adapters.is_empty() {
+        outln!(
+            "no adapter found: on a machine without a GPU install Mesa's Vulkan driver \
+             (Debian: mesa-vulkan-drivers) or its GL one (libegl1 libegl-mesa0 libgl1-mesa-dri)"
+        );
+        return Ok(());
+    }
+    let width = Method::all()
+        .iter()
+        .map(|m| m.name().len())
+        .max()
+        .unwrap_or(0);
+    for (i, a) in adapters.iter().enumerate() {
+        outln!();
+        outln!("adapter {i}: {}", adapter::info_line(&a.info));
+        for &m in Method::all() {
+            let (word, detail) = match m.on(&a.caps) {
+                Verdict::Runs => ("runs", String::new()),
+                Verdict::Fallback(f) => ("runs with fallback", f.join("; ")),
+                Verdict::Cannot(missing) => ("cannot", format!("needs {}", missing.join(", "))),
+            };
+            if detail.is_empty() {
+                outln!("  {:<width$}  {word}", m.name());
+            } else {
+                outln!("  {:<width$}  {word}: {detail}", m.name());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// What `main` prints for an error: `dbuffer: ` and the causes on one line (newlines in a name
+/// escaped, so a path cannot fake a line); a GPU's own message (wgpu's, several lines) with its
+/// cause chain on indented lines under it, and what the user can do.
+pub fn error_lines(e: &anyhow::Error) -> String {
+    let gpu = e
+        .chain()
+        .find_map(|c| c.downcast_ref::<RenderError>())
+        .filter(|r| {
+            matches!(
+                r,
+                RenderError::Gpu(_)
+                    | RenderError::Device(_)
+                    | RenderError::Lost(_)
+                    | RenderError::NoAdapter(_)
+            )
+        });
+    let Some(gpu) = gpu else {
+        return format!("dbuffer: {}\n", format!("{e:#}").replace('\n', "\\n"));
+    };
+    let mut out = String::from("dbuffer: ");
+    for context in e
+        .chain()
+        .take_while(|c| c.downcast_ref::<RenderError>().is_none())
+    {
+        out.push_str(&context.to_string().replace('\n', "\\n"));
+        out.push_str(": ");
+    }
+    let message = gpu.to_string();
+    let mut lines = message
+        .lines()
+        .map(str::trim_end)
+        .filter(|l| !l.trim().is_empty() && l.trim() != "Caused by:");
+    out.push_str(lines.next().unwrap_or_default());
+    out.push('\n');
+    for line in lines {
+        out.push_str("  ");
+        out.push_str(line);
+        out.push('\n');
+    }
+    if matches!(gpu, RenderError::Gpu(_) | RenderError::Device(_)) {
+        out.push_str(
+            "  what you can do: try another backend or adapter (--backend vulkan|gl|metal|dx12; \
+             `dbuffer adapters` lists them and what each method needs), and report this \
+             message with that list\n",
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// wgpu's validation error as the GL backend printed it before (issue 23): one line with
+    /// literal `\n`s. Now its message, then its causes on indented lines, then what to do.
+    #[test]
+    fn a_gpu_error_is_its_message_and_indented_causes() {
+        let wgpu = "Validation Error\n\nCaused by:\n  In Device::create_render_pipeline, label = \
+                    'ShadowMapPass::pipeline'\n    Color state [0] is invalid\n      Format \
+                    R32Float is not renderable\n";
+        let e = anyhow::Error::new(RenderError::Gpu(wgpu.into())).context("rendering");
+        let text = error_lines(&e);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines[0],
+            "dbuffer: rendering: the GPU reported an error: Validation Error"
+        );
+        assert_eq!(
+            lines[1],
+            "    In Device::create_render_pipeline, label = 'ShadowMapPass::pipeline'"
+        );
+        assert_eq!(lines[3], "        Format R32Float is not renderable");
+        assert!(lines[4].starts_with("  what you can do: try another backend"));
+        assert!(
+            !text.contains("\\n") && !text.contains("Caused by"),
+            "{text}"
+        );
+    }
+
+    /// Any other error stays one line, a newline in a name escaped (it cannot fake a line).
+    #[test]
+    fn other_errors_stay_one_line() {
+        let e = anyhow::anyhow!("cannot read a\nb.obj").context("cannot load scene 'x'");
+        assert_eq!(
+            error_lines(&e),
+            "dbuffer: cannot load scene 'x': cannot read a\\nb.obj\n"
+        );
+    }
+}
