@@ -5,7 +5,7 @@
 # mesa-vulkan-drivers + libvulkan1: lavapipe, Mesa's Vulkan on the CPU, so wgpu has an adapter
 # on machines without a GPU (and a GPU machine keeps its own driver).
 # libegl1 + libegl-mesa0 + libgl1-mesa-dri: llvmpipe through EGL, wgpu's GL backend
-# (`--backend gl`, the GL tests of tests/adapters.rs).
+# (`--backend gl`, the GL tests of tests/cli/adapters.rs).
 # xvfb + xauth + the X11 client libraries winit loads: the lab's window, and its smoke run under
 # Xvfb in scripts/test.sh (scripts/xvfb-smoke.sh).
 DBUFFER_PACKAGES=(mesa-vulkan-drivers libvulkan1 libegl1 libegl-mesa0 libgl1-mesa-dri xvfb xauth libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1)

@@ -5,6 +5,7 @@
 
 mod support;
 
+mod adapters;
 mod animate_cli;
 mod bad_inputs;
 mod bench_cli;

@@ -219,7 +219,7 @@ pub const SHADOW_MAP: [FormatNeed; 2] = [
 
 /// The stencil shadow volumes (`passes::stencil_volumes`): positions and visibility as floats, a
 /// half-float fill count, and a stencil (with 24-bit depth where 32-bit float depth with stencil
-/// is missing: the volumes' depth test is coarser, and `tests/hard_methods.rs` holds
+/// is missing: the volumes' depth test is coarser, and `tests/gpu/hard_methods.rs` holds
 /// `shadow-volume` on it to at most 0.05 % of pixels off the exact hard shadow).
 pub const STENCIL_VOLUMES: [FormatNeed; 4] = [
     FormatNeed::new(Usage::Render, &[wgpu::TextureFormat::Rgba32Float]),

@@ -12,8 +12,7 @@ use dbuffer::render::offline::Offline;
 use dbuffer::render::{FrameRequest, GpuContext, Method, RenderError};
 use dbuffer::scene::{self, Scene};
 
-#[path = "support/cli.rs"]
-mod cli;
+use crate::support as cli;
 
 fn temp_dir(name: &str) -> PathBuf {
     cli::temp_dir("adapters", name)
