@@ -27,14 +27,14 @@ use crate::scene::{DiskLight, LightKind};
 
 pub static DBUFFER: MethodSpec =
     MethodSpec::new("dbuffer", SHADER, |ctx| Box::new(DBuffer::new(ctx, false)))
-        .adapter(super::needs::DBUFFER)
+        .adapter(super::SHADOW_MAPPED)
         .about("D-buffer soft shadows (Jakobsen et al. 2004)")
         .lights(LightKind::Disk); // its volumes are the disk's
 
 pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER, |ctx| {
     Box::new(DBuffer::new(ctx, true))
 })
-.adapter(super::needs::DBUFFER)
+.adapter(super::SHADOW_MAPPED)
 .about("D-buffer with silhouettes from the light centre only")
 .lights(LightKind::Disk); // its volumes are the disk's
 

@@ -19,6 +19,10 @@
 //! paper's V(t). So do all pixels when the candidate edges exceed [`MAX_FUSED_EDGES`] (or what
 //! the adapter's storage bindings hold).
 
+use wgpu::DownlevelFlags as D;
+use wgpu::TextureFormat as F;
+use super::{AdapterNeeds, SHADOW_MAP};
+use crate::render::adapter::{FormatNeed, Usage};
 use crate::scene::LightKind;
 use std::time::Instant;
 
@@ -68,12 +72,32 @@ pub static MASK_SAMPLES: Knob = Knob::int(
 pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, |ctx| {
     Box::new(DBufferFused::new(ctx))
 })
-.adapter(super::needs::DBUFFER_FUSED)
+.adapter(NEEDS)
 .about("D-buffer with every silhouette chord (occluder fusion)")
 .knobs(&[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES])
 .lights(LightKind::Disk); // its chords cut the disk
 
 const SHADER: &str = "methods/dbuffer_fused.wgsl";
+
+/// What it needs of the adapter: the layers (half-float counts, float receivers, the first layer's depth), the
+/// edge lists built by compute and read back in fragment shaders (4 storage buffers a stage),
+/// the maps written as a storage texture.
+const NEEDS: AdapterNeeds = AdapterNeeds {
+    formats: &[
+        SHADOW_MAP[0],
+        SHADOW_MAP[1],
+        FormatNeed::new(Usage::Render, &[F::R16Float]),
+        FormatNeed::new(Usage::Render, &[F::Rgba32Float]),
+        FormatNeed::new(Usage::Render, &[F::R8Unorm]),
+        FormatNeed::new(Usage::Storage, &[F::Rgba32Float]),
+    ],
+    downlevel: D::COMPUTE_SHADERS
+        .union(D::FRAGMENT_WRITABLE_STORAGE)
+        .union(D::VERTEX_STORAGE),
+    storage_buffers_per_stage: 4,
+    storage_textures_per_stage: 1,
+    ..AdapterNeeds::NONE
+};
 
 /// The method's light-space channels: textures 0 (`|cx_o|`) and 1 (the maps of
 /// `passes::fused_lists`: crossings, farthest crossing height, list count, overflow).

@@ -12,6 +12,9 @@
 //! light sees (blocky under magnification, wrong beside silhouettes where a texel belongs to
 //! another surface).
 
+use wgpu::TextureFormat as F;
+use super::{AdapterNeeds, SHADOW_MAP};
+use crate::render::adapter::{FormatNeed, Usage};
 use glam::{Mat4, Vec3, Vec4};
 
 use super::{
@@ -44,11 +47,19 @@ pub static PATTERN: Choice = Choice::new(
 pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec::new("extended-light-map", SHADER, |ctx| {
     Box::new(ElmMethod::new(ctx))
 })
-.adapter(super::needs::EXTENDED_LIGHT_MAP)
+.adapter(NEEDS)
 .about("extended light map (Brabec et al. 2000): light colour in RGB, distance in A")
 .knobs(&[&DEPTH_BITS, &PATTERN.0])
 .hard()
 .overlay_note("extended-light-map: its channels are in the View panel");
+
+/// What it needs of the adapter: float maps and the light's gobo, filtered.
+const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[
+    SHADOW_MAP[0],
+    SHADOW_MAP[1],
+    FormatNeed::new(Usage::Render, &[F::Rgba32Float]),
+    FormatNeed::new(Usage::Filter, &[F::Rgba8UnormSrgb]),
+]);
 
 const SHADER: &str = "methods/extended_light_map.wgsl";
 

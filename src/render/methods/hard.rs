@@ -7,7 +7,7 @@ use super::MethodSpec;
 pub static HARD: MethodSpec = MethodSpec::new("hard", SHADER, |ctx| {
     Box::new(OnShadowMap::new(ctx, &FLAVOR))
 })
-.adapter(super::needs::SHADOW_MAPPED)
+.adapter(super::SHADOW_MAPPED)
 .about("hard shadow map from the light centre")
 .hard();
 

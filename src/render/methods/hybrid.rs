@@ -12,6 +12,8 @@
 //! leaks). The reconstructed edges (the walls' tops) are the lab's overlay: this method's
 //! [`MethodState::geometry`] holds them as silhouette edges, a frame after the walls were made.
 
+use wgpu::DownlevelFlags as D;
+use super::{AdapterNeeds, SHADOW_MAP, STENCIL_VOLUMES};
 use super::{
     require, v_texture_entries, CameraGroup, Knobs, MethodSpec, MethodState, Prepare, Scaled,
     SharedMaps, Switch,
@@ -51,11 +53,27 @@ pub static EDGES: Switch = Switch::new(
 
 pub static HYBRID: MethodSpec =
     MethodSpec::new("hybrid", SHADER, |ctx| Box::new(HybridMethod::new(ctx)))
-        .adapter(super::needs::HYBRID)
+        .adapter(NEEDS)
         .about("shadow volumes rebuilt from the light's depth map (McCool 2000), one stencil bit")
         .knobs(&[&THRESHOLD.0, &TEMPLATES.0, &EDGES.0])
         .hard()
         .overlay_note("hybrid: silhouette edges = rebuilt from the depth map");
+
+/// What it needs of the adapter: the shadow map, the stencil volumes and its walls found by a compute pass (six
+/// storage buffers in its compute stage).
+const NEEDS: AdapterNeeds = AdapterNeeds {
+    formats: &[
+        SHADOW_MAP[0],
+        SHADOW_MAP[1],
+        STENCIL_VOLUMES[0],
+        STENCIL_VOLUMES[1],
+        STENCIL_VOLUMES[2],
+        STENCIL_VOLUMES[3],
+    ],
+    downlevel: D::COMPUTE_SHADERS,
+    storage_buffers_per_stage: 6,
+    ..AdapterNeeds::NONE
+};
 
 const SHADER: &str = "methods/hybrid.wgsl";
 

@@ -14,6 +14,8 @@
 //! (`line-fig8-overlap`), and the transition is linear in the image where the truth is rational
 //! (`line-fig3-tilted`).
 
+use wgpu::DownlevelFlags as D;
+use super::{AdapterNeeds, SHADOW_MAP};
 use glam::{Mat4, Vec3};
 
 use super::{require, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
@@ -35,12 +37,21 @@ pub static SAMPLES: Knob = Knob::int(
 
 pub static LINEAR_SSM: MethodSpec =
     MethodSpec::new("linear-ssm", SHADER, |ctx| Box::new(LinearSsm::new(ctx)))
-        .adapter(super::needs::LINEAR_SSM)
+        .adapter(NEEDS)
         .about("soft shadow maps for a linear light (Heidrich et al. 2000)")
         .knobs(&[&SAMPLES])
         .lights(LightKind::Line) // Heidrich et al.'s maps along a segment
         .bench("linear-ssm 2", &[(&SAMPLES, 2)])
         .line_samples(|line, knobs| sample_points(line, knobs.get(&SAMPLES)));
+
+/// What it needs of the adapter: the sample maps and the skins found by compute passes (six storage buffers in
+/// the size-extract pipeline's compute stage).
+const NEEDS: AdapterNeeds = AdapterNeeds {
+    formats: &SHADOW_MAP,
+    downlevel: D::COMPUTE_SHADERS,
+    storage_buffers_per_stage: 6,
+    ..AdapterNeeds::NONE
+};
 
 const SHADER: &str = "methods/linear_ssm.wgsl";
 

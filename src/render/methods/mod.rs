@@ -1,7 +1,7 @@
 //! The shadow methods. Each is one module here with its passes, its WGSL
 //! (`shaders/methods/NAME.wgsl`: the method's `method_visibility`, pasted into the shared camera
 //! pass), its knobs and its CPU twin where it has one. [`ALL`] is the registry: adding a method is
-//! its module (with its WGSL and snapshot), a `pub mod` line and one line in [`ALL`]. Everything
+//! its module (with its WGSL and snapshot) and one line in the `registry!` that makes [`ALL`]. Everything
 //! the rest of the program knows about a method — its shader, knobs, bench label, overlay note,
 //! light sample points — is in its [`MethodSpec`], so nothing else matches on its name (the
 //! shader table is built from `shaders/` by `build.rs`; `tests/cli/registry.rs` walks [`ALL`]).
@@ -12,24 +12,9 @@
 //! binds was). What every method shares — the surfaces, shading, V(t), the targets — is the
 //! camera pass's ([`super::passes::camera`]).
 
-pub mod dbuffer;
-pub mod dbuffer_fused;
-pub mod extended_light_map;
-pub mod hard;
-pub mod hybrid;
-pub mod linear_ssm;
 pub mod on_shadow_map;
-pub mod pcf;
-pub mod pcss;
-pub mod planar;
-pub mod reference;
-pub mod reference_hard;
-pub mod sampled;
-pub mod shadow_volume;
-pub mod wedges;
 
 mod knobs;
-pub mod needs;
 pub use knobs::{all_knobs, Choice, Knob, KnobKind, KnobType, Knobs, Scaled, Switch, MAX_KNOBS};
 
 use std::any::Any;
@@ -50,24 +35,33 @@ use crate::geometry::light_view::LightView;
 use crate::geometry::{PreparedCasters, SceneGeometry, VtVariant};
 use crate::scene::{DiskLight, LightKind, LineLight, Scene};
 
-/// Every method, in the order pickers, `compare` and `bench` list them. The registry.
-pub const ALL: &[Method] = &[
-    Method(&dbuffer::DBUFFER),
-    Method(&dbuffer::DBUFFER_CENTER),
-    Method(&dbuffer_fused::DBUFFER_FUSED),
-    Method(&hard::HARD),
-    Method(&pcf::PCF),
-    Method(&pcss::PCSS),
-    Method(&sampled::SAMPLED),
-    Method(&linear_ssm::LINEAR_SSM),
-    Method(&shadow_volume::SHADOW_VOLUME),
-    Method(&planar::PLANAR),
-    Method(&hybrid::HYBRID),
-    Method(&extended_light_map::EXTENDED_LIGHT_MAP),
-    Method(&wedges::WEDGES),
-    Method(&reference::REFERENCE),
-    Method(&reference_hard::REFERENCE_HARD),
-];
+/// Declares each method module and [`ALL`] from one line a module: `module: ITS_SPECS;`.
+macro_rules! registry {
+    ($($(#[$doc:meta])* $module:ident: $($spec:ident),+;)+) => {
+        $($(#[$doc])* pub mod $module;)+
+
+        /// Every method, in the order pickers, `compare` and `bench` list them.
+        pub const ALL: &[Method] = &[$($(Method(&$module::$spec)),+),+];
+    };
+}
+
+// The registry: adding a method is its module and one line here.
+registry! {
+    dbuffer: DBUFFER, DBUFFER_CENTER;
+    dbuffer_fused: DBUFFER_FUSED;
+    hard: HARD;
+    pcf: PCF;
+    pcss: PCSS;
+    sampled: SAMPLED;
+    linear_ssm: LINEAR_SSM;
+    shadow_volume: SHADOW_VOLUME;
+    planar: PLANAR;
+    hybrid: HYBRID;
+    extended_light_map: EXTENDED_LIGHT_MAP;
+    wedges: WEDGES;
+    reference: REFERENCE;
+    reference_hard: REFERENCE_HARD;
+}
 
 /// What a method is, for the registry: everything the rest of the program needs to know about
 /// it, so that nothing outside its module matches on its name.
@@ -216,6 +210,12 @@ pub const SHADOW_MAP: [FormatNeed; 2] = [
     FormatNeed::new(Usage::Render, &[wgpu::TextureFormat::R32Float]),
     FormatNeed::new(Usage::Depth, &[wgpu::TextureFormat::Depth32Float]),
 ];
+
+/// What a method drawn with the centre shadow map alone needs: `hard`, `pcf`, `pcss`, `sampled`
+/// and the D-buffer's `|cx_o|` (a method whose needs are its own states them in its module, a
+/// `const NEEDS`; `reference` and `reference-hard` draw V from the CPU with the camera pass and
+/// need only [`AdapterNeeds::BASE`]).
+pub const SHADOW_MAPPED: AdapterNeeds = AdapterNeeds::formats(&SHADOW_MAP);
 
 /// The stencil shadow volumes (`passes::stencil_volumes`): positions and visibility as floats, a
 /// half-float fill count, and a stencil (with 24-bit depth where 32-bit float depth with stencil

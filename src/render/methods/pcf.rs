@@ -16,7 +16,7 @@ pub static RADIUS: Knob = Knob::int(
 pub static PCF: MethodSpec = MethodSpec::new("pcf", SHADER, |ctx| {
     Box::new(OnShadowMap::new(ctx, &FLAVOR))
 })
-.adapter(super::needs::SHADOW_MAPPED)
+.adapter(super::SHADOW_MAPPED)
 .about("percentage-closer filtering of the shadow map")
 .knobs(&[&RADIUS])
 .hard();

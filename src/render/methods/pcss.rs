@@ -24,7 +24,7 @@ pub static FILTER_TAPS: Knob = Knob::int(
 pub static PCSS: MethodSpec = MethodSpec::new("pcss", SHADER, |ctx| {
     Box::new(OnShadowMap::new(ctx, &FLAVOR))
 })
-.adapter(super::needs::SHADOW_MAPPED)
+.adapter(super::SHADOW_MAPPED)
 .about("percentage-closer soft shadows (Fernando 2005)")
 .knobs(&[&BLOCKER_TAPS, &FILTER_TAPS])
 .lights(LightKind::Disk) // a blocker search over a disk

@@ -11,6 +11,9 @@
 //! darkens instead of blacking out, which shows the stencil at work: where projected triangles
 //! overlap the pixel is still darkened once.
 
+use wgpu::TextureFormat as F;
+use super::{AdapterNeeds, STENCIL_VOLUMES};
+use crate::render::adapter::{FormatNeed, Usage};
 use std::sync::Arc;
 
 use super::{
@@ -34,11 +37,20 @@ pub static OPACITY: Scaled = Scaled::new(
 
 pub static PLANAR: MethodSpec =
     MethodSpec::new("planar", SHADER, |ctx| Box::new(PlanarShadows::new(ctx)))
-        .adapter(super::needs::PLANAR)
+        .adapter(NEEDS)
         .about("planar projected shadows (Blinn 1988) onto the flat receivers, stencilled")
         .knobs(&[&OPACITY.0])
         .hard()
         .overlay_note("planar: shadows on flat objects only, no volumes");
+
+/// What it needs of the adapter: the stencil volumes and a half-float shade it blends.
+const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[
+    STENCIL_VOLUMES[0],
+    STENCIL_VOLUMES[1],
+    STENCIL_VOLUMES[2],
+    STENCIL_VOLUMES[3],
+    FormatNeed::new(Usage::Blend, &[F::R16Float]),
+]);
 
 const SHADER: &str = "methods/planar.wgsl";
 

@@ -22,7 +22,7 @@ pub static LIGHTS: Knob = Knob::int(
 
 pub static SAMPLED: MethodSpec =
     MethodSpec::new("sampled", SHADER, |ctx| Box::new(Sampled::new(ctx)))
-        .adapter(super::needs::SAMPLED)
+        .adapter(super::SHADOW_MAPPED)
         .about("N shadow maps from points on the light, averaged")
         .knobs(&[&LIGHTS])
         .bench("sampled 16", &[(&LIGHTS, 16)])

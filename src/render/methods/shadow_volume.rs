@@ -16,6 +16,7 @@
 //! `--sv-open 1` (the default) the two-sided count, exact for any triangle soup at about twice
 //! the fill.
 
+use super::{AdapterNeeds, STENCIL_VOLUMES};
 use std::time::Instant;
 
 use glam::Vec3;
@@ -42,11 +43,14 @@ pub static OPEN: Switch = Switch::new(
 pub static SHADOW_VOLUME: MethodSpec = MethodSpec::new("shadow-volume", SHADER, |ctx| {
     Box::new(ShadowVolume::new(ctx))
 })
-.adapter(super::needs::SHADOW_VOLUME)
+.adapter(NEEDS)
 .about("stencil shadow volumes from the light centre (Crow 1977), z-fail with caps")
 .knobs(&[&OPEN.0])
 .hard()
 .overlay_note("shadow-volume: from the light centre; umbra volume = Crow's");
+
+/// What it needs of the adapter: the stencil volumes.
+const NEEDS: AdapterNeeds = AdapterNeeds::formats(&STENCIL_VOLUMES);
 
 const SHADER: &str = "methods/shadow_volume.wgsl";
 
