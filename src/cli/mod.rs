@@ -68,7 +68,7 @@ pub struct MethodFlags {
 impl clap::FromArgMatches for MethodFlags {
     fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
         let mut given = Knobs::default();
-        for k in all_knobs() {
+        for &k in all_knobs() {
             if let Some(&v) = m.get_one::<u32>(k.name) {
                 given = given.with(k, v);
             }

@@ -108,7 +108,7 @@ fn every_knob_is_a_flag_of_render_and_compare() {
 #[test]
 fn a_switch_takes_numbers_and_words_and_refuses_the_rest_by_flag() {
     let switch = all_knobs()
-        .into_iter()
+        .iter()
         .find(|k| k.kind == KnobKind::Switch)
         .expect("a method has an on/off knob");
     let dir = cli::temp_dir("registry", "switch");

@@ -11,6 +11,7 @@
 
 use std::fmt;
 use std::ops::RangeInclusive;
+use std::sync::OnceLock;
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
@@ -232,17 +233,21 @@ impl KnobType for Scaled {
 /// At most this many distinct knobs over all methods (checked by a test).
 pub const MAX_KNOBS: usize = 24;
 
-/// Every distinct knob of the registry, in registry order.
-pub fn all_knobs() -> Vec<&'static Knob> {
-    let mut out: Vec<&'static Knob> = Vec::new();
-    for m in ALL {
-        for &k in m.knobs() {
-            if !out.iter().any(|o| o.name == k.name) {
-                out.push(k);
+/// Every distinct knob of the registry, in registry order. Gathered once: every knob read and
+/// every comparison of two [`Knobs`] (each frame the lab asks for) looks its slot up here.
+pub fn all_knobs() -> &'static [&'static Knob] {
+    static ALL_KNOBS: OnceLock<Vec<&'static Knob>> = OnceLock::new();
+    ALL_KNOBS.get_or_init(|| {
+        let mut out: Vec<&'static Knob> = Vec::new();
+        for m in ALL {
+            for &k in m.knobs() {
+                if !out.iter().any(|o| o.name == k.name) {
+                    out.push(k);
+                }
             }
         }
-    }
-    out
+        out
+    })
 }
 
 fn knob_slot(name: &str) -> Option<usize> {
@@ -264,7 +269,7 @@ pub struct Knobs {
 /// renders a frame again.
 impl PartialEq for Knobs {
     fn eq(&self, other: &Self) -> bool {
-        all_knobs().into_iter().all(|k| self.raw(k) == other.raw(k))
+        all_knobs().iter().all(|k| self.raw(k) == other.raw(k))
     }
 }
 
@@ -323,8 +328,8 @@ impl Knobs {
     /// Every knob that was set, with its value, in registry order.
     pub fn set_ones(&self) -> impl Iterator<Item = (&'static Knob, u32)> + '_ {
         all_knobs()
-            .into_iter()
-            .filter_map(|k| Some((k, self.given(k)?)))
+            .iter()
+            .filter_map(|&k| Some((k, self.given(k)?)))
     }
 
     /// Forget the values out of their knob's range (a hand-edited or old settings file).
@@ -340,7 +345,7 @@ impl Knobs {
 
     /// Every knob in its range, or which one is not and what was expected (naming the flag).
     pub fn validate(&self) -> Result<(), String> {
-        match all_knobs().into_iter().find_map(|k| k.check(self.raw(k))) {
+        match all_knobs().iter().find_map(|k| k.check(self.raw(k))) {
             Some(e) => Err(e),
             None => Ok(()),
         }
