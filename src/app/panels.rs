@@ -223,10 +223,7 @@ impl LabApp {
         let light = self.doc.file.light.kind();
         // … and so are those the device cannot run (what it lacks on hover).
         let caps = self.core.as_ref().map(|c| c.ctx.caps.clone());
-        let refuses = |m: Method| {
-            m.refuses(light)
-                .or_else(|| caps.as_ref().and_then(|c| m.refuses_on(c)))
-        };
+        let refuses = |m: Method| m.refusal(light, caps.as_ref());
         ui.horizontal_wrapped(|ui| {
             for &m in Method::all() {
                 let refused = refuses(m);

@@ -302,9 +302,8 @@ impl LabApp {
             };
             // A method that cannot take this light draws nothing and says why (never a
             // picture made with another light).
-            if let Some(why) = method
-                .refuses(core.session.scene().light.kind())
-                .or_else(|| method.refuses_on(&core.ctx.caps))
+            if let Some(why) =
+                method.refusal(core.session.scene().light.kind(), Some(&core.ctx.caps))
             {
                 self.viewport.shown[i] = None;
                 self.viewport.keys[i] = None;

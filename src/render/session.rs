@@ -414,11 +414,9 @@ impl Session {
         let request = job.request;
         request.validate(ctx)?;
         let method = request.method;
-        if let Some(why) = method.refuses(self.scene.light.kind()) {
-            return Err(RenderError::Request(why));
-        }
-        // Before any of its pipelines is made: a device that lacks what it needs says so.
-        if let Some(why) = method.refuses_on(&ctx.caps) {
+        // Before any of its pipelines is made: a light it cannot take, or a device that lacks
+        // what it needs, says so.
+        if let Some(why) = method.refusal(self.scene.light.kind(), Some(&ctx.caps)) {
             return Err(RenderError::Request(why));
         }
         let state = self

@@ -446,6 +446,14 @@ impl Method {
         self.0.adapter.check(caps)
     }
 
+    /// Why the method cannot draw here — a light it does not take ([`Method::refuses`]), else a
+    /// device without what it needs ([`Method::refuses_on`], when the device is known) — or
+    /// `None`: what the session and the lab check before every frame.
+    pub fn refusal(self, light: LightKind, caps: Option<&Capabilities>) -> Option<String> {
+        self.refuses(light)
+            .or_else(|| caps.and_then(|c| self.refuses_on(c)))
+    }
+
     /// `None` when the method can run on a device with `caps`; else the one-line reason it
     /// refuses, naming the method, what is missing and the adapter. Checked before any work,
     /// beside [`Method::refuses`]: `render` exits with it, `compare` and `bench` list the method
