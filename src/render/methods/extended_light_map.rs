@@ -231,11 +231,10 @@ impl MethodState for ElmMethod {
 
     fn light_maps<'a>(&'a self, _shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
         let t = self.elm.targets().filter(|_| self.made.is_some())?;
-        let textures = [&t.map, &t.map, &t.map];
-        Some(LightMaps::new(
+        Some(LightMaps::single(
             t.size,
             self.view_proj,
-            textures,
+            &t.map,
             CHANNELS,
             t.generation,
         ))

@@ -604,6 +604,17 @@ impl<'a> LightMaps<'a> {
             generation,
         }
     }
+
+    /// The maps of one texture whose components are all the channels.
+    pub fn single(
+        size: u32,
+        view_proj: Mat4,
+        texture: &'a super::Texture,
+        channels: &'static [Channel],
+        generation: u64,
+    ) -> LightMaps<'a> {
+        LightMaps::new(size, view_proj, [texture; 3], channels, generation)
+    }
 }
 
 /// One channel of [`LightMaps`].

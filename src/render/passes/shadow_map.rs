@@ -151,11 +151,10 @@ impl ShadowMap {
     /// The map as light-space maps, once it has been made.
     pub fn light_maps(&self) -> Option<LightMaps<'_>> {
         let t = self.targets.as_ref().filter(|_| self.made_for.is_some())?;
-        let textures = [&t.distance, &t.distance, &t.distance];
-        Some(LightMaps::new(
+        Some(LightMaps::single(
             t.size,
             self.view_proj,
-            textures,
+            &t.distance,
             CHANNELS,
             t.generation,
         ))
