@@ -7,15 +7,16 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use dbuffer::geometry::volumes::build_caster;
 use dbuffer::geometry::{CasterMesh, VolumeParams};
-use dbuffer::scene::{self, shapes, DiskLight, Mesh};
+use dbuffer::scene::{self, shapes, AreaLight, Mesh, Outline};
 use glam::{Affine3A, Vec3};
 
-fn light() -> DiskLight {
-    DiskLight {
+fn light() -> AreaLight {
+    AreaLight {
         center: Vec3::new(0.3, 4.0, -0.2),
         normal: Vec3::new(0.1, -1.0, 0.05).normalize(),
         radius: 0.6,
         intensity: 1.0,
+        outline: Outline::Disk,
     }
 }
 

@@ -7,7 +7,8 @@
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 
-// (|cx_uv|, |cx_s|) and (|cx_pv|, |cx_s|): 0 where no umbra exit / penumbra entry.
+// (|cx_uv|, |cx_s|, lit side) and (|cx_pv|, |cx_s|, lit side): 0 where no umbra exit / penumbra
+// entry. The lit side is the chord's direction V exact needs under a polygon light.
 @group(1) @binding(2) var d_u: texture_2d<f32>;
 @group(1) @binding(3) var d_p: texture_2d<f32>;
 
@@ -18,7 +19,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     // Hidden from c: the umbra's exit U; visible: the penumbra's entry P. With X and S its
     // distance and |cx_s|, f = S (D − X) / (2 X (D − S)) is t (hidden) or 1 − t (visible), for
     // D > X; no crossing before the point (X = 0 or D <= X) is umbra (hidden) or lit (visible).
-    let xs = select(textureLoad(d_p, l.texel, 0).xy, textureLoad(d_u, l.texel, 0).xy, hidden);
+    let xs = select(textureLoad(d_p, l.texel, 0), textureLoad(d_u, l.texel, 0), hidden);
     let crossed = xs.x > 0.0 && d > xs.x;
     let f = clamp(xs.y * (d - xs.x) / (2.0 * xs.x * (d - xs.y)), 0.0, 0.5);
     var out: Visibility;
@@ -28,7 +29,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         select(BRANCH_UMBRA, BRANCH_PENUMBRA_HIDDEN, crossed),
         hidden
     );
-    out.v = v_of_t(out.t);
+    out.v = v_of_t_toward(out.t, xs.zw);
     // Outside the fitted frustum no penumbra can reach: lit. Behind the one-sided light, or on
     // a side turned away from the centre: nothing arrives.
     let dark = !in_front_of_light(x) || !faces_light_center(x, n);

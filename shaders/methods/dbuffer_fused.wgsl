@@ -170,7 +170,18 @@ fn edge_chord(e: FusedEdge, x: vec3<f32>, hx: f32) -> Chord {
     let qb = x + (pb - x) * (hx / (hx - fused_height(fused, pb)));
     let ua = vec2<f32>(dot(qa - c, fused.e1), dot(qa - c, fused.e2)) / r;
     let ub = vec2<f32>(dot(qb - c, fused.e1), dot(qb - c, fused.e2)) / r;
-    out.area = region_area(ua, ub);
+    if camera.light_kind == LIGHT_POLYGON {
+        // The same region of the polygon (camera.light_corners are in metres along e1, e2).
+        out.area = abs(polygon_edge_coverage(
+            camera.light_corners,
+            camera.light_corner_count,
+            camera.light_area,
+            ua * r,
+            ub * r
+        ));
+    } else {
+        out.area = region_area(ua, ub);
+    }
     return out;
 }
 

@@ -9,6 +9,8 @@
 // The targets are cleared only inside the rectangles the volumes can cover (vs_clear, fs_clear):
 // everywhere else they still hold "no crossing" from before.
 //   |cx_s|   eq. (2) from the fragment that won, kept per volume (the .y of the volume targets)
+//   side     the winning triangle's lit side in the light's plane (.zw), for V exact under a
+//            polygon light (geometry::volume_vertices::lit_side)
 // Distances are true Euclidean |p - c| per fragment, not interpolated vertex distances.
 // #include shared/light.wgsl
 
@@ -27,6 +29,8 @@ struct VolumeIn {
     @location(2) base: f32,
     @location(3) num: f32,
     @location(4) den: f32,
+    // The triangle's lit side in the light's plane (geometry::volume_vertices::lit_side).
+    @location(5) side: vec2<f32>,
 };
 
 struct VolumeOut {
@@ -36,6 +40,7 @@ struct VolumeOut {
     @location(2) @interpolate(flat) base: f32,
     @location(3) num: f32,
     @location(4) den: f32,
+    @location(5) @interpolate(flat) side: vec2<f32>,
 };
 
 @vertex
@@ -47,6 +52,7 @@ fn vs_volume(v: VolumeIn) -> VolumeOut {
     out.base = v.base;
     out.num = v.num;
     out.den = v.den;
+    out.side = v.side;
     return out;
 }
 
@@ -64,11 +70,11 @@ fn edge_plane_distance(f: VolumeOut, to_fragment: vec3<f32>, d: f32) -> f32 {
     return (f.base + f.num / f.den) / along;
 }
 
-// (|p - c|, |cx_s|) of a volume fragment.
+// (|p - c|, |cx_s|, the lit side) of a volume fragment.
 fn crossing(f: VolumeOut) -> vec4<f32> {
     let to_fragment = f.world - light.center;
     let d = length(to_fragment);
-    return vec4<f32>(d, edge_plane_distance(f, to_fragment, d), 0.0, 0.0);
+    return vec4<f32>(d, edge_plane_distance(f, to_fragment, d), f.side);
 }
 
 // Umbra exits and penumbra entries alike: the pipelines' culling keeps only the faces that count.

@@ -6,6 +6,8 @@
 // part of the disk the edge covers as that receiver sees it (negative: the edge uncovers light)
 // into a float sum buffer (passes/wedges_resolve.wgsl then makes V of it).
 
+// #include shared/polygon.wgsl
+
 // As ScreenUniforms of passes/stencil_volumes.wgsl (the same bind group).
 struct ScreenUniforms {
     infinite_view_proj: mat4x4<f32>,
@@ -13,14 +15,18 @@ struct ScreenUniforms {
     size: vec4<f32>,
 };
 
-// The disk, as render::passes::wedges::WedgeDisk: u x w = -normal.
+// The light, as render::passes::wedges::WedgeDisk: u x w = -normal.
 struct WedgeDisk {
-    // xyz: the centre c; w: the radius r.
+    // xyz: the centre c; w: the radius r (of the disk, or the disk a polygon fits in).
     center: vec4<f32>,
     // xyz: the unit normal n (toward the scene).
     normal: vec4<f32>,
     u: vec4<f32>,
     w: vec4<f32>,
+    // x: a rectangle's or polygon's corner count (0: a disk); y: their area (radius units^2).
+    polygon: vec4<f32>,
+    // The corners in (u, w), radius units, counter-clockwise there: two per vector.
+    corners: array<vec4<f32>, 8>,
 };
 
 @group(0) @binding(0) var<uniform> screen: ScreenUniforms;
@@ -91,7 +97,12 @@ fn edge_coverage(x: vec3<f32>, e0: vec3<f32>, e1: vec3<f32>) -> f32 {
             return 0.0;
         }
     }
-    return edge_coverage_2d(to_disk(x, mix(e0, e1, s.x), tx), to_disk(x, mix(e0, e1, s.y), tx));
+    let a = to_disk(x, mix(e0, e1, s.x), tx);
+    let b = to_disk(x, mix(e0, e1, s.y), tx);
+    if disk.polygon.x > 0.5 {
+        return polygon_edge_coverage(disk.corners, u32(disk.polygon.x), disk.polygon.y, a, b);
+    }
+    return edge_coverage_2d(a, b);
 }
 
 struct WedgeIn {

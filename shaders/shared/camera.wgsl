@@ -7,6 +7,7 @@
 // its own bindings in group 1. Depth is reversed (1 at the near plane, 0 at the far one) for
 // precision: the world position is read back from it.
 // #include shared/surface.wgsl
+// #include shared/polygon.wgsl
 
 struct CameraUniforms {
     view_proj: mat4x4<f32>,
@@ -20,16 +21,26 @@ struct CameraUniforms {
     // The unit normal n_c, toward the emitting side (zero for a line light).
     light_normal: vec3<f32>,
     light_intensity: f32,
-    // LIGHT_DISK or LIGHT_LINE. A line light emits all around its segment: no one-sided test,
-    // no emitter cosine; light_center is its midpoint, light_radius 0.
+    // LIGHT_DISK, LIGHT_LINE or LIGHT_POLYGON. A line light emits all around its segment: no
+    // one-sided test, no emitter cosine; light_center is its midpoint, light_radius 0. A
+    // rectangle or polygon: light_radius is the radius of the disk of its area.
     light_kind: u32,
+    // A rectangle's or polygon's corners (0 for a disk or a line), and its area.
+    light_corner_count: u32,
+    light_area: f32,
     _pad0: u32,
+    // The light's plane basis the corners are given in.
+    light_u: vec3<f32>,
     _pad1: u32,
+    light_w: vec3<f32>,
     _pad2: u32,
+    // The corners about the centre in (light_u, light_w), counter-clockwise, two per vector.
+    light_corners: array<vec4<f32>, 8>,
 };
 
 const LIGHT_DISK: u32 = 0u;
 const LIGHT_LINE: u32 = 1u;
+const LIGHT_POLYGON: u32 = 2u;
 
 @group(0) @binding(0) var<uniform> camera: CameraUniforms;
 
@@ -81,6 +92,30 @@ fn v_of_t(t_in: f32) -> f32 {
     return t * t * (3.0 - 2.0 * t);
 }
 
+// The share of the polygon light where dot(m, p) >= h (twin: geometry::outline::clipped_area).
+fn light_share_above(m: vec2<f32>, h: f32) -> f32 {
+    return polygon_share_above(camera.light_corners, camera.light_corner_count, camera.light_area, m, h);
+}
+
+// V(t), with the chord's direction for V exact under a polygon light: the share of the light
+// beyond the chord a share t of the way across it toward its lit side m (twin:
+// geometry::outline::Outline2d::fraction_beyond). A disk's, or no direction, is v_of_t's.
+fn v_of_t_toward(t_in: f32, m_in: vec2<f32>) -> f32 {
+    if VT_VARIANT != VT_EXACT || camera.light_kind != LIGHT_POLYGON || !(dot(m_in, m_in) > 1e-12) {
+        return v_of_t(t_in);
+    }
+    let t = clamp(t_in, 0.0, 1.0);
+    let m = normalize(m_in);
+    var lo = 3.0e38;
+    var hi = -3.0e38;
+    for (var i = 0u; i < camera.light_corner_count; i++) {
+        let x = dot(m, polygon_corner(camera.light_corners, i));
+        lo = min(lo, x);
+        hi = max(hi, x);
+    }
+    return light_share_above(m, hi - t * (hi - lo));
+}
+
 // V given for a method that is not the D-buffer: t = V, the branch by the class of V.
 fn plain(v: f32) -> Visibility {
     var out: Visibility;
@@ -94,7 +129,8 @@ fn plain(v: f32) -> Visibility {
     return out;
 }
 
-// Whether x lies on the emitting side of the one-sided disk (every point, for a line light).
+// Whether x lies on the emitting side of the one-sided planar light (every point, for a line
+// light).
 fn in_front_of_light(x: vec3<f32>) -> bool {
     return camera.light_kind == LIGHT_LINE || dot(x - camera.light_center, camera.light_normal) > 0.0;
 }

@@ -35,6 +35,9 @@ pub struct PixelLight {
     pub method: Method,
     /// The light is a segment (drawn as a line, its samples along it), not a disk.
     pub line: bool,
+    /// A rectangle's or polygon's corners in the same unit-disk coordinates (drawn as that
+    /// polygon); empty for a disk or a line.
+    pub corners: Vec<Vec2>,
     /// The reference's samples, cast from `position`.
     pub reference: Vec<DiskSample>,
     /// `dbuffer-fused`'s view of the disk from its CPU twin (only for that method).
@@ -148,7 +151,7 @@ impl LightPanel {
             let oracle = Oracle::from_scene(scene, PANEL_SAMPLES);
             // The light's own frame, scaled to the unit disk (a segment: along u, from -1 to 1).
             let (e1, e2, r) = match &scene.light {
-                Light::Disk(d) => {
+                Light::Area(d) => {
                     let (e1, e2) = d.basis();
                     (e1, e2, d.radius)
                 }
@@ -177,7 +180,7 @@ impl LightPanel {
         if method == Method::DBUFFER_FUSED && tools.twin.is_none() {
             let prepared = PreparedCasters::new(scene);
             let geometry = prepared.build(
-                &scene.light.disk_or_centre(),
+                &scene.light.area_or_centre(),
                 &VolumeParams::for_scene(scene),
             );
             tools.twin = Some(FusedTwin::new(scene, &prepared, &geometry, params));
@@ -195,10 +198,21 @@ impl LightPanel {
         let fused = (method == Method::DBUFFER_FUSED)
             .then(|| tools.twin.as_ref().map(|t| t.light_from(x)))
             .flatten();
+        let corners = scene.light.as_area().map_or(Vec::new(), |a| {
+            let (e1, e2) = a.basis();
+            let r = a.radius.max(f32::MIN_POSITIVE);
+            a.corners().map_or(Vec::new(), |p| {
+                p.vertices()
+                    .iter()
+                    .map(|&v| Vec2::new((v - a.center).dot(e1), (v - a.center).dot(e2)) / r)
+                    .collect()
+            })
+        });
         self.shown = Some(PixelLight {
             position: x,
             method,
             line: scene.light.as_line().is_some(),
+            corners,
             reference,
             fused,
         });
@@ -230,7 +244,24 @@ fn chord_ends([a, b, c]: [f32; 3]) -> Option<[Vec2; 2]> {
     Some([foot - along, foot + along])
 }
 
-/// Draws the disk as seen from the pixel into `ui` (a square as wide as the panel).
+/// Where the line `a u + b v + c = 0` crosses the convex polygon `corners`, if it does.
+fn chord_ends_in(corners: &[Vec2], [a, b, c]: [f32; 3]) -> Option<[Vec2; 2]> {
+    let f = |p: Vec2| a * p.x + b * p.y + c;
+    let mut hits = Vec::with_capacity(2);
+    for i in 0..corners.len() {
+        let (p, q) = (corners[i], corners[(i + 1) % corners.len()]);
+        let (fp, fq) = (f(p), f(q));
+        if (fp > 0.0) != (fq > 0.0) {
+            hits.push(p + (q - p) * (fp / (fp - fq)));
+        }
+    }
+    match hits[..] {
+        [p, q, ..] => Some([p, q]),
+        _ => None,
+    }
+}
+
+/// Draws the light as seen from the pixel into `ui` (a square as wide as the panel).
 pub fn draw(ui: &mut egui::Ui, light: &PixelLight) {
     let side = ui.available_width().clamp(120.0, 260.0);
     let (rect, _) = ui.allocate_exact_size(egui::vec2(side, side), Sense::hover());
@@ -245,6 +276,13 @@ pub fn draw(ui: &mut egui::Ui, light: &PixelLight) {
             [at(Vec2::new(-1.0, 0.0)), at(Vec2::new(1.0, 0.0))],
             Stroke::new(3.0, Color32::from_gray(120)),
         );
+    } else if light.corners.len() >= 3 {
+        let outline: Vec<Pos2> = light.corners.iter().map(|&p| at(p)).collect();
+        painter.add(egui::Shape::convex_polygon(
+            outline,
+            Color32::from_gray(44),
+            Stroke::new(1.0, Color32::from_gray(160)),
+        ));
     } else {
         painter.circle_filled(centre, radius, Color32::from_gray(44));
         painter.circle_stroke(centre, radius, Stroke::new(1.0, Color32::from_gray(160)));
@@ -276,8 +314,13 @@ pub fn draw(ui: &mut egui::Ui, light: &PixelLight) {
                 [at(c.chord.ends[0]), at(c.chord.ends[1])],
                 Stroke::new(1.5, color),
             );
-            // ... and the chord its plane through the pixel cuts from the disk.
-            if let Some([p, q]) = chord_ends(c.chord.chord) {
+            // ... and the chord its plane through the pixel cuts from the light.
+            let ends = if light.corners.len() >= 3 {
+                chord_ends_in(&light.corners, c.chord.chord)
+            } else {
+                chord_ends(c.chord.chord)
+            };
+            if let Some([p, q]) = ends {
                 painter.add(egui::Shape::dashed_line(
                     &[at(p), at(q)],
                     Stroke::new(1.0, color.gamma_multiply(0.7)),
@@ -308,5 +351,27 @@ mod tests {
             assert!((line[0] * e.x + line[1] * e.y + line[2]).abs() < 1e-5);
         }
         assert!(chord_ends([0.0, 1.0, 1.5]).is_none(), "misses the disk");
+    }
+
+    #[test]
+    fn chord_ends_in_a_polygon_lie_on_its_edges_and_the_line() {
+        let square = [
+            Vec2::new(-1.0, -0.5),
+            Vec2::new(1.0, -0.5),
+            Vec2::new(1.0, 0.5),
+            Vec2::new(-1.0, 0.5),
+        ];
+        let [p, q] = chord_ends_in(&square, [1.0, 1.0, -0.2]).expect("crosses");
+        for e in [p, q] {
+            assert!((e.x + e.y - 0.2).abs() < 1e-5, "{e}");
+            assert!(
+                (e.x.abs() - 1.0).abs() < 1e-5 || (e.y.abs() - 0.5).abs() < 1e-5,
+                "{e}"
+            );
+        }
+        assert!(
+            chord_ends_in(&square, [0.0, 1.0, 0.9]).is_none(),
+            "misses it"
+        );
     }
 }

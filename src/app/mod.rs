@@ -15,6 +15,7 @@ pub mod core;
 pub mod doc;
 mod files;
 mod inspector;
+mod light_fields;
 pub mod light_panel;
 mod overlays;
 mod panels;
@@ -289,7 +290,7 @@ impl LabApp {
         for name in [&mut self.settings.method, &mut self.settings.split_method] {
             if let Ok(m) = name.parse::<Method>() {
                 if !m.takes(kind) {
-                    said.push(format!("{m} needs a {} light", m.needs()?.name()));
+                    said.push(format!("{m} needs {}", m.takes_in_words()));
                     *name = fallback.name().to_string();
                 }
             }

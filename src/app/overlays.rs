@@ -261,14 +261,11 @@ impl LabApp {
                 }
             }
         }
-        if let (Light::Disk(light), true) = (scene.light, overlays.light_disk || selected_light) {
-            let (u, v) = light.basis();
-            let rim: Vec<Pos2> = (0..=64)
-                .filter_map(|k| {
-                    let a = k as f32 / 64.0 * std::f32::consts::TAU;
-                    projector.point(light.center + light.radius * (a.cos() * u + a.sin() * v))
-                })
-                .collect();
+        if let (Light::Area(light), true) = (scene.light, overlays.light_disk || selected_light) {
+            // The light's own shape: the disk's rim, the rectangle's or polygon's corners.
+            let mut outline = crate::geometry::outline::boundary(&light, 64);
+            outline.extend(outline.first().copied());
+            let rim: Vec<Pos2> = outline.iter().filter_map(|&q| projector.point(q)).collect();
             let color = if selected_light {
                 HIGHLIGHT
             } else {
@@ -289,6 +286,25 @@ impl LabApp {
                 projector.segment(light.center, light.center + light.normal * light.radius)
             {
                 painter.arrow(s[0], s[1] - s[0], Stroke::new(1.5, color));
+            }
+            // A selected rectangle's or polygon's corners are handles (the one dragged filled):
+            // a rectangle's resize it about its centre, a polygon's move that vertex.
+            if let (Some(corners), true) = (light.corners(), selected_light) {
+                for (k, &q) in corners.vertices().iter().enumerate() {
+                    if let Some(p) = projector.point(q) {
+                        let filled = self.selection == Selection::LightEnd(k);
+                        painter.circle(
+                            p,
+                            4.5,
+                            if filled {
+                                HIGHLIGHT
+                            } else {
+                                Color32::TRANSPARENT
+                            },
+                            Stroke::new(1.5, color),
+                        );
+                    }
+                }
             }
         }
 
@@ -500,7 +516,7 @@ mod tests {
     fn volume_outlines_leave_out_quad_diagonals() {
         let scene = crate::scene::load("table1-224").unwrap();
         let geometry = PreparedCasters::new(&scene).build(
-            scene.light.as_disk().expect("a disk light"),
+            scene.light.as_area().expect("a disk light"),
             &VolumeParams::for_scene(&scene),
         );
         let c = &geometry.casters[0];

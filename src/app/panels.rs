@@ -3,17 +3,16 @@
 
 use eframe::egui::{self, Color32, DragValue, RichText, Slider};
 
-use super::doc::{normal_from, tilt_azimuth};
 use super::{LabApp, Level, Selection};
 use crate::geometry::VtVariant;
 use crate::render::methods::{Knob, KnobKind};
 use crate::render::passes::view::{ColorMap, View};
 use crate::render::Method;
+use crate::scene::builtin;
 use crate::scene::file::Scale;
-use crate::scene::{builtin, LightKind};
 
 /// A labelled row of number fields: the label names them for screen readers and tests.
-fn number_row(ui: &mut egui::Ui, label: &str, values: &mut [f64], speed: f64) -> bool {
+pub(super) fn number_row(ui: &mut egui::Ui, label: &str, values: &mut [f64], speed: f64) -> bool {
     let mut changed = false;
     ui.horizontal(|ui| {
         let l = ui.label(label);
@@ -405,84 +404,6 @@ impl LabApp {
                 self.redo();
             }
         });
-    }
-
-    fn light_fields(&mut self, ui: &mut egui::Ui) {
-        let mut light = self.doc.file.light.clone();
-        let mut kind = light.kind();
-        ui.horizontal(|ui| {
-            ui.label("Kind");
-            ui.selectable_value(&mut kind, LightKind::Disk, "disk")
-                .on_hover_text("a one-sided disk (the D-buffer's light)");
-            ui.selectable_value(&mut kind, LightKind::Line, "line")
-                .on_hover_text("a linear light: a segment from a to b, emitting all around");
-        });
-        let mut changed = false;
-        let kind_changed = kind != light.kind();
-        if kind_changed {
-            light = light.converted(kind);
-            changed = true;
-        }
-        match kind {
-            LightKind::Disk => {
-                let mut center = light.center.unwrap_or([0.0, 4.0, 0.0]);
-                let mut radius = light.radius.unwrap_or(0.5);
-                changed |= number_row(ui, "Centre", &mut center, 0.01);
-                let (mut tilt, mut azimuth) =
-                    tilt_azimuth(light.normal.unwrap_or([0.0, -1.0, 0.0]));
-                changed |= ui
-                    .add(
-                        Slider::new(&mut radius, 0.01..=5.0)
-                            .text("Radius")
-                            .logarithmic(true),
-                    )
-                    .changed();
-                changed |= ui
-                    .add(Slider::new(&mut center[1], -5.0..=20.0).text("Height"))
-                    .changed();
-                let t = ui.add(Slider::new(&mut tilt, 0.0..=80.0).text("Tilt °"));
-                let a = ui.add(Slider::new(&mut azimuth, -180.0..=180.0).text("Azimuth °"));
-                if t.changed() || a.changed() {
-                    light.normal = Some(normal_from(tilt, azimuth));
-                    changed = true;
-                }
-                light.center = Some(center);
-                light.radius = Some(radius);
-            }
-            LightKind::Line => {
-                let mut a = light.a.unwrap_or([-1.0, 4.0, 0.0]);
-                let mut b = light.b.unwrap_or([1.0, 4.0, 0.0]);
-                changed |= number_row(ui, "End a", &mut a, 0.01);
-                changed |= number_row(ui, "End b", &mut b, 0.01);
-                let mut height = 0.5 * (a[1] + b[1]);
-                if ui
-                    .add(Slider::new(&mut height, -5.0..=20.0).text("Height"))
-                    .changed()
-                {
-                    let dy = height - 0.5 * (a[1] + b[1]);
-                    a[1] += dy;
-                    b[1] += dy;
-                    changed = true;
-                }
-                let length = (0..3).map(|i| (b[i] - a[i]).powi(2)).sum::<f64>().sqrt();
-                ui.label(
-                    RichText::new(format!(
-                        "length {length:.3} m; drag an end (a, b) or the segment in the viewport"
-                    ))
-                    .small(),
-                );
-                light.a = Some(a);
-                light.b = Some(b);
-            }
-        }
-        if changed {
-            self.edit_scene(|e| e.light = light);
-        }
-        if kind_changed {
-            if let Some(switched) = self.suit_methods_to_the_light() {
-                self.set_status(switched, Level::Info);
-            }
-        }
     }
 
     fn object_fields(&mut self, ui: &mut egui::Ui, i: usize) {

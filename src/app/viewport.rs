@@ -641,8 +641,7 @@ impl LabApp {
                         let to = f3(start_anchor + (hit - start_hit));
                         self.edit_scene(|e| match target {
                             Selection::Light => e.light.set_center(to),
-                            Selection::LightEnd(0) => e.light.a = Some(to),
-                            Selection::LightEnd(_) => e.light.b = Some(to),
+                            Selection::LightEnd(k) => e.light.set_corner(k, to),
                             Selection::Object(i) => {
                                 if let Some(o) = e.objects.get_mut(i) {
                                     o.translate = to;
@@ -683,24 +682,22 @@ impl LabApp {
         }
         let anchor = match self.selection {
             Selection::Light => self.doc.light().center(),
-            Selection::LightEnd(k) => {
-                let l = *self.doc.light().as_line()?;
-                if k == 0 {
-                    l.a
-                } else {
-                    l.b
-                }
-            }
+            Selection::LightEnd(k) => match self.doc.light() {
+                Light::Line(l) if k == 0 => l.a,
+                Light::Line(l) => l.b,
+                Light::Area(a) => *a.corners()?.vertices().get(k)?,
+            },
             Selection::Object(i) => {
                 let t = self.doc.file.objects.get(i)?.translate;
                 Vec3::new(t[0] as f32, t[1] as f32, t[2] as f32)
             }
             Selection::None => return None,
         };
-        let normal = if shift {
-            Vec3::Y
-        } else {
-            camera::basis(&self.camera).2
+        let normal = match (self.selection, self.doc.light()) {
+            // A corner handle moves in the light's own plane.
+            (Selection::LightEnd(_), Light::Area(a)) => a.normal,
+            _ if shift => Vec3::Y,
+            _ => camera::basis(&self.camera).2,
         };
         let start_hit = camera::ray_plane(origin, dir, anchor, normal)?;
         Some(Drag::Move {
@@ -718,10 +715,20 @@ impl LabApp {
             return Selection::None;
         };
         match core.scene().light {
-            Light::Disk(light) => {
+            Light::Area(light) => {
                 if let Some(p) = camera::ray_plane(origin, dir, light.center, light.normal) {
-                    if (p - light.center).length() <= light.radius * 1.15 {
-                        best = ((p - origin).length(), Selection::Light);
+                    let t = (p - origin).length();
+                    // A rectangle's or polygon's corner within a few pixels' width (as a line
+                    // light's end) is its handle; elsewhere in its disk the whole light.
+                    let corner = light.corners().and_then(|c| {
+                        c.vertices()
+                            .iter()
+                            .position(|v| v.distance(p) <= 0.012 * t + 0.02)
+                    });
+                    if let Some(k) = corner {
+                        best = (t, Selection::LightEnd(k));
+                    } else if (p - light.center).length() <= light.radius * 1.15 {
+                        best = (t, Selection::Light);
                     }
                 }
             }

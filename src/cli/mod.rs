@@ -336,7 +336,7 @@ pub fn inspect(
              --samples, or compare it on the GPU with `dbuffer compare`"
         );
     }
-    let Some(&l) = scene.light.as_disk() else {
+    let Some(&l) = scene.light.as_area() else {
         bail!(
             "inspect shows the D-buffer's geometry stage, which needs a disk light, and the \
              light of '{name}' is a line (kind = \"line\"); use `dbuffer render` or `dbuffer \

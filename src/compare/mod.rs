@@ -155,7 +155,10 @@ pub fn run(
         }
         if let Some(why) = method.refuses(scene.light.kind()) {
             progress(&format!("{method}: not applicable ({why})"));
-            let needs = method.needs().map_or("", |k| k.name()).to_string();
+            let needs = method.needs().map_or(String::new(), |kinds| {
+                let names: Vec<&str> = kinds.iter().map(|k| k.name()).collect();
+                names.join(", ")
+            });
             not_applicable.push((method, needs, why));
             continue;
         }

@@ -11,6 +11,7 @@ use super::{heatmap, montage, Comparison, MethodResult};
 use crate::fsutil::write_atomic;
 use crate::output;
 use crate::render::Method;
+use crate::scene::LightKind;
 
 pub const REPORT_MD: &str = "report.md";
 pub const REPORT_JSON: &str = "report.json";
@@ -40,7 +41,8 @@ pub struct Report {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct NotApplicable {
     pub method: String,
-    /// `"disk"` or `"line"`: the light it needs; or what the adapter lacks for it.
+    /// The kinds of light it takes (`"disk"`, `"line"`, `"disk, rect, polygon"`); or what the
+    /// adapter lacks for it.
     pub needs: String,
     pub reason: String,
 }
@@ -187,10 +189,15 @@ impl Report {
             ));
         }
         for n in &self.not_applicable {
-            // A light it cannot take ("disk", "line"), or what the adapter lacks.
-            let needs = match n.needs.as_str() {
-                "disk" | "line" => format!("a {} light", n.needs),
-                other => other.to_string(),
+            // The lights it takes ("disk", "disk, rect, polygon"), or what the adapter lacks.
+            let kinds: Option<Vec<LightKind>> = n
+                .needs
+                .split(", ")
+                .map(|k| LightKind::ALL.into_iter().find(|l| l.name() == k))
+                .collect();
+            let needs = match kinds {
+                Some(k) => format!("a {} light", LightKind::list_in_words(&k)),
+                None => n.needs.clone(),
             };
             s.push_str(&format!(
                 "| {} | n/a — needs {needs} | | | | | | |\n",

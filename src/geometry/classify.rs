@@ -9,7 +9,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::adjacency::CasterMesh;
-use crate::scene::DiskLight;
+use crate::scene::AreaLight;
 
 /// How a face sees the disk light.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -53,15 +53,14 @@ impl FaceClass {
 }
 
 /// The range `[min f, max f]` of the face's plane function over the disk, and `f(c)`.
-pub fn plane_range_over_disk(normal: Vec3, offset: f32, light: &DiskLight) -> (f32, f32, f32) {
-    let fc = normal.dot(light.center) - offset;
-    let n_perp = normal - normal.dot(light.normal) * light.normal;
-    let reach = light.radius * n_perp.length();
-    (fc - reach, fc + reach, fc)
+/// For a polygon, over its vertices (exact: a linear function's extremes over a convex polygon
+/// are at its vertices).
+pub fn plane_range_over_disk(normal: Vec3, offset: f32, light: &AreaLight) -> (f32, f32, f32) {
+    super::outline::plane_range(normal, offset, light)
 }
 
 /// Class of a plane `normal · p = offset` against the light.
-pub fn classify_plane(normal: Vec3, offset: f32, light: &DiskLight) -> FaceClass {
+pub fn classify_plane(normal: Vec3, offset: f32, light: &AreaLight) -> FaceClass {
     let (min_f, max_f, fc) = plane_range_over_disk(normal, offset, light);
     if min_f > 0.0 {
         FaceClass::AllFront
@@ -75,13 +74,13 @@ pub fn classify_plane(normal: Vec3, offset: f32, light: &DiskLight) -> FaceClass
 }
 
 /// The class of face `f` of `mesh`.
-pub fn classify_face(mesh: &CasterMesh, f: u32, light: &DiskLight) -> FaceClass {
+pub fn classify_face(mesh: &CasterMesh, f: u32, light: &AreaLight) -> FaceClass {
     let (normal, offset) = mesh.plane(f);
     classify_plane(normal, offset, light)
 }
 
 /// Classes of every face of the caster, in face order (in parallel for large meshes).
-pub fn classify(mesh: &CasterMesh, light: &DiskLight) -> Vec<FaceClass> {
+pub fn classify(mesh: &CasterMesh, light: &AreaLight) -> Vec<FaceClass> {
     const PARALLEL_ABOVE: usize = 16 * 1024;
     if mesh.faces.len() > PARALLEL_ABOVE {
         (0..mesh.faces.len() as u32)
@@ -100,18 +99,19 @@ pub fn classify(mesh: &CasterMesh, light: &DiskLight) -> Vec<FaceClass> {
 mod tests {
     use super::*;
 
-    fn light(r: f32) -> DiskLight {
-        DiskLight {
+    fn light(r: f32) -> AreaLight {
+        AreaLight {
             center: Vec3::new(0.0, 4.0, 0.0),
             normal: Vec3::NEG_Y,
             radius: r,
             intensity: 1.0,
+            outline: crate::scene::Outline::Disk,
         }
     }
 
     /// Brute force: `f` at many rim points (the extremes of a linear function over a disk lie on
     /// its rim), classified with the same rule.
-    fn brute(normal: Vec3, offset: f32, l: &DiskLight) -> FaceClass {
+    fn brute(normal: Vec3, offset: f32, l: &AreaLight) -> FaceClass {
         let (u, w) = l.basis();
         let fc = normal.dot(l.center) - offset;
         let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
@@ -196,11 +196,12 @@ mod tests {
             state ^= state << 5;
             state as f32 / u32::MAX as f32 * 2.0 - 1.0
         };
-        let l = DiskLight {
+        let l = AreaLight {
             center: Vec3::new(0.1, 3.0, -0.2),
             normal: Vec3::new(0.2, -1.0, 0.1).normalize(),
             radius: 0.8,
             intensity: 1.0,
+            outline: crate::scene::Outline::Disk,
         };
         let mut seen = std::collections::HashSet::new();
         for _ in 0..4000 {

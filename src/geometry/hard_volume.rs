@@ -33,7 +33,7 @@ use glam::{Vec3, Vec4};
 use super::adjacency::{CasterMesh, NO_FACE};
 use super::classify::{classify, FaceClass};
 use super::PreparedCasters;
-use crate::scene::{DiskLight, Light, LineLight};
+use crate::scene::{AreaLight, Light, LineLight, Outline};
 
 /// Which faces of a caster make shadow volumes (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -86,12 +86,13 @@ pub fn point_classes(mesh: &CasterMesh, p: Vec3) -> Vec<FaceClass> {
 }
 
 /// The zero-radius disk at `p`: a point light for the disk's geometry functions and the oracle.
-pub fn point_light(p: Vec3) -> DiskLight {
-    DiskLight {
+pub fn point_light(p: Vec3) -> AreaLight {
+    AreaLight {
         center: p,
         normal: Vec3::NEG_Y,
         radius: 0.0,
         intensity: 1.0,
+        outline: Outline::Disk,
     }
 }
 
@@ -100,7 +101,11 @@ pub fn point_light(p: Vec3) -> DiskLight {
 /// around, as the line does). What `reference-hard` casts its rays to.
 pub fn centre_light(light: &Light) -> Light {
     match *light {
-        Light::Disk(d) => Light::Disk(DiskLight { radius: 0.0, ..d }),
+        Light::Area(d) => Light::Area(AreaLight {
+            radius: 0.0,
+            outline: Outline::Disk,
+            ..d
+        }),
         Light::Line(l) => {
             let m = l.midpoint();
             Light::Line(LineLight { a: m, b: m, ..l })

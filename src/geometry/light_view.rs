@@ -90,7 +90,7 @@ const RIM_SAMPLES: usize = 16;
 /// for a vertical line, along +X).
 fn default_axis(light: &Light) -> Vec3 {
     match light {
-        Light::Disk(d) => d.normal,
+        Light::Area(d) => d.normal,
         Light::Line(l) => {
             let along = (l.b - l.a).normalize_or_zero();
             (Vec3::NEG_Y - along * along.dot(Vec3::NEG_Y))
@@ -120,7 +120,7 @@ where
     // The points of the light whose directions to a caster vertex bound its shadows: the disk's
     // rim (grown so the polygon covers the circle), a segment's two ends.
     let (extreme, normal): (Vec<Vec3>, Option<Vec3>) = match light {
-        Light::Disk(d) => {
+        Light::Area(d) => {
             let (u, w) = d.basis();
             let grow = 1.0 / (std::f32::consts::PI / RIM_SAMPLES as f32).cos();
             let rim = (0..RIM_SAMPLES)
@@ -293,7 +293,7 @@ mod tests {
             };
             let view = LightView::fit(&scene);
             let vp = view.view_projection();
-            let Some(disk) = scene.light.as_disk() else {
+            let Some(disk) = scene.light.as_area() else {
                 continue; // the D-buffer twin needs a disk
             };
             let geometry =

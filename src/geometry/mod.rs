@@ -18,6 +18,7 @@ pub mod light_view;
 pub mod line_light;
 pub mod metrics;
 pub mod oracle;
+pub mod outline;
 pub mod planar;
 pub mod progressive;
 pub mod ray;
@@ -36,7 +37,7 @@ pub use twin::DBufferTwin;
 pub use visibility::{Branch, VtVariant};
 pub use volumes::{CasterGeometry, GeometryStats, VolumeKind, VolumeMesh, VolumeParams};
 
-use crate::scene::{DiskLight, Scene};
+use crate::scene::{AreaLight, Scene};
 
 /// The casters of a scene, prepared once (welding, adjacency, face planes). Only
 /// [`PreparedCasters::build`] runs again when the light moves (Jakobsen et al. 2004, §6.1).
@@ -70,7 +71,7 @@ impl PreparedCasters {
     /// Classes, silhouettes and volumes of every caster for this light, within the scene's
     /// budget of volume triangles (`MAX_VOLUME_TRIANGLES`, shared by the casters in order: one
     /// that would pass what is left casts no shadow, with a warning).
-    pub fn build(&self, light: &DiskLight, params: &VolumeParams) -> SceneGeometry {
+    pub fn build(&self, light: &AreaLight, params: &VolumeParams) -> SceneGeometry {
         let mut left = volumes::MAX_VOLUME_TRIANGLES as usize;
         let casters: Vec<CasterGeometry> = self
             .meshes

@@ -80,13 +80,7 @@ impl Oracle {
         let light = light.into();
         let k = samples.max(1);
         let samples: Vec<Vec3> = match &light {
-            Light::Disk(d) => {
-                let (e1, e2) = d.basis();
-                disk_samples(k)
-                    .into_iter()
-                    .map(|p| d.center + d.radius * (p.x * e1 + p.y * e2))
-                    .collect()
-            }
+            Light::Area(d) => super::outline::area_samples(d, k),
             Light::Line(l) => line_samples(l, k),
         };
         let light_ok = light.is_finite() && samples.iter().all(|s: &Vec3| s.is_finite());
@@ -173,6 +167,16 @@ impl Oracle {
 
 /// `k` stratified points on the unit disk (see the module documentation), deterministic.
 pub fn disk_samples(k: usize) -> Vec<Vec2> {
+    square_strata(k)
+        .into_iter()
+        .map(|(u, v)| concentric(u, v))
+        .collect()
+}
+
+/// `k` jittered points of the unit square, one per stratum of `round(√k)` rows of about equal
+/// columns (see the module documentation), deterministic: mapped onto a light by an
+/// area-preserving map they are its stratified samples.
+pub fn square_strata(k: usize) -> Vec<(f32, f32)> {
     if k == 0 {
         return Vec::new();
     }
@@ -190,7 +194,7 @@ pub fn disk_samples(k: usize) -> Vec<Vec2> {
             let jy = unit_hash(i, 1);
             let u = (col as f64 + jx) / cols as f64;
             let v = y0 + h * jy;
-            out.push(concentric(u as f32, v as f32));
+            out.push((u as f32, v as f32));
         }
         y0 += h;
     }
@@ -240,14 +244,15 @@ fn unit_hash(i: u64, lane: u64) -> f64 {
 mod tests {
     use super::*;
 
-    use crate::scene::DiskLight;
+    use crate::scene::AreaLight;
 
-    fn light() -> DiskLight {
-        DiskLight {
+    fn light() -> AreaLight {
+        AreaLight {
             center: Vec3::new(0.0, 4.0, 0.0),
             normal: Vec3::NEG_Y,
             radius: 0.5,
             intensity: 1.0,
+            outline: crate::scene::Outline::Disk,
         }
     }
 
@@ -300,15 +305,15 @@ mod tests {
     #[test]
     fn a_broken_light_gives_zero_not_a_panic() {
         for l in [
-            DiskLight {
+            AreaLight {
                 radius: f32::NAN,
                 ..light()
             },
-            DiskLight {
+            AreaLight {
                 normal: Vec3::NAN,
                 ..light()
             },
-            DiskLight {
+            AreaLight {
                 center: Vec3::splat(f32::INFINITY),
                 ..light()
             },
@@ -319,7 +324,7 @@ mod tests {
         // A zero radius is a point light: valid.
         let point = Oracle::new(
             Vec::new(),
-            DiskLight {
+            AreaLight {
                 radius: 0.0,
                 ..light()
             },
@@ -401,11 +406,12 @@ mod tests {
         // A UV sphere (convex polyhedron): from a point on a facet, the caster lies behind the
         // facet's plane, so V is 1 when the whole disk is in front of that plane and 0 when it
         // is all behind (the face classes of docs/method/dbuffer.md), whatever the rounding of the point.
-        let l = DiskLight {
+        let l = AreaLight {
             center: Vec3::new(0.3, 3.0, -0.2),
             normal: Vec3::new(-0.1, -1.0, 0.05).normalize(),
             radius: 0.6,
             intensity: 1.0,
+            outline: crate::scene::Outline::Disk,
         };
         let (nu, nv) = (64, 32);
         let p = |i: usize, j: usize| {

@@ -122,7 +122,7 @@ pub fn planar_receivers(scene: &Scene, light: Vec3) -> (Vec<PlanarReceiver>, Vec
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{shapes, Camera, DiskLight, Object};
+    use crate::scene::{shapes, AreaLight, Camera, Object};
     use glam::{Affine3A, Quat};
 
     fn hash(i: u32) -> f32 {
@@ -174,11 +174,12 @@ mod tests {
                 target: Vec3::ZERO,
                 fov_y_deg: 45.0,
             },
-            light: DiskLight {
+            light: AreaLight {
                 center: Vec3::new(0.0, 4.0, 0.0),
                 normal: Vec3::NEG_Y,
                 radius: 0.5,
                 intensity: 1.0,
+                outline: crate::scene::Outline::Disk,
             }
             .into(),
             objects: vec![

@@ -128,15 +128,16 @@ fn gcd(mut a: usize, mut b: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::DiskLight;
+    use crate::scene::AreaLight;
 
     fn oracle(k: usize) -> Oracle {
         // A unit square half covering the disk's view of the origin.
-        let light = DiskLight {
+        let light = AreaLight {
             center: Vec3::new(0.0, 4.0, 0.0),
             normal: Vec3::NEG_Y,
             radius: 1.0,
             intensity: 1.0,
+            outline: crate::scene::Outline::Disk,
         };
         let a = Vec3::new(0.0, 2.0, -5.0);
         let b = Vec3::new(5.0, 2.0, -5.0);

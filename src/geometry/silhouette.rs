@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use super::adjacency::{CasterMesh, Edge, NO_FACE};
 use super::classify::FaceClass;
-use crate::scene::DiskLight;
+use crate::scene::AreaLight;
 
 /// A silhouette edge with everything volume extrusion needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,46 +37,14 @@ pub struct ExtrusionPoints {
     pub penumbra: Vec3,
 }
 
-/// Relative tolerance for "the edge is parallel to the disk plane".
-const PARALLEL_EPS: f32 = 1e-6;
-
-/// The two tangent points on the rim for planes through the line `v1 v2`, or `None` when the line
-/// meets the disk plane inside the disk (it pierces the light's cone of tangency: no plane through
-/// it can be tangent). Happens only for casters that reach the light plane.
-pub fn tangent_points(v1: Vec3, v2: Vec3, light: &DiskLight) -> Option<[Vec3; 2]> {
-    let (c, n, r) = (light.center, light.normal, light.radius);
-    let dir = v2 - v1;
-    let len = dir.length();
-    if len.is_nan() || len <= 0.0 || r.is_nan() || r <= 0.0 {
-        return None;
-    }
-    let denom = dir.dot(n);
-    if denom.abs() <= PARALLEL_EPS * len {
-        // Parallel to the disk plane: the tangent planes touch at c ± r·normalize(dir × n_c).
-        let side = dir.cross(n).try_normalize()?;
-        return Some([c + r * side, c - r * side]);
-    }
-    // Where the line meets the disk plane.
-    let a = v1 + dir * (-(v1 - c).dot(n) / denom);
-    let mut ac = a - c;
-    ac -= ac.dot(n) * n;
-    let d = ac.length();
-    if !d.is_finite() || d <= r * (1.0 + 1e-5) {
-        return None;
-    }
-    let u = ac / d;
-    let w = n.cross(u);
-    let cos = r / d;
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    Some([c + r * (cos * u + sin * w), c + r * (cos * u - sin * w)])
-}
+pub use super::outline::tangent_points;
 
 /// `p_u` and `p_p` for the edge `v1 v2` with the caster on the side of `caster_side`.
 pub fn extrusion_points(
     v1: Vec3,
     v2: Vec3,
     caster_side: Vec3,
-    light: &DiskLight,
+    light: &AreaLight,
 ) -> Option<ExtrusionPoints> {
     let [t0, t1] = tangent_points(v1, v2, light)?;
     // For the plane through the edge and t: positive when c and the caster are on one side.
@@ -195,16 +163,17 @@ mod tests {
     use crate::geometry::classify::classify;
     use crate::scene::Mesh;
 
-    fn light() -> DiskLight {
-        DiskLight {
+    fn light() -> AreaLight {
+        AreaLight {
             center: Vec3::ZERO,
             normal: Vec3::NEG_Y,
             radius: 0.5,
             intensity: 1.0,
+            outline: crate::scene::Outline::Disk,
         }
     }
 
-    fn is_tangent(t: Vec3, v1: Vec3, v2: Vec3, l: &DiskLight) -> bool {
+    fn is_tangent(t: Vec3, v1: Vec3, v2: Vec3, l: &AreaLight) -> bool {
         // On the rim, and the plane through the edge and t meets the disk plane in the tangent
         // line at t: the in-plane normal of that plane is parallel to t − c.
         let on_rim = ((t - l.center).length() - l.radius).abs() < 1e-4;
@@ -241,11 +210,12 @@ mod tests {
 
     #[test]
     fn tilted_edge_tangent_points() {
-        let l = DiskLight {
+        let l = AreaLight {
             center: Vec3::new(0.2, 3.0, -0.1),
             normal: Vec3::new(0.3, -1.0, 0.2).normalize(),
             radius: 0.7,
             intensity: 1.0,
+            outline: crate::scene::Outline::Disk,
         };
         let (v1, v2) = (Vec3::new(1.0, 1.0, 0.3), Vec3::new(1.6, 0.2, -0.5));
         let [t0, t1] = tangent_points(v1, v2, &l).expect("line meets the plane outside the disk");
@@ -305,7 +275,7 @@ mod tests {
         ];
         let mesh = CasterMesh::new("cube", &Mesh::new(positions, triangles));
         assert!(mesh.report.is_closed_manifold(), "{:?}", mesh.report);
-        let small = DiskLight {
+        let small = AreaLight {
             radius: 0.25,
             ..light()
         };
@@ -317,7 +287,7 @@ mod tests {
 
         // A light wider than the cube: the side planes cut the disk, the sides become silhouette
         // faces, the top rim is only the penumbra silhouette and the bottom rim only the umbra one.
-        let wide = DiskLight {
+        let wide = AreaLight {
             radius: 1.0,
             ..light()
         };

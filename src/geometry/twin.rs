@@ -25,9 +25,10 @@
 use glam::Vec3;
 
 use super::bvh::Bvh;
+use super::outline::Outline2d;
 use super::visibility::{t_hidden, t_visible, Branch, VtVariant};
 use super::volumes::{CasterGeometry, VolumeVertex};
-use crate::scene::{DiskLight, Scene};
+use crate::scene::{AreaLight, Scene};
 
 /// One D-buffer texel: the four channels along one ray from the light centre.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -42,6 +43,10 @@ pub struct Texel {
     pub p: Option<f32>,
     /// `|cx_s|` from the fragment that won `p`.
     pub s_p: f32,
+    /// The lit side of the winning umbra and penumbra triangles, in the light's plane
+    /// ([`super::volume_vertices::lit_side`]): the `.zw` of the GPU's volume channels.
+    pub side_u: [f32; 2],
+    pub side_p: [f32; 2],
 }
 
 /// What the camera pass computes for one shaded point.
@@ -53,6 +58,17 @@ pub struct TwinSample {
     pub hidden: bool,
     pub t: f64,
     pub branch: Branch,
+}
+
+impl TwinSample {
+    /// The lit side of the channel `t` came from (umbra when hidden from the centre).
+    pub fn side(&self) -> [f32; 2] {
+        if self.hidden {
+            self.texel.side_u
+        } else {
+            self.texel.side_p
+        }
+    }
 }
 
 /// Relative bias of the hidden-from-centre test `D > |cx_o| (1 + HIDDEN_BIAS) + HIDDEN_BIAS`.
@@ -67,7 +83,8 @@ struct CasterVolumes {
 
 /// The D-buffer lookup and camera-pass arithmetic on the CPU.
 pub struct DBufferTwin {
-    light: DiskLight,
+    light: AreaLight,
+    outline: Outline2d,
     surfaces: Bvh,
     casters: Vec<CasterVolumes>,
 }
@@ -77,12 +94,12 @@ impl DBufferTwin {
     /// needs a disk light (its methods refuse a line light before anything is built); for a
     /// line light this is the twin of a zero-radius disk at the midpoint, facing down.
     pub fn new(scene: &Scene, casters: &[CasterGeometry]) -> Self {
-        let light = scene.light.disk_or_centre();
+        let light = scene.light.area_or_centre();
         Self::from_parts(light, scene.all_triangles(), casters)
     }
 
     pub fn from_parts(
-        light: DiskLight,
+        light: AreaLight,
         surfaces: Vec<[Vec3; 3]>,
         casters: &[CasterGeometry],
     ) -> Self {
@@ -109,14 +126,20 @@ impl DBufferTwin {
             })
             .collect();
         Self {
+            outline: Outline2d::of(&light),
             light,
             surfaces: Bvh::build(surfaces),
             casters,
         }
     }
 
-    pub fn light(&self) -> &DiskLight {
+    pub fn light(&self) -> &AreaLight {
         &self.light
+    }
+
+    /// The light in its own plane, as `V exact` needs it.
+    pub fn outline(&self) -> &Outline2d {
+        &self.outline
     }
 
     /// The D-buffer channels along the ray from the light centre with unit direction `w`.
@@ -143,6 +166,8 @@ impl DBufferTwin {
             if let Some((t, k)) = exit {
                 if texel.u.is_none_or(|u| t > u) {
                     texel.u = Some(t);
+                    let tri = *caster.umbra.triangle(k as usize);
+                    texel.side_u = super::volume_vertices::lit_side(tri, &self.light);
                     let attrs = &caster.umbra_attrs[k as usize];
                     texel.s_u = attrs.edge_plane_distance(c + t * w, w, &self.light);
                 }
@@ -153,6 +178,8 @@ impl DBufferTwin {
                     && texel.p.is_none_or(|p| h.t < p)
                 {
                     texel.p = Some(h.t);
+                    let tri = *caster.penumbra.triangle(h.triangle as usize);
+                    texel.side_p = super::volume_vertices::lit_side(tri, &self.light);
                     let attrs = &caster.penumbra_attrs[h.triangle as usize];
                     texel.s_p = attrs.edge_plane_distance(c + h.t * w, w, &self.light);
                 }
@@ -197,6 +224,7 @@ impl DBufferTwin {
 
     /// `V(t)` at `x` with the chosen variant.
     pub fn visibility(&self, x: Vec3, vt: VtVariant) -> f64 {
-        vt.apply(self.sample(x).t)
+        let s = self.sample(x);
+        vt.apply_toward(s.t, s.side(), &self.outline)
     }
 }

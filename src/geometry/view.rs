@@ -47,7 +47,7 @@ pub fn receivers(scene: &Scene, surfaces: &Bvh, width: u32, height: u32) -> Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Camera, DiskLight, Mesh, Object};
+    use crate::scene::{AreaLight, Camera, Mesh, Object};
 
     #[test]
     fn pixel_rays_match_the_view_projection_and_hit_the_ground() {
@@ -80,11 +80,12 @@ mod tests {
         let scene = Scene {
             name: "ground".into(),
             camera,
-            light: DiskLight {
+            light: AreaLight {
                 center: Vec3::new(0.0, 4.0, 0.0),
                 normal: Vec3::NEG_Y,
                 radius: 0.5,
                 intensity: 1.0,
+                outline: crate::scene::Outline::Disk,
             }
             .into(),
             objects: vec![Object {

@@ -117,6 +117,23 @@ impl VtVariant {
             VtVariant::Linear => t,
         }
     }
+
+    /// `V(t)` for a light of `outline`, `side` the chord's lit side (the winning volume
+    /// triangle's, [`super::volume_vertices::lit_side`]): [`VtVariant::apply`], except `exact`
+    /// under a polygon, which is the polygon's share beyond the chord (the camera pass's
+    /// `v_of_t_toward`).
+    pub fn apply_toward(self, t: f64, side: [f32; 2], outline: &super::outline::Outline2d) -> f64 {
+        let m = glam::Vec2::from(side);
+        match outline {
+            super::outline::Outline2d::Polygon { .. }
+                if self == VtVariant::Exact && m.length_squared() > 1e-12 =>
+            {
+                let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
+                f64::from(outline.fraction_beyond(m.normalize(), t as f32))
+            }
+            _ => self.apply(t),
+        }
+    }
 }
 
 impl fmt::Display for VtVariant {

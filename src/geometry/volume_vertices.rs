@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::light_view::LightView;
 use super::volumes::CasterGeometry;
-use crate::scene::DiskLight;
+use crate::scene::AreaLight;
 
 /// The vertex of a shadow-volume triangle the light pass draws: position, kind, and what
 /// `|cx_s|` needs — the height below the light's plane of the edge point the fragment was
@@ -25,6 +25,24 @@ pub struct VolumeVertex {
     pub base: f32,
     pub num: f32,
     pub den: f32,
+    /// The triangle's lit side in the light's plane ([`lit_side`]): where the light a receiver
+    /// behind it sees lies, which `V exact` of a polygon light needs (a disk's is the same
+    /// whichever way the chord runs).
+    pub side: [f32; 2],
+}
+
+/// The direction, in the light's plane (coordinates in [`AreaLight::basis`]), from the part of
+/// the light a volume triangle's caster hides toward the part it leaves: the triangle's outward
+/// normal (both volumes are wound outward) projected onto the plane. Across a penumbra's outer
+/// wall the caster is on the inner side and the light it leaves is beyond; across an umbra's
+/// wall, likewise toward the penumbra. The chord a receiver's `t` stands for runs across it, so
+/// `V exact` is the share of the light beyond the chord toward this side
+/// (`geometry::outline::Outline2d::fraction_beyond`). Zero for a triangle parallel to the plane.
+pub fn lit_side(corners: [Vec3; 3], light: &AreaLight) -> [f32; 2] {
+    let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+    let (u, w) = light.basis();
+    let m = glam::Vec2::new(n.dot(u), n.dot(w));
+    m.try_normalize().unwrap_or(glam::Vec2::ZERO).to_array()
 }
 
 /// The caster's volume triangles as GPU vertices, umbra and penumbra apart (their winding says
@@ -40,7 +58,7 @@ pub struct VolumeVertex {
 /// its extrusion point lies on have a constant `h`.
 pub fn volume_vertices(
     g: &CasterGeometry,
-    light: &DiskLight,
+    light: &AreaLight,
 ) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
     volume_vertices_within(g, light, None, None)
 }
@@ -49,7 +67,7 @@ pub fn volume_vertices(
 /// one pass: no full copy of a volume is held besides the one returned.
 pub fn volume_vertices_within(
     g: &CasterGeometry,
-    light: &DiskLight,
+    light: &AreaLight,
     umbra_reach: Option<f32>,
     penumbra_reach: Option<f32>,
 ) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
@@ -74,6 +92,7 @@ pub fn volume_vertices_within(
         } else {
             (&mut penumbra, penumbra_reach)
         };
+        let side = lit_side(corners, light);
         let t = corners.map(|q| {
             let (base, num, den) = if ratio {
                 let k = (a - p).dot(w);
@@ -87,6 +106,7 @@ pub fn volume_vertices_within(
                 base,
                 num,
                 den,
+                side,
             }
         });
         match reach {
@@ -106,7 +126,7 @@ pub fn volume_vertices_within(
 /// quads would otherwise run on to the far plane, and most of their fragments would be
 /// rasterised only to die behind the ground. (Not for umbrae merged over casters: there a
 /// caster's missing exit would let another caster's win.)
-pub fn end_at(volume: &[VolumeVertex], light: &DiskLight, reach: f32) -> Vec<VolumeVertex> {
+pub fn end_at(volume: &[VolumeVertex], light: &AreaLight, reach: f32) -> Vec<VolumeVertex> {
     let mut out = Vec::with_capacity(volume.len());
     for t in volume.chunks_exact(3) {
         clip_into([t[0], t[1], t[2]], light, reach, &mut out);
@@ -116,7 +136,7 @@ pub fn end_at(volume: &[VolumeVertex], light: &DiskLight, reach: f32) -> Vec<Vol
 
 /// Append the part of triangle `t` whose height below the light's plane is at most `reach`
 /// (none, all of it, a triangle or a quad as two) to `out`.
-fn clip_into(t: [VolumeVertex; 3], light: &DiskLight, reach: f32, out: &mut Vec<VolumeVertex>) {
+fn clip_into(t: [VolumeVertex; 3], light: &AreaLight, reach: f32, out: &mut Vec<VolumeVertex>) {
     let height = |v: &VolumeVertex| light.height_of(Vec3::from(v.position)) - reach;
     let h = [height(&t[0]), height(&t[1]), height(&t[2])];
     if h.iter().all(|&x| x <= 0.0) {
@@ -210,17 +230,19 @@ mod tests {
                 // Affine in position: num = x + 2y, den = 1 + z.
                 num: p[0] + 2.0 * p[1],
                 den: 1.0 + p[2],
+                side: [0.6, 0.8],
             })
             .collect()
     }
 
     #[test]
     fn ending_volumes_keeps_the_part_in_reach_with_exact_attributes_and_winding() {
-        let light = DiskLight {
+        let light = AreaLight {
             center: Vec3::new(0.0, 4.0, 0.0),
             normal: Vec3::NEG_Y,
             radius: 0.5,
             intensity: 1.0,
+            outline: crate::scene::Outline::Disk,
         };
         // Heights below the light: 4 - y. A triangle from y = 3 (height 1) down to y = -1 (5).
         let t = tri([[0.0, 3.0, 0.0], [2.0, -1.0, 0.0], [0.0, -1.0, 2.0]]);
@@ -258,7 +280,7 @@ mod tests {
         // A built-in scene's first caster: its volumes whole, and ended at reaches from above
         // the caster to below the ground.
         let scene = builtin_scene();
-        let light = scene.light.disk_or_centre();
+        let light = scene.light.area_or_centre();
         let prepared = crate::geometry::PreparedCasters::new(&scene);
         let geometry = prepared.build(&light, &crate::geometry::VolumeParams::for_scene(&scene));
         let g = &geometry.casters[0];
@@ -314,7 +336,7 @@ mod tests {
         }
         // No corners: an empty rect; a corner behind the light centre: the whole image.
         assert_eq!(light_view_rect(&view, std::iter::empty()), [0.0; 4]);
-        let light = scene.light.disk_or_centre();
+        let light = scene.light.area_or_centre();
         let behind = light.center - light.normal;
         let whole = light_view_rect(&view, corners.iter().copied().chain([behind]));
         assert_eq!(whole, [0.0, 0.0, 1.0, 1.0]);

@@ -22,7 +22,7 @@ use super::adjacency::CasterMesh;
 use super::classify::{classify, FaceClass};
 use super::silhouette::{count_silhouettes, extrusion_points, find_silhouettes, SilhouetteEdge};
 pub use crate::budget::MAX_VOLUME_TRIANGLES;
-use crate::scene::{DiskLight, Scene};
+use crate::scene::{AreaLight, Outline, Scene};
 
 /// Largest group of silhouette edge ends at one vertex whose pairs are all compared (see
 /// `Fans::pairs`).
@@ -32,7 +32,7 @@ const PAIRING_WINDOW: usize = 16;
 
 /// Most triangles of one fan: a half turn (a silhouette turns by less at a vertex) at the
 /// finest step [`VolumeParams::fan_step_deg`] is meant to take (11.25° gives 16).
-const MAX_FAN_TRIANGLES: usize = 64;
+const MAX_FAN_TRIANGLES: usize = super::outline::MAX_ARC_POINTS;
 
 /// What a volume triangle is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -101,7 +101,7 @@ impl VolumeVertex {
     /// Note: the formula printed in Jakobsen et al. 2004,
     /// `(dir(c,x)·n)/(dir(c,e)·n)·dist(c,e)`, is this distance with the ratio inverted; the two
     /// agree only where `dir(c,x)·n = dir(c,e)·n`.
-    pub fn edge_plane_distance(&self, hit: Vec3, dir: Vec3, light: &DiskLight) -> f32 {
+    pub fn edge_plane_distance(&self, hit: Vec3, dir: Vec3, light: &AreaLight) -> f32 {
         let along = dir.dot(light.normal);
         if self.kind.is_silhouette_face() {
             return (hit - light.center).length();
@@ -280,7 +280,7 @@ pub struct CasterGeometry {
 
 /// Classify, find silhouettes and build both volumes of one caster, within the whole scene's
 /// budget of volume triangles ([`MAX_VOLUME_TRIANGLES`]).
-pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams) -> CasterGeometry {
+pub fn build_caster(mesh: &CasterMesh, light: &AreaLight, params: &VolumeParams) -> CasterGeometry {
     build_caster_within(mesh, light, params, MAX_VOLUME_TRIANGLES as usize)
 }
 
@@ -290,15 +290,16 @@ pub fn build_caster(mesh: &CasterMesh, light: &DiskLight, params: &VolumeParams)
 /// none (it casts no shadow) and a warning naming the budget.
 pub fn build_caster_within(
     mesh: &CasterMesh,
-    light: &DiskLight,
+    light: &AreaLight,
     params: &VolumeParams,
     max_triangles: usize,
 ) -> CasterGeometry {
     let classes = if params.center_silhouettes {
         classify(
             mesh,
-            &DiskLight {
+            &AreaLight {
                 radius: 0.0,
+                outline: Outline::Disk,
                 ..*light
             },
         )
@@ -545,7 +546,7 @@ impl EdgeEnd {
 /// Closing fans at the vertices where quads of one volume meet.
 struct Fans<'a> {
     mesh: &'a CasterMesh,
-    light: &'a DiskLight,
+    light: &'a AreaLight,
     params: &'a VolumeParams,
 }
 
@@ -642,29 +643,17 @@ impl Fans<'_> {
     /// The fan at `apex` between the quads of its two edges, from `p1` to `p2` along the shorter
     /// disk arc (a silhouette turns by less than 180° at a vertex).
     fn push_fan(&self, volumes: &mut VolumeMesh, apex: Vec3, p1: Vec3, p2: Vec3, kind: VolumeKind) {
-        let light = self.light;
-        let (u, w) = light.basis();
-        let c = light.center;
-        let angle = |p: Vec3| (p - c).dot(w).atan2((p - c).dot(u));
-        let a1 = angle(p1);
-        let mut delta = angle(p2) - a1;
-        if delta > std::f32::consts::PI {
-            delta -= std::f32::consts::TAU;
-        } else if delta < -std::f32::consts::PI {
-            delta += std::f32::consts::TAU;
+        if p1 == p2 {
+            return;
         }
+        let light = self.light;
+        let c = light.center;
         let step = self.params.fan_step_deg.to_radians().max(1e-3);
-        let n = ((delta.abs() / step).ceil() as usize).min(MAX_FAN_TRIANGLES);
-        let rim = |k: usize| {
-            if k == 0 {
-                return p1;
-            }
-            if k == n {
-                return p2;
-            }
-            let a = a1 + delta * k as f32 / n as f32;
-            c + light.radius * (a.cos() * u + a.sin() * w)
-        };
+        let mut rim = vec![p1];
+        rim.extend(super::outline::boundary_between(light, p1, p2, step));
+        rim.push(p2);
+        let n = rim.len() - 1;
+        let rim = |k: usize| rim[k];
         let extrude = |q: Vec3| extrude_away(apex, q, self.params.far);
         for k in 0..n {
             let (q0, q1) = (rim(k), rim(k + 1));
@@ -715,12 +704,13 @@ mod tests {
         Mesh::new(positions, triangles)
     }
 
-    fn light(r: f32) -> DiskLight {
-        DiskLight {
+    fn light(r: f32) -> AreaLight {
+        AreaLight {
             center: Vec3::new(0.0, 4.0, 0.0),
             normal: Vec3::NEG_Y,
             radius: r,
             intensity: 1.0,
+            outline: Outline::Disk,
         }
     }
 

@@ -57,9 +57,10 @@ use glam::{DVec2, DVec3, Vec3};
 
 use super::hard_volume::{scene_volumes, HardVolume, OpenMeshes};
 use super::hull::convex_hull;
+use super::outline::{convex_cut_area, polygon_edge_coverage};
 use super::visibility::disk_segment_fraction;
 use super::PreparedCasters;
-use crate::scene::DiskLight;
+use crate::scene::{AreaLight, MAX_POLYGON_VERTICES};
 
 /// Fraction of a receiver's height above the light plane kept off either end of the slab an
 /// edge is clipped to (the GPU uses the same).
@@ -94,8 +95,10 @@ pub fn edge_coverage_2d(a: DVec2, b: DVec2) -> f64 {
     (cross - cross.atan2(p0.dot(p1))) / (2.0 * std::f64::consts::PI)
 }
 
-/// The disk's frame for the coverage: centre, normal (toward the scene), radius and the basis
-/// `(u, w)` of its plane, with `u × w = −n` (the orientation the sign rule is stated in).
+/// The light's frame for the coverage: centre, normal (toward the scene), radius (of the disk,
+/// or of the disk a polygon fits in) and the basis `(u, w)` of its plane, with `u × w = −n` (the
+/// orientation the sign rule is stated in); for a rectangle or polygon its corners in that basis
+/// in units of the radius, counter-clockwise there, and their area.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DiskFrame {
     pub center: DVec3,
@@ -103,23 +106,71 @@ pub struct DiskFrame {
     pub u: DVec3,
     pub w: DVec3,
     pub radius: f64,
+    corners: [DVec2; MAX_POLYGON_VERTICES],
+    corner_count: usize,
+    corner_area: f64,
 }
 
 impl DiskFrame {
-    pub fn new(light: &DiskLight) -> DiskFrame {
+    pub fn new(light: &AreaLight) -> DiskFrame {
         let (u, w) = light.basis();
         let (u, mut w) = (u.as_dvec3(), w.as_dvec3());
         let normal = light.normal.as_dvec3();
         if u.cross(w).dot(normal) > 0.0 {
             w = -w;
         }
+        let radius = f64::from(light.radius);
+        let mut corners = [DVec2::ZERO; MAX_POLYGON_VERTICES];
+        let mut corner_count = 0;
+        if let Some(p) = light.corners() {
+            let c = light.center.as_dvec3();
+            for (i, v) in p.vertices().iter().enumerate() {
+                let g = v.as_dvec3() - c;
+                corners[i] = DVec2::new(g.dot(u), g.dot(w)) / radius;
+            }
+            corner_count = p.len();
+            let ring = &mut corners[..corner_count];
+            let signed: f64 = (0..ring.len())
+                .map(|i| ring[i].perp_dot(ring[(i + 1) % ring.len()]))
+                .sum();
+            if signed < 0.0 {
+                ring.reverse();
+            }
+        }
+        let ring = &corners[..corner_count];
+        let corner_area = 0.5
+            * (0..ring.len())
+                .map(|i| ring[i].perp_dot(ring[(i + 1) % ring.len()]))
+                .sum::<f64>();
         DiskFrame {
             center: light.center.as_dvec3(),
             normal,
             u,
             w,
-            radius: f64::from(light.radius),
+            radius,
+            corners,
+            corner_count,
+            corner_area,
         }
+    }
+
+    /// A rectangle's or polygon's corners (radius units, counter-clockwise in `(u, w)`); empty
+    /// for a disk.
+    pub fn corners(&self) -> &[DVec2] {
+        &self.corners[..self.corner_count]
+    }
+
+    /// Their area (radius units²).
+    pub fn corner_area(&self) -> f64 {
+        self.corner_area
+    }
+
+    /// The light's share where `p · m ≥ h` (radius units): a disk's segment, a polygon's cut.
+    fn share_beyond(&self, m: DVec2, h: f64) -> f64 {
+        if self.corner_count == 0 {
+            return disk_segment_fraction(h);
+        }
+        (convex_cut_area(self.corners(), &[(m, h)]) / self.corner_area).clamp(0.0, 1.0)
     }
 
     /// The part of the disk in front of the plane through `x` with normal `n` (`n · (y − x) > 0`),
@@ -134,7 +185,12 @@ impl DiskFrame {
         if s.is_nan() || k.is_nan() || s <= 1e-6 * k.abs() {
             return if k > 0.0 { 1.0 } else { 0.0 };
         }
-        disk_segment_fraction(-k / s)
+        if self.corner_count == 0 {
+            return disk_segment_fraction(-k / s);
+        }
+        // In front: n · (c + r p − x) > 0, i.e. p · m > −k / r with m = (n·u, n·w).
+        let m = DVec2::new(n.dot(self.u), n.dot(self.w));
+        self.share_beyond(m, -k / self.radius)
     }
 
     /// The coverage of the disk by the edge `e0 → e1` as `x` sees it (`e0 → e1` in the
@@ -167,7 +223,12 @@ impl DiskFrame {
             let g = x + (q - x) * (tx / (tx - tq)) - c;
             DVec2::new(g.dot(self.u), g.dot(self.w)) / self.radius
         };
-        edge_coverage_2d(to_disk(e0.lerp(e1, s0)), to_disk(e0.lerp(e1, s1)))
+        let (a, b) = (to_disk(e0.lerp(e1, s0)), to_disk(e0.lerp(e1, s1)));
+        if self.corner_count == 0 {
+            edge_coverage_2d(a, b)
+        } else {
+            polygon_edge_coverage(self.corners(), self.corner_area, a, b)
+        }
     }
 }
 
@@ -177,7 +238,7 @@ impl DiskFrame {
 /// pushed `reach` away from the 8 corners of the octagon around the disk (circumradius
 /// `r / cos(π/8)`): every point of the region is a convex combination of those 18 points.
 /// Triangles outward-wound; a box around the 18 points where they span no volume.
-pub fn wedge_hull(light: &DiskLight, e0: Vec3, e1: Vec3, reach: f32) -> Vec<[Vec3; 3]> {
+pub fn wedge_hull(light: &AreaLight, e0: Vec3, e1: Vec3, reach: f32) -> Vec<[Vec3; 3]> {
     let (u, w) = light.basis();
     let rim = light.radius / (std::f32::consts::PI / 8.0).cos();
     let mut points = vec![e0, e1];
@@ -270,7 +331,7 @@ pub struct WedgeTwin {
 }
 
 impl WedgeTwin {
-    pub fn new(casters: &PreparedCasters, light: &DiskLight, open: OpenMeshes) -> WedgeTwin {
+    pub fn new(casters: &PreparedCasters, light: &AreaLight, open: OpenMeshes) -> WedgeTwin {
         WedgeTwin {
             frame: DiskFrame::new(light),
             volumes: scene_volumes(casters, light.center, open)
@@ -355,11 +416,12 @@ mod tests {
     fn the_horizon_fraction_is_the_part_of_the_disk_in_front_of_the_plane() {
         // A tilted disk and random planes through random points: the fraction against the
         // disk's points on a fine polar grid counted in front of the plane.
-        let light = DiskLight {
+        let light = AreaLight {
             center: Vec3::new(0.3, 4.0, -0.2),
             normal: Vec3::new(-0.2, -1.0, 0.1).normalize(),
             radius: 0.7,
             intensity: 1.0,
+            outline: crate::scene::Outline::Disk,
         };
         let frame = DiskFrame::new(&light);
         let mut state = 0x2545_f491_4f6c_dd1du64;

@@ -332,7 +332,7 @@ impl SurfaceVertex {
 pub use crate::geometry::volume_vertices::VolumeVertex;
 
 impl VolumeVertex {
-    pub const ATTRIBUTES: [wgpu::VertexAttribute; 5] = [
+    pub const ATTRIBUTES: [wgpu::VertexAttribute; 6] = [
         wgpu::VertexAttribute {
             format: wgpu::VertexFormat::Float32x3,
             offset: 0,
@@ -358,6 +358,11 @@ impl VolumeVertex {
             offset: 24,
             shader_location: 4,
         },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x2,
+            offset: 28,
+            shader_location: 5,
+        },
     ];
 
     pub fn layout() -> wgpu::VertexBufferLayout<'static> {
@@ -370,4 +375,4 @@ impl VolumeVertex {
 }
 
 const _: () = assert!(std::mem::size_of::<SurfaceVertex>() == 16);
-const _: () = assert!(std::mem::size_of::<VolumeVertex>() == 28);
+const _: () = assert!(std::mem::size_of::<VolumeVertex>() == 36);

@@ -1,4 +1,5 @@
-//! Built-in scenes (docs/guide/scenes.md), and scenes with a linear light after the figures of Heidrich et al. 2000. Each is a TOML file in `assets/scenes/`, embedded in the
+//! Built-in scenes (docs/guide/scenes.md): after the D-buffer paper's figures, with a linear light
+//! after the figures of Heidrich et al. 2000, and under rectangle and polygon lights. Each is a TOML file in `assets/scenes/`, embedded in the
 //! binary and parsed by the same code as user scene files, so they double as examples.
 
 use super::{Scene, SceneError, SceneFile};
@@ -88,6 +89,23 @@ const SCENES: &[(&str, &str)] = &[
     (
         "line-bar",
         include_str!("../../assets/scenes/line-bar.toml"),
+    ),
+    // Rectangle and polygon lights.
+    (
+        "rect-strip",
+        include_str!("../../assets/scenes/rect-strip.toml"),
+    ),
+    (
+        "rect-fig7",
+        include_str!("../../assets/scenes/rect-fig7.toml"),
+    ),
+    (
+        "polygon-triangle",
+        include_str!("../../assets/scenes/polygon-triangle.toml"),
+    ),
+    (
+        "rect-fusion",
+        include_str!("../../assets/scenes/rect-fusion.toml"),
     ),
 ];
 

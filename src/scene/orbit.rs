@@ -128,14 +128,14 @@ mod tests {
     fn the_light_keeps_its_height_distance_and_relative_tilt() {
         let scene = crate::scene::load("fig7-concave").unwrap();
         let poses = Poses::new(&scene, Orbit::Light);
-        let start = *scene.light.as_disk().unwrap();
-        let first = *poses.light.as_disk().unwrap();
+        let start = *scene.light.as_area().unwrap();
+        let first = *poses.light.as_area().unwrap();
         let centre = casters_centre(&scene).unwrap();
         let axis_dist = |p: Vec3| Vec3::new(p.x - centre.x, 0.0, p.z - centre.z).length();
         let mut last = start.center;
         for k in 0..8 {
             let (l, _) = poses.at(k, 8);
-            let l = *l.as_disk().unwrap();
+            let l = *l.as_area().unwrap();
             assert!((l.center.y - first.center.y).abs() < 1e-5);
             assert!((axis_dist(l.center) - axis_dist(first.center)).abs() < 1e-4);
             // The normal keeps its angle to the direction toward the axis.

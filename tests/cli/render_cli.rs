@@ -41,7 +41,7 @@ fn compare_writes_the_report_and_prints_the_table() {
             "{method} row: {stdout}"
         );
         // A method that needs the other kind of light is listed, not drawn.
-        let drawn = method.needs() != Some(dbuffer::scene::LightKind::Line);
+        let drawn = method.takes(dbuffer::scene::LightKind::Disk);
         assert_eq!(
             dir.join(format!("{method}.png")).is_file(),
             drawn,
@@ -126,7 +126,7 @@ fn the_default_method_follows_the_light() {
             "dbuffer",
         ],
         &dir,
-        "needs a disk light",
+        "needs a disk, rect or polygon light",
     );
 }
 
@@ -274,10 +274,21 @@ fn bad_input_is_refused_with_a_reason() {
 #[test]
 fn a_disk_method_refuses_a_line_light_in_one_line() {
     for (scene, method, needs) in [
-        ("line-fig2", "dbuffer", "needs a disk light"),
-        ("line-fig2", "wedges", "needs a disk light"),
-        ("line-fig2", "pcss", "needs a disk light"),
+        (
+            "line-fig2",
+            "dbuffer",
+            "needs a disk, rect or polygon light",
+        ),
+        ("line-fig2", "wedges", "needs a disk, rect or polygon light"),
+        ("line-fig2", "pcss", "needs a disk, rect or polygon light"),
         ("table1-224", "linear-ssm", "needs a line light"),
+        // A polygon or rectangle is no line: linear-ssm refuses it in the same one line.
+        (
+            "polygon-triangle",
+            "linear-ssm",
+            "a polygon (kind = \"polygon\")",
+        ),
+        ("rect-strip", "linear-ssm", "a rect (kind = \"rect\")"),
     ] {
         let dir = temp_dir(&format!("refused-{method}"));
         let out = dbuffer()

@@ -514,10 +514,15 @@ fn the_outside_scan_catches_each_needle() {
 /// Every kind of light, for the table's light column. A new kind fails to compile here until it
 /// is added (and the README's table gets a word for it).
 fn light_kinds() -> Vec<LightKind> {
-    let all = [LightKind::Disk, LightKind::Line];
+    let all = [
+        LightKind::Disk,
+        LightKind::Rect,
+        LightKind::Polygon,
+        LightKind::Line,
+    ];
     for k in all {
         match k {
-            LightKind::Disk | LightKind::Line => {}
+            LightKind::Disk | LightKind::Rect | LightKind::Polygon | LightKind::Line => {}
         }
     }
     all.to_vec()

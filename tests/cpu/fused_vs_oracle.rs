@@ -27,7 +27,7 @@ use dbuffer::geometry::fused::{edge_chord, DiskMask, FusedParams, FusedPath, Fus
 use dbuffer::geometry::hull::convex_hull;
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{view, PreparedCasters, VolumeParams};
-use dbuffer::scene::{shapes, Camera, DiskLight, Mesh, Object, Scene};
+use dbuffer::scene::{shapes, AreaLight, Camera, Mesh, Object, Outline, Scene};
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestCaseError, TestRng, TestRunner};
@@ -121,11 +121,12 @@ fn ground() -> Mesh {
 
 /// The scene of a case, or `None` when a caster would reach the light plane or the ground.
 fn scene_of(case: &Case) -> Option<Scene> {
-    let light = DiskLight {
+    let light = AreaLight {
         center: Vec3::new(case.light_offset.0, 4.0, case.light_offset.1),
         normal: Vec3::new(case.tilt.0, -1.0, case.tilt.1).normalize(),
         radius: case.radius,
         intensity: 1.0,
+        outline: Outline::Disk,
     };
     let mut objects = vec![Object {
         name: "ground".into(),
@@ -177,7 +178,7 @@ fn check(case: &Case, totals: &RefCell<Totals>) -> Result<(), TestCaseError> {
     };
     let prepared = PreparedCasters::new(&scene);
     let geometry = prepared.build(
-        &scene.light.disk_or_centre(),
+        &scene.light.area_or_centre(),
         &VolumeParams::for_scene(&scene),
     );
     let twin = FusedTwin::new(&scene, &prepared, &geometry, FusedParams::default());
@@ -218,7 +219,7 @@ fn check(case: &Case, totals: &RefCell<Totals>) -> Result<(), TestCaseError> {
         };
         let list = twin.texel_list(texel);
         let missing = twin.edges().iter().enumerate().any(|(k, e)| {
-            edge_chord(e, x, &scene.light.disk_or_centre()).is_some_and(|ch| ch.area > 1e-9)
+            edge_chord(e, x, &scene.light.area_or_centre()).is_some_and(|ch| ch.area > 1e-9)
                 && !list.edges.contains(&(k as u32))
         });
         t.lists_missing += usize::from(missing);

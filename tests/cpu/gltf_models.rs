@@ -261,7 +261,7 @@ fn a_model_as_scene_stands_on_the_ground_under_its_own_light() {
     let (lo, hi) = scene.objects[1].mesh.bounds().unwrap();
     assert!(lo.y.abs() < 1e-5 && ((hi - lo).max_element() - 1.5).abs() < 1e-4);
     // The model (10 m) became 1.5 m: ×0.15, centred on x and z (its centre was 5, 5).
-    let light = *scene.light.as_disk().expect("a disk light");
+    let light = *scene.light.as_area().expect("a disk light");
     assert!(
         close(light.center, Vec3::new(-0.75, 6.0, -0.75)),
         "{}",
@@ -279,7 +279,7 @@ fn a_model_as_scene_stands_on_the_ground_under_its_own_light() {
     let plain = dir.join("plain.glb");
     std::fs::write(&plain, glb(&doc, &bin)).unwrap();
     let scene = load(plain.to_str().unwrap()).unwrap();
-    let light = *scene.light.as_disk().expect("a disk light");
+    let light = *scene.light.as_area().expect("a disk light");
     assert!(close(light.center, Vec3::new(0.0, 4.0, 0.0)));
     assert!(close(light.normal, Vec3::NEG_Y));
     // Framed: the camera looks at the model and the light from above the ground.

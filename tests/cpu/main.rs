@@ -3,6 +3,7 @@
 //! documentation against the code. One module per topic; run one with
 //! `cargo test --test cpu scene_files`.
 
+mod area_lights;
 mod docs;
 mod fused_vs_oracle;
 mod fuzz_parsers;

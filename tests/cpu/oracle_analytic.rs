@@ -4,15 +4,16 @@
 use std::f32::consts::PI;
 
 use dbuffer::geometry::oracle::{Oracle, DEFAULT_SAMPLES};
-use dbuffer::scene::DiskLight;
+use dbuffer::scene::{AreaLight, Outline};
 use glam::Vec3;
 
-fn light() -> DiskLight {
-    DiskLight {
+fn light() -> AreaLight {
+    AreaLight {
         center: Vec3::new(0.0, 4.0, 0.0),
         normal: Vec3::NEG_Y,
         radius: 0.5,
         intensity: 1.0,
+        outline: Outline::Disk,
     }
 }
 
@@ -36,7 +37,7 @@ fn half_plane(e: Vec3, dir: Vec3, w: Vec3, half: f32, reach: f32) -> Vec<[Vec3; 
 /// through `e` along `dir`, with `q` any point of the occluder. Valid when every segment from `p`
 /// to the disk crosses the occluder's plane within the modelled quad: the plane through `p` and
 /// the edge line then cuts the disk along a chord and hides exactly one side of it.
-fn exact_edge(l: &DiskLight, p: Vec3, e: Vec3, dir: Vec3, q: Vec3) -> f32 {
+fn exact_edge(l: &AreaLight, p: Vec3, e: Vec3, dir: Vec3, q: Vec3) -> f32 {
     let m = dir.cross(e - p);
     let sigma = (m.dot(q - p)).signum();
     let m_par = m - m.dot(l.normal) * l.normal;

@@ -2,7 +2,7 @@
 //! triangle counts, convexity, placement under the light, the property each scene is for).
 
 use dbuffer::geometry::ray::intersect_triangle;
-use dbuffer::scene::{builtin, load, shapes, DiskLight, Light, Mesh, Scene};
+use dbuffer::scene::{builtin, load, shapes, AreaLight, Light, Mesh, Scene};
 use glam::Vec3;
 use std::collections::{HashMap, HashSet};
 
@@ -254,6 +254,10 @@ const EXPECTED_NAMES: &[&str] = &[
     "line-fig8-overlap",
     "line-fig9",
     "line-bar",
+    "rect-strip",
+    "rect-fig7",
+    "polygon-triangle",
+    "rect-fusion",
 ];
 
 fn scene(name: &str) -> Scene {
@@ -261,9 +265,9 @@ fn scene(name: &str) -> Scene {
 }
 
 /// The disk light of a built-in that has one.
-fn disk(s: &Scene) -> DiskLight {
+fn disk(s: &Scene) -> AreaLight {
     *s.light
-        .as_disk()
+        .as_area()
         .unwrap_or_else(|| panic!("{}: a disk light", s.name))
 }
 
@@ -302,7 +306,7 @@ fn every_builtin_scene_loads_and_is_well_formed() {
         // Every caster between the light and the ground: below a disk's plane (which points
         // down), below both ends of a line light.
         let height = |p: Vec3| match s.light {
-            Light::Disk(d) => {
+            Light::Area(d) => {
                 assert!(d.normal.is_normalized());
                 assert!(d.normal.y < -0.9, "{name}: light points down");
                 d.height_of(p)
@@ -589,7 +593,7 @@ fn bunny_scene_caster_is_open() {
     assert!(prepared.report.boundary_edges > 20, "{:?}", prepared.report);
     assert_eq!(prepared.report.non_manifold_edges, 0);
     let geometry = dbuffer::geometry::PreparedCasters::new(&s).build(
-        s.light.as_disk().expect("a disk light"),
+        s.light.as_area().expect("a disk light"),
         &dbuffer::geometry::VolumeParams::for_scene(&s),
     );
     let open: Vec<_> = geometry

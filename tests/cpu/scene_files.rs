@@ -216,7 +216,7 @@ fn zero_normal_and_normalisation() {
     )
     .unwrap();
     let s = f.build(Path::new("."), "ok.toml").unwrap();
-    let normal = s.light.as_disk().unwrap().normal;
+    let normal = s.light.as_area().unwrap().normal;
     assert!((normal - glam::Vec3::new(0.0, -0.6, 0.8)).length() < 1e-6);
 }
 
@@ -474,7 +474,7 @@ fn a_bare_obj_gets_a_default_scene() {
     let (lo, hi) = s.objects[1].mesh.bounds().unwrap();
     assert!(lo.y.abs() < 1e-5, "stands on the ground");
     assert!(((hi - lo).max_element() - 1.5).abs() < 1e-4);
-    assert!(s.light.as_disk().unwrap().height_of(hi) > 0.0);
+    assert!(s.light.as_area().unwrap().height_of(hi) > 0.0);
     // The generated file is saveable: it round-trips and builds from another directory.
     let (f, p) = load_file(&path.display().to_string()).unwrap();
     assert_eq!(p.as_deref(), Some(path.as_path()));

@@ -17,7 +17,7 @@ const SAMPLES: usize = 256;
 fn measure(name: &str) -> Metrics {
     let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
     let geometry = PreparedCasters::new(&scene).build(
-        scene.light.as_disk().expect("a disk light"),
+        scene.light.as_area().expect("a disk light"),
         &VolumeParams::for_scene(&scene),
     );
     let oracle = Oracle::from_scene(&scene, SAMPLES);
@@ -93,12 +93,12 @@ fn volume_surfaces_are_closed() {
     };
     for name in scene::builtin::names() {
         let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
-        if scene.light.as_disk().is_none() {
+        if scene.light.as_area().is_none() {
             continue; // the D-buffer's geometry is a disk light's
         }
         let prepared = PreparedCasters::new(&scene);
         let geometry = prepared.build(
-            scene.light.as_disk().expect("a disk light"),
+            scene.light.as_area().expect("a disk light"),
             &VolumeParams::for_scene(&scene),
         );
         for (g, mesh) in geometry.casters.iter().zip(&prepared.meshes) {
@@ -188,12 +188,12 @@ fn fused_twin_on_every_built_in() {
     use dbuffer::geometry::fused::{FusedParams, FusedTwin};
     for name in scene::builtin::names() {
         let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
-        if scene.light.as_disk().is_none() {
+        if scene.light.as_area().is_none() {
             continue; // a line light: the D-buffer family refuses it
         }
         let prepared = PreparedCasters::new(&scene);
         let geometry = prepared.build(
-            &scene.light.disk_or_centre(),
+            &scene.light.area_or_centre(),
             &VolumeParams::for_scene(&scene),
         );
         let oracle = Oracle::from_scene(&scene, SAMPLES);

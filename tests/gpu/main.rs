@@ -10,6 +10,7 @@ mod compare_report;
 mod hard_methods;
 mod linear_ssm;
 mod methods_accuracy;
+mod polygon_lights;
 mod reference_analytic;
 mod render_accuracy;
 mod render_fused;

@@ -8,18 +8,19 @@ use dbuffer::geometry::VtVariant;
 use dbuffer::render::methods::reference::SAMPLES;
 use dbuffer::render::offline::Offline;
 use dbuffer::render::{Frame, FrameRequest, Knobs, Method};
-use dbuffer::scene::{Camera, DiskLight, Mesh, Object, Scene};
+use dbuffer::scene::{AreaLight, Camera, Mesh, Object, Outline, Scene};
 use glam::Vec3;
 
 const H: f32 = 4.0; // light height
 const R: f32 = 1.0; // light radius
 
-fn light() -> DiskLight {
-    DiskLight {
+fn light() -> AreaLight {
+    AreaLight {
         center: Vec3::new(0.0, H, 0.0),
         normal: Vec3::NEG_Y,
         radius: R,
         intensity: 1.0,
+        outline: Outline::Disk,
     }
 }
 

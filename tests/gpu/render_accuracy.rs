@@ -1,5 +1,5 @@
 //! The GPU render core against the ray-cast reference (docs/method/metrics.md), V(t) exact, on
-//! every built-in disk scene: each holds a bound on its class mismatch and penumbra MAE, stated
+//! every built-in scene with a planar light (disk, rectangle, polygon): each holds a bound on its class mismatch and penumbra MAE, stated
 //! with the reason that scene's bound is what it is (`BOUNDS`). Every built-in is measured and
 //! printed (`cargo test --test gpu render_accuracy -- --nocapture`).
 
@@ -152,6 +152,30 @@ const BOUNDS: &[(&str, f64, f64, &str)] = &[
         0.276,
         "sixteen casters in front of the light at once: worst case",
     ),
+    (
+        "rect-strip",
+        0.5,
+        0.050,
+        "convex box under a 20:1 strip: the method's exact case",
+    ),
+    (
+        "rect-fig7",
+        0.7,
+        0.048,
+        "concave caster under a rectangle: Assumption 1 fails",
+    ),
+    (
+        "polygon-triangle",
+        0.8,
+        0.100,
+        "triangle light: its corners give acute visible parts",
+    ),
+    (
+        "rect-fusion",
+        4.4,
+        0.100,
+        "plank over a box fuse under a wide rectangle",
+    ),
 ];
 
 #[test]
@@ -168,7 +192,7 @@ fn gpu_against_the_reference_on_every_built_in() {
         .filter(|name| {
             // The D-buffer needs a disk light (`gpu::linear_ssm` holds the line-light method).
             let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
-            scene.light.as_disk().is_some()
+            scene.light.as_area().is_some()
         })
         .collect();
     let mut failures = Vec::new();

@@ -88,7 +88,7 @@ fn render(ctx: &GpuContext, scene: &Scene, method: Method, knobs: Knobs) -> Fram
 fn twin(scene: &Scene, cap: usize) -> FusedTwin {
     let prepared = PreparedCasters::new(scene);
     let geometry = prepared.build(
-        &scene.light.disk_or_centre(),
+        &scene.light.area_or_centre(),
         &VolumeParams::for_scene(scene),
     );
     let params = FusedParams {

@@ -50,9 +50,14 @@ fn uniforms_match_their_wgsl() {
             light_normal,
             light_intensity,
             light_kind,
+            light_corner_count,
+            light_area,
             _pad0,
+            light_u,
             _pad1,
-            _pad2
+            light_w,
+            _pad2,
+            light_corners
         );
     }
     for shader in ["hard", "pcf", "pcss", "dbuffer", "extended_light_map"] {
@@ -109,7 +114,9 @@ fn uniforms_match_their_wgsl() {
         center,
         normal,
         u,
-        w
+        w,
+        polygon,
+        corners
     );
     assert_wgsl_layout!(
         HybridUniforms,
@@ -319,6 +326,7 @@ fn vertex_attributes_match_the_structs() {
             (2, offset_of!(VolumeVertex, base) as u64),
             (3, offset_of!(VolumeVertex, num) as u64),
             (4, offset_of!(VolumeVertex, den) as u64),
+            (5, offset_of!(VolumeVertex, side) as u64),
         ]
     );
     // The WGSL inputs use those locations with the matching types.
@@ -336,6 +344,7 @@ fn vertex_attributes_match_the_structs() {
         "@location(2) base: f32",
         "@location(3) num: f32",
         "@location(4) den: f32",
+        "@location(5) side: vec2<f32>",
     ] {
         assert!(
             volumes.contains(decl),

@@ -15,7 +15,7 @@ fn every_built_in_matches_its_snapshot() {
     for name in scene::builtin::names() {
         let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
         // Each with the method of its light: the D-buffer for a disk, linear-ssm for a line.
-        let method = if scene.light.as_disk().is_some() {
+        let method = if scene.light.as_area().is_some() {
             Method::DBUFFER
         } else {
             "linear-ssm".parse().unwrap()

@@ -6,20 +6,21 @@ use dbuffer::geometry::hard_volume::OpenMeshes;
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::wedges::{wedge_hull, wedge_reach, WedgeTwin};
 use dbuffer::geometry::PreparedCasters;
-use dbuffer::scene::{self, Camera, DiskLight, Object, Scene};
+use dbuffer::scene::{self, AreaLight, Camera, Object, Outline, Scene};
 use glam::{Affine3A, Vec3};
 
-fn light(radius: f32) -> DiskLight {
-    DiskLight {
+fn light(radius: f32) -> AreaLight {
+    AreaLight {
         center: Vec3::new(0.0, 4.0, 0.0),
         normal: Vec3::NEG_Y,
         radius,
         intensity: 1.0,
+        outline: Outline::Disk,
     }
 }
 
 /// A box caster of `size` at height 2 over a ground plane, under `light`.
-fn box_scene(size: Vec3, light: DiskLight) -> Scene {
+fn box_scene(size: Vec3, light: AreaLight) -> Scene {
     let cube = scene::shapes::build("cube").unwrap();
     let ground = scene::shapes::build("plane").unwrap();
     Scene {
@@ -51,7 +52,7 @@ fn box_scene(size: Vec3, light: DiskLight) -> Scene {
 
 /// Ground points over the shadow, V by the twin and by the oracle.
 fn twin_against_oracle(scene: &Scene) -> (f64, f64, usize) {
-    let disk = *scene.light.as_disk().unwrap();
+    let disk = *scene.light.as_area().unwrap();
     let twin = WedgeTwin::new(&PreparedCasters::new(scene), &disk, OpenMeshes::TwoSided);
     let oracle = Oracle::from_scene(scene, 4096);
     let (mut sum, mut worst, mut penumbra) = (0.0f64, 0.0f64, 0usize);
@@ -100,7 +101,7 @@ fn a_thick_caster_shows_the_centre_silhouette_error() {
 
 /// A sphere of `mesh` (a `sphere:LxM` shape) of radius 0.8 at height 2 under `light`, over a
 /// ground plane.
-fn sphere_scene(mesh: &str, light: DiskLight) -> Scene {
+fn sphere_scene(mesh: &str, light: AreaLight) -> Scene {
     let mut scene = box_scene(Vec3::ONE, light);
     scene.objects[1] = Object {
         name: "sphere".into(),
@@ -127,7 +128,7 @@ fn sphere_scene(mesh: &str, light: DiskLight) -> Scene {
 fn the_horizon_clip_matches_the_oracle_near_a_spheres_terminator() {
     for mesh in ["sphere:16x8", "sphere:32x16"] {
         let scene = sphere_scene(mesh, light(0.6));
-        let disk = *scene.light.as_disk().unwrap();
+        let disk = *scene.light.as_area().unwrap();
         let mut twin = WedgeTwin::new(&PreparedCasters::new(&scene), &disk, OpenMeshes::TwoSided);
         let oracle = Oracle::from_scene(&scene, 4096);
         let sphere = &scene.objects[1].mesh;
@@ -180,7 +181,7 @@ fn the_horizon_clip_matches_the_oracle_near_a_spheres_terminator() {
 #[test]
 fn wedges_hold_every_point_their_edge_covers() {
     let scene = box_scene(Vec3::new(1.0, 0.5, 1.0), light(0.6));
-    let disk = *scene.light.as_disk().unwrap();
+    let disk = *scene.light.as_area().unwrap();
     let twin = WedgeTwin::new(&PreparedCasters::new(&scene), &disk, OpenMeshes::TwoSided);
     let reach = wedge_reach(&scene);
     let mut checked = 0;
@@ -273,7 +274,7 @@ fn gpu_wedges_match_their_twin() {
             &scene,
             Knobs::default().with(&HORIZON, horizon),
         );
-        let disk = *scene.light.as_disk().unwrap();
+        let disk = *scene.light.as_area().unwrap();
         let mut twin = WedgeTwin::new(&PreparedCasters::new(&scene), &disk, OpenMeshes::TwoSided);
         twin.horizon = horizon == 1;
         let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), SIZE, SIZE);
@@ -325,7 +326,7 @@ fn wedges_against_the_reference_on_the_built_ins() {
     );
     for &name in dbuffer::scene::builtin::names() {
         let scene = scene::load(name).unwrap_or_else(|e| panic!("{e}"));
-        if scene.light.as_disk().is_none() {
+        if scene.light.as_area().is_none() {
             continue;
         }
         let reference = render(&mut offline, &scene, Method::REFERENCE, SIZE);
@@ -430,7 +431,7 @@ fn overlapping_edges_are_summed_not_combined() {
             casts_shadow: true,
         });
     }
-    let disk = *scene.light.as_disk().unwrap();
+    let disk = *scene.light.as_area().unwrap();
     let twin = WedgeTwin::new(&PreparedCasters::new(&scene), &disk, OpenMeshes::TwoSided);
     let oracle = Oracle::from_scene(&scene, 4096);
     let (mut darker, mut brighter) = (0.0f64, 0.0f64);

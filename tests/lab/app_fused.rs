@@ -34,7 +34,7 @@ fn the_light_as_seen_from_a_fused_pixel() {
     // than one layer deep (two casters' chords combine) and the mask ran.
     let prepared = PreparedCasters::new(&scene);
     let geometry = prepared.build(
-        &scene.light.disk_or_centre(),
+        &scene.light.area_or_centre(),
         &VolumeParams::for_scene(&scene),
     );
     let twin = FusedTwin::new(&scene, &prepared, &geometry, fused_params(&shown.request));

@@ -4,5 +4,6 @@
 
 mod support;
 
+mod app_area_lights;
 mod app_fused;
 mod app_lab;

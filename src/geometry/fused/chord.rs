@@ -7,7 +7,8 @@ use super::area::region_area;
 use super::{CLIP, FACING_TOL};
 use crate::geometry::adjacency::{CasterMesh, NO_FACE};
 use crate::geometry::classify::FaceClass;
-use crate::scene::DiskLight;
+use crate::geometry::outline::polygon_edge_coverage;
+use crate::scene::AreaLight;
 
 /// A candidate silhouette edge: what the light pass rasterises and the camera pass reads, per edge
 /// (the GPU's storage-buffer record, 5 × `vec4<f32>`: see `docs/method/dbuffer-fused.md`).
@@ -148,9 +149,37 @@ impl EdgeChord {
     }
 }
 
+/// [`region_area`] of the disk, or for a rectangle or polygon light the same region of it (the
+/// part beyond the segment inside the angle its ends subtend at the centre), as a fraction of
+/// its area: `geometry::outline::polygon_edge_coverage`, unsigned. `p` and `q` are in unit-disk
+/// coordinates (radii of the disk the polygon fits in).
+pub fn region_area_of(light: &AreaLight, p: Vec2, q: Vec2) -> f64 {
+    let Some(poly) = light.corners() else {
+        return region_area(p, q);
+    };
+    let (e1, e2) = light.basis();
+    let r = light.radius;
+    let mut corners: Vec<glam::DVec2> = poly
+        .vertices()
+        .iter()
+        .map(|v| {
+            let g = *v - light.center;
+            glam::DVec2::new(f64::from(g.dot(e1) / r), f64::from(g.dot(e2) / r))
+        })
+        .collect();
+    let area = 0.5
+        * (0..corners.len())
+            .map(|i| corners[i].perp_dot(corners[(i + 1) % corners.len()]))
+            .sum::<f64>();
+    if area < 0.0 {
+        corners.reverse();
+    }
+    polygon_edge_coverage(&corners, area.abs(), p.as_dvec2(), q.as_dvec2()).abs()
+}
+
 /// The chord `edge` cuts from the disk as seen from `x`, or `None` when it changes nothing there:
 /// not a silhouette from `x`, entirely beyond `x`'s height, or degenerate (chord through `c`).
-pub fn edge_chord(edge: &FusedEdge, x: Vec3, light: &DiskLight) -> Option<EdgeChord> {
+pub fn edge_chord(edge: &FusedEdge, x: Vec3, light: &AreaLight) -> Option<EdgeChord> {
     let (e1, e2) = light.basis();
     let c = light.center;
     let hx = light.height_of(x);
@@ -196,7 +225,7 @@ pub fn edge_chord(edge: &FusedEdge, x: Vec3, light: &DiskLight) -> Option<EdgeCh
         end_a: end(pa),
         end_b: end(pb),
         delta,
-        area: region_area(ends[0], ends[1]),
+        area: region_area_of(light, ends[0], ends[1]),
         ends,
     })
 }

@@ -6,7 +6,7 @@ use glam::{Mat4, Vec2, Vec3};
 
 use super::chord::FusedEdge;
 use super::{CLIP, FACING_TOL};
-use crate::scene::DiskLight;
+use crate::scene::AreaLight;
 
 /// What the light pass stores for one texel.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -40,7 +40,7 @@ impl CasterCrossings {
         &self,
         x: Vec3,
         edges: impl IntoIterator<Item = &'a FusedEdge>,
-        light: &DiskLight,
+        light: &AreaLight,
     ) -> Option<i32> {
         let h = light.height_of(x);
         if h.is_nan() || h <= self.far_height * (1.0 + 1e-4) {
@@ -85,7 +85,7 @@ impl CasterCrossings {
 /// their corresponding corners: together they cover the hull's projection.
 pub fn wedge_proxy(
     edge: &FusedEdge,
-    light: &DiskLight,
+    light: &AreaLight,
     h_max: f32,
     pad: [f32; 2],
 ) -> [[Vec3; 8]; 2] {
@@ -108,7 +108,7 @@ pub fn wedge_proxy(
 /// light view's eye plane the projection is not convex: the whole view (`[-1, 1]²`).
 pub fn proxy_hull(
     edge: &FusedEdge,
-    light: &DiskLight,
+    light: &AreaLight,
     h_max: f32,
     pad: [f32; 2],
     view_proj: &Mat4,
@@ -215,7 +215,7 @@ pub struct TexelRay {
 ///    function changes by at most the distance); deeper: somewhere on the `deeper` stretch of
 ///    the ray beyond the edge, where each face function is linear along the ray and moves by at
 ///    most the pyramid's half-width sideways.
-pub fn edge_in_texel(edge: &FusedEdge, ray: &TexelRay, light: &DiskLight) -> bool {
+pub fn edge_in_texel(edge: &FusedEdge, ray: &TexelRay, light: &AreaLight) -> bool {
     let c = light.center;
     let along = ray.dir.dot(light.normal);
     if along.is_nan() || along <= 0.0 || ray.far.is_nan() || ray.far <= 0.0 {

@@ -7,7 +7,8 @@ use glam::{Vec2, Vec3};
 use super::chord::{edge_chord, EdgeChord, FusedEdge};
 use super::{ANCHOR_SAMPLES, COUNTER_BITS, MAX_LUT_SAMPLES, MAX_SAMPLES};
 use crate::geometry::oracle::disk_samples;
-use crate::scene::DiskLight;
+use crate::geometry::outline::area_samples;
+use crate::scene::AreaLight;
 
 /// How the camera pass decides which samples a half-plane holds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -59,11 +60,35 @@ pub struct DiskMask {
 impl DiskMask {
     /// `samples` is clamped to `1..=MAX_SAMPLES` (`1..=MAX_LUT_SAMPLES` with look-up tables).
     pub fn new(samples: usize, eval: MaskEval) -> DiskMask {
+        let samples = disk_samples(Self::clamped(samples, eval));
+        Self::from_samples(samples, eval)
+    }
+
+    /// The mask of `light`: for a disk [`DiskMask::new`]; for a rectangle or polygon its
+    /// stratified area samples (the oracle's, `geometry::outline::area_samples`) in the same
+    /// unit-disk coordinates (radii of the disk it fits in, along its basis).
+    pub fn for_light(light: &AreaLight, samples: usize, eval: MaskEval) -> DiskMask {
+        if light.is_disk() {
+            return DiskMask::new(samples, eval);
+        }
+        let (e1, e2) = light.basis();
+        let r = light.radius.max(f32::MIN_POSITIVE);
+        let unit = area_samples(light, Self::clamped(samples, eval))
+            .into_iter()
+            .map(|p| Vec2::new((p - light.center).dot(e1), (p - light.center).dot(e2)) / r)
+            .collect();
+        Self::from_samples(unit, eval)
+    }
+
+    fn clamped(samples: usize, eval: MaskEval) -> usize {
         let max = match eval {
             MaskEval::Exact => MAX_SAMPLES,
             MaskEval::Lut => MAX_LUT_SAMPLES,
         };
-        let samples = disk_samples(samples.clamp(1, max));
+        samples.clamp(1, max)
+    }
+
+    fn from_samples(samples: Vec<Vec2>, eval: MaskEval) -> DiskMask {
         let (mut through_centre, mut chords) = (Vec::new(), Vec::new());
         if eval == MaskEval::Lut {
             for k in 0..LUT_ANGLES {
@@ -262,7 +287,7 @@ pub fn mask_visibility<'a>(
     edges: impl IntoIterator<Item = &'a FusedEdge>,
     x: Vec3,
     centre: CentreLayers,
-    light: &DiskLight,
+    light: &AreaLight,
     mask: &DiskMask,
 ) -> MaskResult {
     mask_details(edges, x, centre, light, mask).result
@@ -283,7 +308,7 @@ pub fn mask_details<'a>(
     edges: impl IntoIterator<Item = &'a FusedEdge>,
     x: Vec3,
     centre: CentreLayers,
-    light: &DiskLight,
+    light: &AreaLight,
     mask: &DiskMask,
 ) -> MaskDetails {
     let n = mask.len();

@@ -9,15 +9,16 @@ use crate::geometry::classify::FaceClass;
 use crate::geometry::oracle::Oracle;
 use crate::geometry::visibility::disk_segment_fraction;
 use crate::geometry::PreparedCasters;
+use crate::scene::{AreaLight, Scene};
 use crate::scene::{Camera, Mesh, Object};
-use crate::scene::{DiskLight, Scene};
 
-fn light() -> DiskLight {
-    DiskLight {
+fn light() -> AreaLight {
+    AreaLight {
         center: Vec3::new(0.1, 4.0, -0.2),
         normal: Vec3::new(0.05, -1.0, 0.1).normalize(),
         radius: 0.7,
         intensity: 1.0,
+        outline: crate::scene::Outline::Disk,
     }
 }
 
@@ -30,7 +31,7 @@ fn slab(centre: Vec3, half: Vec3) -> Mesh {
     m
 }
 
-fn scene_of(casters: Vec<Mesh>, light: DiskLight) -> Scene {
+fn scene_of(casters: Vec<Mesh>, light: AreaLight) -> Scene {
     let mut objects: Vec<Object> = casters
         .into_iter()
         .enumerate()
@@ -64,7 +65,7 @@ fn edges_of(scene: &Scene) -> Vec<FusedEdge> {
         .iter()
         .enumerate()
         .flat_map(|(k, m)| {
-            candidate_edges(m, &classify(m, &scene.light.disk_or_centre()), k as u32)
+            candidate_edges(m, &classify(m, &scene.light.area_or_centre()), k as u32)
         })
         .collect()
 }
@@ -115,11 +116,12 @@ fn chord_is_the_edge_seen_from_the_receiver() {
 /// chord, found by similar triangles.
 #[test]
 fn one_straight_edge_is_exact() {
-    let l = DiskLight {
+    let l = AreaLight {
         center: Vec3::new(0.0, 4.0, 0.0),
         normal: Vec3::NEG_Y,
         radius: 0.5,
         intensity: 1.0,
+        outline: crate::scene::Outline::Disk,
     };
     // A wide plate 2 below the light, its edge along z at x = 0, the plate toward −x.
     let plate = slab(Vec3::new(-3.0, 2.0, 0.0), Vec3::new(3.0, 0.01, 3.0));
@@ -268,7 +270,7 @@ fn lut_masks_agree_with_the_exact_test() {
 /// penumbra silhouette; edges between two all-frontfacing faces are not.
 #[test]
 fn candidates_include_edges_between_silhouette_faces() {
-    let l = DiskLight {
+    let l = AreaLight {
         radius: 1.5,
         ..light()
     };
@@ -309,7 +311,7 @@ fn wedge_proxies_hold_every_accepted_texel() {
         };
         let prepared = PreparedCasters::new(&scene);
         let geometry = prepared.build(
-            &scene.light.disk_or_centre(),
+            &scene.light.area_or_centre(),
             &crate::geometry::VolumeParams::for_scene(&scene),
         );
         let params = FusedParams {
@@ -317,7 +319,7 @@ fn wedge_proxies_hold_every_accepted_texel() {
             ..FusedParams::default()
         };
         let twin = FusedTwin::new(&scene, &prepared, &geometry, params);
-        let l = scene.light.disk_or_centre();
+        let l = scene.light.area_or_centre();
         let h_max = scene
             .objects
             .iter()
@@ -395,7 +397,7 @@ fn the_light_from_a_point_is_what_the_mask_saw() {
     };
     let prepared = PreparedCasters::new(&scene);
     let geometry = prepared.build(
-        &scene.light.disk_or_centre(),
+        &scene.light.area_or_centre(),
         &crate::geometry::VolumeParams::for_scene(&scene),
     );
     let twin = FusedTwin::new(&scene, &prepared, &geometry, FusedParams::default());

@@ -14,7 +14,7 @@ use crate::geometry::light_view::LightView;
 use crate::geometry::twin::{DBufferTwin, TwinSample};
 use crate::geometry::visibility::{Branch, VtVariant};
 use crate::geometry::{PreparedCasters, SceneGeometry};
-use crate::scene::{DiskLight, Scene};
+use crate::scene::{AreaLight, Scene};
 
 /// How the CPU twin of `dbuffer-fused` is set up.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,7 +80,7 @@ struct EdgeBins {
 }
 
 impl EdgeBins {
-    fn build(edges: &[FusedEdge], light: &DiskLight, vp: &Mat4, cells: u32) -> EdgeBins {
+    fn build(edges: &[FusedEdge], light: &AreaLight, vp: &Mat4, cells: u32) -> EdgeBins {
         let (e1, e2) = light.basis();
         let r = light.radius;
         let mut bins = vec![Vec::new(); (cells * cells) as usize];
@@ -187,7 +187,7 @@ pub struct LightFromPoint {
 /// view's texels and their bounded lists, and the camera pass's mask.
 pub struct FusedTwin {
     dbuffer: DBufferTwin,
-    light: DiskLight,
+    light: AreaLight,
     edges: Vec<FusedEdge>,
     surfaces: Bvh,
     /// Whether each triangle of `surfaces` belongs to a caster.
@@ -225,8 +225,8 @@ impl FusedTwin {
         );
         FusedTwin {
             dbuffer: DBufferTwin::new(scene, &geometry.casters),
-            light: scene.light.disk_or_centre(),
-            bins: EdgeBins::build(&edges, &scene.light.disk_or_centre(), &vp, 64),
+            light: scene.light.area_or_centre(),
+            bins: EdgeBins::build(&edges, &scene.light.area_or_centre(), &vp, 64),
             edges,
             surfaces: Bvh::build(scene.all_triangles()),
             is_caster: scene
@@ -244,7 +244,7 @@ impl FusedTwin {
             vp,
             inv_vp: vp.inverse(),
             view_slope,
-            mask: DiskMask::new(params.samples, params.eval),
+            mask: DiskMask::for_light(&scene.light.area_or_centre(), params.samples, params.eval),
             params: FusedParams {
                 size: params.size.max(1),
                 list_size: params.list_size.max(1),

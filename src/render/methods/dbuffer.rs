@@ -23,22 +23,33 @@ use crate::render::passes::shadow_map::{lookup_entries, LightUniforms, ShadowUni
 use crate::render::{
     buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError,
 };
-use crate::scene::{DiskLight, LightKind};
+use crate::scene::AreaLight;
 
 pub static DBUFFER: MethodSpec =
     MethodSpec::new("dbuffer", SHADER, |ctx| Box::new(DBuffer::new(ctx, false)))
-        .adapter(super::SHADOW_MAPPED)
+        .adapter(NEEDS)
         .about("D-buffer soft shadows (Jakobsen et al. 2004)")
-        .lights(LightKind::Disk); // its volumes are the disk's
+        .lights(super::AREA_LIGHTS); // volumes from a planar light's outline
 
 pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER, |ctx| {
     Box::new(DBuffer::new(ctx, true))
 })
-.adapter(super::SHADOW_MAPPED)
+.adapter(NEEDS)
 .about("D-buffer with silhouettes from the light centre only")
-.lights(LightKind::Disk); // its volumes are the disk's
+.lights(super::AREA_LIGHTS); // volumes from a planar light's outline
 
 const SHADER: &str = "methods/dbuffer.wgsl";
+
+/// The centre's shadow map (`|cx_o|`) and the volume channels: distance, `|cx_s|` and the lit
+/// side per texel, as `Rgba32Float` (`passes::dbuffer_volumes::VOLUME_FORMAT`).
+const NEEDS: super::AdapterNeeds = super::AdapterNeeds::formats(&[
+    super::SHADOW_MAP[0],
+    super::SHADOW_MAP[1],
+    crate::render::adapter::FormatNeed::new(
+        crate::render::adapter::Usage::Render,
+        &[crate::render::passes::dbuffer_volumes::VOLUME_FORMAT],
+    ),
+]);
 
 /// The D-buffer's channels, in `dbuffer.exr` order (R, G, B, A): textures 0 (`|cx_o|`), 1
 /// (umbra: `|cx_uv|`, `|cx_s|`), 2 (penumbra: `|cx_pv|`, `|cx_s|`). `|cx_s|` is the umbra's
@@ -141,7 +152,7 @@ impl DBuffer {
     }
 
     /// The geometry stage and the volumes' upload, when the light or a caster moved.
-    fn update_geometry(&mut self, inputs: &FrameInputs<'_>, light: DiskLight) {
+    fn update_geometry(&mut self, inputs: &FrameInputs<'_>, light: AreaLight) {
         if self
             .geometry
             .as_ref()
@@ -222,7 +233,7 @@ impl DBuffer {
 impl MethodState for DBuffer {
     fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
         let Prepare(inputs, shared, rec) = p;
-        let light = *inputs.disk(if self.center_silhouettes {
+        let light = *inputs.area(if self.center_silhouettes {
             DBUFFER_CENTER.name
         } else {
             DBUFFER.name

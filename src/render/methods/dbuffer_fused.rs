@@ -23,8 +23,8 @@ use wgpu::DownlevelFlags as D;
 use wgpu::TextureFormat as F;
 use super::{AdapterNeeds, SHADOW_MAP};
 use crate::render::adapter::{FormatNeed, Usage};
-use crate::scene::LightKind;
 use std::time::Instant;
+use crate::scene::AreaLight;
 
 use super::dbuffer::DBuffer;
 use super::{
@@ -75,7 +75,7 @@ pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, 
 .adapter(NEEDS)
 .about("D-buffer with every silhouette chord (occluder fusion)")
 .knobs(&[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES])
-.lights(LightKind::Disk); // its chords cut the disk
+.lights(super::AREA_LIGHTS); // its chords cut a disk or a convex polygon
 
 const SHADER: &str = "methods/dbuffer_fused.wgsl";
 
@@ -159,7 +159,8 @@ pub struct DBufferFused {
     lists: FusedLists,
     edges: Option<Edges>,
     /// The look-up tables and the sample count they were made for.
-    lut: Option<(wgpu::Buffer, u32)>,
+    /// The look-up tables, for this many samples of this light (masks of a polygon's samples).
+    lut: Option<(wgpu::Buffer, u32, AreaLight)>,
     geometry_ms: f64,
     /// What the light passes hold.
     made_for: Option<Made>,
@@ -256,7 +257,7 @@ fn update_edges(
     }
     let t = Instant::now();
     // A disk (the session refuses a line light for this method before a frame gets here).
-    let light = inputs.scene.light.disk_or_centre();
+    let light = inputs.scene.light.area_or_centre();
     let prepared = inputs.prepared();
     let edges: Vec<FusedEdge> = prepared
         .meshes
@@ -350,18 +351,25 @@ impl MethodState for DBufferFused {
             self.geometry_ms = ms;
         }
         let edges = require(self.edges.as_ref(), "dbuffer-fused's edges were not made")?;
-        if self.lut.as_ref().is_none_or(|(_, s)| *s != samples) {
+        let light = inputs.scene.light.area_or_centre();
+        // A disk's samples are the same for every disk; a polygon's follow its shape.
+        let same_shape = |l: &AreaLight| (l.is_disk() && light.is_disk()) || *l == light;
+        if self
+            .lut
+            .as_ref()
+            .is_none_or(|(_, s, l)| *s != samples || !same_shape(l))
+        {
             use wgpu::util::DeviceExt;
-            let words = DiskMask::new(samples as usize, MaskEval::Lut).lut_words();
+            let words = DiskMask::for_light(&light, samples as usize, MaskEval::Lut).lut_words();
             let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("DBufferFused::lut"),
                 contents: bytemuck::cast_slice(&words),
                 usage: wgpu::BufferUsages::STORAGE,
             });
-            self.lut = Some((buffer, samples));
+            self.lut = Some((buffer, samples, light));
         }
         let uniforms = FusedUniforms::new(
-            &inputs.scene.light.disk_or_centre(),
+            &inputs.scene.light.area_or_centre(),
             inputs.light_view,
             FusedSizes {
                 map_size: inputs.map_size,
@@ -402,7 +410,7 @@ impl MethodState for DBufferFused {
             .ctx
             .queue
             .write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow));
-        let (Some(paper), Some(lists), Some((lut, _))) = (
+        let (Some(paper), Some(lists), Some((lut, ..))) = (
             self.paper.light_maps(shared),
             self.lists.targets(),
             self.lut.as_ref(),

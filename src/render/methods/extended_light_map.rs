@@ -124,7 +124,7 @@ pub fn elm_params(inputs: &FrameInputs<'_>) -> ElmParams {
     let light = inputs.scene.light;
     let view = inputs.light_view;
     // A disk's spotlight points along its normal; a line's along the view fitted to the casters.
-    let axis = light.as_disk().map_or_else(
+    let axis = light.as_area().map_or_else(
         || {
             view.view
                 .inverse()
@@ -144,7 +144,7 @@ pub fn elm_params(inputs: &FrameInputs<'_>) -> ElmParams {
         inner: INNER_SHARE * outer,
         bits: inputs.knobs.get(&DEPTH_BITS),
         pattern: pattern(inputs.knobs),
-        emitter: light.as_disk().map(|d| d.normal),
+        emitter: light.as_area().map(|d| d.normal),
         size: inputs.map_size,
     }
 }

@@ -40,7 +40,7 @@ pub static LINEAR_SSM: MethodSpec =
         .adapter(NEEDS)
         .about("soft shadow maps for a linear light (Heidrich et al. 2000)")
         .knobs(&[&SAMPLES])
-        .lights(LightKind::Line) // Heidrich et al.'s maps along a segment
+        .lights(&[LightKind::Line]) // Heidrich et al.'s maps along a segment
         .bench("linear-ssm 2", &[(&SAMPLES, 2)])
         .line_samples(|line, knobs| sample_points(line, knobs.get(&SAMPLES)));
 

@@ -33,7 +33,7 @@ use super::timer::Recorder;
 use super::{GpuContext, RenderError};
 use crate::geometry::light_view::LightView;
 use crate::geometry::{PreparedCasters, SceneGeometry, VtVariant};
-use crate::scene::{DiskLight, LightKind, LineLight, Scene};
+use crate::scene::{AreaLight, LightKind, LineLight, Scene};
 
 /// Declares each method module and [`ALL`] from one line a module: `module: ITS_SPECS;`.
 macro_rules! registry {
@@ -80,8 +80,8 @@ pub struct MethodSpec {
     /// A hard shadow from the light's centre as a point light: `compare` scores it against
     /// `reference-hard` too.
     pub hard: bool,
-    /// The kind of light it takes, if it cannot take both (docs/method/README.md).
-    pub lights: Option<LightKind>,
+    /// The kinds of light it takes, if not every kind (docs/method/README.md).
+    pub lights: Option<&'static [LightKind]>,
     /// What it needs of the adapter beyond what every method needs.
     pub adapter: AdapterNeeds,
     /// How `dbuffer bench` times it.
@@ -144,9 +144,9 @@ impl MethodSpec {
         self
     }
 
-    /// It takes this kind of light only.
-    pub const fn lights(mut self, kind: LightKind) -> Self {
-        self.lights = Some(kind);
+    /// It takes these kinds of light only (the first is the one the bench converts to).
+    pub const fn lights(mut self, kinds: &'static [LightKind]) -> Self {
+        self.lights = Some(kinds);
         self
     }
 
@@ -397,24 +397,33 @@ impl Method {
         self.0.hard
     }
 
-    /// The kind of light the method needs, if it cannot take both (docs/method/README.md).
-    pub fn needs(self) -> Option<LightKind> {
+    /// The kinds of light the method takes, if not every kind (docs/method/README.md).
+    pub fn needs(self) -> Option<&'static [LightKind]> {
         self.0.lights
     }
 
     /// The method a `light` light gets when none is named: the first of the registry made for
-    /// that kind only (the D-buffer for a disk, `linear-ssm` for a line).
+    /// some kinds only that takes it (the D-buffer for a disk, rectangle or polygon,
+    /// `linear-ssm` for a line).
     pub fn made_for(light: LightKind) -> Method {
         ALL.iter()
             .copied()
-            .find(|m| m.needs() == Some(light))
+            .find(|m| m.needs().is_some_and(|k| k.contains(&light)))
             .or_else(|| ALL.iter().copied().find(|m| m.takes(light)))
             .unwrap_or(Method::HARD)
     }
 
     /// Whether the method can render with a `light` light.
     pub fn takes(self, light: LightKind) -> bool {
-        self.needs().is_none_or(|k| k == light)
+        self.needs().is_none_or(|k| k.contains(&light))
+    }
+
+    /// The kinds it takes in words: "a disk, rect or polygon light", "any light".
+    pub fn takes_in_words(self) -> String {
+        match self.needs() {
+            None => "any light".into(),
+            Some(kinds) => format!("a {} light", LightKind::list_in_words(kinds)),
+        }
     }
 
     /// `None` when the method can render with a `light` light; else the one-line reason it
@@ -422,10 +431,13 @@ impl Method {
     /// exits with it, `compare` and `bench` list the method as not applicable, the lab greys
     /// its picker entry: a disk-only method never draws a line light's scene as something else.
     pub fn refuses(self, light: LightKind) -> Option<String> {
-        let needs = self.needs().filter(|k| *k != light)?;
+        if self.takes(light) {
+            return None;
+        }
+        let needs = self.takes_in_words();
         let this = match light {
-            LightKind::Line => "a line (kind = \"line\")",
-            LightKind::Disk => "a disk",
+            LightKind::Disk => "a disk".to_string(),
+            other => format!("a {other} (kind = \"{other}\")"),
         };
         let others: Vec<&str> = ALL
             .iter()
@@ -433,12 +445,18 @@ impl Method {
             .map(|m| m.name())
             .collect();
         Some(format!(
-            "method '{self}' needs a {needs} light, and this scene's light is {this}; \
+            "method '{self}' needs {needs}, and this scene's light is {this}; \
              for a {light} light use {}",
             others.join(", ")
         ))
     }
 }
+
+/// The planar lights: a method that takes a disk, a rectangle and a polygon alike.
+pub const AREA_LIGHTS: &[LightKind] = &[LightKind::Disk, LightKind::Rect, LightKind::Polygon];
+
+/// A method made for the disk alone (its closed forms are the disk's).
+pub const DISK_ONLY: &[LightKind] = &[LightKind::Disk];
 
 impl Method {
     /// What the method gets on a device with `caps` (its needs and [`AdapterNeeds::BASE`]).
@@ -545,10 +563,11 @@ impl FrameInputs<'_> {
 
     /// The scene's disk light, for a method that needs one; an error naming `method` for a
     /// line light (the session refuses such a frame before it gets here).
-    pub fn disk(&self, method: &str) -> Result<&DiskLight, RenderError> {
-        self.scene.light.as_disk().ok_or_else(|| {
+    pub fn area(&self, method: &str) -> Result<&AreaLight, RenderError> {
+        self.scene.light.as_area().ok_or_else(|| {
             RenderError::Request(format!(
-                "method '{method}' needs a disk light, and this scene's light is a line"
+                "method '{method}' needs a planar light (disk, rect or polygon), and this \
+                 scene's light is a line"
             ))
         })
     }

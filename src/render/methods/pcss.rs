@@ -5,7 +5,7 @@
 
 use super::on_shadow_map::{Flavor, OnShadowMap};
 use super::{FrameInputs, Knob, MethodSpec};
-use crate::scene::{LightKind, Scene};
+use crate::scene::Scene;
 
 pub static BLOCKER_TAPS: Knob = Knob::int(
     "blocker-taps",
@@ -27,7 +27,9 @@ pub static PCSS: MethodSpec = MethodSpec::new("pcss", SHADER, |ctx| {
 .adapter(super::SHADOW_MAPPED)
 .about("percentage-closer soft shadows (Fernando 2005)")
 .knobs(&[&BLOCKER_TAPS, &FILTER_TAPS])
-.lights(LightKind::Disk) // a blocker search over a disk
+// A blocker search over a disk; under a rectangle or polygon, over the disk of the same area
+// about its centroid (docs/method/README.md#pcss).
+.lights(super::AREA_LIGHTS)
 .bench("pcss 16/32", &[(&BLOCKER_TAPS, 16), (&FILTER_TAPS, 32)]);
 
 /// Points of the Poisson disk (`PoissonDisk` of the shader: two per vec4).

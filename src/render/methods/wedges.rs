@@ -37,7 +37,7 @@ use crate::render::passes::wedges::{WedgeVertex, Wedges};
 use crate::render::{
     buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
 };
-use crate::scene::{DiskLight, LightKind};
+use crate::scene::AreaLight;
 
 /// `--wedges-horizon`: clip the disk by the receiver's own plane.
 pub static HORIZON: Switch = Switch::new(
@@ -53,7 +53,7 @@ pub static WEDGES: MethodSpec =
         .adapter(NEEDS)
         .about("penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)")
         .knobs(&[&OPEN.0, &HORIZON.0])
-        .lights(LightKind::Disk); // the coverage of a disk
+        .lights(super::AREA_LIGHTS); // the coverage of a disk or a convex polygon
 
 const SHADER: &str = "methods/wedges.wgsl";
 
@@ -96,7 +96,7 @@ fn wedge_options(knobs: &Knobs) -> WedgeOptions {
 /// The wedges of every side edge of `volumes`' hard volumes, as GPU vertices, and the overlay's
 /// view of them (each wedge cut at about the distance from its edge to the light).
 pub fn build_wedges(
-    light: &DiskLight,
+    light: &AreaLight,
     sides: &[[Vec3; 2]],
     reach: f32,
 ) -> (Vec<WedgeVertex>, VolumeMesh) {
@@ -170,7 +170,7 @@ impl WedgesMethod {
 impl MethodState for WedgesMethod {
     fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
         let Prepare(inputs, _, rec) = p;
-        let light = *inputs.disk(WEDGES.name)?;
+        let light = *inputs.area(WEDGES.name)?;
         let ctx = inputs.ctx;
         let open = open_meshes(inputs.knobs);
         if self.built_for != Some((inputs.revision, open)) {

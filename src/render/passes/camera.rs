@@ -13,6 +13,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 
 use super::next_generation;
+use crate::geometry::outline::Outline2d;
 use crate::geometry::VtVariant;
 use crate::render::gpu_scene::GpuScene;
 use crate::render::methods::CameraBindings;
@@ -21,7 +22,7 @@ use crate::render::{
     buffer_entry, cleared, opaque, pipeline_layout, uniform_buffer, uniform_entry, GpuContext,
     SurfaceVertex, Texture,
 };
-use crate::scene::{Light, Scene};
+use crate::scene::{Light, Scene, MAX_POLYGON_VERTICES};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 /// The colour target seen as its bytes (the view pass copies them as they are).
@@ -43,20 +44,34 @@ pub struct CameraUniforms {
     pub light_radius: f32,
     pub light_normal: [f32; 3],
     pub light_intensity: f32,
-    /// [`LIGHT_DISK`] or [`LIGHT_LINE`]: a line emits all around (no one-sided test, no
-    /// emitter cosine); `light_center` is then its midpoint, `light_radius` 0.
+    /// [`LIGHT_DISK`], [`LIGHT_LINE`] or [`LIGHT_POLYGON`]: a line emits all around (no
+    /// one-sided test, no emitter cosine); `light_center` is then its midpoint, `light_radius`
+    /// 0. A rectangle or polygon has `light_radius` the radius of the disk of its area (what
+    /// `pcss` sizes its search by) and its corners below.
     pub light_kind: u32,
+    /// How many of `light_corners` a rectangle or polygon has (0 for a disk or a line).
+    pub light_corner_count: u32,
+    /// The polygon's area (m²).
+    pub light_area: f32,
     pub _pad0: u32,
+    /// The light's plane basis (`AreaLight::basis`) the corners are given in.
+    pub light_u: [f32; 3],
     pub _pad1: u32,
+    pub light_w: [f32; 3],
     pub _pad2: u32,
+    /// The corners about the centre in `(light_u, light_w)`, counter-clockwise there, two per
+    /// vector (`geometry::outline::Outline2d`).
+    pub light_corners: [[f32; 4]; MAX_POLYGON_VERTICES / 2],
 }
 
-const _: () = assert!(std::mem::size_of::<CameraUniforms>() == 128);
+const _: () = assert!(std::mem::size_of::<CameraUniforms>() == 288);
 
 /// `CameraUniforms::light_kind` of a disk light (`LIGHT_DISK` in `shared/camera.wgsl`).
 pub const LIGHT_DISK: u32 = 0;
 /// `CameraUniforms::light_kind` of a line light (`LIGHT_LINE` in `shared/camera.wgsl`).
 pub const LIGHT_LINE: u32 = 1;
+/// `CameraUniforms::light_kind` of a rectangle or polygon light (`LIGHT_POLYGON`).
+pub const LIGHT_POLYGON: u32 = 2;
 
 /// The camera's world → clip transform for a `width`×`height` image of `scene` (whose surfaces
 /// span `bounds`): reversed depth, planes that hold the whole scene.
@@ -114,10 +129,37 @@ impl CameraUniforms {
     pub fn new(scene: &Scene, view_proj: Mat4) -> CameraUniforms {
         let light = scene.light;
         let (radius, normal, kind) = match light {
-            Light::Disk(d) => (d.radius, d.normal, LIGHT_DISK),
+            Light::Area(d) if d.is_disk() => (d.radius, d.normal, LIGHT_DISK),
+            Light::Area(d) => (
+                (d.area() / std::f32::consts::PI).sqrt(),
+                d.normal,
+                LIGHT_POLYGON,
+            ),
             Light::Line(_) => (0.0, Vec3::ZERO, LIGHT_LINE),
         };
+        let mut corners = [[0.0; 4]; MAX_POLYGON_VERTICES / 2];
+        let (mut count, mut area, mut u, mut w) = (0, 0.0, Vec3::ZERO, Vec3::ZERO);
+        if let Some(a) = light.as_area() {
+            (u, w) = a.basis();
+            if let Outline2d::Polygon {
+                corners: c,
+                area: ar,
+            } = Outline2d::of(a)
+            {
+                for (i, p) in c.iter().enumerate().take(MAX_POLYGON_VERTICES) {
+                    corners[i / 2][2 * (i % 2)] = p.x;
+                    corners[i / 2][2 * (i % 2) + 1] = p.y;
+                }
+                count = c.len().min(MAX_POLYGON_VERTICES) as u32;
+                area = ar;
+            }
+        }
         CameraUniforms {
+            light_corner_count: count,
+            light_area: area,
+            light_u: u.to_array(),
+            light_w: w.to_array(),
+            light_corners: corners,
             view_proj: view_proj.to_cols_array_2d(),
             eye: scene.camera.eye.to_array(),
             ambient: AMBIENT,

@@ -1,6 +1,7 @@
 //! The D-buffer's volume channels (`shaders/passes/dbuffer_volumes.wgsl`), drawn from the light
 //! centre after the shadow map: umbra `(|cx_uv|, |cx_s|)` and penumbra `(|cx_pv|, |cx_s|)`,
-//! `size`² texels of Rg32Float each.
+//! `size`² texels of Rgba32Float each (distance, `|cx_s|`, and the winning triangle's lit side
+//! in the light's plane, which `V exact` of a polygon light reads).
 //!
 //! - Penumbra: every caster's entry faces (the pipeline culls the faces turned away from `c`)
 //!   over a copy of the shadow map's depth, nearest wins: an entry behind the nearest surface is
@@ -23,7 +24,7 @@ use crate::render::{
     VolumeVertex,
 };
 
-pub const VOLUME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+pub const VOLUME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 /// The pipelines, built once per device.
 pub struct DBufferVolumesPass {

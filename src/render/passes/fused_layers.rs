@@ -20,7 +20,7 @@ use crate::render::{
     buffer_entry, cleared, depth_attachment, pipeline_layout, render_pipeline, shader_module,
     uniform_entry, view_entry, GpuContext, PipelineSpec, SurfaceVertex, Texture,
 };
-use crate::scene::DiskLight;
+use crate::scene::AreaLight;
 
 use super::next_generation;
 
@@ -74,7 +74,7 @@ pub struct FusedSizes {
 }
 
 impl FusedUniforms {
-    pub fn new(light: &DiskLight, view: &LightView, s: FusedSizes) -> FusedUniforms {
+    pub fn new(light: &AreaLight, view: &LightView, s: FusedSizes) -> FusedUniforms {
         let vp = view.view_projection();
         let (e1, e2) = light.basis();
         // FusedTwin::texel_ray_of's half_slope: half a list texel's diagonal, as a slope.

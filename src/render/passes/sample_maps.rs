@@ -15,7 +15,7 @@ use glam::{Mat4, Vec3};
 use super::shadow_map::{DEPTH_FORMAT, DISTANCE_FORMAT, NO_SURFACE};
 use super::{next_generation, LayeredTargets};
 use crate::geometry::light_view::LightView;
-use crate::geometry::oracle::disk_samples;
+use crate::geometry::outline::area_samples;
 use crate::render::gpu_scene::GpuScene;
 use crate::render::timer::Recorder;
 use crate::render::{
@@ -54,8 +54,8 @@ pub struct SampleLights {
 
 const _: () = assert!(std::mem::size_of::<SampleLights>() == 64 * 80 + 32);
 
-/// The N points on the light and their view-projections, with the test's bias: on a disk the
-/// oracle's stratified points, on a segment the centres of N equal pieces
+/// The N points on the light and their view-projections, with the test's bias: on a disk,
+/// rectangle or polygon the oracle's stratified points, on a segment the centres of N equal pieces
 /// (`a + (i + ½)/N · (b − a)`).
 pub fn sample_lights(
     light: &Light,
@@ -66,13 +66,7 @@ pub fn sample_lights(
 ) -> SampleLights {
     let n = n.clamp(1, MAX_LIGHTS);
     let points: Vec<Vec3> = match light {
-        Light::Disk(d) => {
-            let (e1, e2) = d.basis();
-            disk_samples(n as usize)
-                .into_iter()
-                .map(|p| d.center + d.radius * (p.x * e1 + p.y * e2))
-                .collect()
-        }
+        Light::Area(d) => area_samples(d, n as usize),
         Light::Line(l) => (0..n).map(|i| l.at((i as f32 + 0.5) / n as f32)).collect(),
     };
     lights_at(light.center(), &points, view, size, bias)

@@ -40,7 +40,7 @@ impl LightUniforms {
     /// (which has none) the view's axis.
     pub fn new(light: &Light, view: &LightView) -> LightUniforms {
         let normal = match light {
-            Light::Disk(d) => d.normal,
+            Light::Area(d) => d.normal,
             Light::Line(_) => view.view.inverse().transform_vector3(glam::Vec3::NEG_Z),
         };
         LightUniforms {

@@ -22,30 +22,41 @@ use crate::render::{
     buffer_entry, cleared, pipeline_layout, shader_module, texture_entry, uniform_buffer,
     uniform_entry, view_entry, GpuContext, Texture,
 };
-use crate::scene::DiskLight;
+use crate::scene::AreaLight;
 
 /// `WedgeDisk` of `shaders/passes/wedges.wgsl`: the disk's frame, `u × w = −normal`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct WedgeDisk {
-    /// xyz: the centre; w: the radius.
+    /// xyz: the centre; w: the radius (of the disk a polygon fits in).
     pub center: [f32; 4],
     pub normal: [f32; 4],
     pub u: [f32; 4],
     pub w: [f32; 4],
+    /// x: a rectangle's or polygon's corner count (0: a disk); y: their area (radius units²).
+    pub polygon: [f32; 4],
+    /// The corners in `(u, w)`, radius units, counter-clockwise: two per vector.
+    pub corners: [[f32; 4]; 8],
 }
 
-const _: () = assert!(std::mem::size_of::<WedgeDisk>() == 64);
+const _: () = assert!(std::mem::size_of::<WedgeDisk>() == 208);
 
 impl WedgeDisk {
-    pub fn new(light: &DiskLight) -> WedgeDisk {
+    pub fn new(light: &AreaLight) -> WedgeDisk {
         let f = DiskFrame::new(light);
         let v = |d: glam::DVec3, w: f64| [d.x as f32, d.y as f32, d.z as f32, w as f32];
+        let mut corners = [[0.0; 4]; 8];
+        for (i, p) in f.corners().iter().enumerate() {
+            corners[i / 2][2 * (i % 2)] = p.x as f32;
+            corners[i / 2][2 * (i % 2) + 1] = p.y as f32;
+        }
         WedgeDisk {
             center: v(f.center, f.radius),
             normal: v(f.normal, 0.0),
             u: v(f.u, 0.0),
             w: v(f.w, 0.0),
+            polygon: [f.corners().len() as f32, f.corner_area() as f32, 0.0, 0.0],
+            corners,
         }
     }
 }
@@ -273,7 +284,7 @@ impl Wedges {
         ctx: &GpuContext,
         rec: &mut Recorder<'_>,
         screen: &ScreenPass,
-        light: &DiskLight,
+        light: &AreaLight,
         wedges: &VertexChunks,
     ) {
         let Some(t) = screen.targets() else { return };

@@ -202,7 +202,7 @@ scale = [1, 2, 3]
         let s = f.build(Path::new("."), "m.toml").unwrap();
         assert_eq!(s.name, "m");
         assert_eq!(
-            s.light.as_disk().map(|d| d.normal),
+            s.light.as_area().map(|d| d.normal),
             Some(Vec3::new(0.0, -1.0, 0.0))
         );
         assert_eq!(s.objects[0].mesh.triangles.len(), 2 * 8 * 3);

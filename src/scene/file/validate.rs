@@ -4,7 +4,8 @@
 use super::meshes::{check_budget, shape_error};
 use super::spec::{show, v3, Scale, SceneFile};
 use crate::scene::obj::Others;
-use crate::scene::{shapes, LightKind, SceneError, MIN_LINE_LENGTH};
+use crate::scene::{check_polygon, shapes, LightKind, SceneError, MIN_LINE_LENGTH};
+use glam::DVec3;
 
 impl SceneFile {
     /// Checks every value that TOML accepts but a scene cannot use. `parse` calls it; call it
@@ -50,67 +51,128 @@ impl SceneFile {
         }
 
         let l = &self.light;
-        // The keys of the other kind are mistakes, not options: say which kind reads them.
-        let foreign = |key: &str, found: String, kind: LightKind| {
-            let expected = match kind {
-                LightKind::Line => {
-                    "no such key for a line light (kind = \"line\" reads a, b and intensity)"
-                }
-                LightKind::Disk => {
-                    "no such key for a disk light (a disk reads center, normal, radius and \
-                     intensity; end points a and b need kind = \"line\")"
-                }
-            };
-            invalid(key, expected, found)
-        };
+        let kind = l.kind();
+        // The keys of another kind are mistakes, not options: say which kind reads them.
+        let present: [(&str, Option<String>); 8] = [
+            ("center", l.center.map(|v| show(&v))),
+            ("normal", l.normal.map(|v| show(&v))),
+            ("radius", l.radius.map(|v| show(&[v]))),
+            ("size", l.size.map(|v| show(&v))),
+            ("tangent", l.tangent.map(|v| show(&v))),
+            (
+                "vertices",
+                l.vertices.as_ref().map(|v| format!("{} vertices", v.len())),
+            ),
+            ("a", l.a.map(|v| show(&v))),
+            ("b", l.b.map(|v| show(&v))),
+        ];
+        for (key, found) in present {
+            let Some(found) = found else { continue };
+            if !light_keys(kind).contains(&key) {
+                let owner = LightKind::ALL
+                    .into_iter()
+                    .find(|k| light_keys(*k).contains(&key))
+                    .unwrap_or_default();
+                let expected = format!(
+                    "no such key for a {kind} light (kind = \"{kind}\" reads {} and intensity; \
+                     {key} belongs to kind = \"{owner}\")",
+                    light_keys(kind).join(", ")
+                );
+                return Err(invalid(&format!("light.{key}"), &expected, found));
+            }
+        }
         let missing = |key: &str, expected: &str| invalid(key, expected, "nothing".into());
-        match l.kind() {
-            LightKind::Disk => {
-                for (key, value) in [("light.a", l.a), ("light.b", l.b)] {
-                    if let Some(v) = value {
-                        return Err(foreign(key, show(&v), LightKind::Disk));
+        let normal_of = |what: &str| -> Result<[f64; 3], SceneError> {
+            let normal = l.normal.ok_or_else(|| {
+                missing(
+                    "light.normal",
+                    &format!("the {what}'s normal [x, y, z] (it emits toward it)"),
+                )
+            })?;
+            finite("light.normal", &normal)?;
+            let n = v3(normal);
+            if n.length() <= 1e-6 || n.try_normalize().is_none() {
+                return Err(invalid(
+                    "light.normal",
+                    "a non-zero direction (it is normalised)",
+                    show(&normal),
+                ));
+            }
+            Ok(normal)
+        };
+        match kind {
+            LightKind::Disk | LightKind::Rect => {
+                let what = if kind == LightKind::Disk {
+                    "disk"
+                } else {
+                    "rectangle"
+                };
+                let center = l.center.ok_or_else(|| {
+                    missing("light.center", &format!("the {what}'s centre [x, y, z]"))
+                })?;
+                finite("light.center", &center)?;
+                let normal = normal_of(what)?;
+                if kind == LightKind::Disk {
+                    let radius = l
+                        .radius
+                        .ok_or_else(|| missing("light.radius", "the disk's radius"))?;
+                    finite("light.radius", &[radius])?;
+                    if radius <= 0.0 {
+                        return Err(invalid(
+                            "light.radius",
+                            "a positive disk radius",
+                            show(&[radius]),
+                        ));
+                    }
+                } else {
+                    let size = l.size.ok_or_else(|| {
+                        missing("light.size", "the rectangle's [width, height] in metres")
+                    })?;
+                    finite("light.size", &size)?;
+                    if size.iter().any(|&x| x <= 0.0 || (x as f32) <= 0.0) {
+                        return Err(invalid(
+                            "light.size",
+                            "a positive width and height [w, h] in metres",
+                            show(&size),
+                        ));
+                    }
+                    if let Some(t) = l.tangent {
+                        finite("light.tangent", &t)?;
+                        let (t, n) = (DVec3::from(t), DVec3::from(normal).normalize());
+                        let projected = t - n * n.dot(t);
+                        if projected.length() <= 1e-6 * t.length().max(1e-30) || t.length() == 0.0 {
+                            return Err(invalid(
+                                "light.tangent",
+                                "a direction not parallel to light.normal (the width's \
+                                 direction, projected onto the light's plane)",
+                                show(&l.tangent.unwrap_or_default()),
+                            ));
+                        }
                     }
                 }
-                let center = l
-                    .center
-                    .ok_or_else(|| missing("light.center", "the disk's centre [x, y, z]"))?;
-                let normal = l.normal.ok_or_else(|| {
+            }
+            LightKind::Polygon => {
+                let vertices = l.vertices.as_ref().ok_or_else(|| {
                     missing(
-                        "light.normal",
-                        "the disk's normal [x, y, z] (it emits toward it)",
+                        "light.vertices",
+                        "the polygon's vertices [[x, y, z], ...], counter-clockwise seen from \
+                         the side it emits to",
                     )
                 })?;
-                let radius = l
-                    .radius
-                    .ok_or_else(|| missing("light.radius", "the disk's radius"))?;
-                finite("light.center", &center)?;
-                finite("light.normal", &normal)?;
-                finite("light.radius", &[radius])?;
-                let n = v3(normal);
-                if n.length() <= 1e-6 || n.try_normalize().is_none() {
-                    return Err(invalid(
-                        "light.normal",
-                        "a non-zero direction (it is normalised)",
-                        show(&normal),
-                    ));
+                for v in vertices {
+                    finite("light.vertices", v)?;
                 }
-                if radius <= 0.0 {
-                    return Err(invalid(
-                        "light.radius",
-                        "a positive disk radius",
-                        show(&[radius]),
-                    ));
+                let points: Vec<DVec3> = vertices.iter().map(|v| DVec3::from(*v)).collect();
+                if let Some((expected, found)) = check_polygon(&points) {
+                    let found = if found.is_empty() {
+                        format!("{} vertices", vertices.len())
+                    } else {
+                        found
+                    };
+                    return Err(invalid("light.vertices", &expected, found));
                 }
             }
             LightKind::Line => {
-                for (key, value) in [("light.center", l.center), ("light.normal", l.normal)] {
-                    if let Some(v) = value {
-                        return Err(foreign(key, show(&v), LightKind::Line));
-                    }
-                }
-                if let Some(r) = l.radius {
-                    return Err(foreign("light.radius", show(&[r]), LightKind::Line));
-                }
                 let a = l.a.ok_or_else(|| {
                     missing("light.a", "the first end point [x, y, z] of the line light")
                 })?;
@@ -178,5 +240,15 @@ impl SceneFile {
             }
         }
         Ok(())
+    }
+}
+
+/// The keys of `[light]` a light of `kind` reads, besides `kind` and `intensity`.
+pub fn light_keys(kind: LightKind) -> &'static [&'static str] {
+    match kind {
+        LightKind::Disk => &["center", "normal", "radius"],
+        LightKind::Rect => &["center", "normal", "size", "tangent"],
+        LightKind::Polygon => &["vertices"],
+        LightKind::Line => &["a", "b"],
     }
 }

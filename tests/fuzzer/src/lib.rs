@@ -36,7 +36,9 @@ use dbuffer::geometry::{PreparedCasters, VolumeParams};
 use dbuffer::scene::file::decode_utf8;
 use dbuffer::scene::gltf::{load_gltf, MAX_FILE_BYTES, MAX_TRIANGLES};
 use dbuffer::scene::obj::{parse_obj_bytes, Others};
-use dbuffer::scene::{builtin, shapes, DiskLight, Mesh, Object, Scene, SceneError, SceneFile};
+use dbuffer::scene::{
+    builtin, shapes, AreaLight, Mesh, Object, Outline, Scene, SceneError, SceneFile,
+};
 use glam::Vec3;
 use serde_json::{json, Value};
 
@@ -498,7 +500,7 @@ fn check_geometry(scene: &Scene) -> Result<String, String> {
     // The D-buffer's geometry stage takes a disk; a line light's scene gets the zero-radius
     // disk at its midpoint (what the twins fall back to), so the stage still sees its casters.
     let prepared = PreparedCasters::new(scene);
-    let light = scene.light.disk_or_centre();
+    let light = scene.light.area_or_centre();
     let geometry = prepared.build(&light, &VolumeParams::for_scene(scene));
     let mut kinds: Vec<String> = Vec::new();
     for w in &geometry.warnings {
@@ -937,11 +939,12 @@ fn scene_of(mesh: Mesh) -> Scene {
             target: (lo + hi) / 2.0,
             fov_y_deg: 45.0,
         },
-        light: DiskLight {
+        light: AreaLight {
             center: Vec3::new((lo.x + hi.x) / 2.0, top, (lo.z + hi.z) / 2.0),
             normal: Vec3::NEG_Y,
             radius: 0.5,
             intensity: 1.0,
+            outline: Outline::Disk,
         }
         .into(),
         objects: vec![Object {
