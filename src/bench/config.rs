@@ -4,7 +4,7 @@
 //! [`MethodSpec::bench`]: crate::render::methods::MethodSpec
 
 use crate::render::{Knobs, Method};
-use crate::scene::SceneError;
+use crate::scene::{LightKind, SceneError};
 
 /// The Table 1 scenes of Jakobsen et al. 2004, in the paper's order.
 pub const TABLE1_SCENES: [&str; 4] = ["table1-224", "table1-960", "table1-5760", "table1-1440"];
@@ -40,18 +40,35 @@ pub struct Case {
     pub label: String,
     pub method: Method,
     pub knobs: Knobs,
+    /// Timed under this kind of light in place of the scene's (`run::scene_for`); `None`: the
+    /// scene's own, or the kind the method takes.
+    pub light: Option<LightKind>,
 }
 
 impl Case {
     /// Every method of the registry, with the knobs its module names for the bench (PCSS with 16
     /// blocker and 32 filter taps, 16 light samples, the reference as a single
     /// 1-sample-per-pixel pass).
+    ///
+    /// And once more the D-buffer under the regular 16-gon inscribed in each scene's disk
+    /// ([`Case::polygon_dbuffer`]): the polygon D-buffer's cost against the disk's, on the same
+    /// casters.
     pub fn all() -> Vec<Case> {
-        Method::all()
+        let mut cases: Vec<Case> = Method::all()
             .iter()
             .copied()
             .map(Case::for_method)
-            .collect()
+            .collect();
+        cases.push(Case::polygon_dbuffer());
+        cases
+    }
+
+    /// The D-buffer timed under the 16-gon in each disk's place.
+    pub fn polygon_dbuffer() -> Case {
+        Case {
+            light: Some(LightKind::Polygon),
+            ..Case::for_method(Method::DBUFFER)
+        }
     }
 
     /// The method as its [`MethodSpec::bench`](crate::render::methods::MethodSpec) says: its
@@ -66,6 +83,7 @@ impl Case {
             label: bench.label.unwrap_or(method.name()).to_string(),
             method,
             knobs,
+            light: None,
         }
     }
 

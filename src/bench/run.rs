@@ -16,7 +16,9 @@ use crate::render::readback::map_now;
 use crate::render::session::{FrameJob, Session};
 use crate::render::timer::{PassTimer, Recorder};
 use crate::render::{Frame, FrameRequest, FrameTargets, GpuContext, Method};
-use crate::scene::{self, shapes, Camera, DiskLight, Object, Scene};
+use crate::scene::{
+    self, shapes, AreaLight, Camera, Light, LightKind, Object, Outline, Scene, MAX_POLYGON_VERTICES,
+};
 
 /// What the run reports as it goes (for a progress line on stderr).
 pub type Progress<'a> = &'a mut dyn FnMut(&str);
@@ -60,7 +62,7 @@ pub fn run(
         let mut sessions: Vec<Session> = config
             .cases
             .iter()
-            .map(|case| Session::new(ctx, scene_for(case.method, scene)))
+            .map(|case| Session::new(ctx, scene_for(case, scene)))
             .collect();
         // Cases timed under the other kind of light (see `scene_for`) say so in their label.
         let converted: Vec<bool> = sessions
@@ -81,7 +83,7 @@ pub fn run(
                 format!(", ~{left:.0} s of frames left")
             };
             progress(&format!(
-                "[{}/{total}] {} {size}²: {} methods, {} frames each, interleaved{eta}",
+                "[{}/{total}] {} {size}²: {} cases, {} frames each, interleaved{eta}",
                 done + 1,
                 scene.name,
                 config.cases.len(),
@@ -162,7 +164,7 @@ fn scene_info(scene: &Scene, runs: usize) -> SceneInfo {
     let mut samples = Vec::with_capacity(runs);
     let mut last = None;
     // The geometry stage is the D-buffer's: a disk light's (none for a line light).
-    for light in std::iter::repeat_n(scene.light.as_disk(), runs.max(1)).flatten() {
+    for light in std::iter::repeat_n(scene.light.as_area(), runs.max(1)).flatten() {
         let t = Instant::now();
         let g = prepared.build(light, &params);
         samples.push(ms_since(t));
@@ -269,10 +271,19 @@ impl Samples {
 /// same scene under the light converted to the kind the method takes (`Light::converted`: a
 /// disk's diameter as a segment, a segment's length as a disk), so every method of the registry
 /// has a frame on the same casters at the same size to compare with the D-buffer's.
-pub fn scene_for(method: Method, scene: &Scene) -> Scene {
-    match method.needs() {
-        Some(kind) if kind != scene.light.kind() => Scene {
-            light: scene.light.converted(kind),
+///
+/// A case timed under a polygon ([`Case::polygon_dbuffer`]) gets the regular 16-gon inscribed
+/// in the scene's disk (the most vertices a polygon light may have).
+pub fn scene_for(case: &Case, scene: &Scene) -> Scene {
+    if let (Some(LightKind::Polygon), Some(disk)) = (case.light, scene.light.as_area()) {
+        return Scene {
+            light: Light::Area(disk.inscribed_polygon(MAX_POLYGON_VERTICES)),
+            ..scene.clone()
+        };
+    }
+    match case.method.needs() {
+        Some(kinds) if !kinds.contains(&scene.light.kind()) => Scene {
+            light: scene.light.converted(kinds[0]),
             ..scene.clone()
         },
         _ => scene.clone(),
@@ -529,11 +540,12 @@ pub fn scaling_scene(triangles: u32) -> Scene {
             target: Vec3::new(0.0, 0.5, 0.0),
             fov_y_deg: 45.0,
         },
-        light: DiskLight {
+        light: AreaLight {
             center: Vec3::new(0.3, 4.0, -0.2),
             normal: Vec3::new(0.1, -1.0, 0.05).normalize(),
             radius: 0.6,
             intensity: 1.0,
+            outline: Outline::Disk,
         }
         .into(),
         objects: vec![Object {
@@ -552,7 +564,7 @@ fn scaling_point(triangles: u32, runs: usize) -> ScalingPoint {
     let params = VolumeParams::for_scene(&scene);
     let mut samples = Vec::new();
     let mut volume_triangles = 0;
-    for light in std::iter::repeat_n(scene.light.as_disk(), runs.max(1)).flatten() {
+    for light in std::iter::repeat_n(scene.light.as_area(), runs.max(1)).flatten() {
         let t = Instant::now();
         let g = prepared.build(light, &params);
         samples.push(ms_since(t));

@@ -1,7 +1,7 @@
 //! The targets, judged from a finished [`Report`]: ratios of the D-buffer to the hard
 //! shadow map, PCSS and the floor, the lab's display path, and the geometry stage's time.
 
-use super::{Report, Stat, Target, TABLE1_SCENES, TARGET_SIZE};
+use super::{Case, Report, Stat, Target, TABLE1_SCENES, TARGET_SIZE};
 use crate::render::methods::pcss;
 use crate::render::Method;
 
@@ -73,6 +73,19 @@ pub fn targets(report: &Report) -> Vec<Target> {
         let p = report.timing(s, size, Method::of(&pcss::PCSS)?)?;
         ratio(dbuffer(s)?.pass("camera_pass"), p.pass("camera_pass"))
     });
+    // The D-buffer under the 16-gon inscribed in the disk (`Case::polygon_dbuffer`) over the
+    // D-buffer under the disk, on the same casters.
+    let polygon_label = format!("{} (polygon light)", Case::polygon_dbuffer().label);
+    let polygon = worst(&|s| {
+        let p = report
+            .runs
+            .iter()
+            .find(|r| r.scene == s && r.size == size && r.label == polygon_label)?
+            .timing
+            .as_ref()?;
+        let d = dbuffer(s)?;
+        ratio(Some(p.frame_ms), d.frame_by(p.frame_source))
+    });
     let display = |s: &str, sz: u32| report.display.iter().find(|d| d.scene == s && d.size == sz);
     let lab = worst(&|s| {
         let d = display(s, size)?;
@@ -119,6 +132,11 @@ pub fn targets(report: &Report) -> Vec<Target> {
             1.05,
         ),
         at_most("D-buffer frame / hard-shadow frame", frame, 1.5),
+        at_most(
+            "D-buffer frame under a 16-gon light / under the disk",
+            polygon,
+            1.3,
+        ),
         Target {
             strict: true,
             ..at_most("D-buffer camera pass / PCSS camera pass", camera_pcss, 1.0)

@@ -73,7 +73,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let ctx = GpuContext::headless()?;
     super::chosen(&ctx);
     errln!(
-        "bench on {}: {} scenes × {} sizes × {} methods, {} + {} frames each; about {:.0} s",
+        "bench on {}: {} scenes × {} sizes × {} cases (every method, and the D-buffer under a \
+         16-gon), {} + {} frames each; about {:.0} s",
         ctx.adapter_description(),
         config.scenes.len(),
         config.sizes.len(),

@@ -38,7 +38,8 @@ fn tiny_bench_writes_json_markdown_and_plot() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stderr}");
-    let methods = format!("table1-224 32²: {} methods", Method::all().len());
+    // Every method, and the D-buffer once more under the 16-gon inscribed in the disk.
+    let methods = format!("table1-224 32²: {} cases", Method::all().len() + 1);
     assert!(stderr.contains(&methods), "progress on stderr: {stderr}");
 
     let json = std::fs::read(dir.join("bench.json")).expect("bench.json written");
@@ -75,7 +76,7 @@ fn tiny_bench_writes_json_markdown_and_plot() {
         c.rebuilds as usize, c.frames,
         "one geometry build per rebuilt frame"
     );
-    assert_eq!(report.targets.len(), 8);
+    assert_eq!(report.targets.len(), 9);
     let display = report.display.first().expect("the display path measured");
     assert_eq!((display.scene.as_str(), display.size), ("table1-224", 32));
     assert!(display.lab_still.wall_ms.median > 0.0 && display.readback.wall_ms.median > 0.0);
@@ -108,7 +109,9 @@ fn tiny_bench_writes_json_markdown_and_plot() {
     for &m in Method::all() {
         let label = dbuffer::bench::Case::for_method(m).label;
         // A method timed under the other kind of light: "| linear-ssm 2 (line light) |".
-        let converted = m.needs().map(|kind| format!("| {label} ({kind} light) |"));
+        let converted = m
+            .needs()
+            .map(|kinds| format!("| {label} ({} light) |", kinds[0]));
         assert!(
             md.contains(&format!("| {label} |")) || converted.is_some_and(|row| md.contains(&row)),
             "no competition row for {label}"
