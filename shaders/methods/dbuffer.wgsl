@@ -1,7 +1,7 @@
 // `dbuffer` and `dbuffer-center`: the D-buffer lookup (Jakobsen et al. 2004, §4, with the corrections in docs/method/dbuffer.md;
 // src/render/methods/dbuffer.rs). Per pixel: |cx|, the hidden-from-centre test against |cx_o|,
 // the parameter t by the corrected eq. (3) from the umbra or the penumbra channel, then V(t).
-// Its CPU twin is DBufferTwin::sample (src/geometry/twin.rs) with geometry::visibility.
+// Its CPU twin is DBufferTwin::visibility_on (src/geometry/twin.rs).
 // Written without branches: a CPU rasteriser runs both sides of every branch anyway, so one
 // formula serves both of eq. (3)'s (they differ only in which channel and in t ↔ 1 − t).
 // #include shared/camera.wgsl
@@ -11,6 +11,44 @@
 // entry. The lit side is the chord's direction V exact needs under a polygon light.
 @group(1) @binding(2) var d_u: texture_2d<f32>;
 @group(1) @binding(3) var d_p: texture_2d<f32>;
+// The closing fans' silhouette corners, three texels per fan (apex, the two edges' far ends;
+// geometry::FanCorner), CORNERS_PER_ROW fans to a row. Under a polygon light a fan's texel holds
+// -(2 + its index) in .z (geometry::volume_vertices::corner_marker) instead of a lit side.
+@group(1) @binding(4) var corners: texture_2d<f32>;
+const CORNERS_PER_ROW: u32 = 512u;
+
+fn corner_point(k: u32, j: u32) -> vec3<f32> {
+    return textureLoad(corners, vec2<u32>(3u * (k % CORNERS_PER_ROW) + j, k / CORNERS_PER_ROW), 0).xyz;
+}
+
+// V at x behind one convex silhouette corner: the light less the part behind both planes
+// through x and an edge (each on the side of the other edge's far end), the corner's wedge as
+// x sees it; -1 where the corner is degenerate from x (twin: DiskFrame::corner_visibility).
+fn corner_visibility(x: vec3<f32>, k: u32) -> f32 {
+    let size = textureDimensions(corners);
+    if 3u * (k % CORNERS_PER_ROW) + 2u >= size.x || k / CORNERS_PER_ROW >= size.y {
+        return -1.0;
+    }
+    let a = corner_point(k, 0u);
+    let ends = array<vec3<f32>, 2>(corner_point(k, 1u) - a, corner_point(k, 2u) - a);
+    var m: array<vec2<f32>, 3>;
+    var h = vec3<f32>(-1.0);
+    for (var i = 0u; i < 2u; i++) {
+        let edge = ends[i];
+        let other = ends[1u - i];
+        var n = cross(edge, x - a);
+        let side = dot(n, other);
+        if !(abs(side) > 1e-6 * length(n) * length(other)) {
+            return -1.0;
+        }
+        n = select(n, -n, side < 0.0);
+        // Behind: n . (c + p - a) >= 0, p a corner-plane point about the centre.
+        m[i] = vec2<f32>(dot(n, camera.light_u), dot(n, camera.light_w));
+        h[i] = dot(n, a - camera.light_center);
+    }
+    let hidden = polygon_cut_area(camera.light_corners, camera.light_corner_count, m, h);
+    return clamp(1.0 - hidden / max(camera.light_area, 1e-30), 0.0, 1.0);
+}
 
 fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
     let l = light_lookup(x, n);
@@ -30,11 +68,28 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         hidden
     );
     out.v = v_of_t_toward(out.t, xs.zw);
+    // V exact where a closing fan won: the corner's wedge, not a chord's strip (which grows
+    // with the depth where the wedge grows with its square).
+    // (shadow.knobs.y = 1, --dbuffer-corners.)
+    // Under a polygon light only: a disk's fans keep the chord.
+    if VT_VARIANT == VT_EXACT && crossed && xs.z < -1.5 && shadow.knobs.y > 0.5 && camera.light_kind == LIGHT_POLYGON {
+        let corner = corner_visibility(x, u32(round(-xs.z - 2.0)));
+        if corner >= 0.0 {
+            out.v = corner;
+        }
+    }
     // Outside the fitted frustum no penumbra can reach: lit. Behind the one-sided light, or on
     // a side turned away from the centre: nothing arrives.
     let dark = !in_front_of_light(x) || !faces_light_center(x, n);
     if !l.inside {
         out = plain(1.0);
+    }
+    // shadow.knobs.x = 1 (--dbuffer-horizon): at most the part of the light in front of the
+    // receiver's own plane. A caster's face whose plane cuts the light sits on its own
+    // silhouette, where no volume darkens it; the light behind that plane never reaches it.
+    let horizon = horizon_fraction(x, n);
+    if shadow.knobs.x > 0.5 && horizon < out.v {
+        out = plain(horizon);
     }
     if dark {
         out = plain(0.0);

@@ -451,7 +451,12 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         let count = counts[list];
         let overflow = count > fused.cap || fused.all_overflow != 0u;
         if overflow {
+            // With the receiver's horizon, as dbuffer's default (its fans' chords: no corners).
             out = paper_visibility(l, hidden);
+            let horizon = horizon_fraction(x, n);
+            if horizon < out.v {
+                out = plain(horizon);
+            }
         } else {
             out = plain(mask_visibility(x, l, hidden, list * fused.cap, count));
         }

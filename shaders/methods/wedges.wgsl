@@ -14,24 +14,6 @@
 // render::methods::wedges::WedgeOptions. x: 1 = clip by the receiver's plane.
 @group(1) @binding(2) var<uniform> wedge_options: vec4<f32>;
 
-// The part of the light in front of the plane through x with normal n
-// (geometry::wedges::DiskFrame::horizon_fraction): with k = n . (c - x) and m the part of n in
-// the light's plane, the far side of the chord at -k / (r |m|), V(t)'s exact disk-half-plane area
-// (for a polygon, its share beyond that chord).
-fn horizon_fraction(x: vec3<f32>, n: vec3<f32>) -> f32 {
-    let nc = camera.light_normal;
-    let k = dot(n, camera.light_center - x);
-    let s = length(n - dot(n, nc) * nc) * camera.light_radius;
-    if !(s > 1e-6 * abs(k)) {
-        return select(0.0, 1.0, k > 0.0);
-    }
-    if camera.light_kind == LIGHT_POLYGON {
-        // In front where p . (n . u, n . w) > -k, p a corner-plane point about the centre.
-        return light_share_above(vec2<f32>(dot(n, camera.light_u), dot(n, camera.light_w)), -k);
-    }
-    return disk_segment_fraction(-k / s);
-}
-
 fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
     if !in_front_of_light(x) {
         return plain(0.0);

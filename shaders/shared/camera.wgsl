@@ -101,7 +101,8 @@ fn light_share_above(m: vec2<f32>, h: f32) -> f32 {
 // beyond the chord a share t of the way across it toward its lit side m (twin:
 // geometry::outline::Outline2d::fraction_beyond). A disk's, or no direction, is v_of_t's.
 fn v_of_t_toward(t_in: f32, m_in: vec2<f32>) -> f32 {
-    if VT_VARIANT != VT_EXACT || camera.light_kind != LIGHT_POLYGON || !(dot(m_in, m_in) > 1e-12) {
+    // A fan's corner marker (x <= -2, methods/dbuffer.wgsl) is no direction either.
+    if VT_VARIANT != VT_EXACT || camera.light_kind != LIGHT_POLYGON || !(dot(m_in, m_in) > 1e-12) || m_in.x < -1.5 {
         return v_of_t(t_in);
     }
     let t = clamp(t_in, 0.0, 1.0);
@@ -114,6 +115,24 @@ fn v_of_t_toward(t_in: f32, m_in: vec2<f32>) -> f32 {
         hi = max(hi, x);
     }
     return light_share_above(m, hi - t * (hi - lo));
+}
+
+// The receiver's horizon: the part of the area light in front of the plane through x with
+// normal n (twin: geometry::wedges::DiskFrame::horizon_fraction). With k = n . (c - x) and m the
+// part of n in the light's plane, the far side of the chord at -k / (r |m|), V(t)'s exact
+// disk-half-plane area (for a polygon, its share beyond that chord).
+fn horizon_fraction(x: vec3<f32>, n: vec3<f32>) -> f32 {
+    let nc = camera.light_normal;
+    let k = dot(n, camera.light_center - x);
+    let s = length(n - dot(n, nc) * nc) * camera.light_radius;
+    if !(s > 1e-6 * abs(k)) {
+        return select(0.0, 1.0, k > 0.0);
+    }
+    if camera.light_kind == LIGHT_POLYGON {
+        // In front where p . (n . u, n . w) > -k, p a corner-plane point about the centre.
+        return light_share_above(vec2<f32>(dot(n, camera.light_u), dot(n, camera.light_w)), -k);
+    }
+    return disk_segment_fraction(-k / s);
 }
 
 // V given for a method that is not the D-buffer: t = V, the branch by the class of V.

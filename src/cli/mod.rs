@@ -494,9 +494,13 @@ fn compare_twin(
     let rows: Vec<(f32, Option<(usize, bool)>)> = points
         .par_iter()
         .zip(&mask)
-        .map(|(&x, &on)| match (on, &paper, &fused) {
+        .zip(&pixels)
+        .map(|((&x, &on), r)| match (on, &paper, &fused) {
             (false, _, _) => (0.0, None),
-            (true, Some(t), _) => (t.visibility(x, vt) as f32, None),
+            (true, Some(t), _) => (
+                r.map_or(0.0, |r| t.visibility_on(x, r.normal, vt) as f32),
+                None,
+            ),
             (true, _, Some(t)) => {
                 let s = t.sample(x);
                 let list = match s.path {

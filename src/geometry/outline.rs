@@ -110,10 +110,13 @@ fn polygon_tangent_points(v1: Vec3, v2: Vec3, light: &AreaLight, p: &Polygon) ->
     Some([v[hi.1], v[lo.1]])
 }
 
-/// The points of the light's boundary strictly between `p1` and `p2` (two points on it), along
-/// the shorter way round: for a disk, rim points every `step` radians; for a polygon, its
-/// vertices in between (none if `p1` and `p2` lie on one edge).
-pub fn boundary_between(light: &AreaLight, p1: Vec3, p2: Vec3, step: f32) -> Vec<Vec3> {
+/// The points of the light's boundary strictly between `p1` and `p2` (two points on it): for a
+/// disk, rim points every `step` radians along the shorter arc; for a polygon, its vertices in
+/// between going round the way `turn` says (> 0: counter-clockwise in [`AreaLight::basis`],
+/// < 0: clockwise, 0: the shorter way by angle about the centre). A polygon needs the turn: its
+/// vertices' angles about the centre do not follow the directions they touch (the corners of a
+/// long strip are a few degrees from its axis), so the shorter way can be the wrong one.
+pub fn boundary_between(light: &AreaLight, p1: Vec3, p2: Vec3, turn: f32, step: f32) -> Vec<Vec3> {
     let (u, w) = light.basis();
     let c = light.center;
     let angle = |p: Vec3| (p - c).dot(w).atan2((p - c).dot(u));
@@ -135,6 +138,11 @@ pub fn boundary_between(light: &AreaLight, p1: Vec3, p2: Vec3, step: f32) -> Vec
                 .collect()
         }
         Some(poly) => {
+            if turn > 0.0 && delta < 0.0 {
+                delta += std::f32::consts::TAU;
+            } else if turn < 0.0 && delta > 0.0 {
+                delta -= std::f32::consts::TAU;
+            }
             // Vertices whose angle from p1, the way `delta` turns, lies strictly inside it.
             let mut inside: Vec<(f32, Vec3)> = poly
                 .vertices()
@@ -615,9 +623,35 @@ mod tests {
         let light = square();
         let v = light.corners().unwrap();
         let v = v.vertices();
-        assert_eq!(boundary_between(&light, v[0], v[2], 0.1).len(), 1);
-        assert_eq!(boundary_between(&light, v[0], v[1], 0.1).len(), 0);
+        assert_eq!(boundary_between(&light, v[0], v[2], 0.0, 0.1).len(), 1);
+        assert_eq!(boundary_between(&light, v[0], v[1], 0.0, 0.1).len(), 0);
         let mid = (v[0] + v[1]) * 0.5;
-        assert_eq!(boundary_between(&light, mid, v[2], 0.1), vec![v[1]]);
+        assert_eq!(boundary_between(&light, mid, v[2], 0.0, 0.1), vec![v[1]]);
+    }
+
+    /// The turn picks the way round: from one vertex to its neighbour the long way passes every
+    /// other vertex, in order.
+    #[test]
+    fn boundary_between_goes_the_way_it_is_turned() {
+        let light = square();
+        let v = light.corners().unwrap();
+        let v = v.vertices();
+        let angle = |p: Vec3| {
+            let (u, w) = light.basis();
+            (p - light.center).dot(w).atan2((p - light.center).dot(u))
+        };
+        // Which way v[0] -> v[1] turns in the light's basis.
+        let mut d = angle(v[1]) - angle(v[0]);
+        if d > std::f32::consts::PI {
+            d -= std::f32::consts::TAU;
+        } else if d < -std::f32::consts::PI {
+            d += std::f32::consts::TAU;
+        }
+        let short = d.signum();
+        assert!(boundary_between(&light, v[0], v[1], short, 0.1).is_empty());
+        assert_eq!(
+            boundary_between(&light, v[0], v[1], -short, 0.1),
+            vec![v[3], v[2]]
+        );
     }
 }

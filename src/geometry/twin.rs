@@ -28,6 +28,7 @@ use super::bvh::Bvh;
 use super::outline::Outline2d;
 use super::visibility::{t_hidden, t_visible, Branch, VtVariant};
 use super::volumes::{CasterGeometry, VolumeVertex};
+use super::wedges::DiskFrame;
 use crate::scene::{AreaLight, Scene};
 
 /// One D-buffer texel: the four channels along one ray from the light centre.
@@ -47,6 +48,10 @@ pub struct Texel {
     /// ([`super::volume_vertices::lit_side`]): the `.zw` of the GPU's volume channels.
     pub side_u: [f32; 2],
     pub side_p: [f32; 2],
+    /// Where the winning umbra or penumbra triangle is a closing fan: its silhouette corner
+    /// (apex, the two edges' far ends), for V exact under a polygon light.
+    pub corner_u: Option<[Vec3; 3]>,
+    pub corner_p: Option<[Vec3; 3]>,
 }
 
 /// What the camera pass computes for one shaded point.
@@ -69,6 +74,15 @@ impl TwinSample {
             self.texel.side_p
         }
     }
+
+    /// The silhouette corner of the channel `t` came from, where a fan won it.
+    pub fn corner(&self) -> Option<[Vec3; 3]> {
+        if self.hidden {
+            self.texel.corner_u
+        } else {
+            self.texel.corner_p
+        }
+    }
 }
 
 /// Relative bias of the hidden-from-centre test `D > |cx_o| (1 + HIDDEN_BIAS) + HIDDEN_BIAS`.
@@ -77,14 +91,24 @@ pub const HIDDEN_BIAS: f32 = 1e-4;
 struct CasterVolumes {
     umbra: Bvh,
     umbra_attrs: Vec<VolumeVertex>,
+    umbra_corners: Vec<Option<[Vec3; 3]>>,
     penumbra: Bvh,
     penumbra_attrs: Vec<VolumeVertex>,
+    penumbra_corners: Vec<Option<[Vec3; 3]>>,
 }
 
 /// The D-buffer lookup and camera-pass arithmetic on the CPU.
 pub struct DBufferTwin {
     light: AreaLight,
     outline: Outline2d,
+    /// The light in its own plane for the receiver's horizon.
+    frame: DiskFrame,
+    /// `--dbuffer-horizon` (on unless set off): [`Self::visibility_on`] takes at most the part
+    /// of the light in front of the receiver's own plane.
+    pub horizon: bool,
+    /// `--dbuffer-corners` (on unless set off): under a polygon light, V exact behind a closing
+    /// fan from the fan's corner ([`DiskFrame::corner_visibility`]).
+    pub corners: bool,
     surfaces: Bvh,
     casters: Vec<CasterVolumes>,
 }
@@ -106,27 +130,39 @@ impl DBufferTwin {
         let casters = casters
             .iter()
             .map(|g| {
-                let (mut ut, mut ua, mut pt, mut pa) = (vec![], vec![], vec![], vec![]);
+                let (mut ut, mut ua, mut uc, mut pt, mut pa, mut pc) =
+                    (vec![], vec![], vec![], vec![], vec![], vec![]);
                 for i in 0..g.volumes.triangle_count() {
                     let (tri, attrs) = g.volumes.triangle(i);
+                    let corner = g
+                        .volumes
+                        .corner_of(i)
+                        .map(|c| [c.apex, c.ends[0], c.ends[1]]);
                     if attrs.kind.is_umbra() {
                         ut.push(tri);
                         ua.push(*attrs);
+                        uc.push(corner);
                     } else {
                         pt.push(tri);
                         pa.push(*attrs);
+                        pc.push(corner);
                     }
                 }
                 CasterVolumes {
                     umbra: Bvh::build(ut),
                     umbra_attrs: ua,
+                    umbra_corners: uc,
                     penumbra: Bvh::build(pt),
                     penumbra_attrs: pa,
+                    penumbra_corners: pc,
                 }
             })
             .collect();
         Self {
             outline: Outline2d::of(&light),
+            frame: DiskFrame::new(&light),
+            horizon: true,
+            corners: true,
             light,
             surfaces: Bvh::build(surfaces),
             casters,
@@ -168,6 +204,7 @@ impl DBufferTwin {
                     texel.u = Some(t);
                     let tri = *caster.umbra.triangle(k as usize);
                     texel.side_u = super::volume_vertices::lit_side(tri, &self.light);
+                    texel.corner_u = caster.umbra_corners[k as usize];
                     let attrs = &caster.umbra_attrs[k as usize];
                     texel.s_u = attrs.edge_plane_distance(c + t * w, w, &self.light);
                 }
@@ -180,6 +217,7 @@ impl DBufferTwin {
                     texel.p = Some(h.t);
                     let tri = *caster.penumbra.triangle(h.triangle as usize);
                     texel.side_p = super::volume_vertices::lit_side(tri, &self.light);
+                    texel.corner_p = caster.penumbra_corners[h.triangle as usize];
                     let attrs = &caster.penumbra_attrs[h.triangle as usize];
                     texel.s_p = attrs.edge_plane_distance(c + h.t * w, w, &self.light);
                 }
@@ -222,9 +260,38 @@ impl DBufferTwin {
         }
     }
 
-    /// `V(t)` at `x` with the chosen variant.
+    /// `V(t)` at `x` with the chosen variant: the lookup alone, whatever surface `x` is on.
+    /// V exact under a polygon light, where a closing fan won the channel: the light less the
+    /// caster's corner seen from `x` ([`DiskFrame::corner_visibility`]), not one chord's strip
+    /// (a disk's fans keep the chord).
     pub fn visibility(&self, x: Vec3, vt: VtVariant) -> f64 {
         let s = self.sample(x);
+        let in_penumbra = matches!(s.branch, Branch::PenumbraHidden | Branch::PenumbraVisible);
+        let polygon = matches!(self.outline, Outline2d::Polygon { .. });
+        if vt == VtVariant::Exact && in_penumbra && polygon && self.corners {
+            if let Some([apex, e1, e2]) = s.corner() {
+                if let Some(v) = self.frame.corner_visibility(x, apex, [e1, e2]) {
+                    return v;
+                }
+            }
+        }
         vt.apply_toward(s.t, s.side(), &self.outline)
+    }
+
+    /// What the camera pass gives at `x` on a surface of normal `n`: nothing on a side turned
+    /// away from the light's centre, else [`Self::visibility`], with [`Self::horizon`] at most
+    /// the part of the light in front of the surface's own plane (a caster's face whose plane
+    /// cuts the light is on its own silhouette, where no volume darkens it).
+    pub fn visibility_on(&self, x: Vec3, n: Vec3, vt: VtVariant) -> f64 {
+        let facing = n.dot(self.light.center - x);
+        if facing.is_nan() || facing <= 0.0 {
+            return 0.0;
+        }
+        let v = self.visibility(x, vt);
+        if self.horizon {
+            v.min(self.frame.horizon_fraction(x, n))
+        } else {
+            v
+        }
     }
 }

@@ -163,9 +163,94 @@ pub fn disk_segment_fraction(h: f64) -> f64 {
     (h.acos() - h * (1.0 - h * h).max(0.0).sqrt()) / std::f64::consts::PI
 }
 
+/// The area of the unit disk within both half-planes `m1·p ≥ h1` and `m2·p ≥ h2` (`m1`, `m2`
+/// unit), by Green's theorem over its boundary: the arcs of the circle inside both (half their
+/// angle each) and the two chords' parts inside the other half-plane (`½ P × Q` each, walked
+/// counter-clockwise). The disk's twin of a polygon's two cuts; `shaders/shared/camera.wgsl`
+/// has it as `disk_cut2_area`.
+pub fn disk_cut2_area(m1: glam::DVec2, h1: f64, m2: glam::DVec2, h2: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    if h1 >= 1.0 || h2 >= 1.0 {
+        return 0.0;
+    }
+    // The arc of the circle in each half-plane: [φ − α, φ + α].
+    let arc = |m: glam::DVec2, h: f64| (m.y.atan2(m.x), h.max(-1.0).acos());
+    let ((f1, a1), (f2, a2)) = (arc(m1, h1), arc(m2, h2));
+    let mut area = 0.0;
+    for k in [-1.0, 0.0, 1.0] {
+        let (lo, hi) = (
+            (f1 - a1).max(f2 - a2 + k * TAU),
+            (f1 + a1).min(f2 + a2 + k * TAU),
+        );
+        area += 0.5 * (hi - lo).max(0.0);
+    }
+    if a1 >= PI && a2 >= PI {
+        return PI;
+    }
+    // Each chord, walked with its half-plane on the left, clipped by the other half-plane.
+    for (m, h, mo, ho) in [(m1, h1, m2, h2), (m2, h2, m1, h1)] {
+        if h <= -1.0 {
+            continue;
+        }
+        let d = glam::DVec2::new(m.y, -m.x);
+        let half = (1.0 - h * h).max(0.0).sqrt();
+        let (mut s0, mut s1) = (-half, half);
+        // mo · (h m + s d) ≥ ho.
+        let (slope, rest) = (mo.dot(d), ho - h * mo.dot(m));
+        if slope.abs() < 1e-15 {
+            if rest > 0.0 {
+                continue;
+            }
+        } else if slope > 0.0 {
+            s0 = s0.max(rest / slope);
+        } else {
+            s1 = s1.min(rest / slope);
+        }
+        if s1 > s0 {
+            let (p, q) = (h * m + s0 * d, h * m + s1 * d);
+            area += 0.5 * p.perp_dot(q);
+        }
+    }
+    area.clamp(0.0, PI)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two cuts of the unit disk against the same cuts of a fine inscribed polygon.
+    #[test]
+    fn disk_cut2_area_is_the_polygon_limit() {
+        use glam::DVec2;
+        let n = 4096;
+        let ring: Vec<DVec2> = (0..n)
+            .map(|i| {
+                let a = i as f64 / n as f64 * std::f64::consts::TAU;
+                DVec2::new(a.cos(), a.sin())
+            })
+            .collect();
+        let mut seed = 7u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..500 {
+            let (t1, t2) = (next() * 6.3, next() * 6.3);
+            let (h1, h2) = (next() * 2.4 - 1.2, next() * 2.4 - 1.2);
+            let (m1, m2) = (
+                DVec2::new(t1.cos(), t1.sin()),
+                DVec2::new(t2.cos(), t2.sin()),
+            );
+            let want = super::super::outline::convex_cut_area(&ring, &[(m1, h1), (m2, h2)]);
+            let got = disk_cut2_area(m1, h1, m2, h2);
+            assert!(
+                (got - want).abs() < 2e-3,
+                "{m1} {h1} {m2} {h2}: {got} against {want}"
+            );
+        }
+    }
 
     /// 2D set-up: a segment light from (−r, 0) to (r, 0) centred at c = 0, emitting toward −y; an
     /// occluder that is the half-line from `e` toward −x. Returns the exact visible fraction from

@@ -60,17 +60,44 @@ pub fn volume_vertices(
     g: &CasterGeometry,
     light: &AreaLight,
 ) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
-    volume_vertices_within(g, light, None, None)
+    volume_vertices_within(g, light, None, None, 0)
+}
+
+/// Corners to a row of the D-buffer's corner texture (three texels each).
+pub const CORNERS_PER_ROW: usize = 512;
+
+/// The most corners the texture holds: 2048 rows, the smallest largest texture a device has
+/// (WebGL2's). Every whole number below it is exact in an `f32`.
+pub const MAX_CORNERS: usize = CORNERS_PER_ROW * 2048;
+
+/// The `side` a closing fan's triangles carry under a polygon light instead of their lit side:
+/// `-(2 + k)`, `k` the fan's corner in the scene's table (`corner_base` plus its index in the
+/// caster's [`VolumeMesh::corners`]), which no unit vector's `x` can be. `None` past
+/// [`MAX_CORNERS`]: the lit side then (the chord's V).
+///
+/// [`VolumeMesh::corners`]: super::VolumeMesh::corners
+pub fn corner_marker(k: usize) -> Option<[f32; 2]> {
+    (k < MAX_CORNERS).then(|| [-(2.0 + k as f32), 0.0])
+}
+
+/// The corner a `side` names ([`corner_marker`]), if it names one.
+pub fn marked_corner(side: [f32; 2]) -> Option<usize> {
+    (side[0] <= -1.5).then(|| (-side[0] - 2.0).round() as usize)
 }
 
 /// [`volume_vertices`], each volume ended at its reach when one is given ([`end_at`]), made in
 /// one pass: no full copy of a volume is held besides the one returned.
+///
+/// Under a polygon light a closing fan's triangles carry their corner's marker
+/// ([`corner_marker`], the caster's corners numbered from `corner_base`).
 pub fn volume_vertices_within(
     g: &CasterGeometry,
     light: &AreaLight,
     umbra_reach: Option<f32>,
     penumbra_reach: Option<f32>,
+    corner_base: usize,
 ) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
+    let polygon = light.corners().is_some();
     let (c, n) = (light.center, light.normal);
     let triangles = g.volumes.triangle_count();
     let umbrae = (0..triangles)
@@ -92,7 +119,12 @@ pub fn volume_vertices_within(
         } else {
             (&mut penumbra, penumbra_reach)
         };
-        let side = lit_side(corners, light);
+        let marker = g
+            .volumes
+            .corner_index(i)
+            .filter(|_| polygon)
+            .and_then(|k| corner_marker(corner_base + k));
+        let side = marker.unwrap_or_else(|| lit_side(corners, light));
         let t = corners.map(|q| {
             let (base, num, den) = if ratio {
                 let k = (a - p).dot(w);
@@ -288,7 +320,7 @@ mod tests {
         assert!(!umbra.is_empty() && !penumbra.is_empty());
         let mut shortened = 0;
         for reach in [0.5, 1.0, 2.0, 3.0, 4.0, 6.0, 100.0] {
-            let (u, p) = volume_vertices_within(g, &light, Some(reach), Some(reach));
+            let (u, p) = volume_vertices_within(g, &light, Some(reach), Some(reach), 0);
             assert_eq!(u, end_at(&umbra, &light, reach), "umbra, reach {reach}");
             assert_eq!(
                 p,
@@ -298,7 +330,7 @@ mod tests {
             shortened += usize::from(p != penumbra && !p.is_empty());
         }
         assert!(shortened > 0, "no reach ended a volume part way");
-        let (u, p) = volume_vertices_within(g, &light, None, Some(3.0));
+        let (u, p) = volume_vertices_within(g, &light, None, Some(3.0), 0);
         assert_eq!((u, p), (umbra, end_at(&penumbra, &light, 3.0)));
     }
 

@@ -131,9 +131,42 @@ pub fn closest_point_on_line(a: Vec3, b: Vec3, p: Vec3, q: Vec3) -> Vec3 {
 pub struct VolumeMesh {
     pub vertices: Vec<VolumeVertex>,
     pub indices: Vec<u32>,
+    /// The silhouette corner each closing fan was made at, in the order the fans were pushed
+    /// (their triangles are consecutive): what V exact needs where a fan wins under a polygon
+    /// light ([`FanCorner`]).
+    pub corners: Vec<FanCorner>,
+}
+
+/// A closing fan's silhouette corner: the apex and the far ends of its two silhouette edges, and
+/// the fan's triangles `first .. first + count`. Seen from a point behind the fan the caster's
+/// corner covers the light where it lies behind both planes through the point and an edge (on
+/// each plane's side that holds the other edge): a wedge, whose area grows with the square of
+/// the depth, where one chord's strip grows linearly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FanCorner {
+    pub first: u32,
+    pub count: u32,
+    pub apex: Vec3,
+    pub ends: [Vec3; 2],
 }
 
 impl VolumeMesh {
+    /// The corner of the fan triangle `i` belongs to, if it is a fan's.
+    pub fn corner_of(&self, i: usize) -> Option<&FanCorner> {
+        self.corner_index(i).map(|k| &self.corners[k])
+    }
+
+    /// The index in [`Self::corners`] of the fan triangle `i` belongs to, if it is a fan's.
+    pub fn corner_index(&self, i: usize) -> Option<usize> {
+        let i = i as u32;
+        let k = self
+            .corners
+            .partition_point(|c| c.first <= i)
+            .checked_sub(1)?;
+        let c = &self.corners[k];
+        (i < c.first + c.count).then_some(k)
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
@@ -580,8 +613,24 @@ impl Fans<'_> {
                 if before + MAX_FAN_TRIANGLES > limit {
                     return None;
                 }
-                self.push_fan(volumes, apex, group[i].extrusion, group[j].extrusion, kind);
-                count += usize::from(volumes.triangle_count() > before);
+                let turn = self.support_turn(apex, &group[i], &group[j]);
+                self.push_fan(
+                    volumes,
+                    apex,
+                    [group[i].extrusion, group[j].extrusion],
+                    turn,
+                    kind,
+                );
+                let made = volumes.triangle_count() - before;
+                if made > 0 {
+                    volumes.corners.push(FanCorner {
+                        first: before as u32,
+                        count: made as u32,
+                        apex,
+                        ends: [self.far_end(&group[i]), self.far_end(&group[j])],
+                    });
+                }
+                count += usize::from(made > 0);
             }
         }
         Some(count)
@@ -640,9 +689,52 @@ impl Fans<'_> {
         pairs
     }
 
-    /// The fan at `apex` between the quads of its two edges, from `p1` to `p2` along the shorter
-    /// disk arc (a silhouette turns by less than 180° at a vertex).
-    fn push_fan(&self, volumes: &mut VolumeMesh, apex: Vec3, p1: Vec3, p2: Vec3, kind: VolumeKind) {
+    /// The other vertex of the edge an end belongs to.
+    fn far_end(&self, end: &EdgeEnd) -> Vec3 {
+        let e = &self.mesh.edges[end.edge as usize];
+        let other = if e.v[0] == end.vertex { e.v[1] } else { e.v[0] };
+        self.mesh.position(other)
+    }
+
+    /// Which way round the light's boundary the supports move from one edge end's to the
+    /// other's at `apex`: the sign of the turn from the first touching plane's outward direction
+    /// in the light's plane to the second's, the short way (a silhouette turns by less than 180°
+    /// at a vertex, and the touching point of a convex light moves the way its direction turns).
+    /// 0 where a direction is not defined (the plane is parallel to the light's): the shorter
+    /// way round then.
+    fn support_turn(&self, apex: Vec3, a: &EdgeEnd, b: &EdgeEnd) -> f32 {
+        let (u, w) = self.light.basis();
+        let c = self.light.center;
+        let outward = |end: &EdgeEnd| {
+            let n = (self.far_end(end) - apex).cross(end.extrusion - apex);
+            let m = glam::Vec2::new(n.dot(u), n.dot(w));
+            // The light lies on the side away from m: the support maximises m · p.
+            let to_center = glam::Vec2::new((c - end.extrusion).dot(u), (c - end.extrusion).dot(w));
+            if m.dot(to_center) > 0.0 {
+                -m
+            } else {
+                m
+            }
+        };
+        let turn = outward(a).perp_dot(outward(b));
+        if turn.is_finite() {
+            turn.signum() * f32::from(turn != 0.0)
+        } else {
+            0.0
+        }
+    }
+
+    /// The fan at `apex` between the quads of its two edges, from `p1` to `p2` round the
+    /// light's boundary the way `turn` says ([`Self::support_turn`]; for a disk the shorter arc,
+    /// which is that way).
+    fn push_fan(
+        &self,
+        volumes: &mut VolumeMesh,
+        apex: Vec3,
+        [p1, p2]: [Vec3; 2],
+        turn: f32,
+        kind: VolumeKind,
+    ) {
         if p1 == p2 {
             return;
         }
@@ -650,7 +742,7 @@ impl Fans<'_> {
         let c = light.center;
         let step = self.params.fan_step_deg.to_radians().max(1e-3);
         let mut rim = vec![p1];
-        rim.extend(super::outline::boundary_between(light, p1, p2, step));
+        rim.extend(super::outline::boundary_between(light, p1, p2, turn, step));
         rim.push(p2);
         let n = rim.len() - 1;
         let rim = |k: usize| rim[k];

@@ -58,7 +58,7 @@ use glam::{DVec2, DVec3, Vec3};
 use super::hard_volume::{scene_volumes, HardVolume, OpenMeshes};
 use super::hull::convex_hull;
 use super::outline::{convex_cut_area, polygon_edge_coverage};
-use super::visibility::disk_segment_fraction;
+use super::visibility::{disk_cut2_area, disk_segment_fraction};
 use super::PreparedCasters;
 use crate::scene::{AreaLight, MAX_POLYGON_VERTICES};
 
@@ -191,6 +191,51 @@ impl DiskFrame {
         // In front: n · (c + r p − x) > 0, i.e. p · m > −k / r with m = (n·u, n·w).
         let m = DVec2::new(n.dot(self.u), n.dot(self.w));
         self.share_beyond(m, -k / self.radius)
+    }
+
+    /// V at `x` behind one convex silhouette corner of a caster under a polygon light: the light
+    /// less the part behind both planes through `x` and an edge from `apex` to an end, each on
+    /// the side that holds the other end (the corner's wedge, seen from `x`). `None` where the
+    /// corner is degenerate seen from `x` (an end on the other edge's plane): the chord's V then.
+    /// The twin of `corner_visibility` in `shaders/methods/dbuffer.wgsl`.
+    pub fn corner_visibility(&self, x: Vec3, apex: Vec3, ends: [Vec3; 2]) -> Option<f64> {
+        if self.corner_count > 0 && (self.corner_area.is_nan() || self.corner_area <= 0.0) {
+            return None;
+        }
+        let (x, a) = (x.as_dvec3(), apex.as_dvec3());
+        let (b1, b2) = (ends[0].as_dvec3() - a, ends[1].as_dvec3() - a);
+        let mut cuts = [(DVec2::ZERO, 0.0); 2];
+        for (k, (edge, other)) in [(b1, b2), (b2, b1)].into_iter().enumerate() {
+            let mut n = edge.cross(x - a);
+            let side = n.dot(other);
+            let floor = 1e-9 * n.length() * other.length();
+            if side.is_nan() || floor.is_nan() || side.abs() <= floor {
+                return None;
+            }
+            if side < 0.0 {
+                n = -n;
+            }
+            // Behind: n · (c + r p − a) ≥ 0, p in radius units of the basis.
+            let m = DVec2::new(n.dot(self.u), n.dot(self.w)) * self.radius;
+            cuts[k] = (m, n.dot(a - self.center));
+        }
+        let hidden = if self.corner_count > 0 {
+            convex_cut_area(self.corners(), &cuts) / self.corner_area
+        } else {
+            // The unit disk: each cut with a unit normal (one parallel to the disk keeps all of
+            // it or none).
+            let unit = |(m, h): (DVec2, f64)| {
+                let len = m.length();
+                if len > 1e-12 * h.abs() {
+                    (m / len, h / len)
+                } else {
+                    (DVec2::X, if h <= 0.0 { -2.0 } else { 2.0 })
+                }
+            };
+            let ((m1, h1), (m2, h2)) = (unit(cuts[0]), unit(cuts[1]));
+            disk_cut2_area(m1, h1, m2, h2) / std::f64::consts::PI
+        };
+        Some((1.0 - hidden).clamp(0.0, 1.0))
     }
 
     /// The coverage of the disk by the edge `e0 → e1` as `x` sees it (`e0 → e1` in the

@@ -32,9 +32,13 @@ fn measure(name: &str) -> Metrics {
         .map(|r| r.map_or(Vec3::ZERO, |r| r.position))
         .collect();
     let reference = oracle.visibility_many(&points);
-    let method: Vec<f32> = points
+    let method: Vec<f32> = pixels
         .iter()
-        .map(|&x| twin.visibility(x, VtVariant::Exact) as f32)
+        .map(|r| {
+            r.map_or(0.0, |r| {
+                twin.visibility_on(r.position, r.normal, VtVariant::Exact) as f32
+            })
+        })
         .collect();
     let m = metrics::compare(&reference, &method, &mask);
     println!(
@@ -209,9 +213,13 @@ fn fused_twin_on_every_built_in() {
             .map(|r| r.map_or(Vec3::ZERO, |r| r.position))
             .collect();
         let reference = oracle.visibility_many(&points);
-        let v_paper: Vec<f32> = points
+        let v_paper: Vec<f32> = pixels
             .iter()
-            .map(|&x| paper.visibility(x, VtVariant::Exact) as f32)
+            .map(|r| {
+                r.map_or(0.0, |r| {
+                    paper.visibility_on(r.position, r.normal, VtVariant::Exact) as f32
+                })
+            })
             .collect();
         let v_fused: Vec<f32> = points.iter().map(|&x| fused.visibility(x) as f32).collect();
         let p = metrics::compare(&reference, &v_paper, &mask);

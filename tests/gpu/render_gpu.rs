@@ -63,8 +63,9 @@ fn gpu_agrees_with_the_cpu_twin() {
     ] {
         let (scene, geometry, view, frame) = render(&ctx, name, Method::DBUFFER);
         let twin = DBufferTwin::new(&scene, &geometry.casters);
-        // The twin knows no receiver normal: compare where the surface faces the light (the
-        // pixels every metric uses); a surface turned away from the light must read V = 0.
+        // Compare where the surface faces the light (the pixels every metric uses), the twin
+        // given the receiver's normal for its horizon; a surface turned away from the light
+        // must read V = 0.
         let receivers = dbuffer::geometry::view::receivers(
             &scene,
             &dbuffer::geometry::bvh::Bvh::build(scene.all_triangles()),
@@ -93,7 +94,7 @@ fn gpu_agrees_with_the_cpu_twin() {
                 continue;
             }
             let s = twin.sample(x);
-            let v_twin = VtVariant::Exact.apply(s.t);
+            let v_twin = twin.visibility_on(x, receiver.normal, VtVariant::Exact);
             let dv = (f64::from(*v_gpu) - v_twin).abs();
             n += 1;
             sum += dv;

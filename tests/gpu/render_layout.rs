@@ -254,6 +254,15 @@ fn codes_match_their_wgsl() {
     pairs.push(("LIGHT_DISK", f64::from(LIGHT_DISK)));
     pairs.push(("LIGHT_LINE", f64::from(LIGHT_LINE)));
     wgsl_layout::assert_consts(&camera, "shared/camera.wgsl", &pairs);
+    // The D-buffer's corner texture: as many corners to a row as the geometry numbers them by.
+    wgsl_layout::assert_consts(
+        &source("methods/dbuffer.wgsl"),
+        "methods/dbuffer.wgsl",
+        &[(
+            "CORNERS_PER_ROW",
+            dbuffer::geometry::volume_vertices::CORNERS_PER_ROW as f64,
+        )],
+    );
 
     let view = source("passes/view.wgsl");
     let mut pairs: Vec<(&str, f64)> = View::ALL

@@ -13,9 +13,11 @@ use glam::Vec3;
 
 use super::{
     require, CameraGroup, Channel, Empty, FrameInputs, LightMaps, MethodSpec, MethodState, Prepare,
-    SharedMaps,
+    SharedMaps, Switch,
 };
-use crate::geometry::volume_vertices::{light_view_rect, sort_near_first, volume_vertices_within};
+use crate::geometry::volume_vertices::{
+    light_view_rect, sort_near_first, volume_vertices_within, CORNERS_PER_ROW,
+};
 use crate::geometry::{SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::dbuffer_volumes::{disjoint_groups, CasterVolumes, DBufferVolumes};
@@ -29,6 +31,7 @@ pub static DBUFFER: MethodSpec =
     MethodSpec::new("dbuffer", SHADER, |ctx| Box::new(DBuffer::new(ctx, false)))
         .adapter(NEEDS)
         .about("D-buffer soft shadows (Jakobsen et al. 2004)")
+        .knobs(&[&HORIZON.0, &CORNERS.0])
         .lights(super::AREA_LIGHTS); // volumes from a planar light's outline
 
 pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER, |ctx| {
@@ -36,7 +39,28 @@ pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER
 })
 .adapter(NEEDS)
 .about("D-buffer with silhouettes from the light centre only")
+.knobs(&[&HORIZON.0, &CORNERS.0])
 .lights(super::AREA_LIGHTS); // volumes from a planar light's outline
+
+/// `--dbuffer-corners`: V exact behind a closing fan from the fan's corner (`shadow.knobs.y`).
+pub static CORNERS: Switch = Switch::new(
+    "dbuffer-corners",
+    "dbuffer, dbuffer-center: 1 = V exact behind a closing fan is the light less the caster's \
+     corner seen from the point (a wedge); 0 = one chord there too, as the paper has it",
+    true,
+);
+
+/// `--dbuffer-horizon`: clip the light by the receiver's own plane (`shadow.knobs.x` of
+/// `shaders/methods/dbuffer.wgsl`; the twin's [`DBufferTwin::horizon`]).
+///
+/// [`DBufferTwin::horizon`]: crate::geometry::DBufferTwin::horizon
+pub static HORIZON: Switch = Switch::new(
+    "dbuffer-horizon",
+    "dbuffer, dbuffer-center: 1 = a receiver gets at most the part of the light in front of \
+     its own plane (a caster's face whose plane cuts the light: its terminator); 0 = the \
+     paper's lookup alone (lit there, no volume reaches a silhouette's own faces)",
+    true,
+);
 
 const SHADER: &str = "methods/dbuffer.wgsl";
 
@@ -99,6 +123,12 @@ pub struct DBuffer {
     /// Where the penumbra entries can be in the light view's image.
     penumbra_rect: [f32; 4],
     volumes: DBufferVolumes,
+    /// The closing fans' corners over all casters, three `Rgba32Float` texels each (apex, the
+    /// two edges' far ends), `CORNERS_PER_ROW` to a row: `corners` of
+    /// `shaders/methods/dbuffer.wgsl`, named by the fans' markers
+    /// (`volume_vertices::corner_marker`). A texture, not a storage buffer: the weakest devices
+    /// have none in fragment shaders.
+    corners: wgpu::TextureView,
     /// What the volume channels hold.
     made_for: Option<Made>,
     view_proj: glam::Mat4,
@@ -113,11 +143,14 @@ struct Made {
     map: u64,
 }
 
-/// What the camera bind group binds: the shadow map's and the volume channels' generations.
+/// What the camera bind group binds: the shadow map's and the volume channels' generations, and
+/// the geometry build of the corners.
 #[derive(PartialEq)]
 struct Bound {
     map: u64,
     volumes: u64,
+    /// The geometry build the corners' buffer was made for.
+    corners: u64,
 }
 
 impl DBuffer {
@@ -134,6 +167,11 @@ impl DBuffer {
                 wgpu::ShaderStages::FRAGMENT,
                 wgpu::TextureViewDimension::D2,
             ),
+            texture_entry(
+                4,
+                wgpu::ShaderStages::FRAGMENT,
+                wgpu::TextureViewDimension::D2,
+            ),
         ]);
         DBuffer {
             center_silhouettes,
@@ -146,6 +184,7 @@ impl DBuffer {
             penumbra: VertexChunks::empty(),
             penumbra_rect: [0.0, 0.0, 1.0, 1.0],
             volumes: DBufferVolumes::new(ctx),
+            corners: corner_texture(ctx, &[]),
             made_for: None,
             view_proj: glam::Mat4::IDENTITY,
         }
@@ -203,12 +242,15 @@ impl DBuffer {
         let merged = disjoint_groups(&rects).len() > 1;
         let umbra_reach = (!merged).then_some(reach);
         let mut penumbra = Vec::new();
+        let mut corner_base = 0;
         self.casters = geometry
             .casters
             .iter()
             .zip(rects)
             .map(|(g, rect)| {
-                let (mut umbra, pen) = volume_vertices_within(g, &light, umbra_reach, Some(reach));
+                let (mut umbra, pen) =
+                    volume_vertices_within(g, &light, umbra_reach, Some(reach), corner_base);
+                corner_base += g.volumes.corners.len();
                 penumbra.extend(pen);
                 // Nearest first: the depth test then turns the farther crossings away before
                 // shading.
@@ -225,9 +267,51 @@ impl DBuffer {
             penumbra.iter().map(|v| Vec3::from(v.position)),
         );
         self.penumbra = VertexChunks::new(device, "DBuffer::penumbra", &penumbra);
+        let corners: Vec<[f32; 4]> = geometry
+            .casters
+            .iter()
+            .flat_map(|g| &g.volumes.corners)
+            .flat_map(|c| [c.apex, c.ends[0], c.ends[1]].map(|p| p.extend(0.0).to_array()))
+            .collect();
+        self.corners = corner_texture(inputs.ctx, &corners);
         self.geometry = Some((geometry, inputs.revision));
         self.made_for = None;
     }
+}
+
+/// The corners' texture: `3 × CORNERS_PER_ROW` texels wide (less for fewer corners), a row per
+/// `CORNERS_PER_ROW` corners; one zero corner where there are none (a binding is never empty).
+fn corner_texture(ctx: &GpuContext, corners: &[[f32; 4]]) -> wgpu::TextureView {
+    use wgpu::util::DeviceExt;
+    let texels_per_row = 3 * CORNERS_PER_ROW;
+    let mut data = corners.to_vec();
+    if data.is_empty() {
+        data.resize(3, [0.0; 4]);
+    }
+    let width = data.len().min(texels_per_row);
+    data.resize(data.len().div_ceil(width) * width, [0.0; 4]);
+    let rows = data.len() / width;
+    ctx.device
+        .create_texture_with_data(
+            &ctx.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("DBuffer::corners"),
+                size: wgpu::Extent3d {
+                    width: width as u32,
+                    height: rows as u32,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(&data),
+        )
+        .create_view(&wgpu::TextureViewDescriptor::default())
 }
 
 impl MethodState for DBuffer {
@@ -260,7 +344,10 @@ impl MethodState for DBuffer {
             self.view_proj = inputs.light_view.view_projection();
         }
         let map = shared.shadow_map.made()?;
-        let uniforms = ShadowUniforms::new(inputs.light_view, map.size, [0.0; 4]);
+        let horizon = f32::from(inputs.knobs.get(&HORIZON));
+        let corners = f32::from(inputs.knobs.get(&CORNERS));
+        let uniforms =
+            ShadowUniforms::new(inputs.light_view, map.size, [horizon, corners, 0.0, 0.0]);
         inputs
             .ctx
             .queue
@@ -272,6 +359,7 @@ impl MethodState for DBuffer {
         let bound = Bound {
             map: map.generation,
             volumes: v.generation,
+            corners: self.builds,
         };
         self.camera.bind(
             &inputs.ctx.device,
@@ -281,6 +369,7 @@ impl MethodState for DBuffer {
                 view_entry(1, &map.distance.view),
                 view_entry(2, &v.umbra.view),
                 view_entry(3, &v.penumbra.view),
+                view_entry(4, &self.corners),
             ],
         );
         Ok(&self.camera)
