@@ -12,8 +12,7 @@
 @group(1) @binding(2) var d_u: texture_2d<f32>;
 @group(1) @binding(3) var d_p: texture_2d<f32>;
 // The closing fans' silhouette corners, three texels per fan (apex, the two edges' far ends;
-// geometry::FanCorner), CORNERS_PER_ROW fans to a row. Under a polygon light a fan's texel holds
-// -(2 + its index) in .z (geometry::volume_vertices::corner_marker) instead of a lit side.
+// geometry::FanCorner), CORNERS_PER_ROW fans to a row. A fan's texel holds -(2 + its index) in .z (geometry::volume_vertices::corner_marker) instead of a lit side.
 @group(1) @binding(4) var corners: texture_2d<f32>;
 const CORNERS_PER_ROW: u32 = 512u;
 
@@ -23,10 +22,16 @@ fn corner_point(k: u32, j: u32) -> vec3<f32> {
 
 // V at x behind one convex silhouette corner: the light less the part behind both planes
 // through x and an edge (each on the side of the other edge's far end), the corner's wedge as
-// x sees it; -1 where the corner is degenerate from x (twin: DiskFrame::corner_visibility).
+// x sees it (a reflex corner: the light less it); -1 where the corner is unclear or degenerate
+// from x (twin: DiskFrame::corner_visibility).
 fn corner_visibility(x: vec3<f32>, k: u32) -> f32 {
     let size = textureDimensions(corners);
     if 3u * (k % CORNERS_PER_ROW) + 2u >= size.x || k / CORNERS_PER_ROW >= size.y {
+        return -1.0;
+    }
+    // apex.w: 1 convex, -1 reflex, 0 unclear (geometry::FanCorner::convex).
+    let convex = textureLoad(corners, vec2<u32>(3u * (k % CORNERS_PER_ROW), k / CORNERS_PER_ROW), 0).w;
+    if convex == 0.0 {
         return -1.0;
     }
     let a = corner_point(k, 0u);
@@ -46,8 +51,24 @@ fn corner_visibility(x: vec3<f32>, k: u32) -> f32 {
         m[i] = vec2<f32>(dot(n, camera.light_u), dot(n, camera.light_w));
         h[i] = dot(n, a - camera.light_center);
     }
-    let hidden = polygon_cut_area(camera.light_corners, camera.light_corner_count, m, h);
-    return clamp(1.0 - hidden / max(camera.light_area, 1e-30), 0.0, 1.0);
+    var hidden: f32;
+    if camera.light_kind == LIGHT_POLYGON {
+        hidden = polygon_cut_area(camera.light_corners, camera.light_corner_count, m, h) / max(camera.light_area, 1e-30);
+    } else {
+        // A disk: the cuts in units of its radius with unit normals (one parallel to the disk
+        // keeps all of it or none).
+        var mu: array<vec2<f32>, 2>;
+        var hu: vec2<f32>;
+        for (var i = 0u; i < 2u; i++) {
+            let len = length(m[i]) * camera.light_radius;
+            let tilted = len > 1e-12 * abs(h[i]);
+            mu[i] = select(vec2<f32>(1.0, 0.0), m[i] * camera.light_radius / len, tilted);
+            hu[i] = select(select(2.0, -2.0, h[i] <= 0.0), h[i] / len, tilted);
+        }
+        hidden = disk_cut2_area(mu[0], hu[0], mu[1], hu[1]) / 3.14159265358979;
+    }
+    // A reflex corner covers the light less the wedge.
+    return clamp(select(hidden, 1.0 - hidden, convex > 0.0), 0.0, 1.0);
 }
 
 fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
@@ -71,8 +92,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     // V exact where a closing fan won: the corner's wedge, not a chord's strip (which grows
     // with the depth where the wedge grows with its square).
     // (shadow.knobs.y = 1, --dbuffer-corners.)
-    // Under a polygon light only: a disk's fans keep the chord.
-    if VT_VARIANT == VT_EXACT && crossed && xs.z < -1.5 && shadow.knobs.y > 0.5 && camera.light_kind == LIGHT_POLYGON {
+    if VT_VARIANT == VT_EXACT && crossed && xs.z < -1.5 && shadow.knobs.y > 0.5 {
         let corner = corner_visibility(x, u32(round(-xs.z - 2.0)));
         if corner >= 0.0 {
             out.v = corner;

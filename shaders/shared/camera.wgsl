@@ -78,6 +78,61 @@ fn disk_segment_fraction(h_in: f32) -> f32 {
     return (acos(h) - h * sqrt(max(1.0 - h * h, 0.0))) / 3.14159265358979;
 }
 
+// The area of the unit disk within dot(m1, p) >= h1 and dot(m2, p) >= h2 (m1, m2 unit), by
+// Green's theorem: the arcs inside both, half their angle each, and each chord's part inside the
+// other half-plane, half P x Q walked counter-clockwise (twin: geometry::visibility::disk_cut2_area).
+fn disk_cut2_area(m1: vec2<f32>, h1: f32, m2: vec2<f32>, h2: f32) -> f32 {
+    let pi = 3.14159265358979;
+    if h1 >= 1.0 || h2 >= 1.0 {
+        return 0.0;
+    }
+    let f1 = atan2(m1.y, m1.x);
+    let f2 = atan2(m2.y, m2.x);
+    let a1 = acos(max(h1, -1.0));
+    let a2 = acos(max(h2, -1.0));
+    if a1 >= pi && a2 >= pi {
+        return pi;
+    }
+    var area = 0.0;
+    for (var k = -1.0; k <= 1.0; k += 1.0) {
+        let lo = max(f1 - a1, f2 - a2 + k * 2.0 * pi);
+        let hi = min(f1 + a1, f2 + a2 + k * 2.0 * pi);
+        area += 0.5 * max(hi - lo, 0.0);
+    }
+    let ms = array<vec2<f32>, 2>(m1, m2);
+    let hs = vec2<f32>(h1, h2);
+    for (var i = 0u; i < 2u; i++) {
+        let m = ms[i];
+        let h = hs[i];
+        let mo = ms[1u - i];
+        let ho = hs[1u - i];
+        if h <= -1.0 {
+            continue;
+        }
+        let d = vec2<f32>(m.y, -m.x);
+        let half_len = sqrt(max(1.0 - h * h, 0.0));
+        var s0 = -half_len;
+        var s1 = half_len;
+        let slope = dot(mo, d);
+        let rest = ho - h * dot(mo, m);
+        if abs(slope) < 1e-12 {
+            if rest > 0.0 {
+                continue;
+            }
+        } else if slope > 0.0 {
+            s0 = max(s0, rest / slope);
+        } else {
+            s1 = min(s1, rest / slope);
+        }
+        if s1 > s0 {
+            let p = h * m + s0 * d;
+            let q = h * m + s1 * d;
+            area += 0.5 * (p.x * q.y - p.y * q.x);
+        }
+    }
+    return clamp(area, 0.0, pi);
+}
+
 fn v_of_t(t_in: f32) -> f32 {
     let t = clamp(t_in, 0.0, 1.0);
     if VT_VARIANT == VT_SQRT {

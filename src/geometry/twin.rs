@@ -27,7 +27,7 @@ use glam::Vec3;
 use super::bvh::Bvh;
 use super::outline::Outline2d;
 use super::visibility::{t_hidden, t_visible, Branch, VtVariant};
-use super::volumes::{CasterGeometry, VolumeVertex};
+use super::volumes::{CasterGeometry, FanCorner, VolumeVertex};
 use super::wedges::DiskFrame;
 use crate::scene::{AreaLight, Scene};
 
@@ -48,10 +48,10 @@ pub struct Texel {
     /// ([`super::volume_vertices::lit_side`]): the `.zw` of the GPU's volume channels.
     pub side_u: [f32; 2],
     pub side_p: [f32; 2],
-    /// Where the winning umbra or penumbra triangle is a closing fan: its silhouette corner
-    /// (apex, the two edges' far ends), for V exact under a polygon light.
-    pub corner_u: Option<[Vec3; 3]>,
-    pub corner_p: Option<[Vec3; 3]>,
+    /// Where the winning umbra or penumbra triangle is a closing fan: its silhouette corner,
+    /// for V exact.
+    pub corner_u: Option<FanCorner>,
+    pub corner_p: Option<FanCorner>,
 }
 
 /// What the camera pass computes for one shaded point.
@@ -76,7 +76,7 @@ impl TwinSample {
     }
 
     /// The silhouette corner of the channel `t` came from, where a fan won it.
-    pub fn corner(&self) -> Option<[Vec3; 3]> {
+    pub fn corner(&self) -> Option<FanCorner> {
         if self.hidden {
             self.texel.corner_u
         } else {
@@ -91,10 +91,10 @@ pub const HIDDEN_BIAS: f32 = 1e-4;
 struct CasterVolumes {
     umbra: Bvh,
     umbra_attrs: Vec<VolumeVertex>,
-    umbra_corners: Vec<Option<[Vec3; 3]>>,
+    umbra_corners: Vec<Option<FanCorner>>,
     penumbra: Bvh,
     penumbra_attrs: Vec<VolumeVertex>,
-    penumbra_corners: Vec<Option<[Vec3; 3]>>,
+    penumbra_corners: Vec<Option<FanCorner>>,
 }
 
 /// The D-buffer lookup and camera-pass arithmetic on the CPU.
@@ -106,8 +106,8 @@ pub struct DBufferTwin {
     /// `--dbuffer-horizon` (on unless set off): [`Self::visibility_on`] takes at most the part
     /// of the light in front of the receiver's own plane.
     pub horizon: bool,
-    /// `--dbuffer-corners` (on unless set off): under a polygon light, V exact behind a closing
-    /// fan from the fan's corner ([`DiskFrame::corner_visibility`]).
+    /// `--dbuffer-corners` (on unless set off): V exact behind a closing fan from the fan's
+    /// corner ([`DiskFrame::corner_visibility`]).
     pub corners: bool,
     surfaces: Bvh,
     casters: Vec<CasterVolumes>,
@@ -134,10 +134,7 @@ impl DBufferTwin {
                     (vec![], vec![], vec![], vec![], vec![], vec![]);
                 for i in 0..g.volumes.triangle_count() {
                     let (tri, attrs) = g.volumes.triangle(i);
-                    let corner = g
-                        .volumes
-                        .corner_of(i)
-                        .map(|c| [c.apex, c.ends[0], c.ends[1]]);
+                    let corner = g.volumes.corner_of(i).copied();
                     if attrs.kind.is_umbra() {
                         ut.push(tri);
                         ua.push(*attrs);
@@ -261,16 +258,15 @@ impl DBufferTwin {
     }
 
     /// `V(t)` at `x` with the chosen variant: the lookup alone, whatever surface `x` is on.
-    /// V exact under a polygon light, where a closing fan won the channel: the light less the
-    /// caster's corner seen from `x` ([`DiskFrame::corner_visibility`]), not one chord's strip
-    /// (a disk's fans keep the chord).
+    /// V exact where a closing fan won the channel: the light less the caster's corner seen
+    /// from `x` ([`DiskFrame::corner_visibility`]), not one chord's strip.
     pub fn visibility(&self, x: Vec3, vt: VtVariant) -> f64 {
         let s = self.sample(x);
         let in_penumbra = matches!(s.branch, Branch::PenumbraHidden | Branch::PenumbraVisible);
-        let polygon = matches!(self.outline, Outline2d::Polygon { .. });
-        if vt == VtVariant::Exact && in_penumbra && polygon && self.corners {
-            if let Some([apex, e1, e2]) = s.corner() {
-                if let Some(v) = self.frame.corner_visibility(x, apex, [e1, e2]) {
+        if vt == VtVariant::Exact && in_penumbra && self.corners {
+            let corner = s.corner().and_then(|c| Some((c, c.convex?)));
+            if let Some((c, convex)) = corner {
+                if let Some(v) = self.frame.corner_visibility(x, c.apex, c.ends, convex) {
                     return v;
                 }
             }

@@ -70,7 +70,7 @@ pub const CORNERS_PER_ROW: usize = 512;
 /// (WebGL2's). Every whole number below it is exact in an `f32`.
 pub const MAX_CORNERS: usize = CORNERS_PER_ROW * 2048;
 
-/// The `side` a closing fan's triangles carry under a polygon light instead of their lit side:
+/// The `side` a closing fan's triangles carry instead of their lit side:
 /// `-(2 + k)`, `k` the fan's corner in the scene's table (`corner_base` plus its index in the
 /// caster's [`VolumeMesh::corners`]), which no unit vector's `x` can be. `None` past
 /// [`MAX_CORNERS`]: the lit side then (the chord's V).
@@ -88,7 +88,7 @@ pub fn marked_corner(side: [f32; 2]) -> Option<usize> {
 /// [`volume_vertices`], each volume ended at its reach when one is given ([`end_at`]), made in
 /// one pass: no full copy of a volume is held besides the one returned.
 ///
-/// Under a polygon light a closing fan's triangles carry their corner's marker
+/// A closing fan's triangles carry their corner's marker
 /// ([`corner_marker`], the caster's corners numbered from `corner_base`).
 pub fn volume_vertices_within(
     g: &CasterGeometry,
@@ -97,7 +97,6 @@ pub fn volume_vertices_within(
     penumbra_reach: Option<f32>,
     corner_base: usize,
 ) -> (Vec<VolumeVertex>, Vec<VolumeVertex>) {
-    let polygon = light.corners().is_some();
     let (c, n) = (light.center, light.normal);
     let triangles = g.volumes.triangle_count();
     let umbrae = (0..triangles)
@@ -119,10 +118,11 @@ pub fn volume_vertices_within(
         } else {
             (&mut penumbra, penumbra_reach)
         };
+        // Only a corner whose side is clear: the others keep their lit side (the chord's V).
         let marker = g
             .volumes
             .corner_index(i)
-            .filter(|_| polygon)
+            .filter(|&k| g.volumes.corners[k].convex.is_some())
             .and_then(|k| corner_marker(corner_base + k));
         let side = marker.unwrap_or_else(|| lit_side(corners, light));
         let t = corners.map(|q| {

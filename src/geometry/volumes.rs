@@ -142,12 +142,17 @@ pub struct VolumeMesh {
 /// corner covers the light where it lies behind both planes through the point and an edge (on
 /// each plane's side that holds the other edge): a wedge, whose area grows with the square of
 /// the depth, where one chord's strip grows linearly.
+///
+/// `convex`: whether the caster lies inside that wedge (`Some(true)`), outside it (a reflex
+/// corner, `Some(false)`: it covers the light less the wedge), or neither is clear (`None`: an
+/// edge's two faces on two sides of its plane, seen from behind the apex): the chord's V then.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FanCorner {
     pub first: u32,
     pub count: u32,
     pub apex: Vec3,
     pub ends: [Vec3; 2],
+    pub convex: Option<bool>,
 }
 
 impl VolumeMesh {
@@ -623,11 +628,14 @@ impl Fans<'_> {
                 );
                 let made = volumes.triangle_count() - before;
                 if made > 0 {
+                    let ends = [self.far_end(&group[i]), self.far_end(&group[j])];
+                    let behind = apex + (apex - 0.5 * (group[i].extrusion + group[j].extrusion));
                     volumes.corners.push(FanCorner {
                         first: before as u32,
                         count: made as u32,
                         apex,
-                        ends: [self.far_end(&group[i]), self.far_end(&group[j])],
+                        ends,
+                        convex: self.corner_convexity(apex, [&group[i], &group[j]], ends, behind),
                     });
                 }
                 count += usize::from(made > 0);
@@ -687,6 +695,37 @@ impl Fans<'_> {
             }
         }
         pairs
+    }
+
+    /// Whether the caster lies inside the wedge of the corner at `apex` seen from `from` (behind
+    /// it): for each edge, the side of the plane through `from` and the edge the caster is on
+    /// (against its outward direction there, the sum of the edge's faces' normals), against the
+    /// side the other edge's far end is on ([`FanCorner::convex`]).
+    fn corner_convexity(
+        &self,
+        apex: Vec3,
+        ends: [&EdgeEnd; 2],
+        far: [Vec3; 2],
+        from: Vec3,
+    ) -> Option<bool> {
+        let mut inside = [false; 2];
+        for k in 0..2 {
+            let n = (far[k] - apex).cross(from - apex);
+            let other = n.dot(far[1 - k] - apex);
+            let e = &self.mesh.edges[ends[k].edge as usize];
+            let outward: Vec3 = e
+                .faces
+                .iter()
+                .filter_map(|&f| self.mesh.faces.get(f as usize))
+                .map(|f| f.normal)
+                .sum();
+            let caster = -n.dot(outward);
+            if other.is_nan() || caster.is_nan() || other == 0.0 || caster == 0.0 {
+                return None;
+            }
+            inside[k] = other.signum() == caster.signum();
+        }
+        (inside[0] == inside[1]).then_some(inside[0])
     }
 
     /// The other vertex of the edge an end belongs to.

@@ -198,7 +198,14 @@ impl DiskFrame {
     /// the side that holds the other end (the corner's wedge, seen from `x`). `None` where the
     /// corner is degenerate seen from `x` (an end on the other edge's plane): the chord's V then.
     /// The twin of `corner_visibility` in `shaders/methods/dbuffer.wgsl`.
-    pub fn corner_visibility(&self, x: Vec3, apex: Vec3, ends: [Vec3; 2]) -> Option<f64> {
+    /// A reflex corner (`convex` false) covers the light less that wedge.
+    pub fn corner_visibility(
+        &self,
+        x: Vec3,
+        apex: Vec3,
+        ends: [Vec3; 2],
+        convex: bool,
+    ) -> Option<f64> {
         if self.corner_count > 0 && (self.corner_area.is_nan() || self.corner_area <= 0.0) {
             return None;
         }
@@ -235,7 +242,8 @@ impl DiskFrame {
             let ((m1, h1), (m2, h2)) = (unit(cuts[0]), unit(cuts[1]));
             disk_cut2_area(m1, h1, m2, h2) / std::f64::consts::PI
         };
-        Some((1.0 - hidden).clamp(0.0, 1.0))
+        let v = if convex { 1.0 - hidden } else { hidden };
+        Some(v.clamp(0.0, 1.0))
     }
 
     /// The coverage of the disk by the edge `e0 → e1` as `x` sees it (`e0 → e1` in the

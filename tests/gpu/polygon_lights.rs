@@ -5,7 +5,8 @@
 //! - on random scenes (a convex caster under a random rectangle or polygon light), the D-buffer,
 //!   `dbuffer-fused` and `wedges` against the ray-cast reference, held to the bounds of issue 20.
 //!
-//! `POLYGON_SCENES=N` runs N random scenes instead of the suite's four (at 128², K = 1024);
+//! `POLYGON_SCENES=N` runs N random scenes instead of the suite's four (at 128², D-buffer 1024²,
+//! K = 1024);
 //! docs/results/polygon-lights.md has the last long run.
 
 use dbuffer::geometry::bvh::Bvh;
@@ -18,7 +19,17 @@ use dbuffer::render::{FrameRequest, Knobs, Method};
 use dbuffer::scene::{self, shapes, AreaLight, Camera, LightKind, Mesh, Object, Scene};
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 
-/// V of `method` over the pixels that see a surface, at `size`², D-buffer 512².
+/// The D-buffer's size for a view of `size`²: the command line's 1024² for the random scenes'
+/// views, 512² for the small views of the disk built-ins.
+fn dbuffer_size(size: u32) -> u32 {
+    if size >= 128 {
+        1024
+    } else {
+        512
+    }
+}
+
+/// V of `method` over the pixels that see a surface, at `size`², the D-buffer [`dbuffer_size`].
 fn visibility(offline: &mut Offline, scene: &Scene, method: Method, size: u32) -> Vec<Option<f32>> {
     // The reference's own V: few rays, both lights alike (the same strata on either shape).
     visibility_with(
@@ -40,7 +51,7 @@ fn visibility_with(
     let request = FrameRequest {
         width: size,
         height: size,
-        dbuffer_size: 512,
+        dbuffer_size: dbuffer_size(size),
         method,
         vt: VtVariant::Exact,
         knobs,
@@ -72,13 +83,8 @@ fn the_inscribed_16_gon_meets_the_disk_on_every_disk_built_in() {
             if !(method.takes(LightKind::Disk) && method.takes(LightKind::Polygon)) {
                 continue;
             }
-            // One model on both lights: the D-buffer's fans take the corner under a polygon
-            // only (`--dbuffer-corners`), so the geometry paths are compared with the chord.
-            let knobs = Knobs::default()
-                .with(&reference::SAMPLES, 64)
-                .with(&dbuffer::render::methods::dbuffer::CORNERS, 0);
-            let a = visibility_with(&mut offline, &disk_scene, method, SIZE, knobs);
-            let b = visibility_with(&mut offline, &polygon_scene, method, SIZE, knobs);
+            let a = visibility(&mut offline, &disk_scene, method, SIZE);
+            let b = visibility(&mut offline, &polygon_scene, method, SIZE);
             let (mut sum, mut n) = (0.0f64, 0usize);
             for (a, b) in a.iter().zip(&b) {
                 if let (Some(a), Some(b)) = (a, b) {

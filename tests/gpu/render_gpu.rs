@@ -100,13 +100,18 @@ fn gpu_agrees_with_the_cpu_twin() {
             sum += dv;
             shadowed += usize::from(s.branch != Branch::Lit);
             if dv > 0.1 {
-                // Near a boundary? Probe the twin two texel footprints around x.
+                // Near a boundary or a seam? Probe the twin two texel footprints around x.
                 let w = (x - scene.light.center()).normalize();
                 let (a, b) = w.any_orthonormal_pair();
                 let reach = 2.0 * slope * s.d;
                 let near_boundary = [a, -a, b, -b, a + b, a - b, -a + b, -a - b]
                     .iter()
-                    .any(|o| twin.sample(x + *o * reach).branch != s.branch);
+                    .any(|o| {
+                        // A class boundary, or a seam between a fan (V from its corner) and
+                        // another volume triangle (V from its chord): the texel's winner changes.
+                        let n = twin.sample(x + *o * reach);
+                        n.branch != s.branch || n.corner() != s.corner()
+                    });
                 if !near_boundary {
                     far_from_boundary.push((i % SIZE as usize, i / SIZE as usize, *v_gpu, v_twin));
                 }

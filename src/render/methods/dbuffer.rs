@@ -271,7 +271,15 @@ impl DBuffer {
             .casters
             .iter()
             .flat_map(|g| &g.volumes.corners)
-            .flat_map(|c| [c.apex, c.ends[0], c.ends[1]].map(|p| p.extend(0.0).to_array()))
+            .flat_map(|c| {
+                let convex = match c.convex {
+                    Some(true) => 1.0,
+                    Some(false) => -1.0,
+                    None => 0.0,
+                };
+                [c.apex.extend(convex), c.ends[0].extend(0.0), c.ends[1].extend(0.0)]
+                    .map(|p| p.to_array())
+            })
             .collect();
         self.corners = corner_texture(inputs.ctx, &corners);
         self.geometry = Some((geometry, inputs.revision));
