@@ -147,9 +147,38 @@ fn v_of_t(t_in: f32) -> f32 {
     return t * t * (3.0 - 2.0 * t);
 }
 
-// The share of the polygon light where dot(m, p) >= h (twin: geometry::outline::clipped_area).
+// Corner i of the polygon light, read from the uniforms in place (passing the array by value,
+// as shared/polygon.wgsl's functions take it, copies it per pixel: on a CPU rasteriser that
+// copy was most of the D-buffer's camera pass once the horizon called it on every receiver).
+fn light_corner(i: u32) -> vec2<f32> {
+    let q = camera.light_corners[i / 2u];
+    return select(q.xy, q.zw, (i & 1u) == 1u);
+}
+
+// The share of the polygon light where dot(m, p) >= h, in one walk round it: the kept edges, the
+// parts of the two it crosses, and the chord from where it leaves the half-plane to where it
+// comes back (twin: geometry::outline::clipped_area).
 fn light_share_above(m: vec2<f32>, h: f32) -> f32 {
-    return polygon_share_above(camera.light_corners, camera.light_corner_count, camera.light_area, m, h);
+    let n = min(camera.light_corner_count, 16u);
+    var sum = 0.0;
+    var leave = vec2<f32>(0.0);
+    var enter = vec2<f32>(0.0);
+    for (var i = 0u; i < n; i++) {
+        let a = light_corner(i);
+        let b = light_corner((i + 1u) % n);
+        let da = dot(m, a) - h;
+        let db = dot(m, b) - h;
+        let p = a + (b - a) * (da / (da - db));
+        let a_in = da >= 0.0;
+        let b_in = db >= 0.0;
+        let start = select(p, a, a_in);
+        let end = select(p, b, b_in);
+        sum += select(0.0, start.x * end.y - start.y * end.x, a_in || b_in);
+        leave = select(leave, p, a_in && !b_in);
+        enter = select(enter, p, !a_in && b_in);
+    }
+    sum += leave.x * enter.y - leave.y * enter.x;
+    return clamp(0.5 * sum / max(camera.light_area, 1e-30), 0.0, 1.0);
 }
 
 // V(t), with the chord's direction for V exact under a polygon light: the share of the light
@@ -180,7 +209,9 @@ fn horizon_fraction(x: vec3<f32>, n: vec3<f32>) -> f32 {
     let nc = camera.light_normal;
     let k = dot(n, camera.light_center - x);
     let s = length(n - dot(n, nc) * nc) * camera.light_radius;
-    if !(s > 1e-6 * abs(k)) {
+    // The plane misses the light (its radius bounds a polygon too): all of it or none, and no
+    // polygon to clip (most receivers; on a CPU rasteriser the clip's loops then end at once).
+    if !(s > abs(k)) {
         return select(0.0, 1.0, k > 0.0);
     }
     if camera.light_kind == LIGHT_POLYGON {

@@ -181,8 +181,8 @@ impl DiskFrame {
         let n = n.as_dvec3();
         let k = n.dot(self.center - x.as_dvec3());
         let s = (n - n.dot(self.normal) * self.normal).length() * self.radius;
-        // No chord to cut by (NaN included; the GPU's `!(s > 1e-6 |k|)`).
-        if s.is_nan() || k.is_nan() || s <= 1e-6 * k.abs() {
+        // No chord to cut by (NaN included; the GPU's `!(s > |k|)`).
+        if s.is_nan() || k.is_nan() || s <= k.abs() {
             return if k > 0.0 { 1.0 } else { 0.0 };
         }
         if self.corner_count == 0 {
