@@ -1,7 +1,7 @@
 // A convex polygon light's corners in its own plane, as the uniforms hold them: up to 16 points
-// counter-clockwise, two per vec4 (xy, zw). Its cut areas, for V exact (shared/camera.wgsl), the
-// wedges' coverage (passes/wedges.wgsl) and dbuffer-fused's exact regions
-// (methods/dbuffer_fused.wgsl). The CPU twins are in src/geometry/outline.rs.
+// counter-clockwise, two per vec4 (xy, zw). Its cut areas, for the D-buffer's corners
+// (methods/dbuffer.wgsl; one cut is shared/camera.wgsl's light_share_above), the wedges'
+// coverage (passes/wedges.wgsl) and dbuffer-fused's exact regions (methods/dbuffer_fused.wgsl). The CPU twins are in src/geometry/outline.rs.
 
 fn polygon_corner(corners: array<vec4<f32>, 8>, i: u32) -> vec2<f32> {
     let q = corners[i / 2u];
@@ -52,19 +52,6 @@ fn polygon_cut_area(
         sum += a.x * b.y - a.y * b.x;
     }
     return max(0.5 * sum, 0.0);
-}
-
-// The share of the polygon (of area `area`) where dot(m, p) >= h.
-fn polygon_share_above(
-    corners: array<vec4<f32>, 8>,
-    count: u32,
-    area: f32,
-    m: vec2<f32>,
-    h: f32
-) -> f32 {
-    var cut: array<vec2<f32>, 3>;
-    cut[0] = m;
-    return clamp(polygon_cut_area(corners, count, cut, vec3<f32>(h, -1.0, -1.0)) / max(area, 1e-30), 0.0, 1.0);
 }
 
 // Minus the part of the polygon beyond the segment a -> b's line inside the angle its ends
