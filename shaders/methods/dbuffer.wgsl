@@ -52,7 +52,7 @@ fn corner_visibility(x: vec3<f32>, k: u32) -> f32 {
         h[i] = dot(n, a - camera.light_center);
     }
     var hidden: f32;
-    if camera.light_kind == LIGHT_POLYGON {
+    if polygon_light() {
         hidden = polygon_cut_area(camera.light_corners, camera.light_corner_count, m, h) / max(camera.light_area, 1e-30);
     } else {
         // A disk: the cuts in units of its radius with unit normals (one parallel to the disk

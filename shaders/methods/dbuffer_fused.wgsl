@@ -170,7 +170,7 @@ fn edge_chord(e: FusedEdge, x: vec3<f32>, hx: f32) -> Chord {
     let qb = x + (pb - x) * (hx / (hx - fused_height(fused, pb)));
     let ua = vec2<f32>(dot(qa - c, fused.e1), dot(qa - c, fused.e2)) / r;
     let ub = vec2<f32>(dot(qb - c, fused.e1), dot(qb - c, fused.e2)) / r;
-    if camera.light_kind == LIGHT_POLYGON {
+    if polygon_light() {
         // The same region of the polygon (camera.light_corners are in metres along e1, e2).
         out.area = abs(polygon_edge_coverage(
             camera.light_corners,

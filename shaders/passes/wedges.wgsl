@@ -31,6 +31,9 @@ struct WedgeDisk {
 
 @group(0) @binding(0) var<uniform> screen: ScreenUniforms;
 @group(1) @binding(0) var<uniform> disk: WedgeDisk;
+// 1 in the pipeline for rectangle and polygon lights (render::passes::wedges::WedgePass): a
+// constant, so the disk's pipeline has no polygon clip to run.
+override POLYGON_LIGHT: f32 = 0.0;
 @group(1) @binding(1) var positions: texture_2d<f32>;
 
 const PI: f32 = 3.14159265358979;
@@ -99,7 +102,7 @@ fn edge_coverage(x: vec3<f32>, e0: vec3<f32>, e1: vec3<f32>) -> f32 {
     }
     let a = to_disk(x, mix(e0, e1, s.x), tx);
     let b = to_disk(x, mix(e0, e1, s.y), tx);
-    if disk.polygon.x > 0.5 {
+    if POLYGON_LIGHT > 0.5 && disk.polygon.x > 0.5 {
         return polygon_edge_coverage(disk.corners, u32(disk.polygon.x), disk.polygon.y, a, b);
     }
     return edge_coverage_2d(a, b);

@@ -48,6 +48,15 @@ const LIGHT_POLYGON: u32 = 2u;
 // is made (a pipeline per variant): a CPU rasteriser runs every path of a branch, so a switch on
 // a uniform would cost every variant's arithmetic on every pixel.
 override VT_VARIANT: u32 = 0u;
+// 1 in the pipelines for a rectangle or polygon light (render::methods::MethodPipeline): a
+// constant, so a disk's pipeline has no polygon path — a CPU rasteriser runs every branch, and
+// the polygon's clips under a disk cost several times the pass.
+override POLYGON_LIGHT: u32 = 0u;
+
+// Whether the light is a rectangle or polygon (false in a disk's or a line's pipeline).
+fn polygon_light() -> bool {
+    return POLYGON_LIGHT == 1u && camera.light_kind == LIGHT_POLYGON;
+}
 const VT_SMOOTHSTEP: u32 = 0u;
 const VT_SQRT: u32 = 1u;
 const VT_EXACT: u32 = 2u;
@@ -186,7 +195,7 @@ fn light_share_above(m: vec2<f32>, h: f32) -> f32 {
 // geometry::outline::Outline2d::fraction_beyond). A disk's, or no direction, is v_of_t's.
 fn v_of_t_toward(t_in: f32, m_in: vec2<f32>) -> f32 {
     // A fan's corner marker (x <= -2, methods/dbuffer.wgsl) is no direction either.
-    if VT_VARIANT != VT_EXACT || camera.light_kind != LIGHT_POLYGON || !(dot(m_in, m_in) > 1e-12) || m_in.x < -1.5 {
+    if VT_VARIANT != VT_EXACT || !polygon_light() || !(dot(m_in, m_in) > 1e-12) || m_in.x < -1.5 {
         return v_of_t(t_in);
     }
     let t = clamp(t_in, 0.0, 1.0);
@@ -209,14 +218,18 @@ fn horizon_fraction(x: vec3<f32>, n: vec3<f32>) -> f32 {
     let nc = camera.light_normal;
     let k = dot(n, camera.light_center - x);
     let s = length(n - dot(n, nc) * nc) * camera.light_radius;
-    // The plane misses the light (its radius bounds a polygon too): all of it or none, and no
-    // polygon to clip (most receivers; on a CPU rasteriser the clip's loops then end at once).
-    if !(s > abs(k)) {
-        return select(0.0, 1.0, k > 0.0);
-    }
-    if camera.light_kind == LIGHT_POLYGON {
+    if polygon_light() {
+        // (light_radius is the disk of the polygon's area here, no bound on it: the walk
+        // round the polygon decides.)
+        if !(s > 1e-6 * abs(k)) {
+            return select(0.0, 1.0, k > 0.0);
+        }
         // In front where p . (n . u, n . w) > -k, p a corner-plane point about the centre.
         return light_share_above(vec2<f32>(dot(n, camera.light_u), dot(n, camera.light_w)), -k);
+    }
+    // The plane misses the disk: all of it or none.
+    if !(s > abs(k)) {
+        return select(0.0, 1.0, k > 0.0);
     }
     return disk_segment_fraction(-k / s);
 }

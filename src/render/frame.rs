@@ -173,7 +173,8 @@ pub fn record_frame(
     let group = rec.group(&format!("{}: its passes", request.method), |rec| {
         method.prepare(Prepare(&inputs, shared, rec))
     })?;
-    let Some(bindings) = group.bindings(&ctx.device, request.vt) else {
+    let polygon = scene.light.as_area().is_some_and(|a| a.corners().is_some());
+    let Some(bindings) = group.bindings(&ctx.device, request.vt, polygon) else {
         return Err(RenderError::Gpu("the method has no camera pipeline".into()));
     };
     let view_proj = inputs.view.view_proj;

@@ -689,7 +689,8 @@ pub struct MethodPipeline {
     shader: &'static str,
     module: wgpu::ShaderModule,
     pub layout: wgpu::BindGroupLayout,
-    pipelines: [OnceLock<wgpu::RenderPipeline>; 4],
+    /// By V(t) variant and light shape (disk or line, rectangle or polygon).
+    pipelines: [OnceLock<wgpu::RenderPipeline>; 8],
     camera: Arc<super::passes::camera::CameraPass>,
 }
 
@@ -712,12 +713,24 @@ impl MethodPipeline {
         })
     }
 
-    /// The pipeline for V(t) variant `vt`.
-    pub fn pipeline(&self, device: &wgpu::Device, vt: VtVariant) -> &wgpu::RenderPipeline {
-        let slot = &self.pipelines[(vt.code() as usize).min(3)];
+    /// The pipeline for V(t) variant `vt` under a rectangle or polygon light (`polygon`) or
+    /// not.
+    pub fn pipeline(
+        &self,
+        device: &wgpu::Device,
+        vt: VtVariant,
+        polygon: bool,
+    ) -> &wgpu::RenderPipeline {
+        let slot = &self.pipelines[2 * (vt.code() as usize).min(3) + usize::from(polygon)];
         slot.get_or_init(|| {
-            self.camera
-                .method_pipeline(device, self.shader, &self.module, &self.layout, vt)
+            self.camera.method_pipeline(
+                device,
+                self.shader,
+                &self.module,
+                &self.layout,
+                vt,
+                polygon,
+            )
         })
     }
 }
@@ -774,12 +787,17 @@ impl CameraGroup {
         self.bound = Some((group, Box::new(key)));
     }
 
-    /// The pipeline for V(t) variant `vt` and the group; `None` before the first
-    /// [`CameraGroup::bind`] (a method returns its group from [`MethodState::prepare`] once it
-    /// has bound it).
-    pub fn bindings(&self, device: &wgpu::Device, vt: VtVariant) -> Option<CameraBindings<'_>> {
+    /// The pipeline for V(t) variant `vt` and the light's shape, and the group; `None` before
+    /// the first [`CameraGroup::bind`] (a method returns its group from
+    /// [`MethodState::prepare`] once it has bound it).
+    pub fn bindings(
+        &self,
+        device: &wgpu::Device,
+        vt: VtVariant,
+        polygon: bool,
+    ) -> Option<CameraBindings<'_>> {
         self.bound.as_ref().map(|(group, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt),
+            pipeline: self.pipeline.pipeline(device, vt, polygon),
             bind_group: group,
         })
     }

@@ -209,8 +209,10 @@ impl CameraPass {
         })
     }
 
-    /// A method's camera pipeline for V(t) variant `vt`: `module` (from `methods/NAME.wgsl`,
-    /// which includes `shared/camera.wgsl`), with the method's own bindings as group 1.
+    /// A method's camera pipeline for V(t) variant `vt` and a rectangle or polygon light
+    /// (`polygon`: `POLYGON_LIGHT` of `shared/camera.wgsl`) or not: `module` (from
+    /// `methods/NAME.wgsl`, which includes `shared/camera.wgsl`), with the method's own bindings
+    /// as group 1.
     pub fn method_pipeline(
         &self,
         device: &wgpu::Device,
@@ -218,13 +220,17 @@ impl CameraPass {
         module: &wgpu::ShaderModule,
         method_layout: &wgpu::BindGroupLayout,
         vt: VtVariant,
+        polygon: bool,
     ) -> wgpu::RenderPipeline {
         let layout = pipeline_layout(
             device,
             "CameraPass::pipeline_layout",
             &[&self.layout, method_layout],
         );
-        let constants = [("VT_VARIANT", f64::from(vt.code()))];
+        let constants = [
+            ("VT_VARIANT", f64::from(vt.code())),
+            ("POLYGON_LIGHT", f64::from(u8::from(polygon))),
+        ];
         let options = wgpu::PipelineCompilationOptions {
             constants: &constants,
             ..Default::default()

@@ -107,7 +107,10 @@ impl WedgeVertex {
 pub struct WedgePass {
     /// The coverage sum's format (see the module documentation).
     pub sum_format: wgpu::TextureFormat,
-    coverage: wgpu::RenderPipeline,
+    /// Under a disk and under a polygon (`POLYGON_LIGHT` of the shader): a CPU rasteriser runs
+    /// every branch, so one pipeline for both paid the polygon's clip under a disk too (5× the
+    /// pass on lavapipe).
+    coverage: [wgpu::RenderPipeline; 2],
     coverage_layout: wgpu::BindGroupLayout,
     /// Stencil count zero, not zero.
     resolve: [wgpu::RenderPipeline; 2],
@@ -156,30 +159,36 @@ impl WedgePass {
                 }),
                 write_mask: wgpu::ColorWrites::RED,
             })];
-            let coverage = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("WedgePass::coverage"),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_wedge"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(WedgeVertex::layout())],
-                },
-                // Back faces only: one fragment per pixel whose ray meets the (convex) wedge.
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: Some(wgpu::Face::Front),
-                    ..Default::default()
-                },
-                depth_stencil: None,
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_wedge"),
-                    compilation_options: Default::default(),
-                    targets: &targets,
-                }),
-                multiview_mask: None,
-                cache: None,
+            let coverage = [0.0, 1.0].map(|polygon| {
+                let constants = [("POLYGON_LIGHT", polygon)];
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("WedgePass::coverage"),
+                    layout: Some(&layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_wedge"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(WedgeVertex::layout())],
+                    },
+                    // Back faces only: one fragment per pixel whose ray meets the (convex) wedge.
+                    primitive: wgpu::PrimitiveState {
+                        cull_mode: Some(wgpu::Face::Front),
+                        ..Default::default()
+                    },
+                    depth_stencil: None,
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fs_wedge"),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants: &constants,
+                            ..Default::default()
+                        },
+                        targets: &targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
             });
 
             let module = shader_module(device, "passes/wedges_resolve.wgsl");
@@ -336,7 +345,7 @@ impl Wedges {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.pass.coverage);
+            pass.set_pipeline(&self.pass.coverage[usize::from(light.corners().is_some())]);
             pass.set_bind_group(0, &screen.bind_group, &[]);
             pass.set_bind_group(1, coverage, &[]);
             wedges.draw(&mut pass);
