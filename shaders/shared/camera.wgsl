@@ -28,7 +28,8 @@ struct CameraUniforms {
     // A rectangle's or polygon's corners (0 for a disk or a line), and its area.
     light_corner_count: u32,
     light_area: f32,
-    _pad0: u32,
+    // The radius of the disk about light_center that holds the whole light (0 for a line).
+    light_bound: f32,
     // The light's plane basis the corners are given in.
     light_u: vec3<f32>,
     _pad1: u32,
@@ -219,9 +220,8 @@ fn horizon_fraction(x: vec3<f32>, n: vec3<f32>) -> f32 {
     let k = dot(n, camera.light_center - x);
     let s = length(n - dot(n, nc) * nc) * camera.light_radius;
     if polygon_light() {
-        // (light_radius is the disk of the polygon's area here, no bound on it: the walk
-        // round the polygon decides.)
-        if !(s > 1e-6 * abs(k)) {
+        // The plane misses the light's bounding disk: all of it or none, no walk round it.
+        if !(length(n - dot(n, nc) * nc) * camera.light_bound > abs(k)) {
             return select(0.0, 1.0, k > 0.0);
         }
         // In front where p . (n . u, n . w) > -k, p a corner-plane point about the centre.

@@ -52,7 +52,7 @@ fn uniforms_match_their_wgsl() {
             light_kind,
             light_corner_count,
             light_area,
-            _pad0,
+            light_bound,
             light_u,
             _pad1,
             light_w,

@@ -53,7 +53,9 @@ pub struct CameraUniforms {
     pub light_corner_count: u32,
     /// The polygon's area (m²).
     pub light_area: f32,
-    pub _pad0: u32,
+    /// The radius of the disk about `light_center` that holds the whole light (a disk's own
+    /// radius; 0 for a line): a plane farther than it from the centre misses the light.
+    pub light_bound: f32,
     /// The light's plane basis (`AreaLight::basis`) the corners are given in.
     pub light_u: [f32; 3],
     pub _pad1: u32,
@@ -168,7 +170,7 @@ impl CameraUniforms {
             light_normal: normal.to_array(),
             light_intensity: light.intensity(),
             light_kind: kind,
-            _pad0: 0,
+            light_bound: light.as_area().map_or(0.0, |a| a.radius),
             _pad1: 0,
             _pad2: 0,
         }
