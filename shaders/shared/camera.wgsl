@@ -173,10 +173,11 @@ fn light_share_above(m: vec2<f32>, h: f32) -> f32 {
     var sum = 0.0;
     var leave = vec2<f32>(0.0);
     var enter = vec2<f32>(0.0);
+    // Edge (i - 1, i), the last corner first: one corner read and no modulo a step.
+    var a = light_corner(max(n, 1u) - 1u);
+    var da = dot(m, a) - h;
     for (var i = 0u; i < n; i++) {
-        let a = light_corner(i);
-        let b = light_corner((i + 1u) % n);
-        let da = dot(m, a) - h;
+        let b = light_corner(i);
         let db = dot(m, b) - h;
         let p = a + (b - a) * (da / (da - db));
         let a_in = da >= 0.0;
@@ -186,6 +187,8 @@ fn light_share_above(m: vec2<f32>, h: f32) -> f32 {
         sum += select(0.0, start.x * end.y - start.y * end.x, a_in || b_in);
         leave = select(leave, p, a_in && !b_in);
         enter = select(enter, p, !a_in && b_in);
+        a = b;
+        da = db;
     }
     sum += leave.x * enter.y - leave.y * enter.x;
     return clamp(0.5 * sum / max(camera.light_area, 1e-30), 0.0, 1.0);
