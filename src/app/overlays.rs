@@ -217,7 +217,7 @@ impl LabApp {
         }
 
         let selected_light = self.selection.is_light();
-        if let (Light::Line(line), true) = (scene.light, overlays.light_disk || selected_light) {
+        if let (Light::Line(line), true) = (scene.light, overlays.light_outline || selected_light) {
             let color = if selected_light {
                 HIGHLIGHT
             } else {
@@ -261,7 +261,8 @@ impl LabApp {
                 }
             }
         }
-        if let (Light::Area(light), true) = (scene.light, overlays.light_disk || selected_light) {
+        if let (Light::Area(light), true) = (scene.light, overlays.light_outline || selected_light)
+        {
             // The light's own shape: the disk's rim, the rectangle's or polygon's corners.
             let mut outline = crate::geometry::outline::boundary(&light, 64);
             outline.extend(outline.first().copied());
@@ -393,7 +394,7 @@ impl LabApp {
                 umbra_volume: false,
                 penumbra_volume: false,
                 silhouettes: false,
-                light_disk: false,
+                light_outline: false,
             };
         }
         if o.classes {

@@ -355,7 +355,7 @@ impl LabApp {
         ui.checkbox(&mut o.umbra_volume, "Umbra volume");
         ui.checkbox(&mut o.penumbra_volume, "Penumbra volume");
         ui.checkbox(&mut o.silhouettes, "Silhouette edges");
-        ui.checkbox(&mut o.light_disk, "Light disk");
+        ui.checkbox(&mut o.light_outline, "Light outline");
     }
 
     fn selection_section(&mut self, ui: &mut egui::Ui) {

@@ -53,7 +53,10 @@ pub struct Overlays {
     pub umbra_volume: bool,
     pub penumbra_volume: bool,
     pub silhouettes: bool,
-    pub light_disk: bool,
+    /// The light drawn as its shape: a disk, a rectangle, a polygon or a segment (settings
+    /// saved before the rectangle and polygon lights call it `light_disk`).
+    #[serde(alias = "light_disk")]
+    pub light_outline: bool,
 }
 
 impl Default for Overlays {
@@ -63,7 +66,7 @@ impl Default for Overlays {
             umbra_volume: false,
             penumbra_volume: false,
             silhouettes: false,
-            light_disk: true,
+            light_outline: true,
         }
     }
 }
@@ -193,6 +196,16 @@ mod tests {
         assert_eq!(s.vt(), VtVariant::Smoothstep);
         assert_eq!(s.render_scale, 1.0);
         assert_eq!(s.dbuffer_size, 64);
+    }
+
+    #[test]
+    fn the_light_overlay_of_older_settings_keeps_its_state() {
+        // Saved before the overlay was renamed from the disk to any light's outline.
+        let text = r#"{"overlays": {"light_disk": false, "classes": true}}"#;
+        let s: Settings = serde_json::from_str(text).unwrap();
+        assert!(!s.overlays.light_outline && s.overlays.classes);
+        let saved = serde_json::to_value(&s).unwrap();
+        assert_eq!(saved["overlays"]["light_outline"], serde_json::json!(false));
     }
 
     #[test]

@@ -173,8 +173,8 @@ fn every_view_and_overlay_changes_the_viewport() {
     }
     let o = h.state().settings.overlays;
     assert!(!o.classes && !o.umbra_volume && !o.penumbra_volume && !o.silhouettes);
-    click(&mut h, "Light disk");
-    assert!(!h.state().settings.overlays.light_disk);
+    click(&mut h, "Light outline");
+    assert!(!h.state().settings.overlays.light_outline);
 }
 
 #[test]
