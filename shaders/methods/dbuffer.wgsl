@@ -12,7 +12,8 @@
 @group(1) @binding(2) var d_u: texture_2d<f32>;
 @group(1) @binding(3) var d_p: texture_2d<f32>;
 // The closing fans' silhouette corners, three texels per fan (apex, the two edges' far ends;
-// geometry::FanCorner), CORNERS_PER_ROW fans to a row. A fan's texel holds -(2 + its index) in .z (geometry::volume_vertices::corner_marker) instead of a lit side.
+// geometry::FanCorner), CORNERS_PER_ROW fans to a row. A fan's texel holds -(2 + its index) in
+// .z (geometry::volume_vertices::corner_marker) instead of a lit side.
 @group(1) @binding(4) var corners: texture_2d<f32>;
 const CORNERS_PER_ROW: u32 = 512u;
 
@@ -30,11 +31,12 @@ fn corner_visibility(x: vec3<f32>, k: u32) -> f32 {
         return -1.0;
     }
     // apex.w: 1 convex, -1 reflex, 0 unclear (geometry::FanCorner::convex).
-    let convex = textureLoad(corners, vec2<u32>(3u * (k % CORNERS_PER_ROW), k / CORNERS_PER_ROW), 0).w;
+    let apex = textureLoad(corners, vec2<u32>(3u * (k % CORNERS_PER_ROW), k / CORNERS_PER_ROW), 0);
+    let convex = apex.w;
     if convex == 0.0 {
         return -1.0;
     }
-    let a = corner_point(k, 0u);
+    let a = apex.xyz;
     let ends = array<vec3<f32>, 2>(corner_point(k, 1u) - a, corner_point(k, 2u) - a);
     var m: array<vec2<f32>, 3>;
     var h = vec3<f32>(-1.0);

@@ -1,7 +1,8 @@
 // A convex polygon light's corners in its own plane, as the uniforms hold them: up to 16 points
 // counter-clockwise, two per vec4 (xy, zw). Its cut areas, for the D-buffer's corners
 // (methods/dbuffer.wgsl; one cut is shared/camera.wgsl's light_share_above), the wedges'
-// coverage (passes/wedges.wgsl) and dbuffer-fused's exact regions (methods/dbuffer_fused.wgsl). The CPU twins are in src/geometry/outline.rs.
+// coverage (passes/wedges.wgsl) and dbuffer-fused's exact regions (methods/dbuffer_fused.wgsl).
+// The CPU twins are in src/geometry/outline.rs.
 
 fn polygon_corner(corners: array<vec4<f32>, 8>, i: u32) -> vec2<f32> {
     let q = corners[i / 2u];

@@ -101,7 +101,7 @@ struct CasterVolumes {
 pub struct DBufferTwin {
     light: AreaLight,
     outline: Outline2d,
-    /// The light in its own plane for the receiver's horizon.
+    /// The light in its own plane for the receiver's horizon and the fans' corners.
     frame: DiskFrame,
     /// `--dbuffer-horizon` (on unless set off): [`Self::visibility_on`] takes at most the part
     /// of the light in front of the receiver's own plane.

@@ -80,11 +80,6 @@ pub fn corner_marker(k: usize) -> Option<[f32; 2]> {
     (k < MAX_CORNERS).then(|| [-(2.0 + k as f32), 0.0])
 }
 
-/// The corner a `side` names ([`corner_marker`]), if it names one.
-pub fn marked_corner(side: [f32; 2]) -> Option<usize> {
-    (side[0] <= -1.5).then(|| (-side[0] - 2.0).round() as usize)
-}
-
 /// [`volume_vertices`], each volume ended at its reach when one is given ([`end_at`]), made in
 /// one pass: no full copy of a volume is held besides the one returned.
 ///

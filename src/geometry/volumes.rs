@@ -132,8 +132,7 @@ pub struct VolumeMesh {
     pub vertices: Vec<VolumeVertex>,
     pub indices: Vec<u32>,
     /// The silhouette corner each closing fan was made at, in the order the fans were pushed
-    /// (their triangles are consecutive): what V exact needs where a fan wins under a polygon
-    /// light ([`FanCorner`]).
+    /// (their triangles are consecutive): what V exact needs where a fan wins ([`FanCorner`]).
     pub corners: Vec<FanCorner>,
 }
 

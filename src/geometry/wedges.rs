@@ -193,12 +193,12 @@ impl DiskFrame {
         self.share_beyond(m, -k / self.radius)
     }
 
-    /// V at `x` behind one convex silhouette corner of a caster under a polygon light: the light
-    /// less the part behind both planes through `x` and an edge from `apex` to an end, each on
-    /// the side that holds the other end (the corner's wedge, seen from `x`). `None` where the
-    /// corner is degenerate seen from `x` (an end on the other edge's plane): the chord's V then.
-    /// The twin of `corner_visibility` in `shaders/methods/dbuffer.wgsl`.
-    /// A reflex corner (`convex` false) covers the light less that wedge.
+    /// V at `x` behind one silhouette corner of a caster: the light less the part behind both
+    /// planes through `x` and an edge from `apex` to an end, each on the side that holds the
+    /// other end (the corner's wedge, seen from `x`); a reflex corner (`convex` false) covers the
+    /// light less that wedge. A polygon is clipped, a disk cut by `disk_cut2_area`. `None` where
+    /// the corner is degenerate seen from `x` (an end on the other edge's plane): the chord's V
+    /// then. The twin of `corner_visibility` in `shaders/methods/dbuffer.wgsl`.
     pub fn corner_visibility(
         &self,
         x: Vec3,

@@ -16,7 +16,7 @@ use super::{
     SharedMaps, Switch,
 };
 use crate::geometry::volume_vertices::{
-    light_view_rect, sort_near_first, volume_vertices_within, CORNERS_PER_ROW,
+    light_view_rect, sort_near_first, volume_vertices_within, CORNERS_PER_ROW, MAX_CORNERS,
 };
 use crate::geometry::{SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::VertexChunks;
@@ -149,7 +149,7 @@ struct Made {
 struct Bound {
     map: u64,
     volumes: u64,
-    /// The geometry build the corners' buffer was made for.
+    /// The geometry build the corners' texture was made for.
     corners: u64,
 }
 
@@ -271,6 +271,9 @@ impl DBuffer {
             .casters
             .iter()
             .flat_map(|g| &g.volumes.corners)
+            // No fan past MAX_CORNERS carries a marker (it keeps the chord): the texture stops
+            // there, within the smallest texture a device allows.
+            .take(MAX_CORNERS)
             .flat_map(|c| {
                 let convex = match c.convex {
                     Some(true) => 1.0,
