@@ -7,6 +7,7 @@
 mod support;
 
 mod compare_report;
+mod engine_methods;
 mod hard_methods;
 mod linear_ssm;
 mod methods_accuracy;

@@ -52,6 +52,7 @@ registry! {
     hard: HARD;
     pcf: PCF;
     pcss: PCSS;
+    smrt: SMRT;
     sampled: SAMPLED;
     linear_ssm: LINEAR_SSM;
     shadow_volume: SHADOW_VOLUME;
