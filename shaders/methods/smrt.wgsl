@@ -12,6 +12,7 @@
 
 const FLAG_EXTRAPOLATE: u32 = 1u;
 const FLAG_ADAPTIVE: u32 = 2u;
+const MAX_SLOPE: f32 = 0.3;
 
 // A per-pixel offset in [0, 1) (interleaved gradient noise, Jimenez 2014), `salt` picking one of
 // several independent ones: the rays' Cranley-Patterson rotation, fixed by the pixel alone, so
@@ -21,54 +22,41 @@ fn pixel_noise(pixel: vec2<f32>, salt: f32) -> f32 {
     return fract(52.9829189 * fract(dot(p, vec2<f32>(0.06711056, 0.00583715))));
 }
 
-// The concentric map of the unit square onto the unit disk (Shirley & Chiu 1997; twin:
-// geometry::oracle::concentric).
-fn concentric(u: vec2<f32>) -> vec2<f32> {
-    let a = 2.0 * u - 1.0;
-    if a.x == 0.0 && a.y == 0.0 {
-        return vec2<f32>(0.0);
-    }
-    let quarter = 0.785398163;
-    if abs(a.x) > abs(a.y) {
-        let phi = quarter * a.y / a.x;
-        return a.x * vec2<f32>(cos(phi), sin(phi));
-    }
-    let phi = 2.0 * quarter - quarter * a.x / a.y;
-    return a.y * vec2<f32>(cos(phi), sin(phi));
-}
-
-// A point of the light for u in the unit square, of uniform area density: the disk by the
-// concentric map; a polygon by its fan from corner 0, u.x picking the triangle by area (and
-// reused within it), u.y and the rest of u.x a uniform point in it.
+// A point of the light for u in the unit square, of uniform area density, in polar form about
+// the light's centre: u.x goes round (an angle for the disk; for a polygon, its fan of triangles
+// from the centre picked by area, and the place along that triangle's edge), sqrt(u.y) out. The
+// same u lands within a few per cent of the same place on a disk and on the regular polygon
+// inscribed in it (corner 0 on the disk's first axis), so a polygon's shadow meets its disk's.
 fn light_point(u: vec2<f32>) -> vec3<f32> {
+    let r = sqrt(u.y);
     var p: vec2<f32>;
     if polygon_light() {
         let n = min(camera.light_corner_count, 16u);
-        let a = light_corner(0u);
         let target_area = u.x * camera.light_area;
         var before = 0.0;
-        var b = light_corner(1u);
-        var c = light_corner(2u);
-        var s = u.x;
+        var a = light_corner(0u);
+        var b = light_corner(min(1u, n - 1u));
+        var t = 0.0;
         var found = false;
-        for (var i = 1u; i + 1u < n; i++) {
-            let bi = light_corner(i);
-            let ci = light_corner(i + 1u);
-            let e1 = bi - a;
-            let e2 = ci - a;
-            let area = 0.5 * abs(e1.x * e2.y - e1.y * e2.x);
-            let take = !found && (target_area < before + area || i + 2u == n);
-            b = select(b, bi, take);
-            c = select(c, ci, take);
-            s = select(s, clamp((target_area - before) / max(area, 1e-30), 0.0, 1.0), take);
+        var previous = light_corner(0u);
+        for (var i = 0u; i < n; i++) {
+            let next = light_corner(select(i + 1u, 0u, i + 1u == n));
+            // The triangle (centre, previous, next): half their cross product.
+            let area = 0.5 * abs(previous.x * next.y - previous.y * next.x);
+            let take = !found && (target_area < before + area || i + 1u == n);
+            a = select(a, previous, take);
+            b = select(b, next, take);
+            t = select(t, clamp((target_area - before) / max(area, 1e-30), 0.0, 1.0), take);
             found = found || take;
             before += area;
+            previous = next;
         }
-        // Uniform in the triangle (a, b, c): sqrt of one coordinate (Turk 1990).
-        let r = sqrt(s);
-        p = (1.0 - r) * a + r * (1.0 - u.y) * b + r * u.y * c;
+        // Uniform in the triangle with its apex at the centre: the point r of the way out to
+        // the edge, at t along it (the area element is r dr dt times a constant).
+        p = r * mix(a, b, t);
     } else {
-        p = concentric(u) * camera.light_radius;
+        let phi = 6.2831853 * u.x;
+        p = r * camera.light_radius * vec2<f32>(cos(phi), sin(phi));
     }
     return camera.light_center + p.x * camera.light_u + p.y * camera.light_w;
 }
@@ -125,8 +113,10 @@ fn ray_hits(x: vec3<f32>, q: vec3<f32>, rel_bias: f32, offset: f32) -> bool {
                 compared = select(history, history + slope * (time2 - history_time), extrapolate);
             } else if o != history {
                 let dt = time2 - history_time;
-                // Depth may change along the ray at most as fast as the ray's own length.
-                slope = clamp((o - history) / select(dt, -1e-6, abs(dt) < 1e-6), -length_along, length_along);
+                // The extrapolation's slope at most MAX_SLOPE of the ray's length a unit of time
+                // (UE5's ExtrapolateMaxSlopeLocal is 0.3, in its own depth units).
+                let max_slope = MAX_SLOPE * length_along;
+                slope = clamp((o - history) / select(dt, -1e-6, abs(dt) < 1e-6), -max_slope, max_slope);
                 history = o;
                 history_time = time2;
             }
