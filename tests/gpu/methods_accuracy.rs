@@ -3,64 +3,12 @@
 //! as its construction says, and the numbers are printed
 //! (`cargo test --release --test gpu methods_accuracy -- --nocapture`).
 
-use dbuffer::geometry::bvh::Bvh;
-use dbuffer::geometry::metrics::{self, Metrics};
-use dbuffer::geometry::{view, VtVariant};
-use dbuffer::render::methods::{pcf, reference::SAMPLES, sampled};
-use dbuffer::render::offline::Offline;
-use dbuffer::render::{Frame, FrameRequest, Knobs, Method};
-use dbuffer::scene::{self, Scene};
+use dbuffer::render::methods::{pcf, sampled};
+use dbuffer::render::{Knobs, Method};
+
+use crate::support::scored::Scored;
 
 const SIZE: u32 = 96;
-
-struct Bench {
-    offline: Offline,
-    scene: Scene,
-    reference: Vec<f32>,
-    mask: Vec<bool>,
-}
-
-impl Bench {
-    fn new(name: &str) -> Bench {
-        let scene = scene::load(name).unwrap_or_else(|e| panic!("{e}"));
-        let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
-        let reference = render(&mut offline, &scene, Method::REFERENCE, Knobs::default());
-        let receivers = view::receivers(&scene, &Bvh::build(scene.all_triangles()), SIZE, SIZE);
-        let mask = dbuffer::compare::counted_pixels(&receivers, &reference);
-        Bench {
-            offline,
-            scene,
-            reference: reference.visibility,
-            mask,
-        }
-    }
-
-    fn measure(&mut self, method: Method, knobs: Knobs) -> (Frame, Metrics) {
-        let frame = render(&mut self.offline, &self.scene, method, knobs);
-        let m = metrics::compare(&self.reference, &frame.visibility, &self.mask);
-        println!(
-            "| {} | {method} | {:.2} | {:.4} | {:.4} | {:.3} |",
-            self.scene.name, m.class_mismatch_pct, m.mae, m.penumbra_mae, m.p99
-        );
-        (frame, m)
-    }
-}
-
-fn render(offline: &mut Offline, scene: &Scene, method: Method, knobs: Knobs) -> Frame {
-    let request = FrameRequest {
-        width: SIZE,
-        height: SIZE,
-        dbuffer_size: 1024,
-        method,
-        vt: VtVariant::Exact,
-        knobs: knobs.with(&SAMPLES, 256),
-        read_dbuffer: false,
-    };
-    offline
-        .render(scene, &request)
-        .unwrap_or_else(|e| panic!("{method}: {e}"))
-        .0
-}
 
 fn lights(n: u32) -> Knobs {
     Knobs::default().with(&sampled::LIGHTS, n)
@@ -70,7 +18,7 @@ fn lights(n: u32) -> Knobs {
 fn every_method_behaves_as_built() {
     println!("| scene | method | class mismatch % | MAE | penumbra MAE | p99 |");
     for name in ["table1-960", "fig1-large-light"] {
-        let mut b = Bench::new(name);
+        let mut b = Scored::new(name, SIZE);
         let d = Knobs::default();
         let (hard, hard_m) = b.measure(Method::HARD, d);
         let (_, dbuffer) = b.measure(Method::DBUFFER, d);

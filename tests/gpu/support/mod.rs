@@ -1,5 +1,7 @@
-//! Helpers of the render tests: snapshot images compared within a tolerance, and WGSL struct
-//! layouts read from naga to hold the Rust side's against.
+//! Helpers of the render tests: snapshot images compared within a tolerance, WGSL struct
+//! layouts read from naga to hold the Rust side's against, and scenes scored against the
+//! ray-cast reference.
 
+pub mod scored;
 pub mod snapshot;
 pub mod wgsl_layout;
