@@ -18,9 +18,9 @@ fn poisson(i: u32) -> vec2<f32> {
     return select(e.zw, e.xy, i % 2u == 0u);
 }
 
-// A per-pixel rotation (interleaved gradient noise, Jimenez 2014).
+// A per-pixel rotation (interleaved gradient noise).
 fn rotation(pixel: vec2<f32>) -> mat2x2<f32> {
-    let a = 6.2831853 * fract(52.9829189 * fract(dot(pixel, vec2<f32>(0.06711056, 0.00583715))));
+    let a = 6.2831853 * interleaved_gradient_noise(pixel);
     let cs = cos(a);
     let sn = sin(a);
     return mat2x2<f32>(cs, sn, -sn, cs);

@@ -14,12 +14,11 @@ const FLAG_EXTRAPOLATE: u32 = 1u;
 const FLAG_ADAPTIVE: u32 = 2u;
 const MAX_SLOPE: f32 = 0.3;
 
-// A per-pixel offset in [0, 1) (interleaved gradient noise, Jimenez 2014), `salt` picking one of
+// A per-pixel offset in [0, 1) (interleaved gradient noise), `salt` picking one of
 // several independent ones: the rays' Cranley-Patterson rotation, fixed by the pixel alone, so
 // two renders of a frame agree.
 fn pixel_noise(pixel: vec2<f32>, salt: f32) -> f32 {
-    let p = pixel + salt * vec2<f32>(47.0, 17.0);
-    return fract(52.9829189 * fract(dot(p, vec2<f32>(0.06711056, 0.00583715))));
+    return interleaved_gradient_noise(pixel + salt * vec2<f32>(47.0, 17.0));
 }
 
 // A point of the light for u in the unit square, of uniform area density, in polar form about

@@ -143,6 +143,12 @@ fn disk_cut2_area(m1: vec2<f32>, h1: f32, m2: vec2<f32>, h2: f32) -> f32 {
     return clamp(area, 0.0, pi);
 }
 
+// Interleaved gradient noise (Jimenez 2014): a value in [0, 1) per pixel, fixed by the pixel
+// alone (the per-pixel rotation of pcss's taps, smrt's rays and steps).
+fn interleaved_gradient_noise(pixel: vec2<f32>) -> f32 {
+    return fract(52.9829189 * fract(dot(pixel, vec2<f32>(0.06711056, 0.00583715))));
+}
+
 fn v_of_t(t_in: f32) -> f32 {
     let t = clamp(t_in, 0.0, 1.0);
     if VT_VARIANT == VT_SQRT {

@@ -213,11 +213,12 @@ fn wedges_hold_every_point_their_edge_covers() {
 
 use dbuffer::geometry::bvh::Bvh;
 use dbuffer::geometry::metrics;
-use dbuffer::geometry::{view, VtVariant};
-use dbuffer::render::methods::reference::SAMPLES;
+use dbuffer::geometry::view;
 use dbuffer::render::methods::wedges::HORIZON;
 use dbuffer::render::offline::Offline;
-use dbuffer::render::{Frame, FrameRequest, Knobs, Method};
+use dbuffer::render::{Frame, Knobs, Method};
+
+use crate::support::scored;
 
 const SIZE: u32 = 96;
 
@@ -226,34 +227,12 @@ fn wedges() -> Method {
 }
 
 fn render(offline: &mut Offline, scene: &Scene, method: Method, size: u32) -> Frame {
-    render_knobs(offline, scene, method, size, Knobs::default())
+    scored::render(offline, scene, method, Knobs::default(), size)
 }
 
 /// `wedges` at [`SIZE`] with `knobs`.
 fn render_with(offline: &mut Offline, scene: &Scene, knobs: Knobs) -> Frame {
-    render_knobs(offline, scene, wedges(), SIZE, knobs)
-}
-
-fn render_knobs(
-    offline: &mut Offline,
-    scene: &Scene,
-    method: Method,
-    size: u32,
-    knobs: Knobs,
-) -> Frame {
-    let request = FrameRequest {
-        width: size,
-        height: size,
-        dbuffer_size: 1024,
-        method,
-        vt: VtVariant::Exact,
-        knobs: knobs.with(&SAMPLES, 256),
-        read_dbuffer: false,
-    };
-    offline
-        .render(scene, &request)
-        .unwrap_or_else(|e| panic!("{method}: {e}"))
-        .0
+    scored::render(offline, scene, wedges(), knobs, SIZE)
 }
 
 /// The GPU's V is its CPU twin's at the point each pixel shows (pixels facing the light), with

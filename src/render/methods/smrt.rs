@@ -3,7 +3,8 @@
 //! points of the light (a Fibonacci lattice over the light's area, rotated per pixel by
 //! interleaved gradient noise: fixed by the pixel, so two renders agree), each marched in
 //! `smrt-steps` steps through the one depth layer the map holds, with UE5's gap extrapolation
-//! and adaptive ray count (two rays first; if they agree, no more). UE5's defaults for local
+//! and adaptive ray count (two rays toward opposite halves of the light first; if they agree,
+//! no more). UE5's defaults for local
 //! lights: 7 rays (`r.Shadow.Virtual.SMRT.RayCountLocal`), 8 samples a ray
 //! (`SamplesPerRayLocal`). docs/method/README.md#smrt says where it errs.
 
