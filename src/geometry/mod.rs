@@ -17,6 +17,7 @@ pub mod hybrid;
 pub mod light_view;
 pub mod line_light;
 pub mod metrics;
+pub mod moments;
 pub mod oracle;
 pub mod outline;
 pub mod planar;
