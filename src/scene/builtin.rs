@@ -46,6 +46,10 @@ const SCENES: &[(&str, &str)] = &[
     ("bunny", include_str!("../../assets/scenes/bunny.toml")),
     ("overlap", include_str!("../../assets/scenes/overlap.toml")),
     (
+        "leak-test",
+        include_str!("../../assets/scenes/leak-test.toml"),
+    ),
+    (
         "no-umbra",
         include_str!("../../assets/scenes/no-umbra.toml"),
     ),

@@ -243,6 +243,7 @@ const EXPECTED_NAMES: &[&str] = &[
     "table1-5760",
     "bunny",
     "overlap",
+    "leak-test",
     "no-umbra",
     "acute-corner",
     "fusion-cross",

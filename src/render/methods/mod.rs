@@ -53,6 +53,9 @@ registry! {
     pcf: PCF;
     pcss: PCSS;
     smrt: SMRT;
+    vsm: VSM;
+    msm: MSM;
+    msm_soft: MSM_SOFT;
     sampled: SAMPLED;
     linear_ssm: LINEAR_SSM;
     shadow_volume: SHADOW_VOLUME;

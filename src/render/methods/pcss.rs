@@ -62,7 +62,7 @@ fn poisson_bytes() -> Vec<u8> {
 
 /// The distance from the light centre to the nearest caster vertex in front of the light: where
 /// the blocker search stops.
-fn nearest_caster(scene: &Scene) -> f32 {
+pub(crate) fn nearest_caster(scene: &Scene) -> f32 {
     let light = scene.light;
     scene
         .casters()

@@ -12,6 +12,8 @@ pub mod floor;
 pub mod fused_layers;
 pub mod fused_lists;
 pub mod hybrid;
+pub mod moment_sat;
+pub mod moments;
 pub mod planar;
 pub mod probe;
 pub mod sample_maps;

@@ -1,0 +1,19 @@
+// `msm`: moment shadow maps (Peters & Klein, I3D 2015; src/render/methods/msm.rs), filtered: the
+// centre's shadow map's four moments over a (2R + 1)² box from the summed-area table, and
+// Hamburger 4MSM at the receiver's depth. A hard shadow from the centre, filtered: its softness
+// is the filter's, not the light's.
+// knobs: x the box's half-width R in texels, y the moment bias.
+// #include shared/camera.wgsl
+// #include shared/shadow_lookup.wgsl
+// #include shared/msm.wgsl
+
+fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
+    if !in_front_of_light(x) || !faces_light_center(x, n) {
+        return plain(0.0);
+    }
+    let l = light_lookup(x, n);
+    if !l.inside {
+        return plain(1.0);
+    }
+    return plain(msm_lit(l, shadow.knobs.x, shadow.knobs.y, false));
+}
