@@ -123,7 +123,7 @@ fn hamburger(moments: vec4<f32>, z_f: f32, moment_bias: f32) -> vec2<f32> {
 // up to 4 texels' worth and no further: a wider box on a tilted receiver then shadows itself a
 // little at its far side, where a bias grown with it would push the receiver in front of a
 // caster just above it and leak (leak-test: twice the lit umbra; penumbra MAE lower or equal on
-// 10 of 13 scored scenes, docs/method/README.md).
+// 13 of 14 scored scenes, docs/method/README.md).
 fn box_bias(l: LightLookup, r: f32) -> f32 {
     return shadow.bias_constant + (l.rel_bias - shadow.bias_constant) * (min(r, 4.0) + 1.0);
 }
