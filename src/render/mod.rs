@@ -254,6 +254,38 @@ pub(crate) fn depth_test(compare: wgpu::CompareFunction) -> Option<wgpu::DepthSt
     })
 }
 
+/// A pipeline that draws one full-screen triangle (`vs_main`, no vertex buffers) into one
+/// opaque colour target with `fs_main`: the image-space passes.
+pub(crate) fn fullscreen_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[opaque(format)],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// A pipeline layout over bind group layouts.
 pub(crate) fn pipeline_layout(
     device: &wgpu::Device,

@@ -3,7 +3,9 @@
 //! a fullscreen triangle loads each texel and writes the same 32-bit float, so what readback
 //! gets is the depth exactly (`shaders/passes/depth_copy.wgsl`).
 
-use crate::render::{cleared, opaque, pipeline_layout, shader_module, texture_entry, GpuContext};
+use crate::render::{
+    cleared, fullscreen_pipeline, pipeline_layout, shader_module, texture_entry, GpuContext,
+};
 use crate::render::{RenderError, Texture};
 
 /// The pipeline and layout, once per device.
@@ -24,27 +26,13 @@ pub fn copy(ctx: &GpuContext, depth: &Texture) -> Result<Texture, RenderError> {
                 wgpu::TextureViewDimension::D2,
             )],
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("DepthCopyPass::pipeline"),
-            layout: Some(&pipeline_layout(device, "DepthCopyPass", &[&layout])),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[opaque(wgpu::TextureFormat::R32Float)],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = fullscreen_pipeline(
+            device,
+            "DepthCopyPass::pipeline",
+            &pipeline_layout(device, "DepthCopyPass", &[&layout]),
+            &module,
+            wgpu::TextureFormat::R32Float,
+        );
         DepthCopyPass { pipeline, layout }
     });
     let size = depth.texture.size();

@@ -6,8 +6,8 @@
 
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, cleared, opaque, pipeline_layout, shader_module, texture_entry, uniform_entry,
-    view_entry, GpuContext, Texture,
+    buffer_entry, cleared, fullscreen_pipeline, pipeline_layout, shader_module, texture_entry,
+    uniform_entry, view_entry, GpuContext, Texture,
 };
 
 use super::next_generation;
@@ -82,27 +82,13 @@ impl Moments {
                     ),
                 ],
             });
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("Moments::pipeline"),
-                layout: Some(&pipeline_layout(device, "Moments", &[&layout])),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: wgpu::MultisampleState::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[opaque(MOMENTS_FORMAT)],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+            let pipeline = fullscreen_pipeline(
+                device,
+                "Moments::pipeline",
+                &pipeline_layout(device, "Moments", &[&layout]),
+                &module,
+                MOMENTS_FORMAT,
+            );
             MomentsPipeline { pipeline, layout }
         });
         if self.targets.as_ref().is_none_or(|t| t.size != size) {
