@@ -50,6 +50,24 @@ pub(crate) fn shader_module(device: &wgpu::Device, name: &str) -> wgpu::ShaderMo
     })
 }
 
+/// A storage-buffer entry of a bind group layout.
+pub(crate) fn storage_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    read_only: bool,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
 /// A uniform-buffer entry of a bind group layout.
 pub(crate) fn uniform_entry(
     binding: u32,

@@ -10,7 +10,8 @@ use super::{
     require, AdapterNeeds, CameraGroup, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
     Prepare, Scaled, SharedMaps, SHADOW_MAP,
 };
-use crate::render::passes::moment_sat::{storage_entry, MomentSat};
+use crate::render::passes::moment_sat::MomentSat;
+use crate::render::storage_entry;
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
 use crate::render::{buffer_entry, uniform_buffer, view_entry, GpuContext, RenderError};
 

@@ -41,23 +41,6 @@ pub const MAPS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// The list pass writes no colour; a render pass needs an attachment.
 const NO_COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
-fn storage(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    read_only: bool,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
 /// A texture read with `textureLoad`; a depth texture is bound as an unfilterable float one
 /// too, which every backend can load (GLSL has no `textureLoad` of a depth texture).
 fn texture(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
@@ -104,17 +87,17 @@ impl FusedListsPass {
                     texture(2, S::COMPUTE),
                     texture(3, S::COMPUTE),
                     texture(4, S::COMPUTE),
-                    storage(5, S::COMPUTE, false),
+                    crate::render::storage_entry(5, S::COMPUTE, false),
                 ],
             );
             let list_layout = layout(
                 "FusedListsPass::list_layout",
                 &[
-                    storage(6, S::FRAGMENT, true),
-                    storage(7, S::FRAGMENT, true),
-                    storage(8, S::VERTEX, true),
-                    storage(9, S::FRAGMENT, false),
-                    storage(10, S::FRAGMENT, false),
+                    crate::render::storage_entry(6, S::FRAGMENT, true),
+                    crate::render::storage_entry(7, S::FRAGMENT, true),
+                    crate::render::storage_entry(8, S::VERTEX, true),
+                    crate::render::storage_entry(9, S::FRAGMENT, false),
+                    crate::render::storage_entry(10, S::FRAGMENT, false),
                 ],
             );
             let maps_layout = layout(
@@ -122,7 +105,7 @@ impl FusedListsPass {
                 &[
                     texture(11, S::COMPUTE),
                     texture(12, S::COMPUTE),
-                    storage(13, S::COMPUTE, true),
+                    crate::render::storage_entry(13, S::COMPUTE, true),
                     wgpu::BindGroupLayoutEntry {
                         binding: 14,
                         visibility: S::COMPUTE,

@@ -6,29 +6,12 @@
 //! [`moments::MAX_RADIUS`] (the arithmetic and its tests: `geometry::moments`).
 
 use crate::geometry::moments;
+use crate::render::storage_entry;
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, pipeline_layout, shader_module, texture_entry, uniform_entry, view_entry,
     GpuContext,
 };
-
-/// A storage-buffer entry of a bind group layout.
-pub fn storage_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    read_only: bool,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
 
 use super::next_generation;
 
