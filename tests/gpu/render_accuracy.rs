@@ -123,6 +123,12 @@ const BOUNDS: &[(&str, f64, f64, &str)] = &[
         "two casters' penumbrae overlap: one chord cannot split the light",
     ),
     (
+        "leak-test",
+        3.0,
+        0.050,
+        "the low plate's umbra lies in the high plate's penumbra: one chord cannot split the light (2.34 %, 0.0327 measured)",
+    ),
+    (
         "no-umbra",
         2.6,
         0.123,
