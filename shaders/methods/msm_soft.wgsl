@@ -16,16 +16,15 @@ fn msm_soft(l: LightLookup) -> f32 {
     if d <= near {
         return 1.0;
     }
-    let texel_slope = max(shadow.texel_slope, 1e-9);
     let max_r = f32(MSM_MAX_RADIUS - 1);
-    let search = clamp(r * (d - near) / (d * near) / texel_slope, 1.0, max_r);
+    let search = clamp(light_width_in_texels(r, d, near), 1.0, max_r);
     let z_search = msm_depth(d * (1.0 - box_bias(l, search)));
     let found = hamburger(box_moments(l.texel, i32(ceil(search))), z_search, shadow.knobs.y);
     if found.x < shadow.knobs.z {
         return 1.0;
     }
     let blocker = max(msm_distance(found.y), near);
-    let width = clamp(r * (d - blocker) / (blocker * d) / texel_slope, 0.0, max_r);
+    let width = clamp(light_width_in_texels(r, d, blocker), 0.0, max_r);
     return msm_lit(l, width, shadow.knobs.y, true);
 }
 

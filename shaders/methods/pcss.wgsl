@@ -33,11 +33,10 @@ fn pcss(x: vec3<f32>, n: vec3<f32>, l: LightLookup, pixel: vec2<f32>) -> f32 {
     if d <= near {
         return 1.0;
     }
-    let texel_slope = max(shadow.texel_slope, 1e-9);
     let size = shadow.size;
     let centre = l.uv * size;
     let rot = rotation(pixel);
-    let search = clamp(r * (d - near) / (d * near) / texel_slope, 1.0, size * 0.5);
+    let search = clamp(light_width_in_texels(r, d, near), 1.0, size * 0.5);
     var blockers = 0.0;
     var sum = 0.0;
     let blocker_taps = u32(shadow.knobs.x);
@@ -55,7 +54,7 @@ fn pcss(x: vec3<f32>, n: vec3<f32>, l: LightLookup, pixel: vec2<f32>) -> f32 {
         return 1.0;
     }
     let blocker = sum / blockers;
-    let width = clamp(r * (d - blocker) / (blocker * d) / texel_slope, 1.0, size * 0.5);
+    let width = clamp(light_width_in_texels(r, d, blocker), 1.0, size * 0.5);
     var lit = 0.0;
     let filter_taps = u32(shadow.knobs.y);
     for (var i = 0u; i < filter_taps; i++) {

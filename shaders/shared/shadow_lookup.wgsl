@@ -76,6 +76,13 @@ fn receiver_distance(texel: vec2<i32>, x: vec3<f32>, n: vec3<f32>, d: f32) -> f3
     return select(d, t, abs(denom) > 1e-4 && t > 0.0 && t < 4.0 * d);
 }
 
+// How wide, in shadow-map texels, a light of radius r at c looks from a receiver at distance d
+// through a plane at distance z (similar triangles): the blocker search of `pcss` and
+// `msm-soft` with z the nearest caster, their penumbra with z the blockers' mean.
+fn light_width_in_texels(r: f32, d: f32, z: f32) -> f32 {
+    return r * (d - z) / (z * d) / max(shadow.texel_slope, 1e-9);
+}
+
 // 1 where the shadow map at `texel` does not hide a receiver at `expected`.
 fn lit_at(texel: vec2<i32>, expected: f32, rel_bias: f32) -> f32 {
     let size = i32(shadow.size);
