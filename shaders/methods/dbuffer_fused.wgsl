@@ -8,6 +8,7 @@
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 // #include shared/fused.wgsl
+// #include shared/light_bits.wgsl
 
 // The paper's D-buffer channels, as methods/dbuffer.wgsl binds them.
 @group(1) @binding(2) var d_u: texture_2d<f32>;
@@ -23,10 +24,8 @@
 // LUT_ANGLES × LUT_OFFSETS chords.
 @group(1) @binding(9) var<storage, read> lut: array<vec4<u32>>;
 
-const LUT_ANGLES: u32 = 256u;
 // geometry::fused::ANCHOR_SAMPLES.
 const ANCHOR_SAMPLES: u32 = 3u;
-const LUT_OFFSETS: u32 = 128u;
 const PI: f32 = 3.14159265358979;
 
 // The paper's V at the pixel: methods/dbuffer.wgsl's lookup (tests/gpu/render_fused.rs holds the
@@ -183,26 +182,6 @@ fn edge_chord(e: FusedEdge, x: vec3<f32>, hx: f32) -> Chord {
         out.area = region_area(ua, ub);
     }
     return out;
-}
-
-// The position along the diamond |u| + |v| = 1 of the ray through n, in [0, 4): a monotone
-// stand-in for its angle (geometry::fused::diamond_angle).
-fn diamond_angle(n: vec2<f32>) -> f32 {
-    let s = abs(n.x) + abs(n.y);
-    if !(s > 0.0) {
-        return 0.0;
-    }
-    let x = n.x / s;
-    let y = n.y / s;
-    if y >= 0.0 {
-        return select(1.0 - x, y, x >= 0.0);
-    }
-    return select(3.0 + x, 2.0 - y, x < 0.0);
-}
-
-// The angle bin of the normal n, rounded to the nearest (geometry::fused::lut_bin).
-fn lut_bin(n: vec2<f32>) -> u32 {
-    return u32(round(diamond_angle(n) * (f32(LUT_ANGLES) / 4.0))) % LUT_ANGLES;
 }
 
 // The samples in an edge's region (DiskMask::lut_region).

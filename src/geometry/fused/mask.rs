@@ -27,7 +27,8 @@ pub const LUT_ANGLES: usize = 256;
 /// Distance bins (over `(0, 1)`) of the chord look-up table.
 pub const LUT_OFFSETS: usize = 128;
 
-type Bits = [u64; 4];
+/// One bit a sample, sample `i` is bit `i % 64` of word `i / 64`.
+pub type Bits = [u64; 4];
 
 fn bit_set(bits: &mut Bits, i: usize) {
     bits[i / 64] |= 1 << (i % 64);
@@ -149,6 +150,68 @@ impl DiskMask {
             .chain(&self.chords)
             .map(words)
             .collect()
+    }
+
+    /// The same tables with all 256 bits a mask (eight `u32`, sample `i` is bit `i % 32` of word
+    /// `i / 32`): what `bitmask` reads, for up to [`MAX_LUT_SAMPLES`] samples. Empty unless made
+    /// with [`MaskEval::Lut`].
+    pub fn lut_words_wide(&self) -> Vec<[u32; 8]> {
+        if self.eval != MaskEval::Lut {
+            return Vec::new();
+        }
+        let words = |b: &Bits| std::array::from_fn(|i| (b[i / 2] >> (32 * (i % 2))) as u32);
+        self.through_centre
+            .iter()
+            .chain(&self.chords)
+            .map(words)
+            .collect()
+    }
+
+    /// The samples `p` with `p·n ≤ ρ` (a half-plane of the light's unit-disk coordinates, `n`
+    /// any non-zero normal, `ρ` relative to `|n|`) through the chord table, as `bitmask`'s
+    /// camera pass reads it: the chord of the angle bin nearest `n` (`-n` where `ρ < 0`) and the
+    /// distance bin below `|ρ|`. Every sample for `ρ ≥ 1`, none for `ρ ≤ -1`. Exact samples
+    /// (no table) where the mask was made with [`MaskEval::Exact`].
+    pub fn half_plane(&self, n: Vec2, rho: f32) -> Bits {
+        let len = n.length();
+        let all = self.all();
+        if len.is_nan() || len <= 0.0 || rho.is_nan() {
+            return Bits::default();
+        }
+        let rho = rho / len;
+        if rho >= 1.0 {
+            return all;
+        }
+        if rho <= -1.0 {
+            return Bits::default();
+        }
+        if self.eval == MaskEval::Exact || self.chords.is_empty() {
+            let mut m = Bits::default();
+            for (i, p) in self.samples.iter().enumerate() {
+                if p.dot(n) <= rho * len {
+                    bit_set(&mut m, i);
+                }
+            }
+            return m;
+        }
+        let j = ((rho.abs() * LUT_OFFSETS as f32) as usize).min(LUT_OFFSETS - 1);
+        if rho >= 0.0 {
+            // Not beyond the chord at ρ along n.
+            let beyond = self.chords[lut_bin(n.x, n.y) * LUT_OFFSETS + j];
+            xor(beyond, all)
+        } else {
+            // Beyond the chord at |ρ| along -n.
+            self.chords[lut_bin(-n.x, -n.y) * LUT_OFFSETS + j]
+        }
+    }
+
+    /// Every sample's bit.
+    pub fn all(&self) -> Bits {
+        let mut m = Bits::default();
+        for i in 0..self.samples.len().min(MAX_LUT_SAMPLES) {
+            bit_set(&mut m, i);
+        }
+        m
     }
 
     /// Adds `ch.delta` to the counter of every sample in the edge's region; returns whether any

@@ -76,8 +76,8 @@ pub use lists::{
     edge_in_texel, proxy_hull, wedge_proxy, CasterCrossings, Patch, TexelList, TexelRay,
 };
 pub use mask::{
-    diamond_angle, mask_details, mask_visibility, CentreLayers, DiskMask, MaskDetails, MaskEval,
-    MaskResult, LUT_ANGLES, LUT_OFFSETS,
+    diamond_angle, mask_details, mask_visibility, Bits, CentreLayers, DiskMask, MaskDetails,
+    MaskEval, MaskResult, LUT_ANGLES, LUT_OFFSETS,
 };
 pub use twin::{FusedParams, FusedPath, FusedSample, FusedTwin, LightFromPoint, PointChord};
 
