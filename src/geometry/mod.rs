@@ -8,6 +8,7 @@
 //! truth every test compares against.
 
 pub mod adjacency;
+pub mod bitmask;
 pub mod bvh;
 pub mod classify;
 pub mod fused;

@@ -264,3 +264,243 @@ fn msm_soft_against_pcss_and_the_filtered_hard_shadows() {
         }
     }
 }
+
+fn bitmask_method() -> Method {
+    Method::of(&dbuffer::render::methods::bitmask::BITMASK).expect("bitmask is on the registry")
+}
+
+/// Bitmask soft shadows against PCSS: back-projecting every texel in front of the receiver onto
+/// the light's samples leaves only the one depth layer and the samples' own noise, so its
+/// penumbra error is at most PCSS's on every scene — concave, overlapping and fusing casters and
+/// rectangle and polygon lights included — and on convex casters, where the one layer the map
+/// holds is all there is, within 0.03 of the reference.
+#[test]
+fn bitmask_beats_pcss_on_every_scene() {
+    let bitmask = bitmask_method();
+    let pcss = Method::of(&dbuffer::render::methods::pcss::PCSS).expect("pcss");
+    println!("| scene | method | class mismatch % | MAE | penumbra MAE | p99 |");
+    for (name, convex) in [
+        ("fig1-large-light", true),
+        ("fig8a-distance", true),
+        ("fig8b-light-size", true),
+        ("no-umbra", true),
+        ("table1-224", true),
+        ("rect-strip", true),
+        ("polygon-triangle", true),
+        ("fig7-concave", false),
+        ("overlap", false),
+        ("acute-corner", false),
+        ("fusion-cross", false),
+        ("fusion-many", false),
+        ("rect-fusion", false),
+        ("leak-test", false),
+    ] {
+        let mut s = Scored::new(name, SIZE);
+        let (_, b) = s.measure_as(bitmask, Knobs::default(), "bitmask");
+        let (_, p) = s.measure_as(pcss, Knobs::default(), "pcss");
+        assert!(
+            b.penumbra_mae <= p.penumbra_mae,
+            "{name}: bitmask's penumbra MAE {:.4} against PCSS's {:.4}",
+            b.penumbra_mae,
+            p.penumbra_mae
+        );
+        if convex {
+            assert!(
+                b.penumbra_mae <= 0.03,
+                "{name}: bitmask's penumbra MAE {:.4} on a convex caster",
+                b.penumbra_mae
+            );
+        }
+    }
+}
+
+/// The gap filling and the pyramid: on a curved caster seen at a slant (the sphere of
+/// `table1-960`, whose texels step in distance toward its rim) micro-patches flat at their own
+/// texel's distance leave gaps between them that light leaks through, and the shared corners
+/// close them. Back-projecting a pyramid node that is one surface wholly in front of the receiver
+/// as one patch gives the shadow of its texels one by one; reading a node too small to matter
+/// on the light at its middle texel (the level of detail) moves V by a fraction of a sample.
+#[test]
+fn bitmask_gap_filling_closes_the_gaps_and_the_pyramid_changes_little() {
+    use dbuffer::render::methods::bitmask::{COARSE, DETAIL, GAP_FILL};
+    let bitmask = bitmask_method();
+    let mut s = Scored::new("table1-960", SIZE);
+    let (default_frame, filled) = s.measure_as(bitmask, Knobs::default(), "bitmask");
+    let (_, gaps) = s.measure_as(
+        bitmask,
+        Knobs::default().with(&GAP_FILL.0, 0),
+        "bitmask, no gap filling",
+    );
+    assert!(
+        filled.mae < gaps.mae,
+        "gap filling should lower the error: {:.4} with, {:.4} without",
+        filled.mae,
+        gaps.mae
+    );
+    // On a 512² map, where every texel of the sphere fits in the 65 535 iterations Mesa's
+    // llvmpipe gives a shader's loops (render::methods::bitmask).
+    let mut on_512 = |knobs: Knobs| {
+        let request = dbuffer::render::FrameRequest {
+            width: SIZE,
+            height: SIZE,
+            dbuffer_size: 512,
+            method: bitmask,
+            vt: dbuffer::geometry::VtVariant::Exact,
+            knobs,
+            read_dbuffer: false,
+        };
+        s.offline
+            .render(&s.scene, &request)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .0
+    };
+    let every_node = Knobs::default().with(&DETAIL.0, 0);
+    let nodes_frame = on_512(every_node);
+    let texels_frame = on_512(every_node.with(&COARSE.0, 0));
+    let differ = |a: &Frame, b: &Frame| {
+        let d: Vec<f32> = a
+            .visibility
+            .iter()
+            .zip(&b.visibility)
+            .map(|(a, b)| (a - b).abs())
+            .collect();
+        let mean = d.iter().sum::<f32>() / d.len().max(1) as f32;
+        (mean, d.into_iter().fold(0.0f32, f32::max))
+    };
+    let (mean, worst) = differ(&nodes_frame, &texels_frame);
+    println!("coarse nodes: mean {mean:.4}, worst {worst:.3}");
+    assert!(
+        mean < 0.002 && worst < 0.1,
+        "coarse nodes moved V by {mean:.4} on average, {worst:.3} at worst"
+    );
+    let (detailed_frame, _) = s.measure_as(bitmask, every_node, "bitmask, no level of detail");
+    let (mean, worst) = differ(&default_frame, &detailed_frame);
+    println!("level of detail: mean {mean:.4}, worst {worst:.3}");
+    assert!(
+        mean < 0.004 && worst < 0.2,
+        "the level of detail moved V by {mean:.4} on average, {worst:.3} at worst"
+    );
+}
+
+/// Occluders combine as bits, not as areas: where the two bars of `fusion-cross` cross, each
+/// hides a strip of the light and the two strips overlap, and a sum of the two would hide more
+/// light than either. Bitmask's V under the crossing stays within the reference's noise, like
+/// `dbuffer-fused`'s, where the paper's D-buffer (one chord a pixel) is off.
+#[test]
+fn bitmask_fuses_occluders_in_image_space() {
+    let bitmask = bitmask_method();
+    let mut s = Scored::new("fusion-cross", SIZE);
+    let (_, b) = s.measure_as(bitmask, Knobs::default(), "bitmask");
+    let (_, d) = s.measure_as(Method::DBUFFER, Knobs::default(), "dbuffer");
+    assert!(
+        b.penumbra_mae < d.penumbra_mae,
+        "bitmask {:.4} against the one-chord D-buffer {:.4}",
+        b.penumbra_mae,
+        d.penumbra_mae
+    );
+}
+
+/// The camera pass against its CPU twin on the map it read: the frame's shadow map read back,
+/// every texel in front of a ground pixel made a micro-patch with the gap-filled corners of
+/// `geometry::bitmask::corner_distance`, and `geometry::bitmask::visibility` over all of them
+/// (no pyramid, no search region) gives the GPU's V within the look-up tables' rounding — with
+/// the pyramid's coarse nodes and without.
+#[test]
+fn bitmask_matches_its_cpu_twin_on_the_map_it_reads() {
+    use dbuffer::geometry::bitmask::{corner_distance, visibility, LightPlane};
+    use dbuffer::geometry::fused::{DiskMask, MaskEval};
+    use dbuffer::geometry::light_view::LightView;
+    use dbuffer::render::methods::bitmask::COARSE;
+    use dbuffer::render::FrameRequest;
+    use glam::{Vec3, Vec4};
+    const MAP: u32 = 256;
+    let scene = scene::load("fig8a-distance").unwrap_or_else(|e| panic!("{e}"));
+    let light = *scene.light.as_area().expect("a disk light");
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let view = LightView::fit(&scene).view_projection();
+    let inverse = view.inverse();
+    let plane = LightPlane::of(&light);
+    let mask = DiskMask::for_light(&light, 256, MaskEval::Lut);
+    for coarse in [1, 0] {
+        let request = FrameRequest {
+            width: 48,
+            height: 48,
+            dbuffer_size: MAP,
+            method: bitmask_method(),
+            vt: dbuffer::geometry::VtVariant::Exact,
+            knobs: Knobs::default().with(&COARSE.0, coarse),
+            read_dbuffer: true,
+        };
+        let (frame, _) = offline
+            .render(&scene, &request)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let maps = frame.maps.as_ref().expect("the shadow map read back");
+        let o = |x: i64, y: i64| -> f32 {
+            if x < 0 || y < 0 || x >= MAP as i64 || y >= MAP as i64 {
+                return 3.0e38;
+            }
+            maps.texel(x as u32, y as u32).map_or(3.0e38, |t| t[0][0])
+        };
+        let direction = |s: f32, t: f32| -> Vec3 {
+            let ndc = Vec4::new(
+                s / MAP as f32 * 2.0 - 1.0,
+                1.0 - t / MAP as f32 * 2.0,
+                0.5,
+                1.0,
+            );
+            let p = inverse * ndc;
+            (p.truncate() / p.w - light.center).normalize()
+        };
+        // Every caster texel (the ground is never in front of a ground pixel) as a patch.
+        let mut patches = Vec::new();
+        for y in 0..MAP as i64 {
+            for x in 0..MAP as i64 {
+                let own = o(x, y);
+                if own >= 1.0e30 || own.is_nan() {
+                    continue;
+                }
+                let corner = |cx: i64, cy: i64| {
+                    let around = [o(cx - 1, cy - 1), o(cx, cy - 1), o(cx - 1, cy), o(cx, cy)];
+                    let d = corner_distance(own, &around);
+                    light.center + direction(cx as f32, cy as f32) * d
+                };
+                let quad = [
+                    corner(x, y),
+                    corner(x + 1, y),
+                    corner(x + 1, y + 1),
+                    corner(x, y + 1),
+                ];
+                // Off the ground: casters only.
+                if quad.iter().all(|p| p.y > 0.01) {
+                    patches.push(quad);
+                }
+            }
+        }
+        let (mut worst, mut sum, mut n) = (0.0f32, 0.0f32, 0);
+        for i in 0..frame.len() {
+            let Some(x) = frame.position(i) else { continue };
+            if x.y.abs() > 1e-3 {
+                continue;
+            }
+            let twin = visibility(&plane, &mask, x, &patches);
+            let gpu = frame.visibility[i];
+            worst = worst.max((twin - gpu).abs());
+            sum += (twin - gpu).abs();
+            n += 1;
+        }
+        let mean = sum / n.max(1) as f32;
+        println!("coarse {coarse}: {n} ground pixels, mean |ΔV| {mean:.4}, worst {worst:.3}");
+        assert!(n > 500, "{n} ground pixels");
+        // Texel by texel the GPU reads the twin's tables: the same bits but for rounding in
+        // the corners' positions. A coarse node is one quad where the twin has its texels'.
+        let (mean_bound, worst_bound) = if coarse == 1 {
+            (0.002, 0.05)
+        } else {
+            (2e-4, 0.02)
+        };
+        assert!(
+            mean < mean_bound && worst < worst_bound,
+            "coarse {coarse}: the GPU's V is {mean:.4} from its twin on average, {worst:.3} at worst"
+        );
+    }
+}

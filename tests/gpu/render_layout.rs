@@ -60,7 +60,14 @@ fn uniforms_match_their_wgsl() {
             light_corners
         );
     }
-    for shader in ["hard", "pcf", "pcss", "dbuffer", "extended_light_map"] {
+    for shader in [
+        "hard",
+        "pcf",
+        "pcss",
+        "dbuffer",
+        "extended_light_map",
+        "bitmask",
+    ] {
         assert_wgsl_layout!(
             ShadowUniforms,
             &source(&format!("methods/{shader}.wgsl")),
@@ -105,6 +112,19 @@ fn uniforms_match_their_wgsl() {
             size
         );
     }
+    use dbuffer::render::passes::micro_patches::PatchUniforms;
+    assert_wgsl_layout!(
+        PatchUniforms,
+        &source("passes/micro_patches.wgsl"),
+        "PatchUniforms",
+        inv_light_view_proj,
+        light_center,
+        light_normal,
+        mode,
+        gap_fill,
+        size,
+        _pad
+    );
     use dbuffer::render::passes::ssm::{SkinVertex, SsmSample};
     use dbuffer::render::passes::wedges::WedgeDisk;
     assert_wgsl_layout!(

@@ -56,6 +56,7 @@ registry! {
     vsm: VSM;
     msm: MSM;
     msm_soft: MSM_SOFT;
+    bitmask: BITMASK;
     sampled: SAMPLED;
     linear_ssm: LINEAR_SSM;
     shadow_volume: SHADOW_VOLUME;

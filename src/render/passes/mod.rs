@@ -12,6 +12,7 @@ pub mod floor;
 pub mod fused_layers;
 pub mod fused_lists;
 pub mod hybrid;
+pub mod micro_patches;
 pub mod moment_sat;
 pub mod moments;
 pub mod planar;

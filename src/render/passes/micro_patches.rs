@@ -1,0 +1,225 @@
+//! What `bitmask` reads of the centre's shadow map besides `|cx_o|`
+//! (`shaders/passes/micro_patches.wgsl`), made once per light or caster move:
+//! - the **patch corners**: per texel the distance at each of its four corners, gap-filled — the
+//!   mean of the texels meeting there that lie on the texel's surface
+//!   (`geometry::bitmask::corner_distance`), so neighbouring micro-patches share corners;
+//! - a **pyramid**: level `k` holds, per `2^(k+1)` × `2^(k+1)` texels of the map, the lowest and
+//!   highest height above the light's plane, the largest step between neighbouring texels'
+//!   distances and the farthest distance — the camera pass skips a node nothing of which lies
+//!   above the receiver, and back-projects a node wholly in front of it and of one surface as one
+//!   patch.
+//!
+//! Both are `Rgba32Float` (one pipeline, one layout); the pyramid's first level is a power of two
+//! wide (`next_power_of_two(⌈size / 2⌉)`), so each level is exactly half the one below.
+
+use crate::render::timer::Recorder;
+use crate::render::{
+    buffer_entry, cleared, fullscreen_pipeline, pipeline_layout, shader_module, texture_entry,
+    uniform_entry, view_entry, GpuContext, Texture,
+};
+
+use super::next_generation;
+
+pub const PATCH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// `PatchUniforms` of `shaders/passes/micro_patches.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PatchUniforms {
+    pub inv_light_view_proj: [[f32; 4]; 4],
+    pub light_center: [f32; 4],
+    pub light_normal: [f32; 4],
+    pub mode: u32,
+    pub gap_fill: u32,
+    pub size: u32,
+    pub _pad: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<PatchUniforms>() == 112);
+
+/// Where the map looks from: the light view's clip space back to the world, and the light's
+/// centre and normal (the pyramid holds heights above the light's plane).
+#[derive(Clone, Copy, Debug)]
+pub struct MapFrame {
+    pub inv_light_view_proj: glam::Mat4,
+    pub center: glam::Vec3,
+    pub normal: glam::Vec3,
+}
+
+struct PatchPipeline {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+/// The corners and the pyramid, and a number that changes whenever they are made again.
+pub struct PatchMaps {
+    pub size: u32,
+    pub corners: Texture,
+    /// Every level (the camera pass reads any with `textureLoad`).
+    pub pyramid: wgpu::TextureView,
+    /// Levels of the pyramid.
+    pub levels: u32,
+    pyramid_texture: wgpu::Texture,
+    /// One uniform buffer a draw (the corners, then each level).
+    uniforms: Vec<wgpu::Buffer>,
+    pub generation: u64,
+}
+
+#[derive(Default)]
+pub struct MicroPatches {
+    maps: Option<PatchMaps>,
+}
+
+/// The pyramid's first level's texels per side for a `size`² map, and its levels (down to 1²).
+pub fn pyramid_shape(size: u32) -> (u32, u32) {
+    let base = size.div_ceil(2).max(1).next_power_of_two();
+    (base, base.trailing_zeros() + 1)
+}
+
+impl MicroPatches {
+    pub fn maps(&self) -> Option<&PatchMaps> {
+        self.maps.as_ref()
+    }
+
+    /// Make the corners (gap-filled or not) and the pyramid of `distance`, the centre's `size`²
+    /// distance map seen as `frame` says.
+    pub fn record(
+        &mut self,
+        ctx: &GpuContext,
+        rec: &mut Recorder<'_>,
+        distance: &wgpu::TextureView,
+        size: u32,
+        gap_fill: bool,
+        frame: &MapFrame,
+    ) {
+        let pipe = ctx.shared(|device| {
+            let module = shader_module(device, "passes/micro_patches.wgsl");
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("MicroPatches::layout"),
+                entries: &[
+                    uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
+                    texture_entry(
+                        1,
+                        wgpu::ShaderStages::FRAGMENT,
+                        wgpu::TextureViewDimension::D2,
+                    ),
+                ],
+            });
+            let pipeline = fullscreen_pipeline(
+                device,
+                "MicroPatches::pipeline",
+                &pipeline_layout(device, "MicroPatches", &[&layout]),
+                &module,
+                PATCH_FORMAT,
+            );
+            PatchPipeline { pipeline, layout }
+        });
+        if self.maps.as_ref().is_none_or(|m| m.size != size) {
+            self.maps = Some(PatchMaps::new(ctx, size));
+        }
+        let Some(m) = &mut self.maps else { return };
+        m.generation = next_generation();
+        let (base, levels) = pyramid_shape(size);
+        let level_view = |k: u32| {
+            m.pyramid_texture.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("MicroPatches::level"),
+                base_mip_level: k,
+                mip_level_count: Some(1),
+                ..Default::default()
+            })
+        };
+        let uniforms = |mode: u32, gap_fill: bool, size: u32| PatchUniforms {
+            inv_light_view_proj: frame.inv_light_view_proj.to_cols_array_2d(),
+            light_center: frame.center.extend(0.0).to_array(),
+            light_normal: frame.normal.extend(0.0).to_array(),
+            mode,
+            gap_fill: gap_fill as u32,
+            size,
+            _pad: 0,
+        };
+        // Draw i: its uniforms, its source and its target.
+        let mut draws: Vec<(PatchUniforms, wgpu::TextureView, wgpu::TextureView)> = vec![
+            (
+                uniforms(0, gap_fill, size),
+                distance.clone(),
+                m.corners.view.clone(),
+            ),
+            (uniforms(1, false, size), distance.clone(), level_view(0)),
+        ];
+        for k in 1..levels {
+            draws.push((
+                uniforms(2, false, base >> (k - 1)),
+                level_view(k - 1),
+                level_view(k),
+            ));
+        }
+        let span = rec.span("bitmask_patches");
+        let last = draws.len() - 1;
+        for (i, (u, source, target)) in draws.iter().enumerate() {
+            ctx.queue
+                .write_buffer(&m.uniforms[i], 0, bytemuck::bytes_of(u));
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("MicroPatches::group"),
+                layout: &pipe.layout,
+                entries: &[buffer_entry(0, &m.uniforms[i]), view_entry(1, source)],
+            });
+            let mut pass = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("MicroPatches::pass"),
+                color_attachments: &[cleared(target, wgpu::Color::TRANSPARENT)],
+                depth_stencil_attachment: None,
+                timestamp_writes: span.writes(rec.timer, i == 0, i == last),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&pipe.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+    }
+}
+
+impl PatchMaps {
+    fn new(ctx: &GpuContext, size: u32) -> PatchMaps {
+        use wgpu::TextureUsages as U;
+        let (base, levels) = pyramid_shape(size);
+        let corners = Texture::new(
+            &ctx.device,
+            "MicroPatches::corners",
+            (size, size),
+            PATCH_FORMAT,
+            U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
+        );
+        let pyramid_texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("MicroPatches::pyramid"),
+            size: wgpu::Extent3d {
+                width: base,
+                height: base,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: levels,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: PATCH_FORMAT,
+            usage: U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let pyramid = pyramid_texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let uniforms = (0..=levels)
+            .map(|_| {
+                crate::render::uniform_buffer::<PatchUniforms>(
+                    &ctx.device,
+                    "MicroPatches::uniforms",
+                )
+            })
+            .collect();
+        PatchMaps {
+            size,
+            corners,
+            pyramid,
+            levels,
+            pyramid_texture,
+            uniforms,
+            generation: 0,
+        }
+    }
+}
