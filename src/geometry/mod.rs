@@ -10,6 +10,7 @@
 pub mod adjacency;
 pub mod bvh;
 pub mod classify;
+pub mod flip;
 pub mod fused;
 pub mod hard_volume;
 pub mod hull;
