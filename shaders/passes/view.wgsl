@@ -83,6 +83,7 @@ fn camera_view(p: vec2<i32>) -> vec3<f32> {
             }
             return mapped(abs(d.x - textureLoad(reference_v, p, 0).x));
         }
+        case VIEW_COST: { return mapped(textureLoad(cost, p, 0).x); }
         default: {
             switch u32(branch) {
                 case 0u: { return BRANCH_UMBRA_COLOR; }

@@ -32,6 +32,8 @@ pub struct Settings {
     pub t_map: Mapping,
     pub error_map: Mapping,
     pub dbuffer_map: Mapping,
+    /// The cost view's range (auto-fitted by default: each method counts its own unit).
+    pub cost_map: Mapping,
     pub overlays: Overlays,
     /// D-buffer (and shadow map) size in texels.
     pub dbuffer_size: u32,
@@ -85,6 +87,7 @@ impl Default for Settings {
             t_map: Mapping::unit(),
             error_map: Mapping::error(),
             dbuffer_map: Mapping::auto(),
+            cost_map: Mapping::auto(),
             overlays: Overlays::default(),
             dbuffer_size: 1024,
             render_scale: 1.0,
@@ -127,6 +130,7 @@ impl Settings {
             View::T => Some(&self.t_map),
             View::Error => Some(&self.error_map),
             View::DBuffer => Some(&self.dbuffer_map),
+            View::Cost => Some(&self.cost_map),
             View::Final | View::Classes => None,
         }
     }
@@ -137,6 +141,7 @@ impl Settings {
             View::T => Some(&mut self.t_map),
             View::Error => Some(&mut self.error_map),
             View::DBuffer => Some(&mut self.dbuffer_map),
+            View::Cost => Some(&mut self.cost_map),
             View::Final | View::Classes => None,
         }
     }

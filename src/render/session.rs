@@ -449,6 +449,7 @@ impl Session {
         .map(|r| External {
             view: &r.texture.view,
             generation: r.generation,
+            rays: r.done,
         });
         let inputs = FrameInputs {
             ctx,

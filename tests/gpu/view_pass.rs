@@ -38,6 +38,7 @@ fn fixture(method: Method) -> Fixture {
         vt: VtVariant::Exact,
         knobs: Knobs::default().with(&SAMPLES, 32),
         read_dbuffer: false,
+        read_cost: false,
     };
     let reference_request = FrameRequest {
         method: Method::REFERENCE,

@@ -34,16 +34,19 @@ pub enum View {
     Error,
     /// The shown method's light-space maps (the D-buffer), channels isolated or combined.
     DBuffer,
+    /// The shown method's work per pixel (taps, steps, listed edges, rays: its cost view).
+    Cost,
 }
 
 impl View {
-    pub const ALL: [View; 6] = [
+    pub const ALL: [View; 7] = [
         View::Final,
         View::Visibility,
         View::T,
         View::Classes,
         View::Error,
         View::DBuffer,
+        View::Cost,
     ];
 
     pub fn name(self) -> &'static str {
@@ -54,6 +57,7 @@ impl View {
             View::Classes => "classes",
             View::Error => "error",
             View::DBuffer => "D-buffer",
+            View::Cost => "cost",
         }
     }
 
@@ -65,6 +69,10 @@ impl View {
             View::Classes => "lit / penumbra (visible or hidden from the centre) / umbra",
             View::Error => "|V − V_reference| against the reference at its current sample count",
             View::DBuffer => "the method's light-space maps (the D-buffer), one channel or several",
+            View::Cost => {
+                "the method's work per pixel (its taps, steps, listed edges or rays; the \
+                 inspector names the unit and the path taken)"
+            }
         }
     }
 
@@ -77,6 +85,7 @@ impl View {
             View::Classes => 3,
             View::Error => 4,
             View::DBuffer => 5,
+            View::Cost => 6,
         }
     }
 
@@ -307,6 +316,7 @@ impl ViewLayout {
                     float(5),
                     float(6),
                     float(7),
+                    float(8),
                 ],
             });
             let blank_float = Texture::new(
@@ -382,6 +392,7 @@ impl ViewBindings {
                     view_entry(5, maps[0]),
                     view_entry(6, maps[1]),
                     view_entry(7, maps[2]),
+                    view_entry(8, &inputs.camera.cost.view),
                 ],
             });
             (group, key)
@@ -394,7 +405,7 @@ impl ViewBindings {
 pub struct ViewPass {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
-    pipelines: [OnceLock<wgpu::RenderPipeline>; 6 * 3],
+    pipelines: [OnceLock<wgpu::RenderPipeline>; 7 * 3],
 }
 
 impl ViewPass {
@@ -412,11 +423,13 @@ impl ViewPass {
     /// The pipeline drawing `params`'s view (and colour map, for the scalar views).
     fn pipeline(&self, device: &wgpu::Device, params: &ViewParams) -> &wgpu::RenderPipeline {
         let map = match params.view {
-            View::Visibility | View::T | View::Error | View::DBuffer => params.mapping.map.code(),
+            View::Visibility | View::T | View::Error | View::DBuffer | View::Cost => {
+                params.mapping.map.code()
+            }
             View::Final | View::Classes => 0,
         };
         let slot = (params.view.code() * 3 + map) as usize;
-        self.pipelines[slot.min(17)].get_or_init(|| {
+        self.pipelines[slot.min(20)].get_or_init(|| {
             let constants = [
                 ("VIEW_KIND", f64::from(params.view.code())),
                 ("COLORMAP", f64::from(map)),

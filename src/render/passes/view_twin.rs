@@ -99,6 +99,7 @@ pub fn scalar(frame: &Frame, reference: Option<&[f32]>, view: View, i: usize) ->
         View::Visibility => frame.visibility.get(i).copied(),
         View::T => (i < frame.len()).then(|| frame.t(i)),
         View::Error => Some((frame.visibility.get(i)? - reference?.get(i)?).abs()),
+        View::Cost => frame.cost.get(i).map(|c| c[0]),
         _ => None,
     }
 }
@@ -121,7 +122,7 @@ pub fn render(
     };
     match params.view {
         View::Final => camera(&color),
-        View::Visibility | View::T => {
+        View::Visibility | View::T | View::Cost => {
             camera(&|i| scalar(frame, reference, params.view, i).map_or(NO_DATA, |v| m.color(v)))
         }
         View::Error => camera(&|i| match (frame.hit(i), reference) {
