@@ -96,6 +96,85 @@ pub fn render(
     img
 }
 
+/// The FLIP map of a method against the reference (per pixel in [0, 1]) in FLIP's own colour
+/// map (magma), with a legend strip below it: ticks at 0, 0.2 … 1.
+pub fn flip(map: &[f32], width: u32, height: u32) -> RgbImage {
+    let mut img = RgbImage::from_pixel(width, height + LEGEND_HEIGHT, Rgb([255, 255, 255]));
+    for (i, v) in map.iter().enumerate() {
+        let (x, y) = (i as u32 % width, i as u32 / width);
+        if y >= height {
+            break;
+        }
+        img.put_pixel(x, y, Rgb(crate::geometry::flip::magma(*v)));
+    }
+    legend(
+        &mut img,
+        (height, width),
+        crate::geometry::flip::magma,
+        1.0,
+        false,
+    );
+    img
+}
+
+/// Each pixel's work (`cost[i][0]`) from black to the colour map's top at `max` (the method's
+/// largest: each method counts its own unit), with a legend of 0 … max below; masked pixels dark.
+pub fn cost(cost: &[[f32; 2]], mask: &[bool], width: u32, height: u32, max: f32) -> RgbImage {
+    let mut img = RgbImage::from_pixel(width, height + LEGEND_HEIGHT, Rgb([255, 255, 255]));
+    let top = max.max(1e-6);
+    for (i, c) in cost.iter().enumerate() {
+        let (x, y) = (i as u32 % width, i as u32 / width);
+        if y >= height {
+            break;
+        }
+        let rgb = if mask.get(i).copied().unwrap_or(false) {
+            colormap(c[0] / top)
+        } else {
+            MASKED_RGB
+        };
+        img.put_pixel(x, y, Rgb(rgb));
+    }
+    legend(&mut img, (height, width), colormap, max, true);
+    img
+}
+
+/// Under an image of width `width` whose legend strip starts at `top`: a colour bar of `map`
+/// over most of the width with six ticks from 0 to `full` (whole numbers when `counts`).
+fn legend(
+    img: &mut RgbImage,
+    (top, width): (u32, u32),
+    map: fn(f32) -> [u8; 3],
+    full: f32,
+    counts: bool,
+) {
+    let margin = 4;
+    let (x0, x1) = (margin, width.saturating_sub(margin + 12));
+    if x1 <= x0 + 10 {
+        return;
+    }
+    for x in x0..=x1 {
+        let f = (x - x0) as f32 / (x1 - x0) as f32;
+        for y in top + 4..top + 10 {
+            img.put_pixel(x, y, Rgb(map(f)));
+        }
+    }
+    for k in 0..=5u32 {
+        let f = k as f32 / 5.0;
+        let x = x0 + ((x1 - x0) as f32 * f).round() as u32;
+        for y in top + 10..top + 13 {
+            img.put_pixel(x, y, Rgb([0, 0, 0]));
+        }
+        let text = if counts {
+            format!("{}", (f * full).round())
+        } else {
+            format!("{:.1}", f * full)
+        };
+        let tw = text_width(&text, 1);
+        let tx = x.saturating_sub(tw / 2).min(width.saturating_sub(tw));
+        draw_text(img, &text, tx, top + 14, 1, [0, 0, 0]);
+    }
+}
+
 /// A colour bar over most of the width, ticks at 0, 0.1 … 0.5 with labels, and "|dV|".
 fn draw_legend(img: &mut RgbImage, top: u32, width: u32) {
     let scale = if width >= 256 { 2 } else { 1 };
