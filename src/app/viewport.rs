@@ -9,6 +9,7 @@ use glam::Vec3;
 
 use super::camera::{self, Projector};
 use super::doc::f3;
+use super::motion::Measure;
 use super::{LabApp, Level, Selection};
 use crate::geometry::bvh::Bvh;
 use crate::render::methods::reference::SAMPLES;
@@ -160,6 +161,7 @@ impl LabApp {
             self.draw_overlays(ui.painter(), image_rect);
         }
         self.draw_legends(ui, rect);
+        self.draw_motion(ui, rect);
         if let Some(note) = self.viewport_note() {
             ui.painter().text(
                 rect.center(),
@@ -169,6 +171,73 @@ impl LabApp {
                 Color32::from_rgb(255, 140, 120),
             );
         }
+    }
+
+    /// The motion meter's plot, top right of the viewport, while a drag moves the light or a
+    /// caster (and shortly after).
+    fn draw_motion(&self, ui: &egui::Ui, rect: Rect) {
+        if !self.motion.showing() {
+            return;
+        }
+        let (values, measure) = self.motion.series();
+        let Some(measure) = measure else { return };
+        let size = Vec2::new(260.0f32.min(rect.width() - 16.0), 74.0);
+        let area = Rect::from_min_size(
+            Pos2::new(rect.right() - size.x - 8.0, rect.top() + 8.0),
+            size,
+        );
+        if size.x < 120.0 {
+            return;
+        }
+        let painter = ui.painter().with_clip_rect(area);
+        painter.rect_filled(area, 4.0, Color32::from_black_alpha(170));
+        let title = match measure {
+            Measure::AgainstReference => "temporal error",
+            Measure::MethodAlone => "frame-to-frame |ΔV|",
+        };
+        let top = values.iter().copied().fold(0.01f32, f32::max);
+        painter.text(
+            area.left_top() + Vec2::new(6.0, 3.0),
+            egui::Align2::LEFT_TOP,
+            format!(
+                "{title}: {:.4} (max {top:.3})",
+                values.last().copied().unwrap_or(0.0)
+            ),
+            egui::FontId::proportional(11.0),
+            Color32::WHITE,
+        );
+        let plot = Rect::from_min_max(
+            area.left_top() + Vec2::new(6.0, 18.0),
+            area.right_bottom() - Vec2::new(6.0, 14.0),
+        );
+        if values.len() >= 2 {
+            let n = values.len() - 1;
+            let points: Vec<Pos2> = values
+                .iter()
+                .enumerate()
+                .map(|(k, v)| {
+                    Pos2::new(
+                        plot.left() + plot.width() * k as f32 / n as f32,
+                        plot.bottom() - plot.height() * (v / top).clamp(0.0, 1.0),
+                    )
+                })
+                .collect();
+            painter.add(egui::Shape::line(
+                points,
+                egui::Stroke::new(1.5, Color32::from_rgb(250, 170, 60)),
+            ));
+        }
+        painter.text(
+            area.left_bottom() + Vec2::new(6.0, -2.0),
+            egui::Align2::LEFT_BOTTOM,
+            format!(
+                "last {} s · {}",
+                super::motion::WINDOW.as_secs(),
+                measure.short()
+            ),
+            egui::FontId::proportional(9.0),
+            Color32::GRAY,
+        );
     }
 
     /// Where the image goes inside the viewport: all of it, or a centred square for the
@@ -199,6 +268,7 @@ impl LabApp {
             vt: self.settings.vt(),
             knobs: knobs.with(&SAMPLES, self.settings.reference_samples),
             read_dbuffer: false,
+            read_cost: false,
         }
     }
 
@@ -231,6 +301,14 @@ impl LabApp {
         let needs_reference = self.settings.needs_reference();
         let hover = self.viewport.hover;
         let revision = self.revision;
+        // A drag of the light or a caster: the motion meter follows the shown method.
+        let moving = matches!(
+            self.viewport.drag,
+            Some(Drag::Move {
+                target: Selection::Light | Selection::LightEnd(_) | Selection::Object(_),
+                ..
+            })
+        );
         let camera = self.camera;
         let Some(core) = self.core.as_mut() else {
             return;
@@ -375,6 +453,12 @@ impl LabApp {
                     self.viewport.probed[i] = here;
                 }
             }
+            if moving && render && i == 0 {
+                let tag = self
+                    .motion
+                    .frame(core.session.scene(), request.width, request.height);
+                probes.push(ProbeRequest::Motion { tag, params });
+            }
             let fit_key = Some((key, params.view, params.channels));
             if params.mapping.auto
                 && params.view != View::Final
@@ -458,6 +542,11 @@ impl LabApp {
                     ProbeRequest::Pixel { x, y, params } => {
                         self.inspector.arrived(i, x, y, params.view, r.values);
                     }
+                    ProbeRequest::Motion { tag, .. } if i == 0 => {
+                        self.motion.arrived(tag, r.values);
+                        ctx.request_repaint();
+                    }
+                    ProbeRequest::Motion { .. } => {}
                     ProbeRequest::Fit { params } => {
                         if let Some(m) = self.settings.mapping_mut(params.view) {
                             let before = *m;
@@ -656,6 +745,9 @@ impl LabApp {
         }
         if response.drag_stopped() {
             self.viewport.drag = None;
+            self.motion.drag_ended();
+            // The plot lingers a moment after the drag: draw it away then.
+            ctx.request_repaint_after(std::time::Duration::from_secs(4));
             self.history.close();
         }
         if response.clicked() {

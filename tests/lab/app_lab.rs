@@ -335,6 +335,45 @@ fn dragging_the_light_moves_the_shadow() {
     assert!((v_at(&mut h, x, y) - before).abs() < 1e-6);
 }
 
+/// While the light is dragged, the viewport plots the shown method's temporal error over the
+/// last seconds (against a low-K reference at a grid of pixels, or the method's own change where
+/// the reference cannot keep up): a value a new frame, each from the 2.3 KiB the probe reads.
+#[test]
+fn dragging_the_light_plots_the_temporal_error() {
+    let mut h = lab(None);
+    h.run();
+    click(&mut h, "light");
+    h.key_press(egui::Key::F);
+    h.run();
+    assert!(!h.state().motion_showing(), "no plot before a drag");
+    let at = h
+        .state()
+        .light_screen_pos()
+        .expect("the light is in view after F");
+    h.drag_at(at);
+    h.step();
+    for k in 1..=6 {
+        h.hover_at(at + egui::vec2(20.0 * k as f32, 0.0));
+        h.step();
+    }
+    let (values, measure) = h.state().motion_series();
+    assert!(values.len() >= 4, "a value a frame of the drag: {values:?}");
+    assert!(
+        values.iter().all(|v| v.is_finite() && *v >= 0.0),
+        "{values:?}"
+    );
+    assert!(measure.is_some());
+    assert!(h.state().motion_showing(), "the plot shows while dragging");
+    // The shadow moved: some step changed V, and the reference's change did not cancel all of it
+    // (the D-buffer is not the reference), or the method moved on its own.
+    assert!(values.iter().any(|&v| v > 0.0), "{values:?}");
+    // Still only probes come back while dragging.
+    let (_, most) = h.state().read_bytes().expect("frames were submitted");
+    assert!(most <= 4096, "{most} bytes read back in one frame");
+    h.drop_at(at + egui::vec2(140.0, 0.0));
+    h.run();
+}
+
 #[test]
 fn a_malformed_scene_is_reported_and_the_scene_kept() {
     let dir = std::env::temp_dir().join(format!("dbuffer-app-{}", std::process::id()));
