@@ -37,6 +37,7 @@ const VIEW_CLASSES: u32 = 3u;
 const VIEW_ERROR: u32 = 4u;
 const VIEW_LIGHT_MAPS: u32 = 5u;
 const VIEW_COST: u32 = 6u;
+const VIEW_FLIP: u32 = 7u;
 
 const COLORMAP_GRAY: u32 = 0u;
 const COLORMAP_HEAT: u32 = 1u;

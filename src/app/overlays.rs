@@ -342,13 +342,17 @@ impl LabApp {
                     rows.push((Some(Color32::from_rgb(r, g, b)), name.to_string()));
                 }
             }
-            View::Visibility | View::T | View::Error | View::DBuffer | View::Cost => {
+            View::Visibility | View::T | View::Error | View::Flip | View::DBuffer | View::Cost => {
                 if let Some(m) = self.settings.mapping(view) {
                     bar = Some(*m);
                 }
                 let what = match view {
                     View::Visibility => "V".to_string(),
                     View::T => "t".to_string(),
+                    View::Flip => {
+                        "FLIP of the image against the reference's (0 … 1, 67 px a degree)"
+                            .to_string()
+                    }
                     View::Cost => {
                         let m = self.settings.method();
                         let c = m.spec().cost;

@@ -34,6 +34,8 @@ pub struct Settings {
     pub dbuffer_map: Mapping,
     /// The cost view's range (auto-fitted by default: each method counts its own unit).
     pub cost_map: Mapping,
+    /// The FLIP view's range: FLIP's own 0 … 1.
+    pub flip_map: Mapping,
     pub overlays: Overlays,
     /// D-buffer (and shadow map) size in texels.
     pub dbuffer_size: u32,
@@ -88,6 +90,12 @@ impl Default for Settings {
             error_map: Mapping::error(),
             dbuffer_map: Mapping::auto(),
             cost_map: Mapping::auto(),
+            flip_map: Mapping {
+                black: 0.0,
+                white: 1.0,
+                map: crate::render::passes::view::ColorMap::Heat,
+                auto: false,
+            },
             overlays: Overlays::default(),
             dbuffer_size: 1024,
             render_scale: 1.0,
@@ -116,7 +124,7 @@ impl Settings {
     /// Whether what is shown needs the reference: it is a shown method, or the error view
     /// measures against it. Only then does it converge (and the status bar show its progress).
     pub fn needs_reference(&self) -> bool {
-        self.shows_reference() || self.view == View::Error
+        self.shows_reference() || self.view == View::Error || self.view == View::Flip
     }
 
     pub fn vt(&self) -> VtVariant {
@@ -131,6 +139,7 @@ impl Settings {
             View::Error => Some(&self.error_map),
             View::DBuffer => Some(&self.dbuffer_map),
             View::Cost => Some(&self.cost_map),
+            View::Flip => Some(&self.flip_map),
             View::Final | View::Classes => None,
         }
     }
@@ -142,6 +151,7 @@ impl Settings {
             View::Error => Some(&mut self.error_map),
             View::DBuffer => Some(&mut self.dbuffer_map),
             View::Cost => Some(&mut self.cost_map),
+            View::Flip => Some(&mut self.flip_map),
             View::Final | View::Classes => None,
         }
     }

@@ -84,6 +84,10 @@ pub struct ViewportState {
     pub hover: Option<Hover>,
     keys: [Option<RenderKey>; 2],
     views: [Option<ViewKey>; 2],
+    /// The frame and reference the FLIP map on the GPU was made for, and a count of the maps
+    /// handed over (the FLIP view draws again when it grows).
+    flipped: Option<(RenderKey, u64)>,
+    flip_serial: u64,
     /// The frame and view the last fit probe of each slot was for.
     fitted: [Option<(RenderKey, View, [bool; 4])>; 2],
     /// The pixel probed last, per slot.
@@ -428,10 +432,10 @@ impl LabApp {
             };
             let view_key = ViewKey {
                 params,
-                reference: if params.view == View::Error {
-                    reference_serial
-                } else {
-                    0
+                reference: match params.view {
+                    View::Error => reference_serial,
+                    View::Flip => self.viewport.flip_serial,
+                    _ => 0,
                 },
             };
             let render = self.viewport.keys[i] != Some(key) || slot.targets.rendered.is_none();
@@ -477,7 +481,7 @@ impl LabApp {
             }
             self.viewport.keys[i] = Some(key);
             self.viewport.views[i] = Some(view_key);
-            let note = (params.view == View::Error && !reference_ready)
+            let note = (matches!(params.view, View::Error | View::Flip) && !reference_ready)
                 .then(|| "no reference of this size yet: the error view waits for it".to_string());
             self.viewport.shown[i] = Some(Shown {
                 method,
@@ -513,6 +517,23 @@ impl LabApp {
         } else {
             drop(jobs);
             self.stats.submitted(0, 0.0, None, 0);
+        }
+        // The FLIP view: the main slot's image against the reference's, on this thread, once per
+        // new frame or reference snapshot; drawn by the next frame's view pass.
+        if params.view == View::Flip && reference_ready {
+            if let Some(key) = self.viewport.keys[0] {
+                let wanted = Some((key, reference_serial));
+                if self.viewport.flipped != wanted {
+                    match flip_map(core, &key.request) {
+                        Ok(()) => {
+                            self.viewport.flipped = wanted;
+                            self.viewport.flip_serial += 1;
+                            ctx.request_repaint();
+                        }
+                        Err(e) => errors.push(format!("FLIP: {e}")),
+                    }
+                }
+            }
         }
         if let Some(rs) = frame.wgpu_render_state() {
             core.register_textures(rs);
@@ -865,6 +886,46 @@ impl LabApp {
         let rect = self.viewport.rect?;
         Projector::new(&self.camera, rect).point(p)
     }
+}
+
+/// The FLIP map of the main slot's frame (`request`) against the reference's shaded image of
+/// the same view, handed to the GPU for the FLIP view: the reference's camera pass into the
+/// core's own targets, both images read back (what the map needs: two colour images), FLIP.
+fn flip_map(core: &mut super::core::Core, request: &FrameRequest) -> Result<(), String> {
+    use crate::geometry::flip;
+    let reference = FrameRequest {
+        method: Method::REFERENCE,
+        ..*request
+    };
+    core.session
+        .submit(
+            &core.ctx,
+            &mut [FrameJob {
+                targets: &mut core.flip_targets,
+                request: reference,
+                view: None,
+                render: true,
+                probes: Vec::new(),
+            }],
+        )
+        .map_err(|e| e.to_string())?;
+    let truth = core
+        .session
+        .read(&core.ctx, &core.flip_targets, None)
+        .map_err(|e| e.to_string())?;
+    let shown = core.read_slot(0, None).map_err(|e| e.to_string())?;
+    let map = flip::ldr_flip(
+        &crate::compare::rgb_of(&truth),
+        &crate::compare::rgb_of(&shown),
+        shown.width,
+        shown.height,
+        flip::DEFAULT_PPD,
+    )
+    .map_err(|e| e.to_string())?;
+    let key = core.session.reference_key(&reference);
+    core.session
+        .set_flip(&core.ctx, key, &map)
+        .map_err(|e| e.to_string())
 }
 
 /// The closest approach of the ray `origin + t·dir` (unit `dir`) to the segment `a`–`b`: the

@@ -430,6 +430,7 @@ pub fn plot_png(
             .y_desc("mean |ΔV − ΔV_ref|")
             .axis_desc_style((family, 14))
             .label_style((family, 12))
+            .x_label_formatter(&|x| format!("{x:.0}"))
             .light_line_style(RGBColor(235, 235, 235))
             .draw()
             .map_err(|e| err(&e))?;

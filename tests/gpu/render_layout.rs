@@ -278,6 +278,7 @@ fn codes_match_their_wgsl() {
                 View::Error => "VIEW_ERROR",
                 View::DBuffer => "VIEW_LIGHT_MAPS",
                 View::Cost => "VIEW_COST",
+                View::Flip => "VIEW_FLIP",
             };
             (name, f64::from(v.code()))
         })

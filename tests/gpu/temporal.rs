@@ -170,3 +170,36 @@ fn the_report_holds_the_motion_and_its_files() {
     assert!(written.iter().any(|p| p.ends_with(temporal::MOTION_APNG)));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `compare --orbit` on every built-in, with every method that takes its light: a light orbit
+/// and a camera orbit of two frames at 24², every value finite (the real runs:
+/// docs/results/motion.md).
+#[test]
+fn every_builtin_goes_round_with_every_method() {
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    for name in scene::builtin::names() {
+        let scene = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        for orbit in [Orbit::Light, Orbit::Camera] {
+            let mut r = request(24, Some(orbit), 2);
+            r.compare.dbuffer_size = 256;
+            r.compare.knobs = Knobs::default().with(&SAMPLES, 16);
+            let m = temporal::run(&mut offline, &scene, &r, |_, _| {})
+                .unwrap_or_else(|e| panic!("{name}, {orbit:?}: {e}"));
+            let takes = Method::all()
+                .iter()
+                .filter(|x| !x.is_reference() && **x != Method::REFERENCE_HARD)
+                .filter(|x| x.refuses(scene.light.kind()).is_none())
+                .count();
+            assert_eq!(m.methods.len(), takes, "{name}");
+            for x in &m.methods {
+                assert_eq!(x.steps.len(), 1, "{name}: {}", x.method);
+                assert!(
+                    x.temporal_error().is_finite() && x.temporal_error() >= 0.0,
+                    "{name}, {orbit:?}: {} {}",
+                    x.method,
+                    x.temporal_error()
+                );
+            }
+        }
+    }
+}

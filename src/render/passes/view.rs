@@ -32,6 +32,8 @@ pub enum View {
     Classes,
     /// |ΔV| against the reference.
     Error,
+    /// FLIP of the shaded image against the reference's (a map handed in, `Session::set_flip`).
+    Flip,
     /// The shown method's light-space maps (the D-buffer), channels isolated or combined.
     DBuffer,
     /// The shown method's work per pixel (taps, steps, listed edges, rays: its cost view).
@@ -39,12 +41,13 @@ pub enum View {
 }
 
 impl View {
-    pub const ALL: [View; 7] = [
+    pub const ALL: [View; 8] = [
         View::Final,
         View::Visibility,
         View::T,
         View::Classes,
         View::Error,
+        View::Flip,
         View::DBuffer,
         View::Cost,
     ];
@@ -56,6 +59,7 @@ impl View {
             View::T => "t",
             View::Classes => "classes",
             View::Error => "error",
+            View::Flip => "FLIP",
             View::DBuffer => "D-buffer",
             View::Cost => "cost",
         }
@@ -68,6 +72,10 @@ impl View {
             View::T => "t, the visibility parameter before V(t)",
             View::Classes => "lit / penumbra (visible or hidden from the centre) / umbra",
             View::Error => "|V − V_reference| against the reference at its current sample count",
+            View::Flip => {
+                "FLIP (Andersson et al. 2020) of the shaded image against the reference's: how \
+                 different they look, 0 … 1"
+            }
             View::DBuffer => "the method's light-space maps (the D-buffer), one channel or several",
             View::Cost => {
                 "the method's work per pixel (its taps, steps, listed edges or rays; the \
@@ -86,6 +94,7 @@ impl View {
             View::Error => 4,
             View::DBuffer => 5,
             View::Cost => 6,
+            View::Flip => 7,
         }
     }
 
@@ -405,7 +414,7 @@ impl ViewBindings {
 pub struct ViewPass {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
-    pipelines: [OnceLock<wgpu::RenderPipeline>; 7 * 3],
+    pipelines: [OnceLock<wgpu::RenderPipeline>; 8 * 3],
 }
 
 impl ViewPass {
@@ -423,13 +432,13 @@ impl ViewPass {
     /// The pipeline drawing `params`'s view (and colour map, for the scalar views).
     fn pipeline(&self, device: &wgpu::Device, params: &ViewParams) -> &wgpu::RenderPipeline {
         let map = match params.view {
-            View::Visibility | View::T | View::Error | View::DBuffer | View::Cost => {
+            View::Visibility | View::T | View::Error | View::Flip | View::DBuffer | View::Cost => {
                 params.mapping.map.code()
             }
             View::Final | View::Classes => 0,
         };
         let slot = (params.view.code() * 3 + map) as usize;
-        self.pipelines[slot.min(20)].get_or_init(|| {
+        self.pipelines[slot.min(23)].get_or_init(|| {
             let constants = [
                 ("VIEW_KIND", f64::from(params.view.code())),
                 ("COLORMAP", f64::from(map)),
