@@ -211,6 +211,9 @@ fn mean(v: &[f64]) -> f64 {
     }
 }
 
+/// A frame as the next step needs it: the reference's V, the pixels counted, each method's V.
+type Previous = (Vec<f32>, Vec<bool>, Vec<Vec<f32>>);
+
 /// The reference's samples on the light of frame `k`: frame 0's, carried with the light.
 fn samples_at(poses: &Poses, frame0: &Light, k: usize, n: usize, count: u32) -> Vec<glam::Vec3> {
     let base = match frame0 {
@@ -271,7 +274,7 @@ pub fn run(
     let mut reference_motion = Vec::with_capacity(frames - 1);
     let mut reference_frames = Vec::with_capacity(frames - 1);
     // The previous frame: the reference's V, the counted pixels, each method's V.
-    let mut previous: Option<(Vec<f32>, Vec<bool>, Vec<Vec<f32>>)> = None;
+    let mut previous: Option<Previous> = None;
     for k in 0..frames {
         let (light, camera) = pose(k);
         session.set_light(light);

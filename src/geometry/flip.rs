@@ -60,10 +60,11 @@ const RGB_TO_XYZ: [[f32; 3]; 3] = [
     ],
 ];
 
+/// XYZ → sRGB, NVIDIA's values as f32 holds them.
 const XYZ_TO_RGB: [[f32; 3]; 3] = [
-    [3.241003275, -1.537398934, -0.498615861],
-    [-0.969224334, 1.875930071, 0.041554224],
-    [0.055639423, -0.204011202, 1.057148933],
+    [3.241_003_3, -1.537_398_9, -0.498_615_86],
+    [-0.969_224_33, 1.875_930_1, 0.041554224],
+    [0.055639423, -0.204_011_2, 1.057_148_9],
 ];
 
 fn mul(m: &[[f32; 3]; 3], v: [f32; 3]) -> [f32; 3] {
@@ -439,7 +440,9 @@ mod tests {
     #[test]
     fn it_agrees_with_nvidias_flip() {
         let a = pattern(0.0, 0);
-        let cases: [(&str, Vec<[u8; 3]>, f64, [f32; 5]); 4] = [
+        // A pair's name, its test image, NVIDIA's mean and NVIDIA's map at five pixels.
+        type Case = (&'static str, Vec<[u8; 3]>, f64, [f32; 5]);
+        let cases: [Case; 4] = [
             (
                 "shift 1",
                 pattern(1.0, 0),
