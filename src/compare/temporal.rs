@@ -280,7 +280,7 @@ pub fn run(
         session.set_light(light);
         session.set_camera(camera);
         let posed = session.scene().clone();
-        progress(k, "reference");
+        progress(k, Method::REFERENCE.name());
         let samples = if request.orbit.is_some() {
             samples_at(&poses, &frame0_light, k, frames, k_samples)
         } else {
