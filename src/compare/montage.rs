@@ -181,7 +181,7 @@ pub fn render(c: &Comparison) -> RgbImage {
         let flip = &r.flip;
         let cell = reduce(w, h, layout.factor, |idx| {
             let v = flip.get(idx).copied().unwrap_or(0.0);
-            Block::Worst(v, crate::geometry::flip::magma(v))
+            Block::Worst(v, heatmap::magma(v))
         });
         paste(&mut img, &cell, layout.cell(i, 2));
         if layout.cells < 4 {

@@ -368,26 +368,6 @@ pub fn mean(map: &[f32]) -> f64 {
     map.iter().map(|&v| f64::from(v)).sum::<f64>() / map.len() as f64
 }
 
-/// FLIP's colour map for its error maps (magma, piecewise linear through 9 stops), `x` in [0, 1].
-pub fn magma(x: f32) -> [u8; 3] {
-    const STOPS: [[f32; 3]; 9] = [
-        [0.0, 0.0, 4.0],
-        [28.0, 16.0, 68.0],
-        [79.0, 18.0, 123.0],
-        [129.0, 37.0, 129.0],
-        [181.0, 54.0, 122.0],
-        [229.0, 80.0, 100.0],
-        [251.0, 135.0, 97.0],
-        [254.0, 194.0, 135.0],
-        [252.0, 253.0, 191.0],
-    ];
-    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-    let f = x * (STOPS.len() - 1) as f32;
-    let i = (f.floor() as usize).min(STOPS.len() - 2);
-    let t = f - i as f32;
-    [0, 1, 2].map(|k| (STOPS[i][k] + (STOPS[i + 1][k] - STOPS[i][k]) * t).round() as u8)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -497,17 +477,5 @@ mod tests {
             Err(FlipError::Ppd(_))
         ));
         assert!((DEFAULT_PPD - 67.02).abs() < 0.01, "{DEFAULT_PPD}");
-    }
-
-    #[test]
-    fn magma_runs_dark_to_light() {
-        let luma =
-            |c: [u8; 3]| 0.3 * f32::from(c[0]) + 0.59 * f32::from(c[1]) + 0.11 * f32::from(c[2]);
-        let mut last = -1.0;
-        for k in 0..=16 {
-            let l = luma(magma(k as f32 / 16.0));
-            assert!(l > last, "{k}");
-            last = l;
-        }
     }
 }

@@ -83,14 +83,7 @@ impl Oracle {
             Light::Area(d) => super::outline::area_samples(d, k),
             Light::Line(l) => line_samples(l, k),
         };
-        let light_ok = light.is_finite() && samples.iter().all(|s: &Vec3| s.is_finite());
-        Oracle {
-            bvh: Bvh::build(triangles),
-            light,
-            samples,
-            light_ok,
-            rays: AtomicU64::new(0),
-        }
+        Oracle::with_samples(triangles, light, samples)
     }
 
     /// An oracle with the sample points `samples` on `light` given (0 samples: none visible):
