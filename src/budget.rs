@@ -92,12 +92,20 @@ pub const MAX_FUSED_LIST_BYTES: u64 = 128 << 20;
 /// overflowing (the method's `overflow` light-map channel shows 1 everywhere).
 pub const MAX_FUSED_EDGES: u64 = 1 << 19;
 
+/// Frames of `compare --orbit` (`--frames`): 720, a half-degree step round the orbit.
+pub const MAX_ORBIT_FRAMES: usize = 720;
+
+/// What `compare --orbit` keeps of every step to draw the worst method's motion afterwards: one
+/// byte per pixel per method per step, 1 GiB (a 512² orbit of 24 frames and 18 methods keeps
+/// 104 MiB). Checked from the flags before the first frame.
+pub const MAX_ORBIT_HELD_BYTES: u64 = 1 << 30;
+
 /// What `dbuffer inspect` may use on any input within the budget above: 2 GiB.
 pub const MEMORY_BOUND_BYTES: u64 = 2 << 30;
 
 /// The budget as the lines `dbuffer --help` prints after its commands.
 pub fn summary() -> String {
-    let rows: [(&str, String, &str); 17] = [
+    let rows: [(&str, String, &str); 19] = [
         (
             "MAX_SCENE_FILE_BYTES",
             bytes(MAX_SCENE_FILE_BYTES),
@@ -177,6 +185,16 @@ pub fn summary() -> String {
             "MAX_FUSED_EDGES",
             MAX_FUSED_EDGES.to_string(),
             "dbuffer-fused's candidate edges (over it: dbuffer's V everywhere)",
+        ),
+        (
+            "MAX_ORBIT_FRAMES",
+            MAX_ORBIT_FRAMES.to_string(),
+            "--frames of compare --orbit",
+        ),
+        (
+            "MAX_ORBIT_HELD_BYTES",
+            bytes(MAX_ORBIT_HELD_BYTES),
+            "compare --orbit: pixels × methods × (frames − 1), one byte each",
         ),
         (
             "MEMORY_BOUND_BYTES",

@@ -59,9 +59,18 @@ enum Command {
         /// Folder for the images and reports (created if missing).
         #[arg(long)]
         out: std::path::PathBuf,
-        /// Image size, WxH (at most 64 Mpixels, sides up to 16384).
-        #[arg(long, default_value = "512x512")]
-        size: String,
+        /// Image size, WxH (at most 64 Mpixels, sides up to 16384); default 512x512, 256x256
+        /// with --orbit.
+        #[arg(long)]
+        size: Option<String>,
+        /// Also every method in motion: the light (or the camera) round the orbit of
+        /// `animate`, the temporal error and popping of each method against the reference
+        /// (K 256 unless --samples says), a plot per method and motion.png.
+        #[arg(long)]
+        orbit: Option<String>,
+        /// Frames of the --orbit (2 to 720).
+        #[arg(long, default_value_t = 24)]
+        frames: usize,
         /// V(t) of the D-buffer methods: smoothstep, sqrt, exact or linear.
         #[arg(long, default_value = "exact")]
         vt: String,
@@ -214,13 +223,17 @@ fn main() -> ExitCode {
             scene,
             out,
             size,
+            orbit,
+            frames,
             vt,
             dbuffer_size,
             knobs,
         }) => cli::compare(&cli::CompareArgs {
             scene: &scene,
             out: &out,
-            size: &size,
+            size: size.as_deref(),
+            orbit: orbit.as_deref(),
+            frames,
             vt: &vt,
             dbuffer_size,
             knobs: &knobs,

@@ -18,6 +18,7 @@
 const CORNERS_PER_ROW: u32 = 512u;
 
 fn corner_point(k: u32, j: u32) -> vec3<f32> {
+    count_work(1.0);
     return textureLoad(corners, vec2<u32>(3u * (k % CORNERS_PER_ROW) + j, k / CORNERS_PER_ROW), 0).xyz;
 }
 
@@ -32,6 +33,7 @@ fn corner_visibility(x: vec3<f32>, k: u32) -> f32 {
     }
     // apex.w: 1 convex, -1 reflex, 0 unclear (geometry::FanCorner::convex).
     let apex = textureLoad(corners, vec2<u32>(3u * (k % CORNERS_PER_ROW), k / CORNERS_PER_ROW), 0);
+    count_work(1.0);
     let convex = apex.w;
     if convex == 0.0 {
         return -1.0;
@@ -81,6 +83,8 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     // distance and |cx_s|, f = S (D − X) / (2 X (D − S)) is t (hidden) or 1 − t (visible), for
     // D > X; no crossing before the point (X = 0 or D <= X) is umbra (hidden) or lit (visible).
     let xs = select(textureLoad(d_p, l.texel, 0), textureLoad(d_u, l.texel, 0), hidden);
+    // The cost view counts texels read: |cx_o| and both channels (a select reads both).
+    count_work(3.0);
     let crossed = xs.x > 0.0 && d > xs.x;
     let f = clamp(xs.y * (d - xs.x) / (2.0 * xs.x * (d - xs.y)), 0.0, 0.5);
     var out: Visibility;
@@ -98,6 +102,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         let corner = corner_visibility(x, u32(round(-xs.z - 2.0)));
         if corner >= 0.0 {
             out.v = corner;
+            took_path(1.0);
         }
     }
     // Outside the fitted frustum no penumbra can reach: lit. Behind the one-sided light, or on
@@ -105,6 +110,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     let dark = !in_front_of_light(x) || !faces_light_center(x, n);
     if !l.inside {
         out = plain(1.0);
+        took_path(3.0);
     }
     // shadow.knobs.x = 1 (--dbuffer-horizon): at most the part of the light in front of the
     // receiver's own plane. A caster's face whose plane cuts the light sits on its own
@@ -112,9 +118,11 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     let horizon = horizon_fraction(x, n);
     if shadow.knobs.x > 0.5 && horizon < out.v {
         out = plain(horizon);
+        took_path(2.0);
     }
     if dark {
         out = plain(0.0);
+        took_path(4.0);
     }
     return out;
 }

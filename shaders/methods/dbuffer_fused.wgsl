@@ -356,6 +356,7 @@ fn mask_visibility(x: vec3<f32>, l: LightLookup, hidden: bool, first: u32, count
             }
             e = edges[lists[first + i]];
             i++;
+            count_work(1.0);
             // L(c): the sweep from the texel's ray to x passes the plane through c and an
             // outline seen from c, within the edge.
             let sx = dot(e.mc.xyz, x - c);
@@ -388,7 +389,9 @@ fn mask_visibility(x: vec3<f32>, l: LightLookup, hidden: bool, first: u32, count
     let hidden_c = select(hidden, centre > 0, known);
     // No chord cuts the disk: all of it is as the centre is.
     var v = select(1.0, 0.0, hidden_c);
+    took_path(1.0);
     if layers > 0 {
+        took_path(3.0);
         // The samples in use (the LUT leaves the others out of every region: they count 0).
         let n_samples = min(fused.samples, 128u);
         let filled = clamp(vec4<i32>(i32(n_samples)) - vec4<i32>(0, 32, 64, 96), vec4<i32>(0), vec4<i32>(32));
@@ -411,6 +414,7 @@ fn mask_visibility(x: vec3<f32>, l: LightLookup, hidden: bool, first: u32, count
         let one_deep = equal_to(counter, 16 - lc) | equal_to(counter, 16 + layers - lc);
         if all((one_deep & valid) == valid) {
             v = clamp(1.0 - (f32(lc) + integral) / f32(layers), 0.0, 1.0);
+            took_path(2.0);
         }
     }
     return v;
@@ -432,6 +436,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         if overflow {
             // With the receiver's horizon, as dbuffer's default (its fans' chords: no corners).
             out = paper_visibility(l, hidden);
+            took_path(4.0);
             let horizon = horizon_fraction(x, n);
             if horizon < out.v {
                 out = plain(horizon);

@@ -20,6 +20,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         return outside;
     }
     let texel = textureLoad(d_o, l.texel, 0);
+    count_work(1.0);
     let d = l.d * shadow.knobs.x;
     // A depth level (the rounding is half of one), and the slope bias of the hard test.
     let bias = 1.0 / shadow.knobs.y + d * l.rel_bias;

@@ -11,5 +11,6 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     if !l.inside {
         return plain(1.0);
     }
+    count_work(1.0);
     return plain(select(1.0, 0.0, hidden_from_center(l)));
 }

@@ -17,6 +17,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     for (var dy = -radius; dy <= radius; dy++) {
         for (var dx = -radius; dx <= radius; dx++) {
             let tap = l.texel + vec2<i32>(dx, dy);
+            count_work(1.0);
             lit += lit_at(tap, receiver_distance(tap, x, n, l.d), l.rel_bias);
         }
     }

@@ -43,6 +43,7 @@ fn pcss(x: vec3<f32>, n: vec3<f32>, l: LightLookup, pixel: vec2<f32>) -> f32 {
     for (var i = 0u; i < blocker_taps; i++) {
         let tap = vec2<i32>(floor(centre + rot * poisson(i) * search));
         let q = clamp(tap, vec2<i32>(0), vec2<i32>(i32(size) - 1));
+        count_work(1.0);
         let o = textureLoad(d_o, q, 0).x;
         let expected = receiver_distance(q, x, n, d);
         if o + expected * l.rel_bias < expected {
@@ -51,14 +52,17 @@ fn pcss(x: vec3<f32>, n: vec3<f32>, l: LightLookup, pixel: vec2<f32>) -> f32 {
         }
     }
     if blockers == 0.0 {
+        took_path(1.0);
         return 1.0;
     }
+    took_path(2.0);
     let blocker = sum / blockers;
     let width = clamp(light_width_in_texels(r, d, blocker), 1.0, size * 0.5);
     var lit = 0.0;
     let filter_taps = u32(shadow.knobs.y);
     for (var i = 0u; i < filter_taps; i++) {
         let tap = vec2<i32>(floor(centre + rot * poisson(i) * width));
+        count_work(1.0);
         lit += lit_at(tap, receiver_distance(tap, x, n, d), l.rel_bias);
     }
     return lit / f32(filter_taps);

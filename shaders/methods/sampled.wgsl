@@ -29,6 +29,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
         let texel = vec2<i32>(clamp(floor(uv * size), vec2<f32>(0.0), vec2<f32>(size - 1.0)));
         let o = textureLoad(sample_maps, texel, i32(i), 0).x;
+        count_work(1.0);
         let cos_i = clamp(dot(n, to_q) / dq, 0.05, 1.0);
         let tan_i = sqrt(1.0 - cos_i * cos_i) / cos_i;
         let bias = dq * (sampled.bias_constant + sampled.bias_slope * sampled.texel_slope * tan_i);

@@ -93,6 +93,7 @@ fn ray_hits(x: vec3<f32>, q: vec3<f32>, rel_bias: f32, offset: f32) -> bool {
         }
         let texel = texel_of(vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5));
         let o = textureLoad(d_o, texel, 0).x;
+        count_work(1.0);
         // The ray point's distance, less the shadow test's bias.
         let r = length(y - c) * (1.0 - rel_bias);
         if history < 0.0 {
@@ -152,9 +153,11 @@ fn smrt(x: vec3<f32>, n: vec3<f32>, l: LightLookup, pixel: vec2<f32>) -> f32 {
         let first = ray_lit(x, n, rotation, l.rel_bias, offset);
         let second = ray_lit(x, n, fract(rotation + vec2<f32>(0.5)), l.rel_bias, offset);
         if first == second {
+            took_path(1.0);
             return f32(first);
         }
     }
+    took_path(2.0);
     var lit = 0u;
     for (var i = 0u; i < rays; i++) {
         // A Fibonacci lattice over the unit square, rotated per pixel: stratified in both

@@ -31,6 +31,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         return plain(1.0);
     }
     let m = textureLoad(moments, l.texel, 0).xy;
+    count_work(1.0);
     // The receiver's distance less the shadow test's slope-scaled bias.
     return plain(chebyshev(m, l.d * (1.0 - l.rel_bias)));
 }

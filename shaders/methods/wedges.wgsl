@@ -18,6 +18,9 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     if !in_front_of_light(x) {
         return plain(0.0);
     }
+    // The cost view: the wedge fragments the coverage pass shaded at this pixel (its sum's y).
+    let here = clamp(vec2<i32>(floor(pixel)), vec2<i32>(0), vec2<i32>(textureDimensions(wedge_sum)) - 1);
+    count_work(textureLoad(wedge_sum, here, 0).y);
     var v: f32;
     if !faces_light_center(x, n) {
         let size = vec2<i32>(textureDimensions(wedge_sum));

@@ -1,12 +1,14 @@
 // The probe (src/render/passes/probe.rs): what the lab reads back of a frame instead of the
 // frame. PROBE_PIXEL: every value under the cursor — colour, V, t + 2·branch, depth, the world
-// position, the reference V, and the three light-map texels under that position (or under the
-// cursor in the light-maps view) — PIXEL_FLOATS floats. PROBE_FIT: the shown scalar at samples on
-// a grid, for the display range's auto-fit (NaN where there is none).
+// position, the reference V, the method's cost (work, path), and the three light-map texels
+// under that position (or under the cursor in the light-maps view) — PIXEL_FLOATS floats. PROBE_FIT: the shown scalar at samples on
+// a grid, for the display range's auto-fit (NaN where there is none). PROBE_MOTION: V at the
+// same grid's pixels whatever the view (NaN where no surface), for the lab's motion meter.
 // #include shared/view_inputs.wgsl
 
 const PROBE_PIXEL: u32 = 0u;
 const PROBE_FIT: u32 = 1u;
+const PROBE_MOTION: u32 = 2u;
 const PIXEL_FLOATS: u32 = 28u;
 const NAN_BITS: u32 = 0x7fc00000u;
 
@@ -73,6 +75,9 @@ fn probe_pixel() {
     if view.has_reference != 0u {
         out[8] = textureLoad(reference_v, p, 0).x;
     }
+    let work = textureLoad(cost, p, 0).xy;
+    out[12] = work.x;
+    out[13] = work.y;
     if z > 0.0 {
         let dims = vec2<f32>(size);
         let ndc = vec2<f32>((f32(p.x) + 0.5) / dims.x * 2.0 - 1.0, 1.0 - (f32(p.y) + 0.5) / dims.y * 2.0);
@@ -88,6 +93,16 @@ fn probe_pixel() {
             put_texels(16u, q);
         }
     }
+}
+
+// V at the pixel of grid sample i (probe.rs's grid_pixel), NaN where no surface.
+fn motion_value(i: u32, grid: u32) -> f32 {
+    let dims = vec2<f32>(textureDimensions(data));
+    let p = vec2<i32>(vec2<f32>((f32(i % grid) + 0.5) / f32(grid) * dims.x, (f32(i / grid) + 0.5) / f32(grid) * dims.y));
+    if !is_hit(p) {
+        return nan();
+    }
+    return textureLoad(data, p, 0).x;
 }
 
 // The value the fit sees at grid sample i.
@@ -132,6 +147,7 @@ fn fit_value(i: u32, grid: u32) -> f32 {
             }
             return abs(d.x - textureLoad(reference_v, p, 0).x);
         }
+        case VIEW_COST: { return textureLoad(cost, p, 0).x; }
         default: { return nan(); }
     }
 }
@@ -146,6 +162,10 @@ fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let grid = max(view.probe.w, 1u);
     if id.x < grid * grid {
-        out[id.x] = fit_value(id.x, grid);
+        if view.probe.z == PROBE_MOTION {
+            out[id.x] = motion_value(id.x, grid);
+        } else {
+            out[id.x] = fit_value(id.x, grid);
+        }
     }
 }

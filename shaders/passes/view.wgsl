@@ -83,6 +83,14 @@ fn camera_view(p: vec2<i32>) -> vec3<f32> {
             }
             return mapped(abs(d.x - textureLoad(reference_v, p, 0).x));
         }
+        case VIEW_COST: { return mapped(textureLoad(cost, p, 0).x); }
+        // The FLIP map handed in, bound where the reference V is for the error view.
+        case VIEW_FLIP: {
+            if view.has_reference == 0u {
+                return textureLoad(color_bytes, p, 0).rgb;
+            }
+            return mapped(textureLoad(reference_v, p, 0).x);
+        }
         default: {
             switch u32(branch) {
                 case 0u: { return BRANCH_UMBRA_COLOR; }

@@ -135,9 +135,6 @@ fn fs_wedge(f: WedgeOut) -> @location(0) vec4<f32> {
     if x.w < 0.5 {
         discard;
     }
-    let c = edge_coverage(x.xyz, f.e0, f.e1);
-    if c == 0.0 {
-        discard;
-    }
-    return vec4<f32>(c, 0.0, 0.0, 0.0);
+    // y counts the fragment (the wedges' cost view), whether its edge covers any light or not.
+    return vec4<f32>(edge_coverage(x.xyz, f.e0, f.e1), 1.0, 0.0, 0.0);
 }

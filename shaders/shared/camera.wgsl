@@ -243,6 +243,24 @@ fn horizon_fraction(x: vec3<f32>, n: vec3<f32>) -> f32 {
     return disk_segment_fraction(-k / s);
 }
 
+// The work the method did at this pixel, for the cost views (src/render/methods/mod.rs, Cost;
+// docs/development/adding-a-method.md): x counts its units of work — shadow-map taps, march
+// steps, listed edges, maps read, rays — and y the path it took (0 its plain path, other codes
+// as its MethodSpec's `.cost(…)` names them). A method adds where it works, inside whatever
+// helper does the work: `count_work(n)`, `took_path(code)`; one that never calls them reports
+// 0 everywhere. fs_main writes it to the cost target. A module-scope private rather than a field
+// of Visibility, so a helper deep in a method counts its own loop without threading a counter
+// through every return value (and `plain()` replacing a Visibility cannot drop the count).
+var<private> method_cost: vec2<f32>;
+
+fn count_work(n: f32) {
+    method_cost.x += n;
+}
+
+fn took_path(code: f32) {
+    method_cost.y = code;
+}
+
 // V given for a method that is not the D-buffer: t = V, the branch by the class of V.
 fn plain(v: f32) -> Visibility {
     var out: Visibility;
@@ -288,6 +306,8 @@ struct Targets {
     @location(0) color: vec4<f32>,
     // V, and t + 2 × branch code: t is in [0, 1], so both are exact in one f32.
     @location(1) data: vec2<f32>,
+    // The method's work here and the path it took (method_cost).
+    @location(2) cost: vec2<f32>,
 };
 
 @fragment
@@ -300,6 +320,7 @@ fn fs_main(f: SurfaceOut) -> Targets {
     if dot(n, to_eye) < 0.0 {
         n = -n;
     }
+    method_cost = vec2<f32>(0.0);
     let vis = method_visibility(f.world, n, f.clip.xy);
     let l = normalize(camera.light_center - f.world);
     let cos_receiver = max(dot(n, l), 0.0);
@@ -310,5 +331,6 @@ fn fs_main(f: SurfaceOut) -> Targets {
     var out: Targets;
     out.color = vec4<f32>(shade, 1.0);
     out.data = vec2<f32>(vis.v, vis.t + 2.0 * vis.branch);
+    out.cost = method_cost;
     return out;
 }

@@ -43,6 +43,8 @@ fn msm_distance(z: f32) -> f32 {
 fn table_at(q: vec2<i32>) -> vec4<u32> {
     let size = i32(shadow.size);
     let i = u32(clamp(q.y, 0, size - 1) * size + clamp(q.x, 0, size - 1));
+    // Every read of the table is a unit of the cost view (shared/camera.wgsl).
+    count_work(1.0);
     return select(vec4<u32>(0u), table[i], q.x >= 0 && q.y >= 0);
 }
 

@@ -18,5 +18,6 @@ fn screen_hard_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visib
     if !in_front_of_light(x) || !faces_light_center(x, n) {
         return plain(0.0);
     }
+    count_work(1.0);
     return plain(screen_visibility(pixel));
 }

@@ -36,6 +36,8 @@ const VIEW_T: u32 = 2u;
 const VIEW_CLASSES: u32 = 3u;
 const VIEW_ERROR: u32 = 4u;
 const VIEW_LIGHT_MAPS: u32 = 5u;
+const VIEW_COST: u32 = 6u;
+const VIEW_FLIP: u32 = 7u;
 
 const COLORMAP_GRAY: u32 = 0u;
 const COLORMAP_HEAT: u32 = 1u;
@@ -55,6 +57,8 @@ const NO_FALLBACK: u32 = 255u;
 @group(0) @binding(5) var map0: texture_2d<f32>;
 @group(0) @binding(6) var map1: texture_2d<f32>;
 @group(0) @binding(7) var map2: texture_2d<f32>;
+// The camera pass's cost target: the method's work per pixel and the path it took.
+@group(0) @binding(8) var cost: texture_2d<f32>;
 
 fn is_hit(p: vec2<i32>) -> bool {
     return textureLoad(depth, p, 0).r > 0.0;

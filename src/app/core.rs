@@ -46,6 +46,8 @@ pub struct Core {
     pub reference_serial: u64,
     /// Bumped whenever an exact hard shadow is handed to the GPU.
     pub hard_serial: u64,
+    /// The reference's shaded image for the FLIP view (never shown itself).
+    pub flip_targets: FrameTargets,
 }
 
 impl Core {
@@ -60,6 +62,7 @@ impl Core {
             slots: [Slot::new(), Slot::new()],
             reference_serial: 0,
             hard_serial: 0,
+            flip_targets: FrameTargets::new(),
         }
     }
 

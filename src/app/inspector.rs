@@ -145,6 +145,15 @@ impl LabApp {
                 .unwrap_or_default();
             rows.push((format!("reference V{samples}"), value(p.reference)));
         }
+        // The method's work here (its cost view), in the unit its registry entry names.
+        let cost = shown.method.spec().cost;
+        let [work, path] = p.cost;
+        if work.is_finite() {
+            rows.push((cost.unit.into(), format!("{work}")));
+        }
+        if !cost.paths.is_empty() && path.is_finite() {
+            rows.push(("path".into(), cost.path_name(path)));
+        }
         rows
     }
 

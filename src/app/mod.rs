@@ -17,6 +17,7 @@ mod files;
 mod inspector;
 mod light_fields;
 pub mod light_panel;
+pub mod motion;
 mod overlays;
 mod panels;
 pub mod record;
@@ -102,6 +103,8 @@ pub struct LabApp {
     inspector: inspector::Inspector,
     /// The inspector's "light as seen from this pixel" panel.
     light_panel: light_panel::LightPanel,
+    /// The temporal error while the light or a caster is dragged.
+    motion: motion::MotionMeter,
     stats: Stats,
     open_text: String,
     smoke: Option<smoke::Smoke>,
@@ -178,6 +181,7 @@ impl LabApp {
             viewport: viewport::ViewportState::default(),
             inspector: inspector::Inspector::default(),
             light_panel: light_panel::LightPanel::default(),
+            motion: motion::MotionMeter::default(),
             stats: Stats::default(),
             open_text: String::new(),
             smoke: options.smoke_screenshot.map(smoke::Smoke::new),
@@ -257,6 +261,16 @@ impl LabApp {
 
     /// Bytes read back from the GPU by the last window frame that submitted work, and the most
     /// over the last few seconds of them.
+    /// The motion meter's values over its window and what the newest measured (tests).
+    pub fn motion_series(&self) -> (Vec<f32>, Option<motion::Measure>) {
+        self.motion.series()
+    }
+
+    /// Whether the motion meter's plot is on screen.
+    pub fn motion_showing(&self) -> bool {
+        self.motion.showing()
+    }
+
     pub fn read_bytes(&self) -> Option<(u64, u64)> {
         self.stats.read_bytes()
     }
@@ -305,6 +319,7 @@ impl LabApp {
                     core.replace_scene(scene);
                 }
                 self.bvhs = vec![None; doc.file.objects.len()];
+                self.motion.reset();
                 self.camera = doc.camera();
                 self.doc = doc;
                 self.history.clear();

@@ -342,13 +342,25 @@ impl LabApp {
                     rows.push((Some(Color32::from_rgb(r, g, b)), name.to_string()));
                 }
             }
-            View::Visibility | View::T | View::Error | View::DBuffer => {
+            View::Visibility | View::T | View::Error | View::Flip | View::DBuffer | View::Cost => {
                 if let Some(m) = self.settings.mapping(view) {
                     bar = Some(*m);
                 }
                 let what = match view {
                     View::Visibility => "V".to_string(),
                     View::T => "t".to_string(),
+                    View::Flip => {
+                        "FLIP of the image against the reference's (0 … 1, 67 px a degree)"
+                            .to_string()
+                    }
+                    View::Cost => {
+                        let m = self.settings.method();
+                        let c = m.spec().cost;
+                        match c.constant {
+                            Some(why) => format!("{m}: {} per pixel, constant ({why})", c.unit),
+                            None => format!("{m}: {} per pixel", c.unit),
+                        }
+                    }
                     View::Error => {
                         let reference = self.viewport.shown[0].as_ref().and_then(|s| {
                             if s.method.is_reference() {

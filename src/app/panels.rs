@@ -277,9 +277,14 @@ impl LabApp {
         ui.heading("View");
         let current = self.settings.view;
         ui.horizontal_wrapped(|ui| {
-            for v in View::ALL.into_iter().filter(|v| *v != View::DBuffer) {
+            for v in View::ALL
+                .into_iter()
+                .filter(|v| *v != View::DBuffer && *v != View::Flip)
+            {
+                // The error view is |ΔV| or FLIP (the choice below it).
+                let on = current == v || (v == View::Error && current == View::Flip);
                 if ui
-                    .selectable_label(current == v, v.name())
+                    .selectable_label(on, v.name())
                     .on_hover_text(v.description())
                     .clicked()
                 {
@@ -287,6 +292,20 @@ impl LabApp {
                 }
             }
         });
+        if matches!(current, View::Error | View::Flip) {
+            ui.horizontal(|ui| {
+                ui.label("Error");
+                for (v, name) in [(View::Error, "|ΔV|"), (View::Flip, "FLIP")] {
+                    if ui
+                        .selectable_label(current == v, name)
+                        .on_hover_text(v.description())
+                        .clicked()
+                    {
+                        self.settings.view = v;
+                    }
+                }
+            });
+        }
         // The shown method's light-space channels (the D-buffer's by default).
         let channels = self
             .core

@@ -32,6 +32,10 @@ pub struct Settings {
     pub t_map: Mapping,
     pub error_map: Mapping,
     pub dbuffer_map: Mapping,
+    /// The cost view's range (auto-fitted by default: each method counts its own unit).
+    pub cost_map: Mapping,
+    /// The FLIP view's range: FLIP's own 0 … 1.
+    pub flip_map: Mapping,
     pub overlays: Overlays,
     /// D-buffer (and shadow map) size in texels.
     pub dbuffer_size: u32,
@@ -85,6 +89,13 @@ impl Default for Settings {
             t_map: Mapping::unit(),
             error_map: Mapping::error(),
             dbuffer_map: Mapping::auto(),
+            cost_map: Mapping::auto(),
+            flip_map: Mapping {
+                black: 0.0,
+                white: 1.0,
+                map: crate::render::passes::view::ColorMap::Heat,
+                auto: false,
+            },
             overlays: Overlays::default(),
             dbuffer_size: 1024,
             render_scale: 1.0,
@@ -113,7 +124,7 @@ impl Settings {
     /// Whether what is shown needs the reference: it is a shown method, or the error view
     /// measures against it. Only then does it converge (and the status bar show its progress).
     pub fn needs_reference(&self) -> bool {
-        self.shows_reference() || self.view == View::Error
+        self.shows_reference() || self.view == View::Error || self.view == View::Flip
     }
 
     pub fn vt(&self) -> VtVariant {
@@ -127,6 +138,8 @@ impl Settings {
             View::T => Some(&self.t_map),
             View::Error => Some(&self.error_map),
             View::DBuffer => Some(&self.dbuffer_map),
+            View::Cost => Some(&self.cost_map),
+            View::Flip => Some(&self.flip_map),
             View::Final | View::Classes => None,
         }
     }
@@ -137,6 +150,8 @@ impl Settings {
             View::T => Some(&mut self.t_map),
             View::Error => Some(&mut self.error_map),
             View::DBuffer => Some(&mut self.dbuffer_map),
+            View::Cost => Some(&mut self.cost_map),
+            View::Flip => Some(&mut self.flip_map),
             View::Final | View::Classes => None,
         }
     }

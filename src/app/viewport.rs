@@ -9,6 +9,7 @@ use glam::Vec3;
 
 use super::camera::{self, Projector};
 use super::doc::f3;
+use super::motion::Measure;
 use super::{LabApp, Level, Selection};
 use crate::geometry::bvh::Bvh;
 use crate::render::methods::reference::SAMPLES;
@@ -83,6 +84,10 @@ pub struct ViewportState {
     pub hover: Option<Hover>,
     keys: [Option<RenderKey>; 2],
     views: [Option<ViewKey>; 2],
+    /// The frame and reference the FLIP map on the GPU was made for, and a count of the maps
+    /// handed over (the FLIP view draws again when it grows).
+    flipped: Option<(RenderKey, u64)>,
+    flip_serial: u64,
     /// The frame and view the last fit probe of each slot was for.
     fitted: [Option<(RenderKey, View, [bool; 4])>; 2],
     /// The pixel probed last, per slot.
@@ -160,6 +165,7 @@ impl LabApp {
             self.draw_overlays(ui.painter(), image_rect);
         }
         self.draw_legends(ui, rect);
+        self.draw_motion(ui, rect);
         if let Some(note) = self.viewport_note() {
             ui.painter().text(
                 rect.center(),
@@ -169,6 +175,73 @@ impl LabApp {
                 Color32::from_rgb(255, 140, 120),
             );
         }
+    }
+
+    /// The motion meter's plot, top right of the viewport, while a drag moves the light or a
+    /// caster (and shortly after).
+    fn draw_motion(&self, ui: &egui::Ui, rect: Rect) {
+        if !self.motion.showing() {
+            return;
+        }
+        let (values, measure) = self.motion.series();
+        let Some(measure) = measure else { return };
+        let size = Vec2::new(260.0f32.min(rect.width() - 16.0), 74.0);
+        let area = Rect::from_min_size(
+            Pos2::new(rect.right() - size.x - 8.0, rect.top() + 8.0),
+            size,
+        );
+        if size.x < 120.0 {
+            return;
+        }
+        let painter = ui.painter().with_clip_rect(area);
+        painter.rect_filled(area, 4.0, Color32::from_black_alpha(170));
+        let title = match measure {
+            Measure::AgainstReference => "temporal error",
+            Measure::MethodAlone => "frame-to-frame |ΔV|",
+        };
+        let top = values.iter().copied().fold(0.01f32, f32::max);
+        painter.text(
+            area.left_top() + Vec2::new(6.0, 3.0),
+            egui::Align2::LEFT_TOP,
+            format!(
+                "{title}: {:.4} (max {top:.3})",
+                values.last().copied().unwrap_or(0.0)
+            ),
+            egui::FontId::proportional(11.0),
+            Color32::WHITE,
+        );
+        let plot = Rect::from_min_max(
+            area.left_top() + Vec2::new(6.0, 18.0),
+            area.right_bottom() - Vec2::new(6.0, 14.0),
+        );
+        if values.len() >= 2 {
+            let n = values.len() - 1;
+            let points: Vec<Pos2> = values
+                .iter()
+                .enumerate()
+                .map(|(k, v)| {
+                    Pos2::new(
+                        plot.left() + plot.width() * k as f32 / n as f32,
+                        plot.bottom() - plot.height() * (v / top).clamp(0.0, 1.0),
+                    )
+                })
+                .collect();
+            painter.add(egui::Shape::line(
+                points,
+                egui::Stroke::new(1.5, Color32::from_rgb(250, 170, 60)),
+            ));
+        }
+        painter.text(
+            area.left_bottom() + Vec2::new(6.0, -2.0),
+            egui::Align2::LEFT_BOTTOM,
+            format!(
+                "last {} s · {}",
+                super::motion::WINDOW.as_secs(),
+                measure.short()
+            ),
+            egui::FontId::proportional(9.0),
+            Color32::GRAY,
+        );
     }
 
     /// Where the image goes inside the viewport: all of it, or a centred square for the
@@ -199,6 +272,7 @@ impl LabApp {
             vt: self.settings.vt(),
             knobs: knobs.with(&SAMPLES, self.settings.reference_samples),
             read_dbuffer: false,
+            read_cost: false,
         }
     }
 
@@ -231,6 +305,14 @@ impl LabApp {
         let needs_reference = self.settings.needs_reference();
         let hover = self.viewport.hover;
         let revision = self.revision;
+        // A drag of the light or a caster: the motion meter follows the shown method.
+        let moving = matches!(
+            self.viewport.drag,
+            Some(Drag::Move {
+                target: Selection::Light | Selection::LightEnd(_) | Selection::Object(_),
+                ..
+            })
+        );
         let camera = self.camera;
         let Some(core) = self.core.as_mut() else {
             return;
@@ -350,10 +432,10 @@ impl LabApp {
             };
             let view_key = ViewKey {
                 params,
-                reference: if params.view == View::Error {
-                    reference_serial
-                } else {
-                    0
+                reference: match params.view {
+                    View::Error => reference_serial,
+                    View::Flip => self.viewport.flip_serial,
+                    _ => 0,
                 },
             };
             let render = self.viewport.keys[i] != Some(key) || slot.targets.rendered.is_none();
@@ -375,6 +457,12 @@ impl LabApp {
                     self.viewport.probed[i] = here;
                 }
             }
+            if moving && render && i == 0 {
+                let tag = self
+                    .motion
+                    .frame(core.session.scene(), request.width, request.height);
+                probes.push(ProbeRequest::Motion { tag, params });
+            }
             let fit_key = Some((key, params.view, params.channels));
             if params.mapping.auto
                 && params.view != View::Final
@@ -393,7 +481,7 @@ impl LabApp {
             }
             self.viewport.keys[i] = Some(key);
             self.viewport.views[i] = Some(view_key);
-            let note = (params.view == View::Error && !reference_ready)
+            let note = (matches!(params.view, View::Error | View::Flip) && !reference_ready)
                 .then(|| "no reference of this size yet: the error view waits for it".to_string());
             self.viewport.shown[i] = Some(Shown {
                 method,
@@ -430,6 +518,23 @@ impl LabApp {
             drop(jobs);
             self.stats.submitted(0, 0.0, None, 0);
         }
+        // The FLIP view: the main slot's image against the reference's, on this thread, once per
+        // new frame or reference snapshot; drawn by the next frame's view pass.
+        if params.view == View::Flip && reference_ready {
+            if let Some(key) = self.viewport.keys[0] {
+                let wanted = Some((key, reference_serial));
+                if self.viewport.flipped != wanted {
+                    match flip_map(core, &key.request) {
+                        Ok(()) => {
+                            self.viewport.flipped = wanted;
+                            self.viewport.flip_serial += 1;
+                            ctx.request_repaint();
+                        }
+                        Err(e) => errors.push(format!("FLIP: {e}")),
+                    }
+                }
+            }
+        }
         if let Some(rs) = frame.wgpu_render_state() {
             core.register_textures(rs);
         }
@@ -458,6 +563,11 @@ impl LabApp {
                     ProbeRequest::Pixel { x, y, params } => {
                         self.inspector.arrived(i, x, y, params.view, r.values);
                     }
+                    ProbeRequest::Motion { tag, .. } if i == 0 => {
+                        self.motion.arrived(tag, r.values);
+                        ctx.request_repaint();
+                    }
+                    ProbeRequest::Motion { .. } => {}
                     ProbeRequest::Fit { params } => {
                         if let Some(m) = self.settings.mapping_mut(params.view) {
                             let before = *m;
@@ -656,6 +766,9 @@ impl LabApp {
         }
         if response.drag_stopped() {
             self.viewport.drag = None;
+            self.motion.drag_ended();
+            // The plot lingers a moment after the drag: draw it away then.
+            ctx.request_repaint_after(std::time::Duration::from_secs(4));
             self.history.close();
         }
         if response.clicked() {
@@ -773,6 +886,46 @@ impl LabApp {
         let rect = self.viewport.rect?;
         Projector::new(&self.camera, rect).point(p)
     }
+}
+
+/// The FLIP map of the main slot's frame (`request`) against the reference's shaded image of
+/// the same view, handed to the GPU for the FLIP view: the reference's camera pass into the
+/// core's own targets, both images read back (what the map needs: two colour images), FLIP.
+fn flip_map(core: &mut super::core::Core, request: &FrameRequest) -> Result<(), String> {
+    use crate::geometry::flip;
+    let reference = FrameRequest {
+        method: Method::REFERENCE,
+        ..*request
+    };
+    core.session
+        .submit(
+            &core.ctx,
+            &mut [FrameJob {
+                targets: &mut core.flip_targets,
+                request: reference,
+                view: None,
+                render: true,
+                probes: Vec::new(),
+            }],
+        )
+        .map_err(|e| e.to_string())?;
+    let truth = core
+        .session
+        .read(&core.ctx, &core.flip_targets, None)
+        .map_err(|e| e.to_string())?;
+    let shown = core.read_slot(0, None).map_err(|e| e.to_string())?;
+    let map = flip::ldr_flip(
+        &crate::compare::rgb_of(&truth),
+        &crate::compare::rgb_of(&shown),
+        shown.width,
+        shown.height,
+        flip::DEFAULT_PPD,
+    )
+    .map_err(|e| e.to_string())?;
+    let key = core.session.reference_key(&reference);
+    core.session
+        .set_flip(&core.ctx, key, &map)
+        .map_err(|e| e.to_string())
 }
 
 /// The closest approach of the ray `origin + t·dir` (unit `dir`) to the segment `a`–`b`: the

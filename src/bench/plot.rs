@@ -13,15 +13,20 @@ use super::{BenchError, ScalingPoint};
 
 const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 /// The family name the plot asks for; "sans-serif" too, plotters' default.
-const FAMILY: &str = "dejavu-sans";
+pub(crate) const FAMILY: &str = "dejavu-sans";
 
-fn fonts() -> Result<(), BenchError> {
+/// Register the embedded font with plotters under [`FAMILY`] (once); whether it parsed. The
+/// plots of `compare --orbit` draw with it too.
+pub(crate) fn register_fonts() -> bool {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| {
+    *REGISTERED.get_or_init(|| {
         register_font(FAMILY, FontStyle::Normal, FONT).is_ok()
             && register_font("sans-serif", FontStyle::Normal, FONT).is_ok()
-    });
-    if ok {
+    })
+}
+
+fn fonts() -> Result<(), BenchError> {
+    if register_fonts() {
         Ok(())
     } else {
         Err(BenchError::Plot("the embedded font does not parse".into()))

@@ -190,6 +190,7 @@ fn request(config: &Config, size: u32, case: &Case) -> FrameRequest {
         vt: VtVariant::Smoothstep,
         knobs: case.knobs,
         read_dbuffer: false,
+        read_cost: false,
     }
 }
 

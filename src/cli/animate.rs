@@ -48,6 +48,7 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
             vt,
             knobs: args.knobs.knobs()?,
             read_dbuffer: false,
+            read_cost: false,
         },
     };
     spec.validate()?;

@@ -183,6 +183,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         vt,
         knobs,
         read_dbuffer: true,
+        read_cost: false,
     };
     let name = scene.name.clone();
     let mut session = offline.session(scene);

@@ -19,15 +19,33 @@ pub fn colormap(x: f32) -> [u8; 3] {
         [249.0, 142.0, 9.0],
         [252.0, 255.0, 164.0],
     ];
+    through(&STOPS, x)
+}
+
+/// FLIP's colour map for its error maps (magma, piecewise linear through 9 stops), `x` in [0, 1].
+pub fn magma(x: f32) -> [u8; 3] {
+    const STOPS: [[f32; 3]; 9] = [
+        [0.0, 0.0, 4.0],
+        [28.0, 16.0, 68.0],
+        [79.0, 18.0, 123.0],
+        [129.0, 37.0, 129.0],
+        [181.0, 54.0, 122.0],
+        [229.0, 80.0, 100.0],
+        [251.0, 135.0, 97.0],
+        [254.0, 194.0, 135.0],
+        [252.0, 253.0, 191.0],
+    ];
+    through(&STOPS, x)
+}
+
+/// The colour at `x` in [0, 1] (clamped; NaN as 0) of a map piecewise linear through `stops`
+/// (at least two), evenly spaced.
+fn through(stops: &[[f32; 3]], x: f32) -> [u8; 3] {
     let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-    let f = x * (STOPS.len() - 1) as f32;
-    let i = (f.floor() as usize).min(STOPS.len() - 2);
+    let f = x * (stops.len() - 1) as f32;
+    let i = (f.floor() as usize).min(stops.len() - 2);
     let t = f - i as f32;
-    let mut out = [0u8; 3];
-    for (k, o) in out.iter_mut().enumerate() {
-        *o = (STOPS[i][k] + (STOPS[i + 1][k] - STOPS[i][k]) * t).round() as u8;
-    }
-    out
+    [0, 1, 2].map(|k| (stops[i][k] + (stops[i + 1][k] - stops[i][k]) * t).round() as u8)
 }
 
 /// The colour of an error `|ΔV|`.
@@ -94,6 +112,79 @@ pub fn render(
     }
     draw_legend(&mut img, height, width);
     img
+}
+
+/// The FLIP map of a method against the reference (per pixel in [0, 1]) in FLIP's own colour
+/// map (magma), with a legend strip below it: ticks at 0, 0.2 … 1.
+pub fn flip(map: &[f32], width: u32, height: u32) -> RgbImage {
+    let mut img = RgbImage::from_pixel(width, height + LEGEND_HEIGHT, Rgb([255, 255, 255]));
+    for (i, v) in map.iter().enumerate() {
+        let (x, y) = (i as u32 % width, i as u32 / width);
+        if y >= height {
+            break;
+        }
+        img.put_pixel(x, y, Rgb(magma(*v)));
+    }
+    legend(&mut img, (height, width), magma, 1.0, false);
+    img
+}
+
+/// Each pixel's work (`cost[i][0]`) from black to the colour map's top at `max` (the method's
+/// largest: each method counts its own unit), with a legend of 0 … max below; masked pixels dark.
+pub fn cost(cost: &[[f32; 2]], mask: &[bool], width: u32, height: u32, max: f32) -> RgbImage {
+    let mut img = RgbImage::from_pixel(width, height + LEGEND_HEIGHT, Rgb([255, 255, 255]));
+    let top = max.max(1e-6);
+    for (i, c) in cost.iter().enumerate() {
+        let (x, y) = (i as u32 % width, i as u32 / width);
+        if y >= height {
+            break;
+        }
+        let rgb = if mask.get(i).copied().unwrap_or(false) {
+            colormap(c[0] / top)
+        } else {
+            MASKED_RGB
+        };
+        img.put_pixel(x, y, Rgb(rgb));
+    }
+    legend(&mut img, (height, width), colormap, max, true);
+    img
+}
+
+/// Under an image of width `width` whose legend strip starts at `top`: a colour bar of `map`
+/// over most of the width with six ticks from 0 to `full` (whole numbers when `counts`).
+fn legend(
+    img: &mut RgbImage,
+    (top, width): (u32, u32),
+    map: fn(f32) -> [u8; 3],
+    full: f32,
+    counts: bool,
+) {
+    let margin = 4;
+    let (x0, x1) = (margin, width.saturating_sub(margin + 12));
+    if x1 <= x0 + 10 {
+        return;
+    }
+    for x in x0..=x1 {
+        let f = (x - x0) as f32 / (x1 - x0) as f32;
+        for y in top + 4..top + 10 {
+            img.put_pixel(x, y, Rgb(map(f)));
+        }
+    }
+    for k in 0..=5u32 {
+        let f = k as f32 / 5.0;
+        let x = x0 + ((x1 - x0) as f32 * f).round() as u32;
+        for y in top + 10..top + 13 {
+            img.put_pixel(x, y, Rgb([0, 0, 0]));
+        }
+        let text = if counts {
+            format!("{}", (f * full).round())
+        } else {
+            format!("{:.1}", f * full)
+        };
+        let tw = text_width(&text, 1);
+        let tx = x.saturating_sub(tw / 2).min(width.saturating_sub(tw));
+        draw_text(img, &text, tx, top + 14, 1, [0, 0, 0]);
+    }
 }
 
 /// A colour bar over most of the width, ticks at 0, 0.1 … 0.5 with labels, and "|dV|".
@@ -187,15 +278,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_colormap_runs_dark_to_bright() {
+    fn the_colormaps_run_dark_to_bright() {
         let luma =
             |c: [u8; 3]| 0.3 * f32::from(c[0]) + 0.59 * f32::from(c[1]) + 0.11 * f32::from(c[2]);
-        let mut last = -1.0;
-        for k in 0..=20 {
-            let l = luma(colormap(k as f32 / 20.0));
-            assert!(l > last, "not monotonic at {k}");
-            last = l;
+        for map in [colormap, magma] {
+            let mut last = -1.0;
+            for k in 0..=20 {
+                let l = luma(map(k as f32 / 20.0));
+                assert!(l > last, "not monotonic at {k}");
+                last = l;
+            }
         }
+        assert_eq!(magma(f32::NAN), magma(0.0));
         assert_eq!(error_rgb(2.0), colormap(1.0));
         assert_eq!(colormap(f32::NAN), colormap(0.0));
     }

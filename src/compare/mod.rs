@@ -12,10 +12,12 @@
 pub mod heatmap;
 pub mod montage;
 pub mod report;
+pub mod temporal;
 
 use std::time::Instant;
 
 use crate::geometry::bvh::Bvh;
+use crate::geometry::flip;
 use crate::geometry::metrics::{self, HardMetrics, Metrics};
 use crate::geometry::{view, VtVariant};
 use crate::render::adapter::Verdict;
@@ -59,6 +61,16 @@ pub struct MethodResult {
     /// For a hard method (one that uses the light's centre as a point light), measured against
     /// `reference-hard` too.
     pub hard: Option<HardMetrics>,
+    /// FLIP of its shaded image against the reference's, per pixel ([`flip::ldr_flip`] at
+    /// [`flip::DEFAULT_PPD`]).
+    pub flip: Vec<f32>,
+    /// The mean of `flip` over every pixel (FLIP's own headline number).
+    pub flip_mean: f64,
+}
+
+/// A frame's shaded colour as FLIP takes it (sRGB, alpha dropped).
+pub fn rgb_of(frame: &Frame) -> Vec<[u8; 3]> {
+    frame.color.iter().map(|c| [c[0], c[1], c[2]]).collect()
 }
 
 /// Every method against the reference.
@@ -118,6 +130,8 @@ pub fn run(
         vt: request.vt,
         knobs: request.knobs,
         read_dbuffer: false,
+        // Each method's work per pixel: its cost heatmap.
+        read_cost: true,
     };
     let k = request.samples();
     progress(&format!(
@@ -147,6 +161,8 @@ pub fn run(
         wall_ms: cpu(&ref_report.cpu_ms, "frame_and_readback"),
         frame: reference,
         hard: None,
+        flip: Vec::new(),
+        flip_mean: 0.0,
     }];
     let mut not_applicable = Vec::new();
     for &method in Method::all() {
@@ -187,7 +203,22 @@ pub fn run(
             wall_ms,
             frame,
             hard: None,
+            flip: Vec::new(),
+            flip_mean: 0.0,
         });
+    }
+    // FLIP of every shaded image against the reference's (the reference's own: 0).
+    let reference_rgb = rgb_of(&results[0].frame);
+    for r in &mut results {
+        r.flip = flip::ldr_flip(
+            &reference_rgb,
+            &rgb_of(&r.frame),
+            request.width,
+            request.height,
+            flip::DEFAULT_PPD,
+        )
+        .map_err(|e| RenderError::Request(e.to_string()))?;
+        r.flip_mean = flip::mean(&r.flip);
     }
     // Every hard method against the exact hard shadow as well.
     let hard_reference = results

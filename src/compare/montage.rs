@@ -2,8 +2,9 @@
 //! (and the README's pictures are a run's own file, not assembled by hand). One tile per method,
 //! in the report's order (the reference first, then the registry's): a label with the method's
 //! name and headline numbers (class mismatch %, penumbra MAE, and against `reference-hard` for a
-//! hard method), then its image, its `|V − V_ref|` heatmap and — when the comparison has
-//! `reference-hard` — its mismatch against the exact hard shadow. A footer says what the rows
+//! hard method), then its image, its `|V − V_ref|` heatmap, its FLIP map against the reference's
+//! image and — when the comparison has `reference-hard` — its mismatch against the exact hard
+//! shadow. A footer says what the rows
 //! are.
 //!
 //! Tiles are downscaled by a whole factor so that no cell is wider or taller than [`MAX_CELL`]
@@ -46,7 +47,7 @@ pub struct Layout {
     pub factor: u32,
     /// A cell's size (a reduced image).
     pub cell: (u32, u32),
-    /// Cells per tile, top to bottom: image, heatmap, and the hard mismatch if any.
+    /// Cells per tile, top to bottom: image, heatmap, FLIP, and the hard mismatch if any.
     pub cells: u32,
     pub columns: u32,
     pub rows: u32,
@@ -75,7 +76,7 @@ impl Layout {
 
     /// The layout of `c`'s montage.
     pub fn of(c: &Comparison) -> Layout {
-        let cells = if has_hard_reference(c) { 3 } else { 2 };
+        let cells = if has_hard_reference(c) { 4 } else { 3 };
         Layout::new(
             c.request.width,
             c.request.height,
@@ -94,7 +95,7 @@ impl Layout {
         )
     }
 
-    /// Top-left corner of cell `k` (0 image, 1 heatmap, 2 hard mismatch) of tile `i`.
+    /// Top-left corner of cell `k` (0 image, 1 heatmap, 2 FLIP, 3 hard mismatch) of tile `i`.
     pub fn cell(&self, i: u32, k: u32) -> (u32, u32) {
         let (x, y) = self.tile(i);
         (x, y + LABEL_HEIGHT + k * (self.cell.1 + GAP))
@@ -176,10 +177,17 @@ pub fn render(c: &Comparison) -> RgbImage {
             });
             paste(&mut img, &heat, (hx, hy));
         }
-        if layout.cells < 3 {
+        // FLIP: the worst of each block, as the |ΔV| cell.
+        let flip = &r.flip;
+        let cell = reduce(w, h, layout.factor, |idx| {
+            let v = flip.get(idx).copied().unwrap_or(0.0);
+            Block::Worst(v, heatmap::magma(v))
+        });
+        paste(&mut img, &cell, layout.cell(i, 2));
+        if layout.cells < 4 {
             continue;
         }
-        let (ex, ey) = layout.cell(i, 2);
+        let (ex, ey) = layout.cell(i, 3);
         match (exact, r.hard.is_some()) {
             (Some(exact), true) => {
                 let mismatch =
@@ -248,10 +256,11 @@ fn label(img: &mut RgbImage, font: &FontRef<'_>, r: &MethodResult, (x, y): (u32,
 fn footer(img: &mut RgbImage, font: &FontRef<'_>, layout: &Layout) {
     let y = layout.height - FOOTER_HEIGHT;
     let right = layout.width - GAP;
-    let rows = if layout.cells == 3 {
-        "rows: image · |V − V_ref| · against reference-hard (red: false shadow, blue: missed)"
+    let rows = if layout.cells == 4 {
+        "rows: image · |V − V_ref| · FLIP against the reference's image · against reference-hard \
+         (red: false shadow, blue: missed)"
     } else {
-        "rows: image · |V − V_ref| against the reference"
+        "rows: image · |V − V_ref| · FLIP against the reference's image"
     };
     text(img, font, rows, (GAP, y + 2), NUMBERS_PX, TEXT, right);
     let bar = (
@@ -267,7 +276,7 @@ fn footer(img: &mut RgbImage, font: &FontRef<'_>, layout: &Layout) {
         }
     }
     let legend = format!(
-        "|ΔV| 0 … {:.1}+   (cells reduced {}×: the image averaged, errors the worst of each block)",
+        "|ΔV| 0 … {:.1}+; FLIP 0 … 1 in magma   (cells reduced {}×: the image averaged, errors the worst of each block)",
         heatmap::FULL_SCALE,
         layout.factor
     );

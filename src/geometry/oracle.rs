@@ -83,7 +83,20 @@ impl Oracle {
             Light::Area(d) => super::outline::area_samples(d, k),
             Light::Line(l) => line_samples(l, k),
         };
-        let light_ok = light.is_finite() && samples.iter().all(|s: &Vec3| s.is_finite());
+        Oracle::with_samples(triangles, light, samples)
+    }
+
+    /// An oracle with the sample points `samples` on `light` given (0 samples: none visible):
+    /// `compare --orbit` moves one set of samples with the light, so the reference's pattern
+    /// on the light is the same in every frame.
+    pub fn with_samples(
+        triangles: Vec<[Vec3; 3]>,
+        light: impl Into<Light>,
+        samples: Vec<Vec3>,
+    ) -> Oracle {
+        let light = light.into();
+        let light_ok =
+            light.is_finite() && samples.iter().all(|s| s.is_finite()) && !samples.is_empty();
         Oracle {
             bvh: Bvh::build(triangles),
             light,
@@ -130,7 +143,7 @@ impl Oracle {
 
     /// `V(x)` in `[0, 1]`: the fraction of the light's samples visible from `x`.
     pub fn visibility(&self, x: Vec3) -> f32 {
-        self.count_visible(x, &self.samples) as f32 / self.samples.len() as f32
+        self.count_visible(x, &self.samples) as f32 / self.samples.len().max(1) as f32
     }
 
     /// How many of `samples` (points on the light) `x` sees; 0 for a point behind the light, a

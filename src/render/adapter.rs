@@ -80,6 +80,7 @@ impl Verdict {
 const FORMATS: &[TextureFormat] = &[
     TextureFormat::R8Unorm,
     TextureFormat::R16Float,
+    TextureFormat::Rg16Float,
     TextureFormat::R32Float,
     TextureFormat::Rg32Float,
     TextureFormat::Rgba32Float,

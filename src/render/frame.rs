@@ -30,6 +30,9 @@ pub struct FrameRequest {
     /// Read the D-buffer back too (`dbuffer.exr`): the method's if it is a D-buffer method, else
     /// the paper's.
     pub read_dbuffer: bool,
+    /// Read the cost target back too ([`Frame::cost`]: each pixel's work, for `compare`'s
+    /// cost heatmaps and the tests of each method's cost view).
+    pub read_cost: bool,
 }
 
 impl Default for FrameRequest {
@@ -42,6 +45,7 @@ impl Default for FrameRequest {
             vt: VtVariant::Smoothstep,
             knobs: Knobs::default(),
             read_dbuffer: false,
+            read_cost: false,
         }
     }
 }
@@ -266,6 +270,10 @@ pub struct Frame {
     pub t_branch: Vec<f32>,
     /// Reversed depth per pixel: 0 where no surface was hit ([`Frame::position`]).
     pub depth: Vec<f32>,
+    /// Per pixel the method's units of work and the path it took (`count_work`, `took_path` of
+    /// `shaders/shared/camera.wgsl`); empty unless the request asked for it
+    /// ([`FrameRequest::read_cost`]).
+    pub cost: Vec<[f32; 2]>,
     /// The camera's clip → world transform, to place a pixel from its depth.
     pub inverse_view_proj: glam::Mat4,
     pub dbuffer_size: u32,
@@ -410,6 +418,12 @@ pub fn read_frame(
             None => TextureRead::depth(&camera.depth.texture),
         },
     ];
+    let read_cost = rendered.request.read_cost;
+    if read_cost {
+        reads.push(TextureRead::color(&camera.cost.texture, 8));
+    }
+    // The light maps' reads come after the frame's.
+    let first_map = reads.len();
     // Each distinct light-map texture once.
     let mut slots = [0usize; 3];
     let mut distinct: Vec<&wgpu::Texture> = Vec::new();
@@ -436,6 +450,7 @@ pub fn read_frame(
         visibility: Vec::with_capacity(n),
         t_branch: Vec::with_capacity(n),
         depth: Vec::with_capacity(n),
+        cost: Vec::with_capacity(if read_cost { n } else { 0 }),
         inverse_view_proj: rendered.view_proj.inverse(),
         dbuffer_size: rendered.request.dbuffer_size,
         maps: None,
@@ -460,13 +475,23 @@ pub fn read_frame(
             }
         }
         2 => frame.depth.extend(f32s_of(row)),
+        3 if read_cost => {
+            let mut values = f32s_of(row);
+            while let (Some(work), Some(path)) = (values.next(), values.next()) {
+                frame.cost.push([work, path]);
+            }
+        }
         k => {
-            if let Some(m) = map_values.get_mut(k - 3) {
+            if let Some(m) = map_values.get_mut(k - first_map) {
                 m.extend(f32s_of(row));
             }
         }
     })?;
-    if frame.color.len() != n || frame.visibility.len() != n || frame.depth.len() != n {
+    if frame.color.len() != n
+        || frame.visibility.len() != n
+        || frame.depth.len() != n
+        || (read_cost && frame.cost.len() != n)
+    {
         return Err(RenderError::Readback(
             "a target did not come back whole".into(),
         ));

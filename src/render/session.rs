@@ -65,6 +65,9 @@ pub struct Session {
     reference: Option<ReferenceImage>,
     /// The exact hard shadow handed in from outside (the lab's worker), for `reference-hard`.
     reference_hard: Option<ReferenceImage>,
+    /// A FLIP map of a frame against the reference's image, handed in for the view pass's FLIP
+    /// view ([`Session::set_flip`]): the key of the reference it was made against.
+    flip: Option<ReferenceImage>,
     /// The synchronous reference ([`Session::advance_reference`]).
     progressive: Option<(ReferenceKey, ProgressiveReference)>,
     /// The targets [`Session::frame`] renders into.
@@ -93,6 +96,7 @@ impl Session {
             methods: HashMap::new(),
             reference: None,
             reference_hard: None,
+            flip: None,
             progressive: None,
             own: FrameTargets::new(),
             pending_read_bytes: 0,
@@ -295,6 +299,17 @@ impl Session {
         upload(&mut self.reference_hard, ctx, key, visibility, (1, 1))
     }
 
+    /// Hand the GPU a FLIP map (row-major, `key.width`×`key.height`) of a frame against the
+    /// reference of `key`: the view pass's FLIP view shows it while the reference is that one.
+    pub fn set_flip(
+        &mut self,
+        ctx: &GpuContext,
+        key: ReferenceKey,
+        map: &[f32],
+    ) -> Result<(), RenderError> {
+        upload(&mut self.flip, ctx, key, map, (1, 1))
+    }
+
     /// Whether the GPU holds the exact hard shadow for `request`, handed in by
     /// [`Session::set_reference_hard`].
     pub fn has_reference_hard(&self, request: &FrameRequest) -> bool {
@@ -449,6 +464,7 @@ impl Session {
         .map(|r| External {
             view: &r.texture.view,
             generation: r.generation,
+            rays: r.done,
         });
         let inputs = FrameInputs {
             ctx,
@@ -468,10 +484,18 @@ impl Session {
                 request.height,
             ),
         };
-        // The error view compares with the reference of exactly this view.
-        let view_reference = reference
-            .filter(|r| r.key == current)
-            .map(|r| (&r.texture.view, r.generation));
+        // The error view compares with the reference of exactly this view; the FLIP view shows
+        // the FLIP map made against it, in the same binding.
+        let flip_view = job
+            .view
+            .as_ref()
+            .is_some_and(|v| v.view == super::passes::view::View::Flip);
+        let view_reference = if flip_view {
+            self.flip.as_ref().filter(|r| r.key == current)
+        } else {
+            reference.filter(|r| r.key == current)
+        }
+        .map(|r| (&r.texture.view, r.generation));
         let mut rec = Recorder::new(encoder, self.timer.as_ref())
             .with_groups(groups_span_passes(&ctx.adapter));
         // The frame's debug groups (docs/development/architecture.md): the frame, in it the

@@ -80,6 +80,21 @@ impl Poses {
         }
     }
 
+    /// Where frame `k` of `n` carries a point that moves with the light (a point on it, or one
+    /// of the reference's samples): turned with the light about the axis on a light orbit, left
+    /// where it is on a camera orbit. The reference's samples moved this way keep their pattern
+    /// on the light from frame to frame.
+    pub fn carry(&self, k: usize, n: usize, p: Vec3) -> Vec3 {
+        match self.orbit {
+            Orbit::Light => {
+                let angle = std::f32::consts::TAU * k as f32 / n.max(1) as f32;
+                let axis = Vec3::new(self.axis.x, p.y, self.axis.z);
+                axis + Quat::from_rotation_y(angle) * (p - axis)
+            }
+            Orbit::Camera => p,
+        }
+    }
+
     /// Frame `k` of `n`'s light and camera (the one that does not orbit stays as it was).
     pub fn at(&self, k: usize, n: usize) -> (Light, Camera) {
         let angle = std::f32::consts::TAU * k as f32 / n.max(1) as f32;

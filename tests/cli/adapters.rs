@@ -390,7 +390,7 @@ fn fallbacks_are_named_with_their_cost() {
     {
         Some(Verdict::Fallback(f)) => {
             let all = f.join("; ");
-            assert!(all.contains("R16Float instead of R32Float"), "{all}");
+            assert!(all.contains("Rg16Float instead of Rg32Float"), "{all}");
             assert!(
                 all.contains("Depth24PlusStencil8 instead of Depth32FloatStencil8"),
                 "{all}"

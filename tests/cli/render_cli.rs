@@ -64,6 +64,70 @@ fn compare_writes_the_report_and_prints_the_table() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `compare --orbit`: the temporal table printed, a plot per method and the APNG written, K
+/// 256 by default; a bad `--orbit` or `--frames` refused in one line before any work.
+#[test]
+fn compare_orbit_writes_the_motion_and_refuses_bad_flags() {
+    let dir = temp_dir("compare-orbit");
+    let out = dbuffer()
+        .args([
+            "compare",
+            "table1-224",
+            "--size",
+            "32x24",
+            "--orbit",
+            "light",
+            "--frames",
+            "3",
+        ])
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .expect("the binary runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("in motion (light orbit, 3 frames, reference K = 256)"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("| dbuffer | 0."), "{stdout}");
+    assert!(dir.join("dbuffer-temporal.png").is_file());
+    assert!(dir.join("motion.png").is_file());
+    assert!(dir.join("dbuffer-flip.png").is_file() && dir.join("pcss-cost.png").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+    for (flags, says) in [
+        (
+            ["--orbit", "wobble", "--frames", "4"],
+            "--orbit expects light or camera",
+        ),
+        (
+            ["--orbit", "light", "--frames", "1"],
+            "--frames expects 2 to",
+        ),
+        (
+            ["--orbit", "light", "--frames", "100000"],
+            "MAX_ORBIT_FRAMES",
+        ),
+    ] {
+        let bad = temp_dir("compare-orbit-bad");
+        let out = dbuffer()
+            .args(["compare", "table1-224"])
+            .args(flags)
+            .arg("--out")
+            .arg(&bad)
+            .output()
+            .expect("the binary runs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{flags:?}");
+        assert!(stderr.contains(says), "{flags:?}: {stderr}");
+        assert!(!bad.exists(), "{flags:?}: nothing written");
+    }
+}
+
 #[test]
 fn every_method_renders_from_the_command_line() {
     for method in dbuffer::render::Method::all() {

@@ -36,9 +36,10 @@ fn the_report_matches_the_written_files() {
         "one progress line a method"
     );
     let dir = std::env::temp_dir().join(format!("dbuffer-compare-test-{}", std::process::id()));
-    let written = report::write(&dir, &comparison).unwrap_or_else(|e| panic!("{e}"));
-    // Three files a method drawn (the reference has no heatmap), a hard-error image per hard
-    // method drawn, the montage and the two reports.
+    let written = report::write(&dir, &comparison, None).unwrap_or_else(|e| panic!("{e}"));
+    // Five files a method drawn (image, EXR, heatmap, FLIP map, cost heatmap; the reference has
+    // no |ΔV| heatmap), a hard-error image per hard method drawn, the montage and the two
+    // reports.
     let drawn = comparison.results.len();
     let hard = comparison
         .results
@@ -46,12 +47,12 @@ fn the_report_matches_the_written_files() {
         .filter(|r| r.method.is_hard())
         .count();
     assert_eq!(drawn + comparison.not_applicable.len(), Method::all().len());
-    assert_eq!(written.len(), 3 * drawn - 1 + hard + 3);
+    assert_eq!(written.len(), 5 * drawn - 1 + hard + 3);
     assert!(hard > 0 && hard < drawn);
 
-    // The montage: one tile per method drawn, three cells each (image, |ΔV|, against
+    // The montage: one tile per method drawn, four cells each (image, |ΔV|, FLIP, against
     // reference-hard), and each tile shows its own method.
-    let layout = montage::Layout::new(W, H, drawn as u32, 3);
+    let layout = montage::Layout::new(W, H, drawn as u32, 4);
     let page = image::open(dir.join(montage::MONTAGE_PNG))
         .unwrap_or_else(|e| panic!("{e}"))
         .to_rgb8();
@@ -109,7 +110,29 @@ fn the_report_matches_the_written_files() {
     let hard_error = image::open(dir.join("hard-hard-error.png"))
         .unwrap_or_else(|e| panic!("{e}"))
         .to_rgb8();
-    assert_eq!(cell(hd, 2), hard_error);
+    assert_eq!(cell(hd, 3), hard_error);
+    // The FLIP cell is METHOD-flip.png's map (above its legend), and the FLIP map is what
+    // geometry::flip makes of the two written images.
+    let flip_png = image::open(dir.join("hard-flip.png")).unwrap().to_rgb8();
+    let flip_map = image::imageops::crop_imm(&flip_png, 0, 0, W, H).to_image();
+    assert_eq!(cell(hd, 2), flip_map);
+    let rgb = |file: &str| -> Vec<[u8; 3]> {
+        image::open(dir.join(file))
+            .unwrap()
+            .to_rgb8()
+            .pixels()
+            .map(|p| p.0)
+            .collect()
+    };
+    let again = dbuffer::geometry::flip::ldr_flip(
+        &rgb("reference.png"),
+        &rgb("hard.png"),
+        W,
+        H,
+        dbuffer::geometry::flip::DEFAULT_PPD,
+    )
+    .unwrap();
+    assert_eq!(again, comparison.results[hd].flip);
 
     let text = std::fs::read_to_string(dir.join(report::REPORT_JSON)).unwrap();
     let r: report::Report = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}"));
@@ -186,6 +209,24 @@ fn the_report_matches_the_written_files() {
     let row = |n: &str| r.methods.iter().find(|m| m.method == n).unwrap();
     assert_eq!(row("reference").mae, 0.0);
     assert!(row("dbuffer").penumbra_mae < 0.5 * row("hard").penumbra_mae);
+    // FLIP for every method: the reference against itself 0, every other image above it, the
+    // hard shadow (no penumbra) above the D-buffer; each with its map and its cost.
+    assert_eq!(row("reference").flip_mean, 0.0);
+    for m in &r.methods {
+        assert!(
+            m.flip_mean.is_finite() && (0.0..=1.0).contains(&m.flip_mean),
+            "{m:?}"
+        );
+        assert!(dir.join(&m.flip).is_file(), "{}", m.flip);
+        let cost = m
+            .cost
+            .as_ref()
+            .unwrap_or_else(|| panic!("{}: no cost", m.method));
+        assert!(dir.join(&cost.image).is_file(), "{}", cost.image);
+        assert!(md.contains(&format!("| {} | {}", m.method, cost.unit)) || cost.constant);
+    }
+    assert!(row("hard").flip_mean > row("dbuffer").flip_mean, "{md}");
+    assert!(row("dbuffer").flip_mean > 0.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -221,6 +221,7 @@ fn render(offline: &mut Offline, scene: &Scene, method: Method, knobs: Knobs) ->
         vt: VtVariant::Exact,
         knobs: knobs.with(&SAMPLES, 512),
         read_dbuffer: false,
+        read_cost: false,
     };
     offline
         .render(scene, &request)

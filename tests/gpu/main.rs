@@ -7,6 +7,7 @@
 mod support;
 
 mod compare_report;
+mod cost_views;
 mod engine_methods;
 mod hard_methods;
 mod linear_ssm;
@@ -21,6 +22,7 @@ mod render_session;
 mod render_snapshots;
 mod shaders;
 mod snapshot_harness;
+mod temporal;
 mod view_pass;
 mod wedges;
 mod wgsl_layout_helper;

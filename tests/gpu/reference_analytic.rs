@@ -91,6 +91,7 @@ fn reference(scene: &Scene) -> Frame {
         vt: VtVariant::Exact,
         knobs: Knobs::default().with(&SAMPLES, 1024),
         read_dbuffer: false,
+        read_cost: false,
     };
     offline
         .render(scene, &request)
@@ -251,6 +252,7 @@ fn line_light_over_an_edge_end_to_end() {
             vt: VtVariant::Exact,
             knobs: knobs.with(&SAMPLES, 1024),
             read_dbuffer: false,
+            read_cost: false,
         };
         offline
             .render(&s, &request)

@@ -65,6 +65,7 @@ fn render_in(
         vt: VtVariant::Exact,
         knobs,
         read_dbuffer: false,
+        read_cost: false,
     };
     let mut targets = FrameTargets::new();
     session.submit(

@@ -9,7 +9,9 @@ use dbuffer::render::passes::camera::CameraUniforms;
 use dbuffer::render::passes::extended_light_map::ElmUniforms;
 use dbuffer::render::passes::hybrid::HybridUniforms;
 use dbuffer::render::passes::planar::{PlanarUniforms, ReceiverUniform};
-use dbuffer::render::passes::probe::{FIT_GRID, PIXEL_FLOATS, PROBE_FIT, PROBE_PIXEL};
+use dbuffer::render::passes::probe::{
+    FIT_GRID, MOTION_GRID, PIXEL_FLOATS, PROBE_FIT, PROBE_MOTION, PROBE_PIXEL,
+};
 use dbuffer::render::passes::sample_maps::{SampleLight, SampleLights, MAX_LIGHTS};
 use dbuffer::render::passes::shadow_map::{LightUniforms, ShadowUniforms};
 use dbuffer::render::passes::stencil_volumes::ScreenUniforms;
@@ -295,6 +297,8 @@ fn codes_match_their_wgsl() {
                 View::Classes => "VIEW_CLASSES",
                 View::Error => "VIEW_ERROR",
                 View::DBuffer => "VIEW_LIGHT_MAPS",
+                View::Cost => "VIEW_COST",
+                View::Flip => "VIEW_FLIP",
             };
             (name, f64::from(v.code()))
         })
@@ -316,12 +320,14 @@ fn codes_match_their_wgsl() {
     );
     // The fit's samples come back in a few KiB (the lab reads back at most 4 KiB a frame).
     const { assert!(FIT_GRID * FIT_GRID * 4 <= 3 * 1024) };
+    const { assert!(MOTION_GRID * MOTION_GRID * 4 <= 3 * 1024) };
     wgsl_layout::assert_consts(
         &source("passes/probe.wgsl"),
         "passes/probe.wgsl",
         &[
             ("PROBE_FIT", f64::from(PROBE_FIT)),
             ("PROBE_PIXEL", f64::from(PROBE_PIXEL)),
+            ("PROBE_MOTION", f64::from(PROBE_MOTION)),
         ],
     );
     assert_eq!(MAX_LIGHTS, 64, "SampleLights holds array<SampleLight, 64>");

@@ -38,6 +38,7 @@ fn fixture(method: Method) -> Fixture {
         vt: VtVariant::Exact,
         knobs: Knobs::default().with(&SAMPLES, 32),
         read_dbuffer: false,
+        read_cost: false,
     };
     let reference_request = FrameRequest {
         method: Method::REFERENCE,
@@ -223,6 +224,30 @@ fn every_view_agrees_with_its_twin() {
         let least = if p.view == View::Classes { 3 } else { 8 };
         assert!(distinct(&gpu) > least, "{what}: the view shows something");
     }
+    // The FLIP view: the map handed in (here a made-up one), through the range, where the
+    // error view has the reference V; before a map is handed in, the image.
+    let unit_heat = Mapping {
+        black: 0.0,
+        white: 1.0,
+        map: ColorMap::Heat,
+        auto: false,
+    };
+    let flip_params = params(View::Flip, one, unit_heat);
+    let before = f.gpu_view(flip_params);
+    let image = view_twin::render(&f.frame, None, &flip_params);
+    compare("FLIP before a map", &before, &image);
+    let map: Vec<f32> = (0..f.frame.len()).map(|i| (i % 17) as f32 / 16.0).collect();
+    let key = f.session.reference_key(&FrameRequest {
+        method: Method::REFERENCE,
+        ..f.request
+    });
+    f.session
+        .set_flip(&f.ctx, key, &map)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let gpu = f.gpu_view(flip_params);
+    let cpu = view_twin::render(&f.frame, Some(&map), &flip_params);
+    compare("FLIP", &gpu, &cpu);
+    assert!(distinct(&gpu) > 8, "the FLIP view shows the map");
 }
 
 #[test]

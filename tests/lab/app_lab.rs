@@ -139,6 +139,7 @@ fn every_view_and_overlay_changes_the_viewport() {
         ("t", View::T),
         ("classes", View::Classes),
         ("error", View::Error),
+        ("cost", View::Cost),
         ("|cx_o|", View::DBuffer),
         ("|cx_uv|", View::DBuffer),
         ("|cx_pv|", View::DBuffer),
@@ -333,6 +334,99 @@ fn dragging_the_light_moves_the_shadow() {
     h.run();
     assert_eq!(h.state().scene().expect("scene").light.center(), start);
     assert!((v_at(&mut h, x, y) - before).abs() < 1e-6);
+}
+
+/// The error view's FLIP choice: once the reference has converged the viewport shows the FLIP
+/// map of the method's image against the reference's — not |ΔV|, and not the image — and the
+/// reference shown against itself scores 0 everywhere.
+#[test]
+fn the_flip_view_shows_flip_against_the_reference() {
+    let mut h = lab(None);
+    h.run();
+    click(&mut h, "error");
+    until_reference_done(&mut h);
+    let error = h.render().expect("render");
+    click(&mut h, "FLIP");
+    assert_eq!(h.state().settings.view, View::Flip);
+    until_reference_done(&mut h);
+    h.run();
+    let flip = h.render().expect("render");
+    assert!(flip != error, "the FLIP view is not the |ΔV| view");
+    let shown = shown_frame(&mut h, false);
+    let key = {
+        let app = h.state();
+        app.shown().expect("a frame").request
+    };
+    assert_eq!(key.method, Method::DBUFFER);
+    // The map on the GPU is FLIP of the two images: recompute it from the reference's image.
+    click(&mut h, "reference");
+    until_reference_done(&mut h);
+    h.run();
+    let truth = shown_frame(&mut h, false);
+    let rgb = |f: &dbuffer::render::Frame| -> Vec<[u8; 3]> {
+        f.color.iter().map(|c| [c[0], c[1], c[2]]).collect()
+    };
+    let map = dbuffer::geometry::flip::ldr_flip(
+        &rgb(&truth),
+        &rgb(&shown),
+        shown.width,
+        shown.height,
+        dbuffer::geometry::flip::DEFAULT_PPD,
+    )
+    .expect("FLIP");
+    let mean = dbuffer::geometry::flip::mean(&map);
+    assert!(
+        mean > 0.0 && mean < 0.2,
+        "D-buffer against the reference: {mean}"
+    );
+    let against_itself = dbuffer::geometry::flip::ldr_flip(
+        &rgb(&truth),
+        &rgb(&truth),
+        truth.width,
+        truth.height,
+        dbuffer::geometry::flip::DEFAULT_PPD,
+    )
+    .expect("FLIP");
+    assert!(against_itself.iter().all(|&v| v == 0.0));
+}
+
+/// While the light is dragged, the viewport plots the shown method's temporal error over the
+/// last seconds (against a low-K reference at a grid of pixels, or the method's own change where
+/// the reference cannot keep up): a value a new frame, each from the 2.3 KiB the probe reads.
+#[test]
+fn dragging_the_light_plots_the_temporal_error() {
+    let mut h = lab(None);
+    h.run();
+    click(&mut h, "light");
+    h.key_press(egui::Key::F);
+    h.run();
+    assert!(!h.state().motion_showing(), "no plot before a drag");
+    let at = h
+        .state()
+        .light_screen_pos()
+        .expect("the light is in view after F");
+    h.drag_at(at);
+    h.step();
+    for k in 1..=6 {
+        h.hover_at(at + egui::vec2(20.0 * k as f32, 0.0));
+        h.step();
+    }
+    let (values, measure) = h.state().motion_series();
+    assert!(values.len() >= 4, "a value a frame of the drag: {values:?}");
+    assert!(
+        values.iter().all(|v| v.is_finite() && *v >= 0.0),
+        "{values:?}"
+    );
+    assert!(measure.is_some());
+    assert!(h.state().motion_showing(), "the plot shows while dragging");
+    // The shadow moved: some step changed V, and the reference's change did not cancel all of it
+    // (the D-buffer is not the reference), or the method moved on its own.
+    assert!(values.iter().any(|&v| v > 0.0), "{values:?}");
+    // Still only probes come back while dragging.
+    let (_, most) = h.state().read_bytes().expect("frames were submitted");
+    assert!(most <= 4096, "{most} bytes read back in one frame");
+    h.drop_at(at + egui::vec2(140.0, 0.0));
+    h.run();
 }
 
 #[test]

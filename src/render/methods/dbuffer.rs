@@ -12,7 +12,7 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{
-    require, CameraGroup, Channel, Empty, FrameInputs, LightMaps, MethodSpec, MethodState, Prepare,
+    require, CameraGroup, Channel, Cost, Empty, FrameInputs, LightMaps, MethodSpec, MethodState, Prepare,
     SharedMaps, Switch,
 };
 use crate::geometry::volume_vertices::{
@@ -27,11 +27,21 @@ use crate::render::{
 };
 use crate::scene::AreaLight;
 
+/// Both D-buffers' cost view: the texels they read, and which answer won.
+const DBUFFER_COST: Cost = Cost::counted("D-buffer texels read").paths(&[
+    "a chord's V(t)",
+    "a closing fan's corner wedge",
+    "the receiver's horizon",
+    "outside the map: lit",
+    "behind the light or facing away: dark",
+]);
+
 pub static DBUFFER: MethodSpec =
     MethodSpec::new("dbuffer", SHADER, |ctx| Box::new(DBuffer::new(ctx, false)))
         .adapter(NEEDS)
         .about("D-buffer soft shadows (Jakobsen et al. 2004)")
         .knobs(&[&HORIZON.0, &CORNERS.0])
+        .cost(DBUFFER_COST)
         .lights(super::AREA_LIGHTS); // volumes from a planar light's outline
 
 pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER, |ctx| {
@@ -40,6 +50,7 @@ pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER
 .adapter(NEEDS)
 .about("D-buffer with silhouettes from the light centre only")
 .knobs(&[&HORIZON.0, &CORNERS.0])
+.cost(DBUFFER_COST)
 .lights(super::AREA_LIGHTS); // volumes from a planar light's outline
 
 /// `--dbuffer-corners`: V exact behind a closing fan from the fan's corner (`shadow.knobs.y`).

@@ -19,6 +19,7 @@
 //! paper's V(t). So do all pixels when the candidate edges exceed [`MAX_FUSED_EDGES`] (or what
 //! the adapter's storage bindings hold).
 
+use super::Cost;
 use wgpu::DownlevelFlags as D;
 use wgpu::TextureFormat as F;
 use super::{AdapterNeeds, SHADOW_MAP};
@@ -75,6 +76,13 @@ pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, 
 .adapter(NEEDS)
 .about("D-buffer with every silhouette chord (occluder fusion)")
 .knobs(&[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES])
+.cost(Cost::counted("listed edges visited").paths(&[
+    "outside the map, or dark: no list",
+    "mask: no chord cuts the light",
+    "mask, one layer deep: exact V",
+    "mask, layers overlap: the samples' count",
+    "list overflowed: the paper's V",
+]))
 .lights(super::AREA_LIGHTS); // its chords cut a disk or a convex polygon
 
 const SHADER: &str = "methods/dbuffer_fused.wgsl";

@@ -12,6 +12,7 @@
 //! light sees (blocky under magnification, wrong beside silhouettes where a texel belongs to
 //! another surface).
 
+use super::Cost;
 use wgpu::TextureFormat as F;
 use super::{AdapterNeeds, SHADOW_MAP};
 use crate::render::adapter::{FormatNeed, Usage};
@@ -51,7 +52,8 @@ pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec::new("extended-light-map"
 .about("extended light map (Brabec et al. 2000): light colour in RGB, distance in A")
 .knobs(&[&DEPTH_BITS, &PATTERN.0])
 .hard()
-.overlay_note("extended-light-map: its channels are in the View panel");
+.overlay_note("extended-light-map: its channels are in the View panel")
+.cost(Cost::counted("light-map taps").constant("one lookup"));
 
 /// What it needs of the adapter: float maps and the light's gobo, filtered.
 const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[

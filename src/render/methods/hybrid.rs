@@ -57,7 +57,8 @@ pub static HYBRID: MethodSpec =
         .about("shadow volumes rebuilt from the light's depth map (McCool 2000), one stencil bit")
         .knobs(&[&THRESHOLD.0, &TEMPLATES.0, &EDGES.0])
         .hard()
-        .overlay_note("hybrid: silhouette edges = rebuilt from the depth map");
+        .overlay_note("hybrid: silhouette edges = rebuilt from the depth map")
+.cost(super::SCREEN_COST);
 
 /// What it needs of the adapter: the shadow map, the stencil volumes and its walls found by a compute pass (six
 /// storage buffers in its compute stage).

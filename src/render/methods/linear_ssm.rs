@@ -14,6 +14,7 @@
 //! (`line-fig8-overlap`), and the transition is linear in the image where the truth is rational
 //! (`line-fig3-tilted`).
 
+use super::Cost;
 use wgpu::DownlevelFlags as D;
 use super::{AdapterNeeds, SHADOW_MAP};
 use glam::{Mat4, Vec3};
@@ -42,7 +43,8 @@ pub static LINEAR_SSM: MethodSpec =
         .knobs(&[&SAMPLES])
         .lights(&[LightKind::Line]) // Heidrich et al.'s maps along a segment
         .bench("linear-ssm 2", &[(&SAMPLES, 2)])
-        .line_samples(|line, knobs| sample_points(line, knobs.get(&SAMPLES)));
+        .line_samples(|line, knobs| sample_points(line, knobs.get(&SAMPLES)))
+.cost(Cost::counted("sample maps read"));
 
 /// What it needs of the adapter: the sample maps and the skins found by compute passes (six storage buffers in
 /// the size-extract pipeline's compute stage).

@@ -97,8 +97,64 @@ pub struct MethodSpec {
     /// The points on a line light it samples (its shadow maps' origins), which the lab draws on
     /// the segment; `None` for a method that samples none.
     pub line_samples: Option<fn(&LineLight, &Knobs) -> Vec<Vec3>>,
+    /// What its cost view counts (`count_work`, `took_path` in its WGSL).
+    pub cost: Cost,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
+}
+
+/// What a method's cost view shows: the work its camera shader counted at each pixel with
+/// `count_work(n)` and the path it took with `took_path(code)` (`shaders/shared/camera.wgsl`,
+/// written to the camera pass's cost target). A method adds its counting in its own WGSL; this
+/// only names what it counts for the lab's legend, the inspector and `compare`'s heatmaps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cost {
+    /// The unit of `count_work`: "shadow-map taps", "listed edges", …
+    pub unit: &'static str,
+    /// The names of the paths by `took_path` code (0 first); empty for a method with one path.
+    pub paths: &'static [&'static str],
+    /// `Some(why)`: the same work at every pixel it shades, and why (what its view then says).
+    pub constant: Option<&'static str>,
+}
+
+impl Cost {
+    /// A method that names nothing: its counts in plain units.
+    pub const DEFAULT: Cost = Cost {
+        unit: "units of work",
+        paths: &[],
+        constant: None,
+    };
+
+    /// Work counted in `unit`, by a method with one path.
+    pub const fn counted(unit: &'static str) -> Cost {
+        Cost {
+            unit,
+            paths: &[],
+            constant: None,
+        }
+    }
+
+    /// The same work at every pixel it shades, for the reason `why`.
+    pub const fn constant(mut self, why: &'static str) -> Cost {
+        self.constant = Some(why);
+        self
+    }
+
+    /// The names of its paths by code.
+    pub const fn paths(mut self, paths: &'static [&'static str]) -> Cost {
+        self.paths = paths;
+        self
+    }
+
+    /// The name of path `code` ("path N" for a code it does not name).
+    pub fn path_name(&self, code: f32) -> String {
+        let k = code.round();
+        if k >= 0.0 && (k as usize) < self.paths.len() {
+            self.paths[k as usize].to_string()
+        } else {
+            format!("path {k}")
+        }
+    }
 }
 
 impl MethodSpec {
@@ -122,8 +178,15 @@ impl MethodSpec {
             bench: Bench::DEFAULTS,
             overlay_note: None,
             line_samples: None,
+            cost: Cost::DEFAULT,
             new,
         }
+    }
+
+    /// What its cost view counts ([`Cost`]).
+    pub const fn cost(mut self, cost: Cost) -> Self {
+        self.cost = cost;
+        self
     }
 
     /// Its one line for menus and `--help`.
@@ -184,6 +247,13 @@ impl MethodSpec {
         self
     }
 }
+
+/// The cost view of the methods whose V was made over the screen before the camera pass
+/// (`shadow-volume`, `planar`, `hybrid`): the camera pass reads one texel of it.
+pub const SCREEN_COST: Cost = Cost::counted("screen texels read").constant(
+    "one texel of the V its screen passes made; their work is the volumes' fill before the \
+     camera pass (bench's stencil fill)",
+);
 
 /// What a method needs of the adapter beyond what every method needs ([`AdapterNeeds::BASE`],
 /// the camera pass's), checked before any work ([`Method::on`]): a device without it refuses the
@@ -592,6 +662,9 @@ pub struct Prepare<'p, 'r>(
 pub struct External<'a> {
     pub view: &'a wgpu::TextureView,
     pub generation: u64,
+    /// The rays each pixel in front of the light has cast for it (the reference's samples so
+    /// far; its cost view).
+    pub rays: u32,
 }
 
 /// Light-space maps a method keeps (the D-buffer view, the inspector, `dbuffer.exr`): up to

@@ -6,6 +6,7 @@
 //! bound, and light leaks — less than the variance shadow map's (`leak-test`). The state here is
 //! `msm-soft`'s too.
 
+use super::Cost;
 use super::{
     require, AdapterNeeds, CameraGroup, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
     Prepare, Scaled, SharedMaps, SHADOW_MAP,
@@ -38,7 +39,8 @@ pub static MSM: MethodSpec = MethodSpec::new("msm", SHADER, |ctx| {
 .adapter(NEEDS)
 .about("moment shadow maps (Peters & Klein 2015), four moments, filtered")
 .knobs(&[&RADIUS, &BIAS.0])
-.hard();
+.hard()
+.cost(Cost::counted("summed-area table reads").constant("two boxes of four corners"));
 
 const SHADER: &str = "methods/msm.wgsl";
 

@@ -5,6 +5,7 @@
 //! whose moments give V (`shaders/methods/msm_soft.wgsl`). No per-tap loop. Under a rectangle
 //! or polygon it is sized by the disk of the same area, as `pcss` is.
 
+use super::Cost;
 use super::msm::{MomentMapped, NEEDS};
 use super::{FrameInputs, MethodSpec, Scaled};
 
@@ -32,7 +33,8 @@ pub static MSM_SOFT: MethodSpec = MethodSpec::new("msm-soft", SHADER, |ctx| {
 .adapter(NEEDS)
 .about("moment soft shadow mapping (Peters et al. 2016): blocker search and filter from moments")
 .knobs(&[&BIAS.0, &LEAST_BLOCKER.0])
-.lights(super::AREA_LIGHTS);
+.lights(super::AREA_LIGHTS)
+.cost(Cost::counted("summed-area table reads"));
 
 const SHADER: &str = "methods/msm_soft.wgsl";
 

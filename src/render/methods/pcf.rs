@@ -2,6 +2,7 @@
 //! (2R + 1)² block of hard tests, each against the receiver's plane
 //! (`shaders/methods/pcf.wgsl`).
 
+use super::Cost;
 use super::on_shadow_map::{Flavor, OnShadowMap};
 use super::{Knob, MethodSpec};
 
@@ -19,7 +20,8 @@ pub static PCF: MethodSpec = MethodSpec::new("pcf", SHADER, |ctx| {
 .adapter(super::SHADOW_MAPPED)
 .about("percentage-closer filtering of the shadow map")
 .knobs(&[&RADIUS])
-.hard();
+.hard()
+.cost(Cost::counted("shadow-map taps").constant("(2R + 1)² taps, R its radius"));
 
 const SHADER: &str = "methods/pcf.wgsl";
 

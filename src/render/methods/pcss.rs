@@ -3,6 +3,7 @@
 //! the penumbra the blockers' mean distance predicts, both over a rotated Poisson disk
 //! (`shaders/methods/pcss.wgsl`).
 
+use super::Cost;
 use super::on_shadow_map::{Flavor, OnShadowMap};
 use super::{FrameInputs, Knob, MethodSpec};
 use crate::scene::Scene;
@@ -30,7 +31,8 @@ pub static PCSS: MethodSpec = MethodSpec::new("pcss", SHADER, |ctx| {
 // A blocker search over a disk; under a rectangle or polygon, over the disk of the same area
 // about its centroid (docs/method/README.md#pcss).
 .lights(super::AREA_LIGHTS)
-.bench("pcss 16/32", &[(&BLOCKER_TAPS, 16), (&FILTER_TAPS, 32)]);
+.bench("pcss 16/32", &[(&BLOCKER_TAPS, 16), (&FILTER_TAPS, 32)])
+.cost(Cost::counted("shadow-map taps (blocker search and filter)").paths(&["not searched: nearer the light than the nearest caster, off the map, or dark", "no blocker found: lit", "blockers found: filtered"]));
 
 /// Points of the Poisson disk (`PoissonDisk` of the shader: two per vec4).
 pub const POISSON_POINTS: usize = 64;

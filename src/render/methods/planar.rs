@@ -41,7 +41,8 @@ pub static PLANAR: MethodSpec =
         .about("planar projected shadows (Blinn 1988) onto the flat receivers, stencilled")
         .knobs(&[&OPACITY.0])
         .hard()
-        .overlay_note("planar: shadows on flat objects only, no volumes");
+        .overlay_note("planar: shadows on flat objects only, no volumes")
+.cost(super::SCREEN_COST);
 
 /// What it needs of the adapter: the stencil volumes and a half-float shade it blends.
 const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[

@@ -3,8 +3,10 @@
 //! texture (the session's), and the camera pass shades it like every other method's
 //! (`shaders/methods/reference.wgsl`).
 
-use super::{v_texture_entries, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
-use crate::render::{view_entry, GpuContext, RenderError};
+use super::{v_texture_entries, CameraGroup, Cost, Knob, MethodSpec, MethodState, Prepare};
+use crate::render::{
+    buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
+};
 
 /// The most disk samples per pixel (the budget's).
 pub const MAX_SAMPLES: u32 = crate::budget::MAX_REFERENCE_SAMPLES;
@@ -23,6 +25,9 @@ pub static REFERENCE: MethodSpec =
         .about("ray-cast ground truth (K disk samples per pixel)")
         .knobs(&[&SAMPLES])
         .cpu_side()
+        .cost(Cost::counted("rays so far").constant(
+            "every pixel in front of the light has cast the samples taken so far",
+        ))
         // Each timed frame takes one more sample per pixel, of a budget that never ends.
         .bench("reference 1 spp", &[(&SAMPLES, MAX_SAMPLES)]);
 
@@ -31,13 +36,41 @@ const SHADER: &str = "methods/reference.wgsl";
 pub struct Reference {
     /// Bound for the generation of the V handed in.
     camera: CameraGroup,
+    rays: RaysUniform,
 }
 
 impl Reference {
     pub fn new(ctx: &GpuContext) -> Reference {
         Reference {
-            camera: CameraGroup::new(ctx, SHADER, &v_texture_entries()),
+            camera: CameraGroup::new(ctx, SHADER, &camera_entries()),
+            rays: RaysUniform::new(ctx),
         }
+    }
+}
+
+/// Group 1 of `methods/reference.wgsl` (this method's and `reference-hard`'s): V per pixel and
+/// the rays per pixel behind it.
+pub(super) fn camera_entries() -> [wgpu::BindGroupLayoutEntry; 2] {
+    let [v] = v_texture_entries();
+    [v, uniform_entry(1, wgpu::ShaderStages::FRAGMENT)]
+}
+
+/// `rays` of `methods/reference.wgsl`: the rays each pixel has cast (x), for the cost view.
+pub(super) struct RaysUniform {
+    pub buffer: wgpu::Buffer,
+}
+
+impl RaysUniform {
+    pub fn new(ctx: &GpuContext) -> RaysUniform {
+        RaysUniform {
+            buffer: uniform_buffer::<[f32; 4]>(&ctx.device, "reference::rays"),
+        }
+    }
+
+    pub fn write(&self, ctx: &GpuContext, rays: u32) {
+        let value = [rays as f32, 0.0, 0.0, 0.0];
+        ctx.queue
+            .write_buffer(&self.buffer, 0, bytemuck::cast_slice(&value));
     }
 }
 
@@ -49,8 +82,12 @@ impl MethodState for Reference {
                 "the reference needs V per pixel: none has been computed for this frame".into(),
             ));
         };
-        self.camera
-            .bind(&inputs.ctx.device, v.generation, &[view_entry(0, v.view)]);
+        self.rays.write(inputs.ctx, v.rays);
+        self.camera.bind(
+            &inputs.ctx.device,
+            v.generation,
+            &[view_entry(0, v.view), buffer_entry(1, &self.rays.buffer)],
+        );
         Ok(&self.camera)
     }
 }

@@ -9,9 +9,10 @@
 
 use std::time::Instant;
 
-use super::{v_texture_entries, CameraGroup, MethodSpec, MethodState, Prepare};
+use super::reference::{camera_entries, RaysUniform};
+use super::{CameraGroup, Cost, MethodSpec, MethodState, Prepare};
 use crate::render::passes::next_generation;
-use crate::render::{view_entry, GpuContext, RenderError, Texture};
+use crate::render::{buffer_entry, view_entry, GpuContext, RenderError, Texture};
 use crate::scene::Camera;
 
 pub static REFERENCE_HARD: MethodSpec = MethodSpec::new("reference-hard", SHADER, |ctx| {
@@ -19,7 +20,8 @@ pub static REFERENCE_HARD: MethodSpec = MethodSpec::new("reference-hard", SHADER
 })
 .about("exact hard shadow: one ray per pixel to the light centre")
 .cpu_side()
-.hard();
+.hard()
+.cost(Cost::counted("rays").constant("one ray to the light's centre per pixel in front of it"));
 
 /// The area reference's camera shader: V from a texture at the pixel.
 const SHADER: &str = "methods/reference.wgsl";
@@ -44,6 +46,8 @@ enum Bound {
 
 pub struct ReferenceHard {
     camera: CameraGroup,
+    /// 1: one ray a pixel (the cost view).
+    rays: RaysUniform,
     /// Its own texture and that texture's generation.
     texture: Option<(Texture, u64)>,
     key: Option<Key>,
@@ -54,7 +58,8 @@ pub struct ReferenceHard {
 impl ReferenceHard {
     pub fn new(ctx: &GpuContext) -> ReferenceHard {
         ReferenceHard {
-            camera: CameraGroup::new(ctx, SHADER, &v_texture_entries()),
+            camera: CameraGroup::new(ctx, SHADER, &camera_entries()),
+            rays: RaysUniform::new(ctx),
             texture: None,
             key: None,
             builds: 0,
@@ -67,10 +72,15 @@ impl MethodState for ReferenceHard {
     fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
         let Prepare(inputs, ..) = p;
         let device = &inputs.ctx.device;
+        self.rays.write(inputs.ctx, 1);
         if let Some(v) = inputs.external {
             // Computed off this thread for exactly this view: bind it.
             let bound = Bound::External(v.generation);
-            self.camera.bind(device, bound, &[view_entry(0, v.view)]);
+            self.camera.bind(
+                device,
+                bound,
+                &[view_entry(0, v.view), buffer_entry(1, &self.rays.buffer)],
+            );
             return Ok(&self.camera);
         }
         let (w, h) = (inputs.view.width, inputs.view.height);
@@ -115,7 +125,11 @@ impl MethodState for ReferenceHard {
         }
         if let Some((t, generation)) = &self.texture {
             let bound = Bound::Own(*generation);
-            self.camera.bind(device, bound, &[view_entry(0, &t.view)]);
+            self.camera.bind(
+                device,
+                bound,
+                &[view_entry(0, &t.view), buffer_entry(1, &self.rays.buffer)],
+            );
         }
         Ok(&self.camera)
     }

@@ -2,6 +2,7 @@
 //! segment), averaged (light-source sampling, Heckbert & Herf 1997): the brute-force area light (maps from `passes::sample_maps`, camera pass
 //! `shaders/methods/sampled.wgsl`).
 
+use super::Cost;
 use glam::Vec3;
 
 use super::{require, CameraGroup, Knob, Knobs, MethodSpec, MethodState, Prepare};
@@ -26,7 +27,8 @@ pub static SAMPLED: MethodSpec =
         .about("N shadow maps from points on the light, averaged")
         .knobs(&[&LIGHTS])
         .bench("sampled 16", &[(&LIGHTS, 16)])
-        .line_samples(stratum_centres);
+        .line_samples(stratum_centres)
+.cost(Cost::counted("sample maps read"));
 
 const SHADER: &str = "methods/sampled.wgsl";
 

@@ -47,7 +47,8 @@ pub static SHADOW_VOLUME: MethodSpec = MethodSpec::new("shadow-volume", SHADER, 
 .about("stencil shadow volumes from the light centre (Crow 1977), z-fail with caps")
 .knobs(&[&OPEN.0])
 .hard()
-.overlay_note("shadow-volume: from the light centre; umbra volume = Crow's");
+.overlay_note("shadow-volume: from the light centre; umbra volume = Crow's")
+.cost(super::SCREEN_COST);
 
 /// What it needs of the adapter: the stencil volumes.
 const NEEDS: AdapterNeeds = AdapterNeeds::formats(&STENCIL_VOLUMES);

@@ -8,6 +8,7 @@
 //! lights: 7 rays (`r.Shadow.Virtual.SMRT.RayCountLocal`), 8 samples a ray
 //! (`SamplesPerRayLocal`). docs/method/README.md#smrt says where it errs.
 
+use super::Cost;
 use super::on_shadow_map::{Flavor, OnShadowMap};
 use super::{FrameInputs, Knob, MethodSpec, Scaled, Switch};
 
@@ -54,7 +55,8 @@ pub static SMRT: MethodSpec = MethodSpec::new("smrt", SHADER, |ctx| {
 .about("shadow-map ray tracing (Unreal Engine 5's virtual shadow map soft shadows)")
 .knobs(&[&RAYS, &STEPS, &EXTRAPOLATE.0, &ADAPTIVE.0, &RAY_LENGTH.0])
 .lights(super::AREA_LIGHTS)
-.bench("smrt 7x8", &[(&RAYS, 7), (&STEPS, 8)]);
+.bench("smrt 7x8", &[(&RAYS, 7), (&STEPS, 8)])
+.cost(Cost::counted("ray-march steps (shadow-map reads)").paths(&["not marched: off the map, or dark", "adaptive: its two first rays agreed", "every ray traced"]));
 
 const SHADER: &str = "methods/smrt.wgsl";
 

@@ -5,6 +5,7 @@
 //! different depths the bound is loose: light bleeds through the farther one's shadow (the
 //! `leak-test` built-in); the bleeding reduction trades it for darker, narrower edges.
 
+use super::Cost;
 use wgpu::TextureFormat as F;
 
 use super::{
@@ -37,7 +38,8 @@ pub static VSM: MethodSpec = MethodSpec::new("vsm", SHADER, |ctx| Box::new(Vsm::
     .adapter(NEEDS)
     .about("variance shadow maps (Donnelly & Lauritzen 2006), filtered, with light-bleeding reduction")
     .knobs(&[&RADIUS, &BLEED.0])
-    .hard();
+    .hard()
+.cost(Cost::counted("moment texels").constant("one filtered moment texel"));
 
 const SHADER: &str = "methods/vsm.wgsl";
 

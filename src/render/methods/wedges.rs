@@ -16,6 +16,7 @@
 //! overlapping edges or casters summed, not combined (`overlap`, `fig7-concave`,
 //! `fig8c-complex`, `bunny`); the sum is clamped, which hides some of it.
 
+use super::Cost;
 use wgpu::TextureFormat as F;
 use super::{AdapterNeeds, STENCIL_VOLUMES};
 use crate::render::adapter::{FormatNeed, Usage};
@@ -53,6 +54,7 @@ pub static WEDGES: MethodSpec =
         .adapter(NEEDS)
         .about("penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)")
         .knobs(&[&OPEN.0, &HORIZON.0])
+        .cost(Cost::counted("wedge fragments"))
         .lights(super::AREA_LIGHTS); // the coverage of a disk or a convex polygon
 
 const SHADER: &str = "methods/wedges.wgsl";
@@ -66,7 +68,7 @@ const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[
     STENCIL_VOLUMES[3],
     FormatNeed {
         usage: Usage::Blend,
-        formats: &[F::R32Float, F::R16Float],
+        formats: &[F::Rg32Float, F::Rg16Float],
         fallback: "coverage summed in half floats: V within 1/64 of the 32-bit sum, within 1/256 at 99.5 % of pixels",
     },
 ]);

@@ -3,8 +3,9 @@
 //! diffuse shading from the disk times V.
 //!
 //! Targets, `width`×`height` each: colour (Rgba8UnormSrgb), data (Rg32Float: V, and t + 2·branch
-//! so both stay exact in one channel) and reversed depth (Depth32Float, 1 at the near plane,
-//! kept): 12 bytes of colour per pixel. The world position, when someone needs it (a render's
+//! so both stay exact in one channel), cost (Rg32Float: the method's work at the pixel and the
+//! path it took, `count_work`/`took_path` of `shared/camera.wgsl`, for the cost views) and
+//! reversed depth (Depth32Float, 1 at the near plane, kept): 20 bytes of colour per pixel. The world position, when someone needs it (a render's
 //! `position.exr`, the inspector), comes back from the depth; reversed float depth keeps it
 //! accurate to about 1e-6 of the distance at any range.
 
@@ -28,6 +29,8 @@ pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrg
 /// The colour target seen as its bytes (the view pass copies them as they are).
 pub const COLOR_BYTES_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const DATA_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+/// The cost target: x the method's units of work at the pixel, y the path it took.
+pub const COST_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// The ambient share of the shading, so shadowed surfaces keep their shape.
@@ -237,7 +240,11 @@ impl CameraPass {
             constants: &constants,
             ..Default::default()
         };
-        let targets = [opaque(COLOR_FORMAT), opaque(DATA_FORMAT)];
+        let targets = [
+            opaque(COLOR_FORMAT),
+            opaque(DATA_FORMAT),
+            opaque(COST_FORMAT),
+        ];
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),
             layout: Some(&layout),
@@ -281,6 +288,8 @@ pub struct CameraTargets {
     /// between formats that differ only in sRGB-ness moves the bytes as they are).
     pub bytes_copy: Option<Texture>,
     pub data: Texture,
+    /// The method's work per pixel and the path it took ([`COST_FORMAT`]).
+    pub cost: Texture,
     pub depth: Texture,
     /// Changes whenever the textures are made again (whoever binds them binds again).
     pub generation: u64,
@@ -343,6 +352,13 @@ impl CameraTargets {
                 "CameraTargets::data",
                 (width, height),
                 DATA_FORMAT,
+                usage,
+            ),
+            cost: Texture::new(
+                device,
+                "CameraTargets::cost",
+                (width, height),
+                COST_FORMAT,
                 usage,
             ),
             depth: Texture::new(
@@ -409,6 +425,7 @@ impl Camera {
             color_attachments: &[
                 cleared(&targets.color.view, wgpu::Color::TRANSPARENT),
                 cleared(&targets.data.view, wgpu::Color::TRANSPARENT),
+                cleared(&targets.cost.view, wgpu::Color::TRANSPARENT),
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &targets.depth.view,

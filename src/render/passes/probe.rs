@@ -3,7 +3,9 @@
 //! persistent staging buffers, and the result is picked up a frame later without waiting:
 //! - [`ProbeRequest::Pixel`]: every value under the cursor ([`PIXEL_FLOATS`] floats, 112 bytes);
 //! - [`ProbeRequest::Fit`]: the shown scalar at [`FIT_GRID`]² samples of a grid, for the display
-//!   range's auto-fit (2.3 KiB), instead of reading the whole image.
+//!   range's auto-fit (2.3 KiB), instead of reading the whole image;
+//! - [`ProbeRequest::Motion`]: V at [`MOTION_GRID`]² pixels of a grid (2.3 KiB), for the lab's
+//!   motion meter while the light or a caster is dragged (`app::motion`).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -15,7 +17,8 @@ use crate::render::timer::Recorder;
 use crate::render::{buffer_entry, pipeline_layout, shader_module, GpuContext};
 
 /// Floats of a pixel probe (`PIXEL_FLOATS` of the shader): 0–3 colour (sRGB bytes / 255), 4 V,
-/// 5 t + 2·branch, 6 depth, 7 hit, 8 reference V, 9–11 world position, 14–15 the light-map texel,
+/// 5 t + 2·branch, 6 depth, 7 hit, 8 reference V, 9–11 world position, 12–13 the method's
+/// cost (work, path), 14–15 the light-map texel,
 /// 16–27 the three light-map textures' RGBA there. NaN where a value does not exist.
 pub const PIXEL_FLOATS: usize = 28;
 /// The auto-fit samples a grid of this many squared.
@@ -23,6 +26,16 @@ pub const FIT_GRID: u32 = 24;
 /// `PROBE_*` of the shader: what a dispatch reads.
 pub const PROBE_PIXEL: u32 = 0;
 pub const PROBE_FIT: u32 = 1;
+pub const PROBE_MOTION: u32 = 2;
+/// The motion probe reads V at a grid of this many squared pixels (the fit's grid).
+pub const MOTION_GRID: u32 = FIT_GRID;
+
+/// The pixel of a `width`×`height` image that sample `i` of a `grid`² grid reads (the fit's and
+/// the motion probe's `grid_pixel` in `probe.wgsl`).
+pub fn grid_pixel(i: u32, grid: u32, width: u32, height: u32) -> (u32, u32) {
+    let at = |g: u32, n: u32| ((g as f32 + 0.5) / grid as f32 * n as f32) as u32;
+    (at(i % grid, width), at(i / grid, height))
+}
 
 /// What to read.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,12 +45,17 @@ pub enum ProbeRequest {
     Pixel { x: u32, y: u32, params: ViewParams },
     /// The shown scalar over a grid, for [`super::view::Mapping::fit`].
     Fit { params: ViewParams },
+    /// V over a grid of [`MOTION_GRID`]² pixels (NaN where no surface), whatever the view;
+    /// `tag` comes back with the answer.
+    Motion { tag: u64, params: ViewParams },
 }
 
 impl ProbeRequest {
     fn params(&self) -> &ViewParams {
         match self {
-            ProbeRequest::Pixel { params, .. } | ProbeRequest::Fit { params } => params,
+            ProbeRequest::Pixel { params, .. }
+            | ProbeRequest::Fit { params }
+            | ProbeRequest::Motion { params, .. } => params,
         }
     }
 
@@ -45,6 +63,7 @@ impl ProbeRequest {
         match self {
             ProbeRequest::Pixel { .. } => PIXEL_FLOATS,
             ProbeRequest::Fit { .. } => (FIT_GRID * FIT_GRID) as usize,
+            ProbeRequest::Motion { .. } => (MOTION_GRID * MOTION_GRID) as usize,
         }
     }
 }
@@ -148,6 +167,7 @@ pub struct Probe {
     pass: Arc<ProbePass>,
     pixel: Slot,
     fit: Slot,
+    motion: Slot,
     /// Answers that arrived and were not taken yet.
     arrived: Vec<ProbeResult>,
 }
@@ -158,6 +178,7 @@ impl Probe {
         Probe {
             pixel: Slot::new(ctx, &pass, PIXEL_FLOATS),
             fit: Slot::new(ctx, &pass, (FIT_GRID * FIT_GRID) as usize),
+            motion: Slot::new(ctx, &pass, (MOTION_GRID * MOTION_GRID) as usize),
             pass,
             arrived: Vec::new(),
         }
@@ -165,12 +186,12 @@ impl Probe {
 
     /// Whether an answer is still on its way.
     pub fn pending(&self) -> bool {
-        self.pixel.pending.is_some() || self.fit.pending.is_some()
+        self.pixel.pending.is_some() || self.fit.pending.is_some() || self.motion.pending.is_some()
     }
 
     /// Ask for the staging buffers copied into by the last submit to be mapped.
     pub fn request_map(&mut self) {
-        for slot in [&mut self.pixel, &mut self.fit] {
+        for slot in [&mut self.pixel, &mut self.fit, &mut self.motion] {
             if slot.pending.is_some() && !slot.map_requested {
                 slot.map_requested = true;
                 let mapped = slot.mapped.clone();
@@ -186,7 +207,7 @@ impl Probe {
     /// Answers that have arrived, without waiting.
     pub fn poll(&mut self, ctx: &GpuContext) -> Vec<ProbeResult> {
         let _ = ctx.device.poll(wgpu::PollType::Poll);
-        for slot in [&mut self.pixel, &mut self.fit] {
+        for slot in [&mut self.pixel, &mut self.fit, &mut self.motion] {
             if !slot.mapped.load(Ordering::Acquire) {
                 continue;
             }
@@ -234,6 +255,7 @@ pub fn record(
     let slot = match request {
         ProbeRequest::Pixel { .. } => &mut probe.pixel,
         ProbeRequest::Fit { .. } => &mut probe.fit,
+        ProbeRequest::Motion { .. } => &mut probe.motion,
     };
     if slot.pending.is_some() {
         return 0;
@@ -259,6 +281,10 @@ pub fn record(
         ProbeRequest::Fit { .. } => {
             uniforms.probe = [0, 0, PROBE_FIT, FIT_GRID];
             (FIT_GRID * FIT_GRID).div_ceil(64)
+        }
+        ProbeRequest::Motion { .. } => {
+            uniforms.probe = [0, 0, PROBE_MOTION, MOTION_GRID];
+            (MOTION_GRID * MOTION_GRID).div_ceil(64)
         }
     };
     let group = slot.bindings.bind(ctx, &inputs, &uniforms);
@@ -298,6 +324,8 @@ pub struct PixelValues {
     pub position: Option<glam::Vec3>,
     /// The reference V there, when the GPU holds the reference of this view.
     pub reference: Option<f32>,
+    /// The method's work there and the path it took (its cost view).
+    pub cost: [f32; 2],
     /// The light-map texel under the point (or under the cursor in the light-space view) and
     /// the three textures' RGBA there.
     pub texel: Option<MapTexel>,
@@ -334,6 +362,7 @@ impl PixelValues {
             branch,
             position: hit.then(|| glam::Vec3::new(v[9], v[10], v[11])),
             reference: finite(v[8]),
+            cost: [v[12], v[13]],
             texel,
         })
     }

@@ -32,18 +32,24 @@ pub enum View {
     Classes,
     /// |ΔV| against the reference.
     Error,
+    /// FLIP of the shaded image against the reference's (a map handed in, `Session::set_flip`).
+    Flip,
     /// The shown method's light-space maps (the D-buffer), channels isolated or combined.
     DBuffer,
+    /// The shown method's work per pixel (taps, steps, listed edges, rays: its cost view).
+    Cost,
 }
 
 impl View {
-    pub const ALL: [View; 6] = [
+    pub const ALL: [View; 8] = [
         View::Final,
         View::Visibility,
         View::T,
         View::Classes,
         View::Error,
+        View::Flip,
         View::DBuffer,
+        View::Cost,
     ];
 
     pub fn name(self) -> &'static str {
@@ -53,7 +59,9 @@ impl View {
             View::T => "t",
             View::Classes => "classes",
             View::Error => "error",
+            View::Flip => "FLIP",
             View::DBuffer => "D-buffer",
+            View::Cost => "cost",
         }
     }
 
@@ -64,7 +72,15 @@ impl View {
             View::T => "t, the visibility parameter before V(t)",
             View::Classes => "lit / penumbra (visible or hidden from the centre) / umbra",
             View::Error => "|V − V_reference| against the reference at its current sample count",
+            View::Flip => {
+                "FLIP (Andersson et al. 2020) of the shaded image against the reference's: how \
+                 different they look, 0 … 1"
+            }
             View::DBuffer => "the method's light-space maps (the D-buffer), one channel or several",
+            View::Cost => {
+                "the method's work per pixel (its taps, steps, listed edges or rays; the \
+                 inspector names the unit and the path taken)"
+            }
         }
     }
 
@@ -77,6 +93,8 @@ impl View {
             View::Classes => 3,
             View::Error => 4,
             View::DBuffer => 5,
+            View::Cost => 6,
+            View::Flip => 7,
         }
     }
 
@@ -307,6 +325,7 @@ impl ViewLayout {
                     float(5),
                     float(6),
                     float(7),
+                    float(8),
                 ],
             });
             let blank_float = Texture::new(
@@ -382,6 +401,7 @@ impl ViewBindings {
                     view_entry(5, maps[0]),
                     view_entry(6, maps[1]),
                     view_entry(7, maps[2]),
+                    view_entry(8, &inputs.camera.cost.view),
                 ],
             });
             (group, key)
@@ -394,7 +414,7 @@ impl ViewBindings {
 pub struct ViewPass {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
-    pipelines: [OnceLock<wgpu::RenderPipeline>; 6 * 3],
+    pipelines: [OnceLock<wgpu::RenderPipeline>; 8 * 3],
 }
 
 impl ViewPass {
@@ -412,11 +432,13 @@ impl ViewPass {
     /// The pipeline drawing `params`'s view (and colour map, for the scalar views).
     fn pipeline(&self, device: &wgpu::Device, params: &ViewParams) -> &wgpu::RenderPipeline {
         let map = match params.view {
-            View::Visibility | View::T | View::Error | View::DBuffer => params.mapping.map.code(),
+            View::Visibility | View::T | View::Error | View::Flip | View::DBuffer | View::Cost => {
+                params.mapping.map.code()
+            }
             View::Final | View::Classes => 0,
         };
         let slot = (params.view.code() * 3 + map) as usize;
-        self.pipelines[slot.min(17)].get_or_init(|| {
+        self.pipelines[slot.min(23)].get_or_init(|| {
             let constants = [
                 ("VIEW_KIND", f64::from(params.view.code())),
                 ("COLORMAP", f64::from(map)),

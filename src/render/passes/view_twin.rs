@@ -99,6 +99,8 @@ pub fn scalar(frame: &Frame, reference: Option<&[f32]>, view: View, i: usize) ->
         View::Visibility => frame.visibility.get(i).copied(),
         View::T => (i < frame.len()).then(|| frame.t(i)),
         View::Error => Some((frame.visibility.get(i)? - reference?.get(i)?).abs()),
+        View::Cost => frame.cost.get(i).map(|c| c[0]),
+        View::Flip => reference?.get(i).copied(),
         _ => None,
     }
 }
@@ -121,14 +123,14 @@ pub fn render(
     };
     match params.view {
         View::Final => camera(&color),
-        View::Visibility | View::T => {
+        View::Visibility | View::T | View::Cost => {
             camera(&|i| scalar(frame, reference, params.view, i).map_or(NO_DATA, |v| m.color(v)))
         }
-        View::Error => camera(&|i| match (frame.hit(i), reference) {
+        View::Error | View::Flip => camera(&|i| match (frame.hit(i), reference) {
             (false, _) => NO_DATA,
             (true, None) => color(i),
             (true, Some(_)) => {
-                scalar(frame, reference, View::Error, i).map_or(NO_DATA, |v| m.color(v))
+                scalar(frame, reference, params.view, i).map_or(NO_DATA, |v| m.color(v))
             }
         }),
         View::Classes => camera(&|i| {

@@ -6,8 +6,9 @@
 //! 1. **coverage**: every wedge's back faces (front faces culled, no depth test: one fragment
 //!    per pixel whose ray meets the wedge, the camera inside one included), each fragment
 //!    adding its edge's signed coverage of the disk, as the receiver in the prepass's position
-//!    target sees it, into the sum buffer (additive blending). The buffer is `R32Float` where the
-//!    device blends 32-bit floats (`FLOAT32_BLENDABLE`), else `R16Float` (11 significant bits: a
+//!    target sees it, into the sum buffer's x (additive blending), and 1 into its y (the wedge
+//!    fragments per pixel, the method's cost view). The buffer is `Rg32Float` where the
+//!    device blends 32-bit floats (`FLOAT32_BLENDABLE`), else `Rg16Float` (11 significant bits: a
 //!    sum of a few terms within about 1e-3; the 2003 papers fought 8-bit buffers);
 //! 2. **resolve**: `V = clamp(1 − H − sum, 0, 1)` into the screen visibility target, `H` from
 //!    the stencil test (two pipelines: count zero, count not zero).
@@ -124,9 +125,9 @@ impl WedgePass {
                 .features()
                 .contains(wgpu::Features::FLOAT32_BLENDABLE)
             {
-                wgpu::TextureFormat::R32Float
+                wgpu::TextureFormat::Rg32Float
             } else {
-                wgpu::TextureFormat::R16Float
+                wgpu::TextureFormat::Rg16Float
             };
             let module = shader_module(device, "passes/wedges.wgsl");
             let coverage_layout =
@@ -157,7 +158,7 @@ impl WedgePass {
                     color: add,
                     alpha: add,
                 }),
-                write_mask: wgpu::ColorWrites::RED,
+                write_mask: wgpu::ColorWrites::RED | wgpu::ColorWrites::GREEN,
             })];
             let coverage = [0.0, 1.0].map(|polygon| {
                 let constants = [("POLYGON_LIGHT", polygon)];

@@ -26,6 +26,7 @@ pub fn render(
         vt: VtVariant::Exact,
         knobs: knobs.with(&SAMPLES, 256),
         read_dbuffer: false,
+        read_cost: false,
     };
     offline
         .render(scene, &request)
