@@ -374,6 +374,7 @@ fn bitmask(x: vec3<f32>, n: vec3<f32>, l: LightLookup) -> f32 {
             }
         }
     }
+    count_work(f32(visits));
     return 1.0 - f32(bits_count(bits_and(hidden, s.all))) / f32(max(samples, 1u));
 }
 

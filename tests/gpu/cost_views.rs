@@ -112,6 +112,7 @@ const CASES: &[&str] = &[
     "vsm",
     "msm",
     "msm-soft",
+    "bitmask",
     "sampled",
     "linear-ssm",
     "shadow-volume",
@@ -199,7 +200,7 @@ fn larger_lights_cost_the_searching_methods_more() {
         light_scaled("fig7-concave", 2.0),
     );
     let d = Knobs::default();
-    for name in ["pcss", "msm-soft", "wedges"] {
+    for name in ["pcss", "msm-soft", "bitmask", "wedges"] {
         let m: Method = name.parse().unwrap();
         grows(
             &mut o,

@@ -348,6 +348,7 @@ fn bitmask_gap_filling_closes_the_gaps_and_the_pyramid_changes_little() {
             vt: dbuffer::geometry::VtVariant::Exact,
             knobs,
             read_dbuffer: false,
+            read_cost: false,
         };
         s.offline
             .render(&s.scene, &request)
@@ -430,6 +431,7 @@ fn bitmask_matches_its_cpu_twin_on_the_map_it_reads() {
             vt: dbuffer::geometry::VtVariant::Exact,
             knobs: Knobs::default().with(&COARSE.0, coarse),
             read_dbuffer: true,
+            read_cost: false,
         };
         let (frame, _) = offline
             .render(&scene, &request)

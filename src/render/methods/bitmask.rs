@@ -9,7 +9,7 @@
 //! `passes::micro_patches`; the arithmetic's CPU twin is `geometry::bitmask`.
 
 use super::{
-    require, AdapterNeeds, CameraGroup, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
+    require, AdapterNeeds, CameraGroup, Cost, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
     Prepare, Scaled, SharedMaps, Switch, SHADOW_MAP,
 };
 use crate::geometry::fused::{DiskMask, MaskEval};
@@ -57,6 +57,7 @@ pub static BITMASK: MethodSpec = MethodSpec::new("bitmask", SHADER, |ctx| {
 .adapter(NEEDS)
 .about("bitmask soft shadows (Schwarz & Stamminger 2007): micro-patches back-projected onto light samples")
 .knobs(&[&SAMPLES, &GAP_FILL.0, &COARSE.0, &DETAIL.0])
+.cost(Cost::counted("pyramid nodes and texels visited"))
 .lights(super::AREA_LIGHTS);
 
 const SHADER: &str = "methods/bitmask.wgsl";
