@@ -15,5 +15,5 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     if !l.inside {
         return plain(1.0);
     }
-    return plain(msm_lit(l, shadow.knobs.x, shadow.knobs.y, false));
+    return plain(msm_lit(l, moment_depth(x, l), vec2<f32>(shadow.knobs.x), shadow.knobs.y, false));
 }

@@ -3,29 +3,57 @@
 // box of the summed-area table over the cone from the point to the disk down to the nearest
 // caster, whose moments give the share in front of the receiver and its mean depth (Hamburger
 // 4MSM's three-point distribution); the penumbra that mean depth predicts sizes the filter,
-// a second box, whose moments give V. No per-tap loop: six table reads of four corners.
-// knobs: x the nearest caster's distance from c, y the moment bias, z the least blocker share.
+// a second box, whose moments give V. No per-tap loop: six table reads of four corners. Depths
+// are heights above the light's plane (moment_depth), as the table holds them.
+// knobs: x the lowest caster's height above the light's plane, y the moment bias, z the least
+// blocker share.
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 // #include shared/msm.wgsl
 
-fn msm_soft(l: LightLookup) -> f32 {
-    let r = camera.light_radius;
-    let d = l.d;
+// Under a rectangle or polygon light, how much to shrink the box of the light's image so that
+// it has the light's own area (the box of a light turned against the map's axes is larger than
+// the light): a summed-area table filters boxes, and under a rectangle light a box is the exact
+// kernel, where pcss takes the disk of the same area. 1 for a disk.
+fn box_shrink() -> f32 {
+    if !polygon_light() {
+        return 1.0;
+    }
+    // The map's axes in the light's plane (texel s grows with NDC x, t against NDC y).
+    let o = shadow.inv_light_view_proj * vec4<f32>(0.0, 0.0, 0.5, 1.0);
+    let sx = shadow.inv_light_view_proj * vec4<f32>(1.0, 0.0, 0.5, 1.0);
+    let ty = shadow.inv_light_view_proj * vec4<f32>(0.0, -1.0, 0.5, 1.0);
+    let s_dir = sx.xyz / sx.w - o.xyz / o.w;
+    let t_dir = ty.xyz / ty.w - o.xyz / o.w;
+    let s_axis = normalize(vec2<f32>(dot(s_dir, camera.light_u), dot(s_dir, camera.light_w)));
+    let t_axis = normalize(vec2<f32>(dot(t_dir, camera.light_u), dot(t_dir, camera.light_w)));
+    var e = vec2<f32>(0.0);
+    for (var i = 0u; i < camera.light_corner_count; i++) {
+        let q = light_corner(i);
+        e = max(e, abs(vec2<f32>(dot(q, s_axis), dot(q, t_axis))));
+    }
+    return min(sqrt(camera.light_area / max(4.0 * e.x * e.y, 1e-30)), 1.0);
+}
+
+fn msm_soft(x: vec3<f32>, l: LightLookup) -> f32 {
+    // Heights above the light's plane: the table's depths, and the similar triangles' own.
+    let d = moment_depth(x, l);
     let near = max(shadow.knobs.x, 1e-4);
     if d <= near {
         return 1.0;
     }
-    let max_r = f32(MSM_MAX_RADIUS - 1);
-    let search = clamp(light_width_in_texels(r, d, near), 1.0, max_r);
-    let z_search = msm_depth(d * (1.0 - box_bias(l, search)));
-    let found = hamburger(box_moments(l.texel, i32(ceil(search))), z_search, shadow.knobs.y);
+    // Filters wider than the table's room are summed in pieces (shared/msm.wgsl box_sum); the
+    // map's width bounds them.
+    let max_r = vec2<f32>(shadow.size);
+    let search = clamp(light_footprint(x, near), vec2<f32>(1.0), max_r);
+    let z_search = msm_depth(d * (1.0 - box_bias(l, max(search.x, search.y))));
+    let found = hamburger(box_moments(l.texel, vec2<i32>(ceil(search))), z_search, shadow.knobs.y);
     if found.x < shadow.knobs.z {
         return 1.0;
     }
     let blocker = max(msm_distance(found.y), near);
-    let width = clamp(light_width_in_texels(r, d, blocker), 0.0, max_r);
-    return msm_lit(l, width, shadow.knobs.y, true);
+    let width = clamp(light_footprint(x, blocker) * box_shrink(), vec2<f32>(0.0), max_r);
+    return msm_lit(l, d, width, shadow.knobs.y, !polygon_light());
 }
 
 fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
@@ -36,5 +64,5 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     if !l.inside {
         return plain(1.0);
     }
-    return plain(msm_soft(l));
+    return plain(msm_soft(x, l));
 }

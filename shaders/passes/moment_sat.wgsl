@@ -1,12 +1,19 @@
 // The moment map's summed-area table (render::passes::moment_sat; the arithmetic's CPU twin is
-// geometry::moments): per texel of the centre's shadow map its depth normalized to [0, 1]
-// between the scene's nearest and farthest distance from c (1 where no surface is), the four
+// geometry::moments): per texel of the centre's shadow map its depth — its height above the
+// light's plane — normalized to [0, 1] between the scene's lowest and highest (1 where no
+// surface is), the four
 // power moments through the optimized quantization (Peters & Klein 2015) in fixed point, and
 // their running sums — along each row, then down each column. Sums are u32 and wrap: a box's
 // sum, four corners of the table, is exact modulo 2³² and the fixed point leaves room for the
 // largest box (JCGT 2017's integer tables).
 
 struct SatUniforms {
+    // The light view's clip space back to the world, the light's centre, and its unit normal
+    // (zero for a line light): a texel's depth is its height above the light's plane, its
+    // distance times the cosine of its ray with the normal (a line light's: the distance).
+    inv_light_view_proj: mat4x4<f32>,
+    light_center: vec4<f32>,
+    light_normal: vec4<f32>,
     size: u32,
     // One moment's fixed-point scale.
     scale: f32,
@@ -35,7 +42,7 @@ fn cs_range(@builtin(global_invocation_id) id: vec3<u32>) {
     var lo = 3.4e38;
     var hi = 0.0;
     for (var x = 0u; x < size; x++) {
-        let d = textureLoad(distance_map, vec2<i32>(vec2<u32>(x, y)), 0).x;
+        let d = texel_depth(vec2<u32>(x, y));
         if d > 0.0 && d < NO_SURFACE {
             lo = min(lo, d);
             hi = max(hi, d);
@@ -63,8 +70,21 @@ const ENCODE = mat4x4<f32>(
     39.3703274134, -35.364903257, -6.6543490743, -23.9728048165,
 );
 
-fn texel_moments(at: vec2<u32>, r: vec2<f32>) -> vec4<u32> {
+// The texel's depth: its height above the light's plane (a plane parallel to the light is one
+// depth over any box, as a receiver-plane bias makes it for a per-tap test), or for a line light
+// its distance; NO_SURFACE's own where it holds none.
+fn texel_depth(at: vec2<u32>) -> f32 {
     let d = textureLoad(distance_map, vec2<i32>(at), 0).x;
+    if !(d < NO_SURFACE) || dot(sat_in.light_normal.xyz, sat_in.light_normal.xyz) == 0.0 {
+        return d;
+    }
+    let uv = (vec2<f32>(at) + 0.5) / f32(sat_in.size);
+    let p = sat_in.inv_light_view_proj * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.5, 1.0);
+    return d * max(dot(normalize(p.xyz / p.w - sat_in.light_center.xyz), sat_in.light_normal.xyz), 0.0);
+}
+
+fn texel_moments(at: vec2<u32>, r: vec2<f32>) -> vec4<u32> {
+    let d = texel_depth(at);
     let z = clamp((d - r.x) * r.y, 0.0, 1.0);
     let s = z * z;
     let optimized = ENCODE * vec4<f32>(z, s, s * z, s * s) + vec4<f32>(0.035955884801, 0.0, 0.0, 0.0);

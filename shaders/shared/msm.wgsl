@@ -17,7 +17,7 @@ const DECODE = mat4x4<f32>(
     0.0319417555, -0.1722823173, -0.2758014811, -0.3376131734,
 );
 
-// The receiver distance |cx| as the table's normalized depth.
+// The point's depth (moment_depth) as the table's normalized depth.
 fn msm_depth(d: f32) -> f32 {
     let lo = bitcast<f32>(range[0]);
     let hi = bitcast<f32>(range[1]);
@@ -50,41 +50,55 @@ fn table_at(q: vec2<i32>) -> vec4<u32> {
 
 // The summed moments of the box of texels centre ± half, clipped to the map, and its texel count.
 struct BoxSum {
-    sum: vec4<u32>,
+    sum: vec4<f32>,
     count: i32,
 };
+
+// The table holds any box up to SAT_SIDE texels a side exactly.
+const SAT_SIDE: i32 = 2 * MSM_MAX_RADIUS + 1;
 
 fn box_sum(centre: vec2<i32>, half: vec2<i32>) -> BoxSum {
     let last = vec2<i32>(i32(shadow.size) - 1);
     let lo = clamp(centre - half, vec2<i32>(0), last);
     let hi = clamp(centre + half, vec2<i32>(0), last);
-    // Wrapping u32 arithmetic: exact as long as the box's true sum fits (the fixed point's
-    // room, geometry::moments::SAT_SCALE).
-    let s = table_at(hi) - table_at(vec2<i32>(lo.x - 1, hi.y)) - table_at(vec2<i32>(hi.x, lo.y - 1))
-        + table_at(lo - vec2<i32>(1));
-    return BoxSum(s, (hi.x - lo.x + 1) * (hi.y - lo.y + 1));
+    // Wrapping u32 arithmetic: a box's four corners give its sum exactly as long as its true sum
+    // fits (the fixed point's room, geometry::moments::SAT_SCALE: SAT_SIDE² texels), so a wider
+    // box is summed in pieces that fit, added as floats (a penumbra wider than the table's room:
+    // `no-umbra`'s needs 250 texels).
+    let pieces = (hi - lo + SAT_SIDE) / SAT_SIDE;
+    var sum = vec4<f32>(0.0);
+    for (var py = 0; py < pieces.y; py++) {
+        for (var px = 0; px < pieces.x; px++) {
+            let a = lo + vec2<i32>(px, py) * SAT_SIDE;
+            let b = min(a + SAT_SIDE - 1, hi);
+            let s = table_at(b) - table_at(vec2<i32>(a.x - 1, b.y)) - table_at(vec2<i32>(b.x, a.y - 1))
+                + table_at(a - vec2<i32>(1));
+            sum += vec4<f32>(s);
+        }
+    }
+    return BoxSum(sum, (hi.x - lo.x + 1) * (hi.y - lo.y + 1));
 }
 
 // Summed moments back to mean power moments.
 fn mean_moments(b: BoxSum) -> vec4<f32> {
-    let optimized = vec4<f32>(b.sum) / (f32(max(b.count, 1)) * MSM_SCALE)
+    let optimized = b.sum / (f32(max(b.count, 1)) * MSM_SCALE)
         - vec4<f32>(0.035955884801, 0.0, 0.0, 0.0);
     return DECODE * optimized;
 }
 
-// The mean power moments of the square centre ± r.
-fn box_moments(centre: vec2<i32>, r: i32) -> vec4<f32> {
-    return mean_moments(box_sum(centre, vec2<i32>(r)));
+// The mean power moments of the box centre ± r.
+fn box_moments(centre: vec2<i32>, r: vec2<i32>) -> vec4<f32> {
+    return mean_moments(box_sum(centre, r));
 }
 
-// The mean power moments of a cross, centre ± (r, r/2) and ± (r/2, r): three boxes of the table
-// that come closer to a disk of radius r than the square does (area 3r², corners at 1.12r), so a
-// disk light's penumbra is not drawn as a square's.
-fn cross_moments(centre: vec2<i32>, r: i32) -> vec4<f32> {
+// The mean power moments of a cross, centre ± (r.x, r.y/2) and ± (r.x/2, r.y): three boxes of the
+// table that come closer to a disk of radius r than the square does (area 3r², corners at
+// 1.12r), so a disk light's penumbra is not drawn as a square's.
+fn cross_moments(centre: vec2<i32>, r: vec2<i32>) -> vec4<f32> {
     let h = r / 2;
-    let a = box_sum(centre, vec2<i32>(r, h));
-    let b = box_sum(centre, vec2<i32>(h, r));
-    let c = box_sum(centre, vec2<i32>(h, h));
+    let a = box_sum(centre, vec2<i32>(r.x, h.y));
+    let b = box_sum(centre, vec2<i32>(h.x, r.y));
+    let c = box_sum(centre, h);
     return mean_moments(BoxSum(a.sum + b.sum - c.sum, a.count + b.count - c.count));
 }
 
@@ -130,13 +144,23 @@ fn box_bias(l: LightLookup, r: f32) -> f32 {
     return shadow.bias_constant + (l.rel_bias - shadow.bias_constant) * (min(r, 4.0) + 1.0);
 }
 
-// V of a filter of half-width r texels (fractional: between the two nearest integers) about
-// the point's texel: the square (`msm`) or the cross (`msm-soft`).
-fn msm_lit(l: LightLookup, r: f32, moment_bias: f32, cross: bool) -> f32 {
+// The table's depth of the point x (render::passes::moment_sat's texel_depth): its height above
+// the light's plane, or for a line light its distance from c.
+fn moment_depth(x: vec3<f32>, l: LightLookup) -> f32 {
+    if camera.light_kind == LIGHT_LINE {
+        return l.d;
+    }
+    return dot(x - camera.light_center, camera.light_normal);
+}
+
+// V of a filter of half-widths r texels along the map's two axes (fractional: between the two
+// nearest integers) about the point's texel, at the point's depth `depth` (moment_depth): a box
+// (`msm`; `msm-soft` under a rectangle or polygon) or the cross (`msm-soft` under a disk).
+fn msm_lit(l: LightLookup, depth: f32, r: vec2<f32>, moment_bias: f32, cross: bool) -> f32 {
     let r0 = floor(r);
-    let t = r - r0;
-    let z_f = msm_depth(l.d * (1.0 - box_bias(l, r)));
-    let r0i = i32(r0);
+    let t = 0.5 * (r.x - r0.x + r.y - r0.y);
+    let z_f = msm_depth(depth * (1.0 - box_bias(l, max(r.x, r.y))));
+    let r0i = vec2<i32>(r0);
     var m0 = box_moments(l.texel, r0i);
     var m1 = box_moments(l.texel, r0i + 1);
     if cross {

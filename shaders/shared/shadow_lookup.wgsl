@@ -77,10 +77,50 @@ fn receiver_distance(texel: vec2<i32>, x: vec3<f32>, n: vec3<f32>, d: f32) -> f3
 }
 
 // How wide, in shadow-map texels, a light of radius r at c looks from a receiver at distance d
-// through a plane at distance z (similar triangles): the blocker search of `pcss` and
-// `msm-soft` with z the nearest caster, their penumbra with z the blockers' mean.
+// through a plane at distance z (similar triangles over the larger of the map's two texel
+// slopes): the blocker search of `pcss` with z the nearest caster, its penumbra with z the
+// blockers' mean.
 fn light_width_in_texels(r: f32, d: f32, z: f32) -> f32 {
     return r * (d - z) / (z * d) / max(shadow.texel_slope, 1e-9);
+}
+
+// Where a world point falls in the map, in texels.
+fn map_point(p: vec3<f32>) -> vec2<f32> {
+    let clip = shadow.light_view_proj * vec4<f32>(p, 1.0);
+    let ndc = clip.xy / clip.w;
+    return vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * shadow.size;
+}
+
+// The light seen from x through the plane at height h above the light's plane (parallel to it),
+// projected into the map: the half-widths, in texels along the map's two axes, of the light's
+// image there — the points q + (x − q) h / h_x for q on the light, about the one for its centre
+// (which lies on x's ray, so on x's texel). `msm-soft` sizes its blocker search (h: the lowest
+// caster) and its penumbra filter (h: the blockers') by it (`pcss` keeps its classic sizing,
+// light_width_in_texels, which on the scored scenes does better for it). By similar triangles in
+// the light's own frame and the map's own projection, so the map's view tilted from the light,
+// a frustum wider one way than the other (a square map's texels then span less angle across than
+// along) and a point off the view's axis are all counted. A disk's image is an ellipse, whose box
+// this is; a rectangle's or polygon's, the box of its corners.
+fn light_footprint(x: vec3<f32>, h: f32) -> vec2<f32> {
+    let c = camera.light_center;
+    let hx = dot(x - c, camera.light_normal);
+    let f = clamp(h / max(hx, 1e-30), 0.0, 1.0);
+    let centre = map_point(c + (x - c) * f);
+    if polygon_light() {
+        var e = vec2<f32>(0.0);
+        for (var i = 0u; i < camera.light_corner_count; i++) {
+            let k = light_corner(i);
+            let q = c + k.x * camera.light_u + k.y * camera.light_w;
+            e = max(e, abs(map_point(q + (x - q) * f) - centre));
+        }
+        return e;
+    }
+    let r = camera.light_radius;
+    let qa = c + r * camera.light_u;
+    let qb = c + r * camera.light_w;
+    let a = map_point(qa + (x - qa) * f) - centre;
+    let b = map_point(qb + (x - qb) * f) - centre;
+    return sqrt(a * a + b * b);
 }
 
 // 1 where the shadow map at `texel` does not hide a receiver at `expected`.

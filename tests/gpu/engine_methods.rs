@@ -220,24 +220,31 @@ fn vsm_bleeds_light_on_leak_test() {
     }
 }
 
-/// Moment soft shadows against PCSS, the method they replace in an engine: on casters where one
-/// blocker depth is right (a large light, a concave caster, casters apart) `msm-soft`'s exact box
-/// filter beats PCSS's 32 noisy taps; where it is not (a high caster, two casters at two heights)
-/// it stays within 15 % of PCSS. The filtered hard shadows (`vsm`, `msm`) stand between the hard
-/// shadow and the soft methods.
+/// Moment soft shadows against PCSS, the method they replace in an engine: with the filter
+/// sized by the light's image projected into the map, the table's depths heights above the
+/// light's plane (a receiver parallel to the light is one depth over any box) and boxes wider
+/// than the table's room summed in pieces, `msm-soft`'s exact box filter beats PCSS's 32 noisy
+/// taps on convex casters — spheres at several heights, a caster smaller than the light, the
+/// strip and triangle lights — and on the concave, overlapping and fusing ones scored here. The
+/// filtered hard shadows (`vsm`, `msm`) stand between the hard shadow and the soft methods.
 #[test]
 fn msm_soft_against_pcss_and_the_filtered_hard_shadows() {
     use dbuffer::render::methods::{hard, msm, msm_soft, pcss, vsm};
     let of = |spec| Method::of(spec).expect("on the registry");
     println!("| scene | method | class mismatch % | MAE | penumbra MAE | p99 |");
-    for (name, wins) in [
-        ("fig1-large-light", true),
-        ("fig7-concave", true),
-        ("fig8b-light-size", true),
-        ("fusion-many", true),
-        ("fig8a-distance", false),
-        ("no-umbra", false),
-        ("fusion-cross", false),
+    for name in [
+        "fig1-large-light",
+        "fig8a-distance",
+        "fig8b-light-size",
+        "no-umbra",
+        "table1-224",
+        "table1-960",
+        "rect-strip",
+        "polygon-triangle",
+        "fig7-concave",
+        "overlap",
+        "fusion-cross",
+        "fusion-many",
     ] {
         let mut s = Scored::new(name, SIZE);
         let d = Knobs::default();
@@ -246,10 +253,9 @@ fn msm_soft_against_pcss_and_the_filtered_hard_shadows() {
         let (_, m) = s.measure_as(of(&msm::MSM), d, "msm");
         let (_, ms) = s.measure_as(of(&msm_soft::MSM_SOFT), d, "msm-soft");
         let (_, p) = s.measure_as(of(&pcss::PCSS), d, "pcss");
-        let bound = if wins { 1.0 } else { 1.15 };
         assert!(
-            ms.penumbra_mae <= bound * p.penumbra_mae,
-            "{name}: msm-soft's penumbra MAE {:.4} against PCSS's {:.4} (bound {bound}×)",
+            ms.penumbra_mae <= p.penumbra_mae,
+            "{name}: msm-soft's penumbra MAE {:.4} against PCSS's {:.4}",
             ms.penumbra_mae,
             p.penumbra_mae
         );

@@ -114,6 +114,19 @@ fn uniforms_match_their_wgsl() {
             size
         );
     }
+    use dbuffer::render::passes::moment_sat::SatUniforms;
+    assert_wgsl_layout!(
+        SatUniforms,
+        &source("passes/moment_sat.wgsl"),
+        "SatUniforms",
+        inv_light_view_proj,
+        light_center,
+        light_normal,
+        size,
+        scale,
+        _pad0,
+        _pad1
+    );
     use dbuffer::render::passes::micro_patches::PatchUniforms;
     assert_wgsl_layout!(
         PatchUniforms,

@@ -14,13 +14,13 @@ use super::{
 };
 use crate::geometry::fused::{DiskMask, MaskEval};
 use crate::render::adapter::{FormatNeed, Usage};
-use crate::render::passes::micro_patches::{pyramid_shape, MapFrame, MicroPatches};
-use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
+use crate::render::passes::micro_patches::{pyramid_shape, MicroPatches};
+use crate::render::passes::shadow_map::{lookup_entries, MapFrame, ShadowUniforms};
 use crate::render::{
     buffer_entry, storage_entry, texture_entry, uniform_buffer, view_entry, GpuContext,
     RenderError,
 };
-use crate::scene::{AreaLight, Scene};
+use crate::scene::AreaLight;
 
 pub static SAMPLES: Knob = Knob::int(
     "bitmask-samples",
@@ -81,26 +81,11 @@ const FLAG_COARSE: u32 = 1;
 fn bitmask_knobs(f: &FrameInputs<'_>, levels: u32) -> [f32; 4] {
     let flags = if f.knobs.get(&COARSE) { FLAG_COARSE } else { 0 };
     [
-        lowest_caster(f.scene),
+        super::pcss::lowest_caster(f.scene),
         f.knobs.get(&SAMPLES) as f32,
         flags as f32 + f.knobs.get(&DETAIL),
         levels as f32,
     ]
-}
-
-/// The least height above the light's plane of a caster vertex in front of it: where the search
-/// starts (the light's reach in the map is widest there).
-fn lowest_caster(scene: &Scene) -> f32 {
-    let Some(light) = scene.light.as_area() else {
-        return 1e30;
-    };
-    scene
-        .casters()
-        .flat_map(|o| o.mesh.positions.iter())
-        .map(|v| light.normal.dot(*v - light.center))
-        .filter(|h| h.is_finite() && *h > 0.0)
-        .fold(f32::MAX, f32::min)
-        .min(1e30)
 }
 
 /// What the corners and the pyramid were made from.
@@ -190,11 +175,7 @@ impl MethodState for Bitmask {
         };
         let light = *inputs.area(BITMASK.name)?;
         if self.made != Some(made) {
-            let frame = MapFrame {
-                inv_light_view_proj: inputs.light_view.view_projection().inverse(),
-                center: light.center,
-                normal: light.normal,
-            };
+            let frame = MapFrame::new(inputs.light_view, &inputs.scene.light);
             self.patches
                 .record(ctx, rec, &map.distance.view, map.size, made.gap_fill, &frame);
             self.made = Some(made);

@@ -13,7 +13,7 @@ use super::{
 };
 use crate::render::passes::moment_sat::MomentSat;
 use crate::render::storage_entry;
-use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
+use crate::render::passes::shadow_map::{lookup_entries, MapFrame, ShadowUniforms};
 use crate::render::{buffer_entry, uniform_buffer, view_entry, GpuContext, RenderError};
 
 /// The filter's half-width R in shadow-map texels.
@@ -102,7 +102,9 @@ impl MethodState for MomentMapped {
             map: map.generation,
         };
         if self.made != Some(made) {
-            self.sat.record(ctx, rec, &map.distance.view, map.size);
+            let frame = MapFrame::new(inputs.light_view, &inputs.scene.light);
+            self.sat
+                .record(ctx, rec, &map.distance.view, map.size, &frame);
             self.made = Some(made);
         }
         let table = require(self.sat.table(), "the moment table was not made")?;

@@ -40,9 +40,9 @@ const SHADER: &str = "methods/msm_soft.wgsl";
 
 fn msm_soft_knobs(f: &FrameInputs<'_>) -> [f32; 4] {
     [
-        super::pcss::nearest_caster(f.scene),
+        super::pcss::lowest_caster(f.scene),
         f.knobs.get(&BIAS),
         f.knobs.get(&LEAST_BLOCKER),
-        0.0,
+        std::env::var("MS_DEBUG").ok().and_then(|v| v.parse().ok()).unwrap_or(0.0),
     ]
 }

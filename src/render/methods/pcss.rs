@@ -76,6 +76,21 @@ pub(crate) fn nearest_caster(scene: &Scene) -> f32 {
         .min(1e30)
 }
 
+/// The least height above the light's plane of a caster vertex in front of it: where the searches of
+/// `msm-soft` and `bitmask` start (the light's reach in the map is widest there).
+pub(crate) fn lowest_caster(scene: &Scene) -> f32 {
+    let Some(light) = scene.light.as_area() else {
+        return 1e30;
+    };
+    scene
+        .casters()
+        .flat_map(|o| o.mesh.positions.iter())
+        .map(|v| light.normal.dot(*v - light.center))
+        .filter(|h| h.is_finite() && *h > 0.0)
+        .fold(f32::MAX, f32::min)
+        .min(1e30)
+}
+
 /// `n` points in the unit disk by Mitchell's best-candidate algorithm (deterministic): each new
 /// point is the farthest of a few candidates from those before it, so every prefix is spread over
 /// the disk and a method may use the first k taps of one table.

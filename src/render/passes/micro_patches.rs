@@ -19,6 +19,7 @@ use crate::render::{
 };
 
 use super::next_generation;
+use super::shadow_map::MapFrame;
 
 pub const PATCH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -36,15 +37,6 @@ pub struct PatchUniforms {
 }
 
 const _: () = assert!(std::mem::size_of::<PatchUniforms>() == 112);
-
-/// Where the map looks from: the light view's clip space back to the world, and the light's
-/// centre and normal (the pyramid holds heights above the light's plane).
-#[derive(Clone, Copy, Debug)]
-pub struct MapFrame {
-    pub inv_light_view_proj: glam::Mat4,
-    pub center: glam::Vec3,
-    pub normal: glam::Vec3,
-}
 
 struct PatchPipeline {
     pipeline: wgpu::RenderPipeline,

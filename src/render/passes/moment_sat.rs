@@ -14,14 +14,19 @@ use crate::render::{
 };
 
 use super::next_generation;
+use super::shadow_map::MapFrame;
 
 /// `SatUniforms` of `shaders/passes/moment_sat.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SatUniforms {
+    pub inv_light_view_proj: [[f32; 4]; 4],
+    pub light_center: [f32; 4],
+    pub light_normal: [f32; 4],
     pub size: u32,
     pub scale: f32,
-    pub _pad: [f32; 2],
+    pub _pad0: f32,
+    pub _pad1: f32,
 }
 
 /// The range buffer's reset: no surface seen yet (`f32::MAX`, 0 as bits).
@@ -61,13 +66,14 @@ impl MomentSat {
         self.table.as_ref()
     }
 
-    /// Make the table of `distance` (the centre's `size`² distance map).
+    /// Make the table of `distance` (the centre's `size`² distance map, seen as `frame` says).
     pub fn record(
         &mut self,
         ctx: &GpuContext,
         rec: &mut Recorder<'_>,
         distance: &wgpu::TextureView,
         size: u32,
+        frame: &MapFrame,
     ) {
         let pipes = ctx.shared(|device| {
             use wgpu::ShaderStages as S;
@@ -120,9 +126,13 @@ impl MomentSat {
         let Some(t) = &mut self.table else { return };
         t.generation = next_generation();
         let u = SatUniforms {
+            inv_light_view_proj: frame.inv_light_view_proj.to_cols_array_2d(),
+            light_center: frame.center.extend(0.0).to_array(),
+            light_normal: frame.normal.extend(0.0).to_array(),
             size,
             scale: moments::SAT_SCALE,
-            _pad: [0.0; 2],
+            _pad0: 0.0,
+            _pad1: 0.0,
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));

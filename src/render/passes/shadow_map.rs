@@ -302,3 +302,23 @@ pub fn lookup_entries() -> [wgpu::BindGroupLayoutEntry; 2] {
         ),
     ]
 }
+
+/// Where the map looks from, for a pass that turns its distances into depths of its own: the
+/// light view's clip space back to the world, and the light's centre and normal (the normal is
+/// zero for a line light, which has none: such a pass keeps distances).
+#[derive(Clone, Copy, Debug)]
+pub struct MapFrame {
+    pub inv_light_view_proj: glam::Mat4,
+    pub center: glam::Vec3,
+    pub normal: glam::Vec3,
+}
+
+impl MapFrame {
+    pub fn new(view: &LightView, light: &crate::scene::Light) -> MapFrame {
+        MapFrame {
+            inv_light_view_proj: view.view_projection().inverse(),
+            center: light.center(),
+            normal: light.as_area().map_or(glam::Vec3::ZERO, |a| a.normal),
+        }
+    }
+}
