@@ -7,13 +7,14 @@ use dbuffer::compare::{self, report, CompareRequest};
 use dbuffer::geometry::VtVariant;
 use dbuffer::output;
 use dbuffer::render::offline::Offline;
-use dbuffer::scene;
 
 use super::{check_dbuffer_size, parse_size, progress, MethodFlags};
 
 /// The arguments of `dbuffer compare`, as typed.
 pub struct CompareArgs<'a> {
     pub scene: &'a str,
+    /// `--scene N`: which scene of a glTF model.
+    pub gltf_scene: Option<usize>,
     pub out: &'a Path,
     pub size: &'a str,
     pub vt: &'a str,
@@ -28,8 +29,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let knobs = args.knobs.knobs()?;
     // Before any work: a comparison that cannot be written is not started.
     output::check_out_dir(args.out, &[]).context("--out")?;
-    let scene =
-        scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
+    let scene = super::load_scene(args.scene, args.gltf_scene)?;
     for w in scene.warnings() {
         errln!("warning   {w}");
     }
