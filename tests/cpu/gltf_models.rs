@@ -383,6 +383,14 @@ fn accessors_out_of_range_or_of_the_wrong_type() {
             "5 items",
         ],
     );
+    // No items, from past the end of the view: refused, not a slice past the end.
+    let mut d = doc.clone();
+    d["accessors"][0]["count"] = json!(0);
+    d["accessors"][0]["byteOffset"] = json!(1000);
+    assert_has(
+        &err_glb(&d, &bin),
+        &["accessor 0", "out of range", "0 items"],
+    );
     // An offset past the view.
     let mut d = doc.clone();
     d["accessors"][1]["byteOffset"] = json!(2);

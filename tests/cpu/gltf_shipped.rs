@@ -285,6 +285,20 @@ fn broken_meshopt_streams_are_refused_in_one_line() {
         doc["bufferViews"][v]["byteLength"] = json!(count * stride);
     });
     assert!(msg.contains(ext) && msg.contains("the count lies"), "{msg}");
+    // ... and a count past what a model may place at all, refused from the count alone.
+    let msg = broken_meshopt(|doc, _| {
+        let v = position_view(doc);
+        let stride = doc["bufferViews"][v]["extensions"][ext]["byteStride"]
+            .as_u64()
+            .unwrap();
+        let count = 1u64 << 30;
+        doc["bufferViews"][v]["extensions"][ext]["count"] = json!(count);
+        doc["bufferViews"][v]["byteLength"] = json!(count * stride);
+    });
+    assert!(
+        msg.contains(ext) && msg.contains("count 1073741824 is more than"),
+        "{msg}"
+    );
     // An unknown filter and an unknown mode.
     let msg = broken_meshopt(|doc, _| {
         let v = position_view(doc);

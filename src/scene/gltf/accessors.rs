@@ -227,8 +227,9 @@ fn fits(
             view.index
         ));
     }
+    // Even no element must start inside the view.
     let needed = if count == 0 {
-        Some(0u64)
+        Some(offset)
     } else {
         (stride as u64)
             .checked_mul(count - 1)

@@ -3,8 +3,8 @@
 //! once, all within the byte budget.
 
 use super::json::Doc;
-use super::meshopt::{compressed, decode, Compressed, MAX_EXPANSION};
-use super::{read_regular_file, MAX_FILE_BYTES};
+use super::meshopt::{compressed, decode, Compressed, Mode, MAX_EXPANSION};
+use super::{read_regular_file, MAX_FILE_BYTES, MAX_PLACED_VERTICES, MAX_TRIANGLES};
 use std::collections::HashMap;
 use std::path::{Component, Path};
 
@@ -180,6 +180,19 @@ impl<'a> Buffers<'a> {
                     "{what}: count {} × byteStride {} is not the view's byteLength {}: the \
                      counts disagree",
                     c.count, c.byte_stride, view.byte_length
+                ));
+            }
+            // The budget's counts, before the decoder allocates: a vertex stream holds at most
+            // the positions a model may place, an index stream three per triangle.
+            let (limit, of) = match c.mode {
+                Mode::Attributes => (MAX_PLACED_VERTICES as u64, "vertices"),
+                _ => (3 * MAX_TRIANGLES as u64, "indices"),
+            };
+            if c.count > limit {
+                return Err(format!(
+                    "{what}: count {} is more than the {limit} {of} a model may have \
+                     (MAX_SCENE_TRIANGLES)",
+                    c.count
                 ));
             }
             let most = c

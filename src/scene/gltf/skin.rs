@@ -20,6 +20,10 @@ use super::MAX_DEPTH;
 /// Most joints one skin may have (JOINTS_0 is at most unsigned short).
 const MAX_JOINTS: usize = 1 << 16;
 
+/// Most vertices of one primitive placed by a skin: its joints and weights take 32 bytes a
+/// vertex (128 MiB here); a larger skinned primitive is drawn by its node, with a warning.
+const MAX_SKINNED_VERTICES: usize = 1 << 22;
+
 /// World transforms of any node, from the parent links of every node's `children` (a joint
 /// need not be under the scene's roots).
 pub(super) struct Worlds {
@@ -144,6 +148,11 @@ pub(super) fn influences(
     vertices: usize,
     buffers: &mut Buffers,
 ) -> Result<(Vec<f32>, Vec<f32>), String> {
+    if vertices > MAX_SKINNED_VERTICES {
+        return Err(format!(
+            "{what} has {vertices} vertices, more than the {MAX_SKINNED_VERTICES} dbuffer skins"
+        ));
+    }
     let read = |i: usize, name: &str, allowed: &[Component], buffers: &mut Buffers| {
         let acc = parse_accessor(doc, i, &format!("{name} of {what}"))?;
         if acc.count != vertices as u64 {
