@@ -20,6 +20,9 @@ use crate::scene::Mesh;
 /// A primitive's positions and triangles (indices into them), as read from its accessors.
 pub(super) type Primitive = (Vec<Vec3>, Vec<[u32; 3]>);
 
+/// A skinned primitive's joints and weights, four a vertex.
+type Influences = (Vec<f32>, Vec<f32>);
+
 /// Primitive modes (glTF's numbers).
 const TRIANGLES: u64 = 4;
 const TRIANGLE_STRIP: u64 = 5;
@@ -410,8 +413,7 @@ pub(super) fn read_document(
     let mut primitives = 0usize;
     let mut worlds = Worlds::new(doc);
     let mut skins: HashMap<usize, Result<Vec<Mat4>, String>> = HashMap::new();
-    let mut influences_read: HashMap<(usize, usize), Result<(Vec<f32>, Vec<f32>), String>> =
-        HashMap::new();
+    let mut influences_read: HashMap<(usize, usize), Result<Influences, String>> = HashMap::new();
     let mut unskinned: Vec<String> = Vec::new();
     let mut no_position = 0usize;
     for inst in &instances {

@@ -7,12 +7,13 @@
 use serde_json::{Map, Value};
 
 /// The parsed document: its top-level object.
+#[derive(Debug)]
 pub(super) struct Doc {
     root: Map<String, Value>,
 }
 
 /// An object of the document with the JSON path that names it in errors (`accessors[2]`).
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub(super) struct Obj<'a> {
     pub(super) map: &'a Map<String, Value>,
     pub(super) path: String,
