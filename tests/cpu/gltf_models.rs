@@ -803,6 +803,20 @@ fn accessors_without_a_buffer_view_are_zeros_and_sparse_on_zeros() {
         sorted_positions(&parse_glb(&tet, &tet_bin).unwrap())
     );
     assert!((volume6(&m) - 1.0).abs() < 1e-6);
+    // 16M positions without a view or sparse values: all at the origin, nothing to draw, and
+    // not 320 MB of zeros welded back into one point.
+    let mut d = doc.clone();
+    d["accessors"][0].as_object_mut().unwrap().remove("sparse");
+    d["accessors"][0]["count"] = json!(16_000_000);
+    d["meshes"][0]["primitives"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("indices");
+    let (m, used) = dbuffer_fuzzer::measure(|| parse_glb(&d, &bin).unwrap());
+    assert!(
+        m.mesh.triangles.is_empty() && used < 1 << 20,
+        "{used} bytes"
+    );
     // Without the sparse values: all four corners at the origin, nothing to draw.
     let mut d = doc.clone();
     d["accessors"][0].as_object_mut().unwrap().remove("sparse");

@@ -195,6 +195,11 @@ impl Accessor {
         }
     }
 
+    /// Whether every element is zero: no buffer view and no sparse values.
+    pub(super) fn all_zeros(&self) -> bool {
+        self.view.is_none() && self.sparse.is_none()
+    }
+
     fn describe(&self, what: &str) -> String {
         format!("accessor {} ({what})", self.index)
     }

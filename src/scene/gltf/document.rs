@@ -439,20 +439,30 @@ pub(super) fn read_document(
                         .position
                         .as_ref()
                         .ok_or_else(|| format!("{what} has no POSITION attribute"))?;
-                    let local = read_positions(position, &format!("POSITION of {what}"), buffers)?;
-                    let corners = match &prim.indices {
-                        Some(acc) => {
-                            read_indices(acc, &format!("indices of {what}"), buffers, local.len())?
-                        }
-                        None => (0..local.len() as u32).collect(),
-                    };
-                    let tris = assemble(prim.mode, &corners);
-                    &*e.insert((local, tris))
+                    if position.all_zeros() {
+                        // Every corner at the origin: nothing to draw, whatever the count says
+                        // (16M zeros would be 320 MB to weld back into one point).
+                        &*e.insert((vec![Vec3::ZERO], Vec::new()))
+                    } else {
+                        let local =
+                            read_positions(position, &format!("POSITION of {what}"), buffers)?;
+                        let corners = match &prim.indices {
+                            Some(acc) => read_indices(
+                                acc,
+                                &format!("indices of {what}"),
+                                buffers,
+                                local.len(),
+                            )?,
+                            None => (0..local.len() as u32).collect(),
+                        };
+                        let tris = assemble(prim.mode, &corners);
+                        &*e.insert((local, tris))
+                    }
                 }
             };
             // A skinned instance: each vertex by its joints (rest pose); else by the node.
             let skinned = match (inst.skin, prim.skinning) {
-                (Some((s, node)), Some((j, w))) => {
+                (Some((s, node)), Some((j, w))) if !tris.is_empty() => {
                     let matrices = match skins.entry(s) {
                         Entry::Occupied(e) => e.into_mut(),
                         Entry::Vacant(e) => e.insert(
