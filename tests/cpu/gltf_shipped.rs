@@ -452,7 +452,8 @@ fn scene_n_picks_a_scene_and_a_file_without_scenes_draws_its_root_nodes() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A folder of glTF test files (`DBUFFER_GLTF_SUITE=…/glTF-Validator/test`): every file is
+/// A folder of glTF test files (`DBUFFER_GLTF_SUITE=DIR`, e.g. the test folder of the Khronos
+/// glTF-Validator, which is not part of this repository): every file is
 /// loaded, none may panic or take a second; a file its `.report.json` calls valid (no errors)
 /// that holds a triangle mesh with positions must load. Prints the counts and each refusal.
 #[test]
