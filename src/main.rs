@@ -25,11 +25,21 @@ struct Args {
 #[derive(Subcommand)]
 enum Command {
     /// Open the lab on a built-in name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
-    Gui { scene: Option<String> },
+    Gui {
+        scene: Option<String>,
+        /// Which scene of a glTF model to draw (default: the model's default scene, else its
+        /// first).
+        #[arg(long = "scene", value_name = "N")]
+        gltf_scene: Option<usize>,
+    },
     /// Render a scene headless into DIR (image.png, visibility.exr, ...).
     Render {
         /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
         scene: String,
+        /// Which scene of a glTF model to draw (default: the model's default scene, else its
+        /// first).
+        #[arg(long = "scene", value_name = "N")]
+        gltf_scene: Option<usize>,
         /// Folder for image.png, visibility.exr, position.exr, dbuffer.exr, dbuffer_s.exr,
         /// classes.png and meta.json (created if missing; written all or nothing).
         #[arg(long)]
@@ -56,6 +66,10 @@ enum Command {
     Compare {
         /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
         scene: String,
+        /// Which scene of a glTF model to draw (default: the model's default scene, else its
+        /// first).
+        #[arg(long = "scene", value_name = "N")]
+        gltf_scene: Option<usize>,
         /// Folder for the images and reports (created if missing).
         #[arg(long)]
         out: std::path::PathBuf,
@@ -85,6 +99,10 @@ enum Command {
     Animate {
         /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
         scene: String,
+        /// Which scene of a glTF model to draw (default: the model's default scene, else its
+        /// first).
+        #[arg(long = "scene", value_name = "N")]
+        gltf_scene: Option<usize>,
         /// Folder for the frames and animation.png (created if missing).
         #[arg(long)]
         out: std::path::PathBuf,
@@ -147,6 +165,10 @@ enum Command {
     Inspect {
         /// A built-in scene name, a .toml scene file, an .obj mesh or a .gltf/.glb model.
         scene: String,
+        /// Which scene of a glTF model to draw (default: the model's default scene, else its
+        /// first).
+        #[arg(long = "scene", value_name = "N")]
+        gltf_scene: Option<usize>,
         /// Also compare the CPU twin of the method with ray-cast ground truth over the camera's
         /// view, with this many disk samples per pixel (1 to 65536).
         #[arg(long)]
@@ -193,16 +215,26 @@ fn main() -> ExitCode {
         Some(Command::Adapters) => cli::adapters::list(),
         Some(Command::Inspect {
             scene,
+            gltf_scene,
             samples,
             size,
             vt,
             method,
             out,
-        }) => cli::inspect(&scene, samples, &size, &vt, &method, out.as_deref()),
-        None => cli::gui(None, verbose),
-        Some(Command::Gui { scene }) => cli::gui(scene, verbose),
+        }) => cli::inspect(
+            &scene,
+            gltf_scene,
+            samples,
+            &size,
+            &vt,
+            &method,
+            out.as_deref(),
+        ),
+        None => cli::gui(None, None, verbose),
+        Some(Command::Gui { scene, gltf_scene }) => cli::gui(scene, gltf_scene, verbose),
         Some(Command::Render {
             scene,
+            gltf_scene,
             out,
             size,
             method,
@@ -211,6 +243,7 @@ fn main() -> ExitCode {
             knobs,
         }) => cli::render(&cli::RenderArgs {
             scene: &scene,
+            gltf_scene,
             out: &out,
             size: &size,
             method: method.as_deref(),
@@ -221,6 +254,7 @@ fn main() -> ExitCode {
         }),
         Some(Command::Compare {
             scene,
+            gltf_scene,
             out,
             size,
             orbit,
@@ -230,6 +264,7 @@ fn main() -> ExitCode {
             knobs,
         }) => cli::compare(&cli::CompareArgs {
             scene: &scene,
+            gltf_scene,
             out: &out,
             size: size.as_deref(),
             orbit: orbit.as_deref(),
@@ -240,6 +275,7 @@ fn main() -> ExitCode {
         }),
         Some(Command::Animate {
             scene,
+            gltf_scene,
             out,
             frames,
             orbit,
@@ -251,6 +287,7 @@ fn main() -> ExitCode {
             knobs,
         }) => cli::animate(&cli::AnimateArgs {
             scene: &scene,
+            gltf_scene,
             out: &out,
             frames,
             orbit: &orbit,

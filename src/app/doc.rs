@@ -33,7 +33,15 @@ pub struct Edit {
 impl SceneDoc {
     /// A built-in scene name, a `.toml` scene file or an `.obj` mesh, with its world-space scene.
     pub fn open(name_or_path: &str) -> Result<(SceneDoc, Scene), SceneError> {
-        let (file, path) = scene::load_file(name_or_path)?;
+        Self::open_with(name_or_path, scene::LoadOptions::default())
+    }
+
+    /// [`SceneDoc::open`] with options (`--scene N` for a glTF model).
+    pub fn open_with(
+        name_or_path: &str,
+        options: scene::LoadOptions,
+    ) -> Result<(SceneDoc, Scene), SceneError> {
+        let (file, path) = scene::load_file_with(name_or_path, options)?;
         let (label, name, base_dir) = match &path {
             None => (
                 format!("built-in scene {name_or_path}"),

@@ -47,6 +47,8 @@ use crate::scene::Camera;
 pub struct LabOptions {
     /// Built-in scene name or path; the default scene when `None`.
     pub scene: Option<String>,
+    /// `--scene N`: which scene of a glTF model to open.
+    pub gltf_scene: Option<usize>,
     /// Take a screenshot of the window into this PNG once frames are showing, then exit
     /// (`DBUFFER_SMOKE_SCREENSHOT`; the Xvfb smoke run).
     pub smoke_screenshot: Option<PathBuf>,
@@ -129,7 +131,10 @@ impl LabApp {
         settings.sanitize();
         let wanted = options.scene.as_deref().unwrap_or(DEFAULT_SCENE);
         let mut status = (String::new(), Level::Info);
-        let (doc, scene) = match SceneDoc::open(wanted) {
+        let load_options = crate::scene::LoadOptions {
+            gltf_scene: options.gltf_scene,
+        };
+        let (doc, scene) = match SceneDoc::open_with(wanted, load_options) {
             Ok(loaded) => loaded,
             Err(e) => {
                 status = (format!("{e}; showing {DEFAULT_SCENE}"), Level::Error);

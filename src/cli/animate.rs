@@ -4,12 +4,11 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use dbuffer::animation::{AnimationSpec, Recording, ANIMATION_FILE};
 use dbuffer::geometry::VtVariant;
 use dbuffer::render::offline::Offline;
 use dbuffer::render::{FrameRequest, Method};
-use dbuffer::scene;
 use dbuffer::scene::orbit::Orbit;
 
 use super::progress::Progress;
@@ -18,6 +17,8 @@ use super::{check_dbuffer_size, parse_size, MethodFlags};
 /// The arguments of `dbuffer animate`, as typed.
 pub struct AnimateArgs<'a> {
     pub scene: &'a str,
+    /// `--scene N`: which scene of a glTF model.
+    pub gltf_scene: Option<usize>,
     pub out: &'a Path,
     pub frames: usize,
     pub orbit: &'a str,
@@ -52,8 +53,7 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
         },
     };
     spec.validate()?;
-    let scene =
-        scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
+    let scene = super::load_scene(args.scene, args.gltf_scene)?;
     let method = named.unwrap_or_else(|| Method::made_for(scene.light.kind()));
     // Before the GPU starts: a disk-only method under a line light (or the reverse) says why.
     if let Some(why) = method.refuses(scene.light.kind()) {

@@ -11,7 +11,6 @@ use dbuffer::output;
 use dbuffer::render::methods::reference::SAMPLES;
 use dbuffer::render::offline::Offline;
 use dbuffer::render::Method;
-use dbuffer::scene;
 use dbuffer::scene::orbit::Orbit;
 
 use super::progress::Progress;
@@ -20,6 +19,8 @@ use super::{check_dbuffer_size, parse_size, progress, MethodFlags};
 /// The arguments of `dbuffer compare`, as typed.
 pub struct CompareArgs<'a> {
     pub scene: &'a str,
+    /// `--scene N`: which scene of a glTF model.
+    pub gltf_scene: Option<usize>,
     pub out: &'a Path,
     /// `None`: 512x512, or [`temporal::DEFAULT_SIZE`] with an orbit.
     pub size: Option<&'a str>,
@@ -66,8 +67,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     }
     // Before any work: a comparison that cannot be written is not started.
     output::check_out_dir(args.out, &[]).context("--out")?;
-    let scene =
-        scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
+    let scene = super::load_scene(args.scene, args.gltf_scene)?;
     for w in scene.warnings() {
         errln!("warning   {w}");
     }

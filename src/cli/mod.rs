@@ -138,6 +138,8 @@ pub fn scenes() -> Result<()> {
 /// The arguments of `dbuffer render`, as typed.
 pub struct RenderArgs<'a> {
     pub scene: &'a str,
+    /// `--scene N`: which scene of a glTF model.
+    pub gltf_scene: Option<usize>,
     pub out: &'a Path,
     pub size: &'a str,
     /// `None`: the method made for the scene's light ([`Method::made_for`]).
@@ -146,6 +148,17 @@ pub struct RenderArgs<'a> {
     pub dbuffer_size: u32,
     pub knobs: &'a MethodFlags,
     pub verbose: bool,
+}
+
+/// The scene SCENE names (with `--scene N` for a glTF model); the model's notes (an extension
+/// ignored, a skin in its bind pose) go to stderr as warnings, one line each.
+pub(crate) fn load_scene(name: &str, gltf_scene: Option<usize>) -> Result<scene::Scene> {
+    let loaded = scene::load_with(name, scene::LoadOptions { gltf_scene })
+        .with_context(|| format!("cannot load scene '{name}'"))?;
+    for note in &loaded.notes {
+        errln!("warning   {note}");
+    }
+    Ok(loaded.scene)
 }
 
 /// `--method` if given (an unknown name lists the methods).
@@ -162,8 +175,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let knobs = args.knobs.knobs()?;
     // Before any work: a render that cannot be written is not started.
     output::check_out_dir(args.out, &output::FILE_NAMES).context("--out")?;
-    let scene =
-        scene::load(args.scene).with_context(|| format!("cannot load scene '{}'", args.scene))?;
+    let scene = load_scene(args.scene, args.gltf_scene)?;
     let method = named.unwrap_or_else(|| Method::made_for(scene.light.kind()));
     // Before the GPU starts: a disk-only method under a line light (or the reverse) says why.
     if let Some(why) = method.refuses(scene.light.kind()) {
@@ -242,10 +254,11 @@ pub fn render(args: &RenderArgs) -> Result<()> {
 
 /// The lab window. `DBUFFER_SMOKE_SCREENSHOT=shot.png` makes it screenshot itself once frames
 /// show and exit (the scripted smoke run under Xvfb).
-pub fn gui(scene: Option<String>, verbose: bool) -> Result<()> {
+pub fn gui(scene: Option<String>, gltf_scene: Option<usize>, verbose: bool) -> Result<()> {
     let smoke_screenshot = std::env::var_os("DBUFFER_SMOKE_SCREENSHOT").map(Into::into);
     dbuffer::app::run(dbuffer::app::LabOptions {
         scene,
+        gltf_scene,
         fresh_settings: smoke_screenshot.is_some(),
         smoke_screenshot,
         verbose,
@@ -299,6 +312,7 @@ impl TwinMethod {
 
 pub fn inspect(
     name: &str,
+    gltf_scene: Option<usize>,
     samples: Option<usize>,
     size: &str,
     vt: &str,
@@ -328,7 +342,7 @@ pub fn inspect(
         }
         None => None,
     };
-    let scene = scene::load(name).with_context(|| format!("cannot load scene '{name}'"))?;
+    let scene = load_scene(name, gltf_scene)?;
     let triangles: usize = scene.objects.iter().map(|o| o.mesh.triangles.len()).sum();
     if comparison.is_some() && triangles as u64 > MAX_ORACLE_TRIANGLES {
         bail!(

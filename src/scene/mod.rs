@@ -263,10 +263,34 @@ pub const CAMERA_PRECISION: f32 = 1e-5;
 /// `.gltf`/`.glb` model, which is shown on a default ground under a default light (see
 /// [`obj_scene`], [`gltf_scene`]).
 pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
-    let source = load_source(name_or_path)?;
-    source
+    load_with(name_or_path, LoadOptions::default()).map(|l| l.scene)
+}
+
+/// How [`load_with`] opens a scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Which scene of a glTF model to draw (`--scene N`); only a `.gltf`/`.glb` takes it.
+    pub gltf_scene: Option<usize>,
+}
+
+/// A scene and what loading its model said: a bare glTF model's warnings (a skinned mesh in
+/// its bind pose, an extension ignored, no `scenes`), one line each.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    pub scene: Scene,
+    pub notes: Vec<String>,
+}
+
+/// [`load`] with options, and the model's notes.
+pub fn load_with(name_or_path: &str, options: LoadOptions) -> Result<Loaded, SceneError> {
+    let source = load_source(name_or_path, options)?;
+    let scene = source
         .file
-        .build_named(&source.base_dir, &source.label, &source.name)
+        .build_named(&source.base_dir, &source.label, &source.name)?;
+    Ok(Loaded {
+        scene,
+        notes: source.notes,
+    })
 }
 
 /// Like [`load`] but stops before loading meshes: the parsed scene file and the file it came from
@@ -274,7 +298,15 @@ pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
 /// one, its mesh an absolute path, and the path returned is the model's. Useful to edit and save
 /// a scene.
 pub fn load_file(name_or_path: &str) -> Result<(SceneFile, Option<PathBuf>), SceneError> {
-    let source = load_source(name_or_path)?;
+    load_file_with(name_or_path, LoadOptions::default())
+}
+
+/// [`load_file`] with options (a glTF model's scene is recorded in its object's `gltf_scene`).
+pub fn load_file_with(
+    name_or_path: &str,
+    options: LoadOptions,
+) -> Result<(SceneFile, Option<PathBuf>), SceneError> {
+    let source = load_source(name_or_path, options)?;
     Ok((source.file, source.path))
 }
 
@@ -284,9 +316,21 @@ struct Source {
     base_dir: PathBuf,
     label: String,
     name: String,
+    notes: Vec<String>,
 }
 
-fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
+fn load_source(name_or_path: &str, options: LoadOptions) -> Result<Source, SceneError> {
+    let path = Path::new(name_or_path);
+    if let Some(n) = options.gltf_scene {
+        if !gltf::is_gltf_path(path) || builtin::source(name_or_path).is_some() {
+            return Err(SceneError::Gltf {
+                file: shown(name_or_path),
+                problem: format!(
+                    "--scene {n} picks a scene of a glTF model: expected a .gltf or .glb file"
+                ),
+            });
+        }
+    }
     if let Some(text) = builtin::source(name_or_path) {
         let label = format!("built-in scene {name_or_path}");
         return Ok(Source {
@@ -295,9 +339,9 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
             base_dir: PathBuf::from("."),
             label,
             name: name_or_path.to_string(),
+            notes: Vec::new(),
         });
     }
-    let path = Path::new(name_or_path);
     let label = shown(&path.display().to_string());
     let name = path
         .file_stem()
@@ -321,6 +365,7 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
                 base_dir,
                 label,
                 name,
+                notes: Vec::new(),
             })
         }
         Some("obj") => Ok(Source {
@@ -329,14 +374,31 @@ fn load_source(name_or_path: &str) -> Result<Source, SceneError> {
             base_dir,
             label,
             name,
+            notes: Vec::new(),
         }),
-        Some("gltf" | "glb") => Ok(Source {
-            file: gltf_scene(path)?,
-            path: Some(path.to_path_buf()),
-            base_dir,
-            label,
-            name,
-        }),
+        Some("gltf" | "glb") => {
+            let choice = gltf::SceneChoice {
+                scene: options.gltf_scene,
+            };
+            let model = gltf::load_gltf_scene(path, choice)?;
+            let mut file = model_scene(path, &model.mesh, model.light)?;
+            // The model is the generated scene's last object (after the ground).
+            if let Some(o) = file.objects.last_mut() {
+                o.gltf_scene = options.gltf_scene;
+            }
+            Ok(Source {
+                file,
+                path: Some(path.to_path_buf()),
+                base_dir,
+                notes: model
+                    .warnings
+                    .iter()
+                    .map(|w| format!("{label}: {w}"))
+                    .collect(),
+                label,
+                name,
+            })
+        }
         _ => Err(SceneError::UnknownScene {
             name: name_or_path.to_string(),
             known: builtin::names().join(", "),
@@ -495,6 +557,7 @@ casts_shadow = false
         rotate_deg: [0.0; 3],
         scale: file::Scale::Uniform(scale),
         casts_shadow: true,
+        gltf_scene: None,
     });
     file.validate(&path.display().to_string())?;
     Ok(file)

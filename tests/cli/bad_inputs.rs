@@ -725,3 +725,50 @@ fn names_in_messages_are_one_line_and_short() {
     let e = load_err(&dir, "long.toml", &scene_with(&object(&long)));
     assert!(e.len() < 1000, "{} bytes", e.len());
 }
+
+/// Models as gltf-transform and gltfpack ship them (tests/models/shipped/): `inspect` draws the
+/// quantized and meshopt ones with their warnings on stderr, refuses the Draco one naming the
+/// extension, and `--scene N` is checked against the file's scenes and refused on a built-in.
+#[test]
+fn shipped_gltf_models_as_a_user_opens_them() {
+    let dir = case_dir("shipped-gltf");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/models/shipped");
+    for file in [
+        "fox-quant.glb",
+        "fox-meshopt.glb",
+        "fox-pack.glb",
+        "fox-webp.glb",
+    ] {
+        let path = shipped.join(file);
+        let r = inspect(&dir, &[path.to_str().unwrap()]);
+        assert!(r.status.success(), "{file}: {}", r.stderr);
+        assert!(r.stdout.contains("576"), "{file}: {}", r.stdout);
+        assert!(
+            r.stderr
+                .lines()
+                .any(|l| l.starts_with("warning") && l.contains("rest pose")),
+            "{file}: {}",
+            r.stderr
+        );
+    }
+    let draco = shipped.join("fox-draco.glb");
+    let r = inspect(&dir, &[draco.to_str().unwrap()]);
+    assert_refused(
+        "draco",
+        &r,
+        &["requires KHR_draco_mesh_compression, which dbuffer cannot decode"],
+        &[],
+    );
+    let quant = shipped.join("fox-quant.glb");
+    let r = inspect(&dir, &[quant.to_str().unwrap(), "--scene", "3"]);
+    assert_refused(
+        "scene 3",
+        &r,
+        &["--scene 3: the file has 1 scene (0 to 0)"],
+        &[],
+    );
+    let r = inspect(&dir, &[quant.to_str().unwrap(), "--scene", "0"]);
+    assert!(r.status.success(), "{}", r.stderr);
+    let r = inspect(&dir, &["fig7-concave", "--scene", "1"]);
+    assert_refused("a built-in", &r, &["--scene 1", ".gltf or .glb"], &[]);
+}

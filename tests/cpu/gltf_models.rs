@@ -11,7 +11,9 @@ use glam::Vec3;
 use proptest::prelude::*;
 use serde_json::{json, Value};
 
-use dbuffer_fuzzer::gltf_build::{base64, f32_bytes, glb, instanced_strip, tet_doc};
+use dbuffer_fuzzer::gltf_build::{
+    base64, f32_bytes, glb, instanced_strip, quantized_tet, sparse_tet, tet_doc,
+};
 
 fn temp_dir(tag: &str) -> PathBuf {
     static NEXT: AtomicUsize = AtomicUsize::new(0);
@@ -381,6 +383,14 @@ fn accessors_out_of_range_or_of_the_wrong_type() {
             "5 items",
         ],
     );
+    // No items, from past the end of the view: refused, not a slice past the end.
+    let mut d = doc.clone();
+    d["accessors"][0]["count"] = json!(0);
+    d["accessors"][0]["byteOffset"] = json!(1000);
+    assert_has(
+        &err_glb(&d, &bin),
+        &["accessor 0", "out of range", "0 items"],
+    );
     // An offset past the view.
     let mut d = doc.clone();
     d["accessors"][1]["byteOffset"] = json!(2);
@@ -415,10 +425,16 @@ fn accessors_out_of_range_or_of_the_wrong_type() {
         &err_glb(&d, &bin),
         &["buffer 0 says 4000 bytes", "BIN chunk"],
     );
-    // Positions that are not FLOAT VEC3.
+    // Positions that are neither FLOAT nor a type KHR_mesh_quantization allows, or not VEC3.
     let mut d = doc.clone();
-    d["accessors"][0]["componentType"] = json!(5123);
-    assert_has(&err_glb(&d, &bin), &["accessor 0", "expected FLOAT VEC3"]);
+    d["accessors"][0]["componentType"] = json!(5125);
+    assert_has(
+        &err_glb(&d, &bin),
+        &["accessor 0", "UNSIGNED_INT VEC3", "expected VEC3 positions"],
+    );
+    let mut d = doc.clone();
+    d["accessors"][0]["type"] = json!("VEC2");
+    assert_has(&err_glb(&d, &bin), &["accessor 0", "FLOAT VEC2"]);
     // Float indices.
     let mut d = doc.clone();
     d["accessors"][1]["componentType"] = json!(5126);
@@ -432,12 +448,28 @@ fn accessors_out_of_range_or_of_the_wrong_type() {
         msg.contains("byteStride") || msg.contains("invalid glTF"),
         "{msg}"
     );
-    // Sparse accessors.
+    // Sparse accessors: more values than elements, an index past them, a view missing.
     let mut d = doc.clone();
-    d["accessors"][0]["sparse"] = json!({"count": 1,
+    d["accessors"][0]["sparse"] = json!({"count": 5,
         "indices": {"bufferView": 1, "componentType": 5123},
         "values": {"bufferView": 0}});
-    assert_has(&err_glb(&d, &bin), &["accessor 0", "sparse"]);
+    assert_has(&err_glb(&d, &bin), &["accessor 0", "5 sparse values"]);
+    let mut d = doc.clone();
+    // The face indices' first two u16 (0, 2) read as one u32: 131072, past the 4 elements.
+    d["accessors"][0]["sparse"] = json!({"count": 1,
+        "indices": {"bufferView": 1, "componentType": 5125},
+        "values": {"bufferView": 0}});
+    assert_has(
+        &err_glb(&d, &bin),
+        &["accessor 0", "sparse index", "out of range"],
+    );
+    let mut d = doc.clone();
+    d["accessors"][0]["sparse"] = json!({"count": 1,
+        "indices": {"componentType": 5123}, "values": {"bufferView": 0}});
+    assert_has(
+        &err_glb(&d, &bin),
+        &["accessors[0].sparse.indices.bufferView is missing"],
+    );
 }
 
 #[test]
@@ -630,11 +662,30 @@ fn no_triangles_bad_json_and_bad_graphs() {
         "bufferViews": [{"buffer": 0, "byteLength": 36}],
         "buffers": [{"byteLength": 36}],
     });
-    assert_has(&err_glb(&doc, &same), &["t.glb", "contains no triangles"]);
-    // No scene at all.
+    // It loads, with nothing to draw, and says so.
+    let m = parse_glb(&doc, &same).unwrap();
+    assert!(m.mesh.triangles.is_empty());
+    assert!(
+        m.warnings.iter().any(|w| w.contains("nothing to draw")),
+        "{:?}",
+        m.warnings
+    );
+    // No scene at all: drawn from the root nodes, with a note.
     let mut d = doc.clone();
     d["scenes"] = json!([]);
-    assert_has(&err_glb(&d, &same), &["t.glb", "has no scene"]);
+    let m = parse_glb(&d, &same).unwrap();
+    assert!(
+        m.warnings.iter().any(|w| w.contains("has no scenes")),
+        "{:?}",
+        m.warnings
+    );
+    // No triangle primitive at all: refused.
+    let mut d = doc.clone();
+    d["meshes"][0]["primitives"][0]["mode"] = json!(0);
+    assert_has(
+        &err_glb(&d, &same),
+        &["t.glb", "contains no triangles", "1 point or line"],
+    );
     // A node that is its own child.
     let mut d = doc.clone();
     d["nodes"][0]["children"] = json!([0]);
@@ -710,5 +761,115 @@ proptest! {
         }
         bytes.truncate(cut.min(bytes.len()));
         let _ = parse_gltf(&bytes, "fuzz.glb", None);
+    }
+}
+
+#[test]
+fn quantized_positions_of_every_integer_type_dequantize_through_the_node() {
+    let (doc, bin) = tet_doc(Some(5123), json!([{"mesh": 0}]), json!([0]));
+    let reference = sorted_positions(&parse_glb(&doc, &bin).unwrap());
+    for ty in [5120, 5121, 5122, 5123] {
+        for normalized in [true, false] {
+            let (doc, bin) = quantized_tet(ty, normalized);
+            let m = parse_glb(&doc, &bin).unwrap_or_else(|e| panic!("{ty} {normalized}: {e}"));
+            let got = sorted_positions(&m);
+            assert_eq!(got.len(), 4, "{ty} {normalized}");
+            for (g, r) in got.iter().zip(&reference) {
+                assert!(close(*g, *r), "{ty} {normalized}: {g} vs {r}");
+            }
+            assert!((volume6(&m) - 1.0).abs() < 1e-4, "{ty} {normalized}");
+        }
+    }
+    // Signed normalized bytes: -128 is -1 as glTF says (clamped), not -1.008.
+    let (mut doc, mut bin) = quantized_tet(5120, true);
+    bin[0] = 0x80; // the first corner's x: -128
+    doc["nodes"][0]["scale"] = json!([1, 1, 1]);
+    let m = parse_glb(&doc, &bin).unwrap();
+    assert!(
+        m.mesh.positions.iter().any(|p| p.x == -1.0),
+        "{:?}",
+        m.mesh.positions
+    );
+}
+
+#[test]
+fn accessors_without_a_buffer_view_are_zeros_and_sparse_on_zeros() {
+    // Positions: no bufferView (four zeros), then sparse values for elements 1, 2, 3.
+    let (doc, bin) = sparse_tet();
+    let m = parse_glb(&doc, &bin).unwrap();
+    let (tet, tet_bin) = tet_doc(Some(5121), json!([{"mesh": 0}]), json!([0]));
+    assert_eq!(
+        sorted_positions(&m),
+        sorted_positions(&parse_glb(&tet, &tet_bin).unwrap())
+    );
+    assert!((volume6(&m) - 1.0).abs() < 1e-6);
+    // 16M positions without a view or sparse values: all at the origin, nothing to draw, and
+    // not 320 MB of zeros welded back into one point.
+    let mut d = doc.clone();
+    d["accessors"][0].as_object_mut().unwrap().remove("sparse");
+    d["accessors"][0]["count"] = json!(16_000_000);
+    d["meshes"][0]["primitives"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("indices");
+    let (m, used) = dbuffer_fuzzer::measure(|| parse_glb(&d, &bin).unwrap());
+    assert!(
+        m.mesh.triangles.is_empty() && used < 1 << 20,
+        "{used} bytes"
+    );
+    // Without the sparse values: all four corners at the origin, nothing to draw.
+    let mut d = doc.clone();
+    d["accessors"][0].as_object_mut().unwrap().remove("sparse");
+    let m = parse_glb(&d, &bin).unwrap();
+    assert!(m.mesh.triangles.is_empty() && m.mesh.positions == [Vec3::ZERO]);
+    // A .gltf whose buffer has no uri (its data left to the application): zeros, a note.
+    let mut d = doc.clone();
+    d["bufferViews"][0]["buffer"] = json!(1);
+    d["buffers"] = json!([{"byteLength": bin.len()}, {"byteLength": 36}]);
+    d["buffers"][0]["uri"] = json!(format!(
+        "data:application/octet-stream;base64,{}",
+        base64(&bin)
+    ));
+    let m = parse_gltf(&serde_json::to_vec(&d).unwrap(), "no-data.gltf", None).unwrap();
+    assert!(m.mesh.triangles.is_empty());
+    assert!(
+        m.warnings.iter().any(|w| w.contains("buffer 1 has no uri")),
+        "{:?}",
+        m.warnings
+    );
+}
+
+#[test]
+fn what_dbuffer_does_not_draw_never_stops_a_load() {
+    // Materials, textures, images, samplers, animations, skins and cameras that are broken,
+    // partial or extended in every way the strict crate refused, around a good mesh.
+    let (mut doc, bin) = tet_doc(
+        Some(5123),
+        json!([{"mesh": 0, "skin": 0, "camera": 9}]),
+        json!([0]),
+    );
+    doc["meshes"][0]["primitives"][0]["material"] = json!(42);
+    doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(99);
+    doc["meshes"][0]["primitives"][0]["targets"] = json!([{"POSITION": 0}]);
+    doc["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 7}}}]);
+    doc["textures"] = json!([{"extensions": {"EXT_texture_webp": {"source": 3}}}]);
+    doc["images"] = json!([{"uri": "missing.ktx2"}, 5]);
+    doc["samplers"] = "not even an array".into();
+    doc["animations"] = json!([{"channels": [{"sampler": 0, "target": {"path": "weights"}}],
+                                "samplers": [{"input": 77, "output": 78}]}]);
+    doc["skins"] = json!([{"joints": [12, 13]}]);
+    doc["cameras"] = json!([{"type": "fisheye"}]);
+    doc["extensionsUsed"] = json!(["KHR_materials_variants", "EXT_texture_webp"]);
+    doc["extensionsRequired"] = json!(["EXT_texture_webp", "KHR_materials_pbrSpecularGlossiness"]);
+    let m = parse_glb(&doc, &bin).unwrap();
+    assert_eq!(m.mesh.triangles.len(), 4);
+    let w = m.warnings.join("\n");
+    for part in [
+        "requires EXT_texture_webp: ignored, textures",
+        "requires KHR_materials_pbrSpecularGlossiness: ignored, materials",
+        "skinned mesh (node 0) drawn in its rest pose",
+        "morph targets",
+    ] {
+        assert!(w.contains(part), "{part:?} not in {w}");
     }
 }

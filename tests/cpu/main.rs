@@ -8,6 +8,7 @@ mod docs;
 mod fused_vs_oracle;
 mod fuzz_parsers;
 mod gltf_models;
+mod gltf_shipped;
 mod oracle_analytic;
 mod output_files;
 mod scene_builtins;

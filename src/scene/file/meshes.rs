@@ -2,6 +2,7 @@
 //! scene, within what the scene's other objects leave of its budget.
 
 use crate::budget::{MAX_SCENE_TRIANGLES, MAX_SCENE_VERTICES};
+use crate::scene::gltf::SceneChoice;
 use crate::scene::obj::Others;
 use crate::scene::{shapes, Mesh, SceneError};
 use std::path::Path;
@@ -17,17 +18,26 @@ pub fn resolve_mesh(
     label: &str,
     key: &str,
 ) -> Result<Mesh, SceneError> {
-    resolve_mesh_within(mesh, base_dir, label, key, Others::default())
+    resolve_mesh_within(
+        mesh,
+        base_dir,
+        label,
+        key,
+        Others::default(),
+        SceneChoice::default(),
+    )
 }
 
 /// Like [`resolve_mesh`] in a scene whose other objects have `others` triangles: an `.obj` may
-/// have what is left of `MAX_SCENE_TRIANGLES` (counted while it is read).
+/// have what is left of `MAX_SCENE_TRIANGLES` (counted while it is read). `choice` says which
+/// scene of a glTF model to draw (`gltf_scene`); it is refused on any other mesh.
 pub fn resolve_mesh_within(
     mesh_name: &str,
     base_dir: &Path,
     label: &str,
     key: &str,
     others: Others,
+    choice: SceneChoice,
 ) -> Result<Mesh, SceneError> {
     let mesh = mesh_name;
     if shapes::is_shape_name(mesh) {
@@ -41,8 +51,17 @@ pub fn resolve_mesh_within(
         key: key.to_string(),
         error: Box::new(error),
     };
+    if let (Some(n), false) = (choice.scene, crate::scene::gltf::is_gltf_path(&path)) {
+        return Err(SceneError::Gltf {
+            file: label.to_string(),
+            problem: format!(
+                "{}: gltf_scene = {n} is for a .gltf or .glb mesh",
+                key.trim_end_matches(".mesh")
+            ),
+        });
+    }
     if crate::scene::gltf::is_gltf_path(&path) {
-        let mesh = crate::scene::gltf::load_gltf(&path)
+        let mesh = crate::scene::gltf::load_gltf_scene(&path, choice)
             .map(|m| m.mesh)
             .map_err(in_file)?;
         // The model's own budget bounds its reading; the scene's counts what the others use.

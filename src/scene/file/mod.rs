@@ -150,9 +150,20 @@ impl SceneFile {
         for (i, o) in self.objects.iter().enumerate() {
             let key = format!("object[{i}].mesh");
             let mesh = if shapes::is_shape_name(&o.mesh) {
+                if let Some(n) = o.gltf_scene {
+                    return Err(SceneError::Gltf {
+                        file: label.to_string(),
+                        problem: format!(
+                            "object[{i}]: gltf_scene = {n} is for a .gltf or .glb mesh"
+                        ),
+                    });
+                }
                 resolve_mesh(&o.mesh, base_dir, label, &key)?
             } else {
-                let mesh = resolve_mesh_within(&o.mesh, base_dir, label, &key, used)?;
+                let choice = crate::scene::gltf::SceneChoice {
+                    scene: o.gltf_scene,
+                };
+                let mesh = resolve_mesh_within(&o.mesh, base_dir, label, &key, used, choice)?;
                 used.triangles += mesh.triangles.len() as u64;
                 used.vertices += mesh.positions.len() as u64;
                 mesh
@@ -225,6 +236,7 @@ scale = [1, 2, 3]
             rotate_deg: [90.0, 90.0, 0.0],
             scale: Scale::default(),
             casts_shadow: true,
+            gltf_scene: None,
         };
         // Rx(90)·Ry(90)·x: Ry takes +X to -Z, then Rx takes -Z to +Y.
         let p = o.transform().transform_point3(Vec3::X);

@@ -279,6 +279,10 @@ pub struct ObjectSpec {
     pub scale: Scale,
     #[serde(default = "yes")]
     pub casts_shadow: bool,
+    /// Which scene of a glTF model (`.gltf`/`.glb` mesh) to draw; default: the model's default
+    /// scene (its `scene`, else its first).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gltf_scene: Option<usize>,
 }
 
 /// `scale`: one number for all axes, or `[x, y, z]`.

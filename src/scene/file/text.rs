@@ -60,6 +60,7 @@ const SCHEMA_WORDS: &[&str] = &[
     "rotate_deg",
     "scale",
     "casts_shadow",
+    "gltf_scene",
     "kind",
     "disk",
     "line",

@@ -155,3 +155,77 @@ pub fn instanced_strip(indices: usize, nodes: usize) -> Vec<u8> {
     });
     glb(&doc, &bin)
 }
+
+/// The tetrahedron with its corners stored as `ty` integers (KHR_mesh_quantization: 5120
+/// byte, 5121 unsigned byte, 5122 short, 5123 unsigned short), `normalized` or not: scaled into
+/// the integers by their maximum (normalized) or by 100, with the node's scale of 1/100 taking
+/// them back. Each element is padded to 4 bytes, as glTF asks of vertex attributes.
+pub fn quantized_tet(ty: u32, normalized: bool) -> (Value, Vec<u8>) {
+    let (size, max) = match ty {
+        5120 => (1, 127.0),
+        5121 => (1, 255.0),
+        5122 => (2, 32767.0),
+        _ => (2, 65535.0),
+    };
+    let k: f32 = if normalized { max } else { 100.0 };
+    let stride = 4 * size;
+    let mut bin = Vec::new();
+    for p in TET {
+        let mut elem = vec![0u8; stride];
+        for (j, c) in p.iter().enumerate() {
+            let q = (c * k).round() as i64;
+            elem[j * size..(j + 1) * size].copy_from_slice(&q.to_le_bytes()[..size]);
+        }
+        bin.extend(elem);
+    }
+    let pos_len = bin.len();
+    let idx = index_bytes(&TET_FACES, 5123);
+    bin.extend(&idx);
+    let scale = if normalized { 1.0 } else { 1.0 / k };
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_mesh_quantization"],
+        "extensionsRequired": ["KHR_mesh_quantization"],
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "scale": [scale, scale, scale]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": ty, "normalized": normalized, "count": 4,
+             "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteLength": pos_len, "byteStride": stride},
+            {"buffer": 0, "byteOffset": pos_len, "byteLength": idx.len()}
+        ],
+        "buffers": [{"byteLength": bin.len()}],
+    });
+    (doc, bin)
+}
+
+/// The tetrahedron with POSITION on no bufferView (four zeros) and sparse values for corners
+/// 1, 2 and 3 (one-byte sparse indices), one-byte face indices.
+pub fn sparse_tet() -> (Value, Vec<u8>) {
+    let mut bin = f32_bytes(&TET[1..]);
+    bin.extend([1u8, 2, 3, 0]);
+    bin.extend(index_bytes(&TET_FACES, 5121));
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "accessors": [
+            {"componentType": 5126, "count": 4, "type": "VEC3",
+             "sparse": {"count": 3, "indices": {"bufferView": 1, "componentType": 5121},
+                        "values": {"bufferView": 0}}},
+            {"bufferView": 2, "componentType": 5121, "count": 12, "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 3},
+            {"buffer": 0, "byteOffset": 40, "byteLength": 12}
+        ],
+        "buffers": [{"byteLength": bin.len()}],
+    });
+    (doc, bin)
+}

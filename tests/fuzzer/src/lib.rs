@@ -961,6 +961,17 @@ fn scene_of(mesh: Mesh) -> Scene {
 /// The Fox of `assets/models` (576 triangles, a skin, animations, a texture): an exporter's file.
 const FOX: &[u8] = include_bytes!("../../../assets/models/Fox.glb");
 
+/// The Fox as the shipping tools write it (`tests/models/shipped/`, made by its `make.sh`):
+/// quantized, meshopt-compressed by gltf-transform and by gltfpack, Draco, and a fan whose
+/// positions are sparse on zeros without a bufferView.
+const SHIPPED: &[&[u8]] = &[
+    include_bytes!("../../models/shipped/fox-quant.glb"),
+    include_bytes!("../../models/shipped/fox-meshopt.glb"),
+    include_bytes!("../../models/shipped/fox-pack.glb"),
+    include_bytes!("../../models/shipped/fox-draco.glb"),
+    include_bytes!("../../models/shipped/fan-sparse.glb"),
+];
+
 /// A model whose triangles or placed vertices, counted from its JSON ([`gltf_size`]), pass
 /// these is within the budget but slow to build (seconds, hundreds of MB): it is not loaded.
 /// Over the budget it is, and must be refused.
@@ -1020,6 +1031,17 @@ fn gltf_seeds() -> Vec<Vec<u8>> {
     let s = std::f32::consts::FRAC_1_SQRT_2;
     let to_vec = |v: &Value| serde_json::to_vec(v).unwrap_or_default();
     let mut seeds = vec![FOX.to_vec()];
+    seeds.extend(SHIPPED.iter().map(|s| s.to_vec()));
+    // The tetrahedron quantized to each integer type, normalized or not.
+    for ty in [5120, 5121, 5122, 5123] {
+        for normalized in [true, false] {
+            let (doc, bin) = gltf_build::quantized_tet(ty, normalized);
+            seeds.push(glb(&doc, &bin));
+        }
+    }
+    // Positions without a bufferView, with sparse values on the zeros.
+    let (doc, bin) = gltf_build::sparse_tet();
+    seeds.push(glb(&doc, &bin));
     // The tetrahedron with each index type, and without indices.
     for ty in [Some(5121), Some(5123), Some(5125), None] {
         let (doc, bin) = tet_doc(ty, json!([{"mesh": 0}]), json!([0]));
@@ -1347,7 +1369,9 @@ fn mutate_gltf_json(rng: &mut Rng, doc: &mut Value) {
     if !doc.is_object() {
         *doc = json!({"asset": {"version": "2.0"}});
     }
-    match rng.below(12) {
+    match rng.below(14) {
+        // The geometry extensions: a meshopt stream's description, or what is required.
+        12 => mutate_gltf_extensions(rng, doc),
         // A field of an accessor, view, buffer, node, scene or mesh.
         0..=3 => {
             let (array, fields) = *rng.pick(GLTF_FIELDS);
@@ -1516,6 +1540,130 @@ fn mutate_gltf_json(rng: &mut Rng, doc: &mut Value) {
         }
         // Any value anywhere becomes a number at an edge.
         _ => *descend(rng, doc, 0) = gltf_number(rng),
+    }
+}
+
+/// Extension names a file may require: decoded, ignored (textures, materials), refused
+/// (geometry dbuffer cannot decode), unknown, and not a name at all.
+const GLTF_EXTENSIONS: &[&str] = &[
+    "KHR_mesh_quantization",
+    "EXT_meshopt_compression",
+    "KHR_meshopt_compression",
+    "KHR_draco_mesh_compression",
+    "KHR_lights_punctual",
+    "EXT_texture_webp",
+    "KHR_texture_basisu",
+    "KHR_materials_unlit",
+    "KHR_animation_pointer",
+    "EXT_mesh_gpu_instancing",
+    "EXT_unknown_geometry",
+    "CANARYx7q",
+    "",
+];
+
+/// One change to the geometry extensions: a field of a buffer view's meshopt extension (its
+/// stream's place, length, count, stride, mode or filter), the extension moved or dropped, an
+/// accessor's quantized type, or `extensionsRequired`.
+fn mutate_gltf_extensions(rng: &mut Rng, doc: &mut Value) {
+    const FIELDS: &[&str] = &[
+        "count",
+        "byteStride",
+        "byteLength",
+        "byteOffset",
+        "buffer",
+        "mode",
+        "filter",
+    ];
+    match rng.below(5) {
+        0..=2 => {
+            let Some(views) = doc.get_mut("bufferViews").and_then(Value::as_array_mut) else {
+                return;
+            };
+            let with: Vec<usize> = (0..views.len())
+                .filter(|&i| {
+                    views[i]
+                        .pointer("/extensions/EXT_meshopt_compression")
+                        .is_some()
+                })
+                .collect();
+            let i = if with.is_empty() || rng.chance(8) {
+                rng.below(views.len().max(1))
+            } else {
+                *rng.pick(&with)
+            };
+            let Some(Value::Object(view)) = views.get_mut(i) else {
+                return;
+            };
+            let ext = view
+                .entry("extensions")
+                .or_insert_with(|| json!({}))
+                .as_object_mut()
+                .map(|e| {
+                    e.entry("EXT_meshopt_compression").or_insert_with(|| {
+                        json!({"buffer": 0, "byteLength": 16, "byteStride": 4,
+                               "count": 4, "mode": "ATTRIBUTES"})
+                    })
+                });
+            let Some(Value::Object(ext)) = ext else {
+                return;
+            };
+            let field = *rng.pick(FIELDS);
+            let value = match field {
+                "mode" => json!(*rng.pick(&["ATTRIBUTES", "TRIANGLES", "INDICES", "POINTS", ""])),
+                "filter" => json!(*rng.pick(&[
+                    "NONE",
+                    "OCTAHEDRAL",
+                    "QUATERNION",
+                    "EXPONENTIAL",
+                    "COLOR",
+                    "CANARYx7q"
+                ])),
+                "byteStride" if rng.chance(2) => {
+                    json!(*rng.pick(&[0, 1, 2, 3, 4, 6, 8, 12, 16, 252, 256, 260]))
+                }
+                _ => {
+                    let snapshot = json!({});
+                    gltf_field_value(rng, field, ext.get(field), &snapshot)
+                }
+            };
+            ext.insert(field.into(), value);
+            // The view's own byteLength kept in step with count × byteStride, half the time:
+            // a count that lies consistently reaches the decoder's budget.
+            if rng.chance(2) {
+                let n = ext.get("count").and_then(Value::as_u64).unwrap_or(0);
+                let st = ext.get("byteStride").and_then(Value::as_u64).unwrap_or(0);
+                view.insert("byteLength".into(), json!(n.saturating_mul(st)));
+            }
+        }
+        3 => {
+            let (field, value) = match rng.below(3) {
+                0 => (
+                    "componentType",
+                    json!(*rng.pick(&[5120, 5121, 5122, 5123, 5125, 5126])),
+                ),
+                1 => ("normalized", json!(rng.chance(2))),
+                _ => ("bufferView", Value::Null),
+            };
+            if let Some(Value::Object(a)) = gltf_element(doc, "accessors", rng) {
+                if value.is_null() {
+                    a.remove(field);
+                } else {
+                    a.insert(field.into(), value);
+                }
+            }
+        }
+        _ => {
+            let key = *rng.pick(&["extensionsRequired", "extensionsUsed"]);
+            let name = json!(*rng.pick(GLTF_EXTENSIONS));
+            match doc.get_mut(key) {
+                Some(Value::Array(list)) if !list.is_empty() && rng.chance(2) => {
+                    let i = rng.below(list.len());
+                    list.remove(i);
+                }
+                Some(Value::Array(list)) => list.push(name),
+                _ => doc[key] = json!([name]),
+            }
+        }
     }
 }
 
@@ -1734,6 +1882,44 @@ fn mutate_gltf_bin(rng: &mut Rng, bin: &mut Vec<u8>, corpus: &[Vec<u8>]) {
     }
 }
 
+/// Changes inside a meshopt stream of the BIN chunk (where the JSON says one lies): its header
+/// byte (the codec's version), a byte anywhere in it, or its tail (the last vertex, the
+/// channel modes); the JSON is left saying what it said.
+fn mutate_meshopt_stream(rng: &mut Rng, json: &[u8], bin: &mut [u8]) {
+    let Ok(doc) = serde_json::from_slice::<Value>(json) else {
+        return;
+    };
+    let streams: Vec<(usize, usize)> = doc["bufferViews"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|v| {
+            let e = v.pointer("/extensions/EXT_meshopt_compression")?;
+            let at = e.get("byteOffset").and_then(Value::as_u64).unwrap_or(0) as usize;
+            let len = e.get("byteLength")?.as_u64()? as usize;
+            (at < bin.len() && len > 0).then(|| (at, len.min(bin.len() - at)))
+        })
+        .collect();
+    if streams.is_empty() {
+        return;
+    }
+    let (at, len) = *rng.pick(&streams);
+    let stream = &mut bin[at..at + len];
+    let value = *rng.pick(&[
+        0u8, 1, 0x0f, 0x10, 0x7f, 0x80, 0xa0, 0xa1, 0xa2, 0xe0, 0xe1, 0xff,
+    ]);
+    let k = match rng.below(3) {
+        0 => 0,
+        1 => len - 1 - rng.below(len.min(32)),
+        _ => rng.below(len),
+    };
+    stream[k] = if rng.chance(2) {
+        value
+    } else {
+        stream[k] ^ (1 << rng.below(8))
+    };
+}
+
 fn mutate_gltf(rng: &mut Rng, input: &mut Vec<u8>, corpus: &[Vec<u8>]) {
     let mut parts = GltfParts::split(input);
     match rng.below(16) {
@@ -1757,7 +1943,11 @@ fn mutate_gltf(rng: &mut Rng, input: &mut Vec<u8>, corpus: &[Vec<u8>]) {
         }
         10 if parts.glb => {
             let mut bin = parts.bin.take().unwrap_or_default();
-            mutate_gltf_bin(rng, &mut bin, corpus);
+            if rng.chance(2) {
+                mutate_meshopt_stream(rng, &parts.json, &mut bin);
+            } else {
+                mutate_gltf_bin(rng, &mut bin, corpus);
+            }
             parts.bin = Some(bin);
             *input = parts.join();
         }
@@ -1776,16 +1966,55 @@ fn mutate_gltf(rng: &mut Rng, input: &mut Vec<u8>, corpus: &[Vec<u8>]) {
 /// reads a byte of a buffer). `None` where the JSON does not say.
 fn gltf_size(bytes: &[u8]) -> Option<(u64, u64)> {
     let parts = GltfParts::split(bytes);
-    let doc: Value = serde_json::from_slice(&parts.json).ok()?;
+    // As the loader: a byte-order mark before the JSON is allowed (the long run found a model
+    // whose size this missed behind one, loaded in full: 285 MB).
+    let json = parts
+        .json
+        .strip_prefix(b"\xEF\xBB\xBF")
+        .unwrap_or(&parts.json);
+    let doc: Value = serde_json::from_slice(json).ok()?;
     let scene = doc.get("scene").map_or(Some(0), Value::as_u64)? as usize;
-    let roots = doc.get("scenes")?.get(scene)?.get("nodes")?.as_array()?;
-    let count = |accessor: &Value| -> Option<u64> {
-        let i = accessor.as_u64()? as usize;
-        doc.get("accessors")?.get(i)?.get("count")?.as_u64()
+    let empty = Vec::new();
+    // As the loader: the scene's roots; without scenes, every node no node holds; if those
+    // place no mesh, every mesh once (counted as a node of its own, below).
+    let roots: Vec<Value> = match doc.get("scenes").and_then(Value::as_array) {
+        Some(list) if !list.is_empty() => list
+            .get(scene)?
+            .get("nodes")
+            .and_then(Value::as_array)
+            .unwrap_or(&empty)
+            .clone(),
+        _ => {
+            let nodes = doc.get("nodes").and_then(Value::as_array).unwrap_or(&empty);
+            let held: HashSet<u64> = nodes
+                .iter()
+                .filter_map(|n| n.get("children")?.as_array())
+                .flatten()
+                .filter_map(Value::as_u64)
+                .collect();
+            (0..nodes.len() as u64)
+                .filter(|i| !held.contains(i))
+                .map(|i| json!(i))
+                .collect()
+        }
     };
+    let (t, v) = gltf_walk(&doc, &roots, None);
+    if t == 0 {
+        let meshes = doc
+            .get("meshes")
+            .and_then(Value::as_array)
+            .map_or(0, Vec::len);
+        return Some(gltf_walk(&doc, &[], Some(meshes)));
+    }
+    Some((t, v))
+}
+
+/// Triangles and positions placed from `roots` (or, with `Some(n)`, each of `n` meshes once).
+fn gltf_walk(doc: &Value, roots: &[Value], all_meshes: Option<usize>) -> (u64, u64) {
     let mut stack: Vec<u64> = roots.iter().filter_map(Value::as_u64).collect();
     let mut seen = HashSet::new();
     let (mut triangles, mut vertices) = (0u64, 0u64);
+    let mut meshes: Vec<u64> = Vec::new();
     while let Some(n) = stack.pop() {
         if !seen.insert(n) {
             continue;
@@ -1796,9 +2025,18 @@ fn gltf_size(bytes: &[u8]) -> Option<(u64, u64)> {
         if let Some(children) = node.get("children").and_then(Value::as_array) {
             stack.extend(children.iter().filter_map(Value::as_u64));
         }
-        let Some(mesh) = node.get("mesh").and_then(Value::as_u64) else {
-            continue;
-        };
+        if let Some(mesh) = node.get("mesh").and_then(Value::as_u64) {
+            meshes.push(mesh);
+        }
+    }
+    if let Some(n) = all_meshes {
+        meshes = (0..n as u64).collect();
+    }
+    let count = |accessor: &Value| -> Option<u64> {
+        let i = accessor.as_u64()? as usize;
+        doc.get("accessors")?.get(i)?.get("count")?.as_u64()
+    };
+    for mesh in meshes {
         let primitives = doc
             .get("meshes")
             .and_then(|m| m.get(mesh as usize))
@@ -1821,7 +2059,7 @@ fn gltf_size(bytes: &[u8]) -> Option<(u64, u64)> {
             vertices = vertices.saturating_add(positions);
         }
     }
-    Some((triangles, vertices))
+    (triangles, vertices)
 }
 
 /// The error names the file, is one line, and quotes nothing of it: the canary may come back
