@@ -23,10 +23,13 @@
 // Per texel of the map the distance at its four corners (x: its (0, 0) corner, y: (1, 0), z:
 // (1, 1), w: (0, 1)), gap-filled (passes/micro_patches.wgsl).
 @group(1) @binding(2) var corners: texture_2d<f32>;
-// Level k: per 2^(k+1) × 2^(k+1) texels of the map, the nearest and farthest distance (x, y)
+// Level k (a square at x level_offset(k) of the first atlas for even k, of the second for odd
+// k): per 2^(k+1) × 2^(k+1) texels of the map, the lowest height above the light's plane and the
+// nearest distance (x, y),
 // the largest bend of its texels' distances (z: over CONTINUITY, a step from one surface to
 // another) and its farthest distance (w).
-@group(1) @binding(3) var pyramid: texture_2d<f32>;
+@group(1) @binding(3) var pyramid_even: texture_2d<f32>;
+@group(1) @binding(5) var pyramid_odd: texture_2d<f32>;
 // Half-plane masks of the samples, 256 bits (two vec4) a mask (DiskMask::lut_words_wide).
 @group(1) @binding(4) var<storage, read> lut: array<vec4<u32>>;
 
@@ -77,6 +80,12 @@ fn bits_all(n: u32) -> Bits {
 fn word_bits(k: vec4<i32>) -> vec4<u32> {
     let low = (vec4<u32>(1u) << vec4<u32>(min(k, vec4<i32>(31)))) - 1u;
     return select(low, vec4<u32>(0xffffffffu), k >= vec4<i32>(32));
+}
+
+// Where pyramid level k starts in its atlas (render::passes::micro_patches::level_offset).
+fn level_offset(k: u32) -> u32 {
+    let base = 1u << (u32(shadow.knobs.w) - 1u);
+    return 2u * base - 2u * (base >> k);
 }
 
 fn lut_mask(m: u32) -> Bits {
@@ -311,7 +320,8 @@ fn bitmask(x: vec3<f32>, n: vec3<f32>, l: LightLookup) -> f32 {
         } else {
             // The node's lowest height, its nearest distance, the largest bend inside it, its
             // farthest distance.
-            let range = textureLoad(pyramid, vec2<i32>(node), i32(level));
+            let at = vec2<i32>(node) + vec2<i32>(i32(level_offset(level)), 0);
+            let range = select(textureLoad(pyramid_odd, at, 0), textureLoad(pyramid_even, at, 0), level % 2u == 0u);
             let low = range.x;
             let w = f32(2u << level);
             a = vec2<f32>(node) * w;

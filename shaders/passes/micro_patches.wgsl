@@ -9,6 +9,8 @@
 //   the texels right of and below them (z: over CONTINUITY, the node holds a step from one
 //   surface to another), and the farthest distance (w);
 // - mode 2, a further level: per 2×2 texels of the level below, the same.
+// The levels are squares side by side in two atlases (even levels in one, odd in the other; each
+// drawn from the other), drawn with a viewport on their square.
 // Texels beyond the map (the pyramid's first level is a power of two) count as no surface.
 // #include shared/fullscreen_vs.wgsl
 
@@ -24,7 +26,13 @@ struct PatchUniforms {
     gap_fill: u32,
     // The map's (or the level below's) texels per side.
     size: u32,
-    _pad: u32,
+    // Where the level below (mode 2) and the level drawn (modes 1, 2) start in their atlases
+    // (x, in texels; render::passes::micro_patches::level_offset).
+    source_offset: u32,
+    target_offset: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 };
 
 // geometry::bitmask::CONTINUITY.
@@ -61,7 +69,7 @@ fn corner(at: vec2<i32>, own: f32, corner: vec2<i32>) -> f32 {
 
 @fragment
 fn fs_main(in: FullscreenVertex) -> @location(0) vec4<f32> {
-    let at = vec2<i32>(in.position.xy);
+    let at = vec2<i32>(in.position.xy) - vec2<i32>(i32(patches.target_offset), 0);
     if patches.mode == 0u {
         let own = distance_at(at);
         if patches.gap_fill == 0u || own >= NO_SURFACE {
@@ -109,7 +117,7 @@ fn fs_main(in: FullscreenVertex) -> @location(0) vec4<f32> {
             if any(q >= vec2<i32>(i32(patches.size))) {
                 continue;
             }
-            let texel = textureLoad(source, q, 0);
+            let texel = textureLoad(source, q + vec2<i32>(i32(patches.source_offset), 0), 0);
             if texel.x >= NO_SURFACE {
                 continue;
             }

@@ -138,7 +138,11 @@ fn uniforms_match_their_wgsl() {
         mode,
         gap_fill,
         size,
-        _pad
+        source_offset,
+        target_offset,
+        _pad0,
+        _pad1,
+        _pad2
     );
     use dbuffer::render::passes::ssm::{SkinVertex, SsmSample};
     use dbuffer::render::passes::wedges::WedgeDisk;

@@ -127,6 +127,7 @@ impl Bitmask {
         entries.push(texture_entry(2, wgpu::ShaderStages::FRAGMENT, texture));
         entries.push(texture_entry(3, wgpu::ShaderStages::FRAGMENT, texture));
         entries.push(storage_entry(4, wgpu::ShaderStages::FRAGMENT, true));
+        entries.push(texture_entry(5, wgpu::ShaderStages::FRAGMENT, texture));
         Bitmask {
             patches: MicroPatches::default(),
             camera: CameraGroup::new(ctx, SHADER, &entries),
@@ -198,8 +199,9 @@ impl MethodState for Bitmask {
             buffer_entry(0, &self.uniforms),
             view_entry(1, &map.distance.view),
             view_entry(2, &patches.corners.view),
-            view_entry(3, &patches.pyramid),
+            view_entry(3, &patches.pyramid[0].view),
             buffer_entry(4, &lut.buffer),
+            view_entry(5, &patches.pyramid[1].view),
         ];
         self.camera.bind(&ctx.device, bound, &entries);
         Ok(&self.camera)

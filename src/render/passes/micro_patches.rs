@@ -33,10 +33,21 @@ pub struct PatchUniforms {
     pub mode: u32,
     pub gap_fill: u32,
     pub size: u32,
-    pub _pad: u32,
+    /// Where the level read and the level drawn start in their atlases (x, in texels).
+    pub source_offset: u32,
+    pub target_offset: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<PatchUniforms>() == 112);
+const _: () = assert!(std::mem::size_of::<PatchUniforms>() == 128);
+
+/// Where pyramid level `k` starts in its atlas (x, in texels): the levels side by side, each
+/// half as wide as the one before, `base` the first's width.
+pub fn level_offset(base: u32, k: u32) -> u32 {
+    2 * base - 2 * (base >> k)
+}
 
 struct PatchPipeline {
     pipeline: wgpu::RenderPipeline,
@@ -47,14 +58,26 @@ struct PatchPipeline {
 pub struct PatchMaps {
     pub size: u32,
     pub corners: Texture,
-    /// Every level (the camera pass reads any with `textureLoad`).
-    pub pyramid: wgpu::TextureView,
+    /// The pyramid in two atlases of one mip level each, `2 base × base` texels: level k at x
+    /// [`level_offset`] of the first for even k, of the second for odd k. Each level is drawn
+    /// from the one below, so neighbouring levels live in different textures; and no level is a
+    /// mip level: wgpu's GL backend makes a texture's views by setting its base and top levels,
+    /// and one texture bound at two levels at once reads the wrong one.
+    pub pyramid: [Texture; 2],
     /// Levels of the pyramid.
     pub levels: u32,
-    pyramid_texture: wgpu::Texture,
     /// One uniform buffer a draw (the corners, then each level).
     uniforms: Vec<wgpu::Buffer>,
     pub generation: u64,
+}
+
+/// One draw of the pass: what it reads and writes, and for a pyramid level the square of its
+/// atlas it covers (x, side, whether it clears the atlas first).
+struct Draw<'a> {
+    uniforms: PatchUniforms,
+    source: &'a wgpu::TextureView,
+    target: &'a wgpu::TextureView,
+    square: Option<(u32, u32, bool)>,
 }
 
 #[derive(Default)]
@@ -112,52 +135,72 @@ impl MicroPatches {
         let Some(m) = &mut self.maps else { return };
         m.generation = next_generation();
         let (base, levels) = pyramid_shape(size);
-        let level_view = |k: u32| {
-            m.pyramid_texture.create_view(&wgpu::TextureViewDescriptor {
-                label: Some("MicroPatches::level"),
-                base_mip_level: k,
-                mip_level_count: Some(1),
-                ..Default::default()
-            })
-        };
-        let uniforms = |mode: u32, gap_fill: bool, size: u32| PatchUniforms {
+        let uniforms = |mode: u32, gap_fill: bool, size: u32, offsets: (u32, u32)| PatchUniforms {
             inv_light_view_proj: frame.inv_light_view_proj.to_cols_array_2d(),
             light_center: frame.center.extend(0.0).to_array(),
             light_normal: frame.normal.extend(0.0).to_array(),
             mode,
             gap_fill: gap_fill as u32,
             size,
-            _pad: 0,
+            source_offset: offsets.0,
+            target_offset: offsets.1,
+            _pad0: 0,
+            _pad1: 0,
+            _pad2: 0,
         };
-        // Draw i: its uniforms, its source and its target.
-        let mut draws: Vec<(PatchUniforms, wgpu::TextureView, wgpu::TextureView)> = vec![
-            (
-                uniforms(0, gap_fill, size),
-                distance.clone(),
-                m.corners.view.clone(),
-            ),
-            (uniforms(1, false, size), distance.clone(), level_view(0)),
+        // Draw i: its uniforms, its source, its target, and where in the target (the corners: all
+        // of it, cleared; a level: its square of its atlas, the atlas cleared by its first level).
+        let atlas = |k: u32| &m.pyramid[(k % 2) as usize].view;
+        let mut draws: Vec<Draw> = vec![
+            Draw {
+                uniforms: uniforms(0, gap_fill, size, (0, 0)),
+                source: distance,
+                target: &m.corners.view,
+                square: None,
+            },
+            Draw {
+                uniforms: uniforms(1, false, size, (0, 0)),
+                source: distance,
+                target: atlas(0),
+                square: Some((0, base, true)),
+            },
         ];
         for k in 1..levels {
-            draws.push((
-                uniforms(2, false, base >> (k - 1)),
-                level_view(k - 1),
-                level_view(k),
-            ));
+            let at = level_offset(base, k);
+            draws.push(Draw {
+                uniforms: uniforms(2, false, base >> (k - 1), (level_offset(base, k - 1), at)),
+                source: atlas(k - 1),
+                target: atlas(k),
+                square: Some((at, base >> k, k == 1)),
+            });
         }
         let span = rec.span("bitmask_patches");
         let last = draws.len() - 1;
-        for (i, (u, source, target)) in draws.iter().enumerate() {
+        for (i, d) in draws.iter().enumerate() {
             ctx.queue
-                .write_buffer(&m.uniforms[i], 0, bytemuck::bytes_of(u));
+                .write_buffer(&m.uniforms[i], 0, bytemuck::bytes_of(&d.uniforms));
             let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("MicroPatches::group"),
                 layout: &pipe.layout,
-                entries: &[buffer_entry(0, &m.uniforms[i]), view_entry(1, source)],
+                entries: &[buffer_entry(0, &m.uniforms[i]), view_entry(1, d.source)],
             });
+            let clear = d.square.is_none_or(|(_, _, first)| first);
+            let attachment = if clear {
+                cleared(d.target, wgpu::Color::TRANSPARENT)
+            } else {
+                Some(wgpu::RenderPassColorAttachment {
+                    view: d.target,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
             let mut pass = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("MicroPatches::pass"),
-                color_attachments: &[cleared(target, wgpu::Color::TRANSPARENT)],
+                color_attachments: &[attachment],
                 depth_stencil_attachment: None,
                 timestamp_writes: span.writes(rec.timer, i == 0, i == last),
                 occlusion_query_set: None,
@@ -165,6 +208,10 @@ impl MicroPatches {
             });
             pass.set_pipeline(&pipe.pipeline);
             pass.set_bind_group(0, &group, &[]);
+            if let Some((x, side, _)) = d.square {
+                pass.set_viewport(x as f32, 0.0, side as f32, side as f32, 0.0, 1.0);
+                pass.set_scissor_rect(x, 0, side, side);
+            }
             pass.draw(0..3, 0..1);
         }
     }
@@ -181,21 +228,15 @@ impl PatchMaps {
             PATCH_FORMAT,
             U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
         );
-        let pyramid_texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("MicroPatches::pyramid"),
-            size: wgpu::Extent3d {
-                width: base,
-                height: base,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: levels,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: PATCH_FORMAT,
-            usage: U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
-            view_formats: &[],
+        let pyramid = [0, 1].map(|_| {
+            Texture::new(
+                &ctx.device,
+                "MicroPatches::pyramid",
+                (2 * base, base),
+                PATCH_FORMAT,
+                U::RENDER_ATTACHMENT | U::TEXTURE_BINDING,
+            )
         });
-        let pyramid = pyramid_texture.create_view(&wgpu::TextureViewDescriptor::default());
         let uniforms = (0..=levels)
             .map(|_| {
                 crate::render::uniform_buffer::<PatchUniforms>(
@@ -209,7 +250,6 @@ impl PatchMaps {
             corners,
             pyramid,
             levels,
-            pyramid_texture,
             uniforms,
             generation: 0,
         }
