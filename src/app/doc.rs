@@ -21,6 +21,9 @@ pub struct SceneDoc {
     base_dir: PathBuf,
     /// Each object's mesh before its transform.
     local: Vec<Mesh>,
+    /// What the model's reader said about an opened `.obj`/glTF (a skin drawn in its rest pose,
+    /// texture extensions ignored, instances not drawn), shown with the geometry's warnings.
+    pub notes: Vec<String>,
 }
 
 /// What undo and redo restore: the light and every object's placement.
@@ -41,7 +44,7 @@ impl SceneDoc {
         name_or_path: &str,
         options: scene::LoadOptions,
     ) -> Result<(SceneDoc, Scene), SceneError> {
-        let (file, path) = scene::load_file_with(name_or_path, options)?;
+        let (file, path, notes) = scene::load_file_with(name_or_path, options)?;
         let (label, name, base_dir) = match &path {
             None => (
                 format!("built-in scene {name_or_path}"),
@@ -68,6 +71,7 @@ impl SceneDoc {
             label,
             base_dir,
             local,
+            notes,
         };
         let scene = doc.scene();
         Ok((doc, scene))
@@ -92,6 +96,7 @@ impl SceneDoc {
             label: "empty scene".into(),
             base_dir: PathBuf::from("."),
             local: Vec::new(),
+            notes: Vec::new(),
         };
         let scene = doc.scene();
         (doc, scene)

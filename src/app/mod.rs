@@ -291,7 +291,8 @@ impl LabApp {
     fn opened_message(&self) -> String {
         let warnings = self.scene_warnings().len();
         if warnings > 0 {
-            format!("opened {} ({warnings} warnings)", self.doc.label)
+            let s = if warnings == 1 { "" } else { "s" };
+            format!("opened {} ({warnings} warning{s})", self.doc.label)
         } else {
             format!("opened {}", self.doc.label)
         }
@@ -360,16 +361,20 @@ impl LabApp {
         }
     }
 
-    /// What the geometry stage warned about (the shown method's, or the paper's, geometry).
+    /// What the model's reader said about it ([`SceneDoc::notes`]) and what the geometry stage
+    /// warned about (the shown method's, or the paper's, geometry).
     pub fn scene_warnings(&self) -> Vec<String> {
-        let Some(core) = self.core.as_ref() else {
-            return Vec::new();
-        };
-        core.session
-            .geometry(self.settings.method())
-            .or_else(|| core.session.geometry(crate::render::Method::DBUFFER))
-            .map(|g| g.warnings.clone())
-            .unwrap_or_default()
+        let mut warnings = self.doc.notes.clone();
+        if let Some(core) = self.core.as_ref() {
+            warnings.extend(
+                core.session
+                    .geometry(self.settings.method())
+                    .or_else(|| core.session.geometry(crate::render::Method::DBUFFER))
+                    .map(|g| g.warnings.clone())
+                    .unwrap_or_default(),
+            );
+        }
+        warnings
     }
 
     /// Change the scene through `change` (one undo step per gesture).

@@ -124,8 +124,11 @@ impl LabApp {
                 let warnings = self.scene_warnings();
                 if !warnings.is_empty() {
                     ui.label(
-                        RichText::new(format!("⚠ {} geometry warnings", warnings.len()))
-                            .color(Color32::from_rgb(230, 190, 60)),
+                        RichText::new(match warnings.len() {
+                            1 => "1 warning".to_string(),
+                            n => format!("{n} warnings"),
+                        })
+                        .color(Color32::from_rgb(230, 190, 60)),
                     )
                     .on_hover_text(warnings.join("\n"));
                 }

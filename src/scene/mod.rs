@@ -298,16 +298,17 @@ pub fn load_with(name_or_path: &str, options: LoadOptions) -> Result<Loaded, Sce
 /// one, its mesh an absolute path, and the path returned is the model's. Useful to edit and save
 /// a scene.
 pub fn load_file(name_or_path: &str) -> Result<(SceneFile, Option<PathBuf>), SceneError> {
-    load_file_with(name_or_path, LoadOptions::default())
+    load_file_with(name_or_path, LoadOptions::default()).map(|(file, path, _)| (file, path))
 }
 
-/// [`load_file`] with options (a glTF model's scene is recorded in its object's `gltf_scene`).
+/// [`load_file`] with options (a glTF model's scene is recorded in its object's `gltf_scene`),
+/// and a bare model's notes (what of it is not drawn, or drawn otherwise), as [`load_with`] gives.
 pub fn load_file_with(
     name_or_path: &str,
     options: LoadOptions,
-) -> Result<(SceneFile, Option<PathBuf>), SceneError> {
+) -> Result<(SceneFile, Option<PathBuf>, Vec<String>), SceneError> {
     let source = load_source(name_or_path, options)?;
-    Ok((source.file, source.path))
+    Ok((source.file, source.path, source.notes))
 }
 
 struct Source {

@@ -641,6 +641,36 @@ fn a_dropped_model_opens_and_a_dropped_bad_file_keeps_the_scene() {
         fox_frame.visibility, first.visibility,
         "the viewport shows the new scene"
     );
+
+    // A model as shipped, with what its reader did not draw said in the status and the panel:
+    // the quantized Fox with WebP textures (textures ignored, its skin in the rest pose).
+    let shipped =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/models/shipped/fox-webp.glb");
+    drop_file(&mut h, &shipped);
+    let (text, level) = h.state().status();
+    assert_eq!(level, Level::Warning, "{text}");
+    assert!(text.contains("fox-webp"), "{text}");
+    let warnings = h.state().scene_warnings();
+    assert!(
+        warnings.iter().any(|w| w.contains("EXT_texture_webp"))
+            && warnings.iter().any(|w| w.contains("rest pose")),
+        "{warnings:?}"
+    );
+    assert!(
+        text.contains(&warnings[0]),
+        "the status names the first: {text}"
+    );
+    // And a built-in scene after it carries none of the model's notes.
+    h.state_mut().open_scene(dbuffer::app::DEFAULT_SCENE);
+    h.run();
+    assert!(
+        !h.state()
+            .scene_warnings()
+            .iter()
+            .any(|w| w.contains("EXT_texture_webp")),
+        "{:?}",
+        h.state().scene_warnings()
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
