@@ -304,6 +304,30 @@ pub(crate) fn fullscreen_pipeline(
     })
 }
 
+/// An image-space pass made whole: the bind group layout of `entries` (`NAME::layout`), and the
+/// [`fullscreen_pipeline`] of the shader `shader` over it into `format` (`NAME::pipeline`).
+pub(crate) fn fullscreen_pass(
+    device: &wgpu::Device,
+    name: &str,
+    shader: &'static str,
+    entries: &[wgpu::BindGroupLayoutEntry],
+    format: wgpu::TextureFormat,
+) -> (wgpu::RenderPipeline, wgpu::BindGroupLayout) {
+    let module = shader_module(device, shader);
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(&format!("{name}::layout")),
+        entries,
+    });
+    let pipeline = fullscreen_pipeline(
+        device,
+        &format!("{name}::pipeline"),
+        &pipeline_layout(device, name, &[&layout]),
+        &module,
+        format,
+    );
+    (pipeline, layout)
+}
+
 /// A pipeline layout over bind group layouts.
 pub(crate) fn pipeline_layout(
     device: &wgpu::Device,

@@ -3,9 +3,7 @@
 //! a fullscreen triangle loads each texel and writes the same 32-bit float, so what readback
 //! gets is the depth exactly (`shaders/passes/depth_copy.wgsl`).
 
-use crate::render::{
-    cleared, fullscreen_pipeline, pipeline_layout, shader_module, texture_entry, GpuContext,
-};
+use crate::render::{cleared, fullscreen_pass, texture_entry, GpuContext};
 use crate::render::{RenderError, Texture};
 
 /// The pipeline and layout, once per device.
@@ -17,20 +15,15 @@ struct DepthCopyPass {
 /// `depth` (a `Depth32Float` texture bindable as a texture) copied into a new `R32Float` one.
 pub fn copy(ctx: &GpuContext, depth: &Texture) -> Result<Texture, RenderError> {
     let pass = ctx.shared(|device| {
-        let module = shader_module(device, "passes/depth_copy.wgsl");
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("DepthCopyPass::layout"),
-            entries: &[texture_entry(
+        let (pipeline, layout) = fullscreen_pass(
+            device,
+            "DepthCopyPass",
+            "passes/depth_copy.wgsl",
+            &[texture_entry(
                 0,
                 wgpu::ShaderStages::FRAGMENT,
                 wgpu::TextureViewDimension::D2,
             )],
-        });
-        let pipeline = fullscreen_pipeline(
-            device,
-            "DepthCopyPass::pipeline",
-            &pipeline_layout(device, "DepthCopyPass", &[&layout]),
-            &module,
             wgpu::TextureFormat::R32Float,
         );
         DepthCopyPass { pipeline, layout }

@@ -14,8 +14,8 @@
 
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, cleared, fullscreen_pipeline, pipeline_layout, shader_module, texture_entry,
-    uniform_entry, view_entry, GpuContext, Texture,
+    buffer_entry, cleared, fullscreen_pass, texture_entry, uniform_entry, view_entry, GpuContext,
+    Texture,
 };
 
 use super::next_generation;
@@ -108,10 +108,11 @@ impl MicroPatches {
         frame: &MapFrame,
     ) {
         let pipe = ctx.shared(|device| {
-            let module = shader_module(device, "passes/micro_patches.wgsl");
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("MicroPatches::layout"),
-                entries: &[
+            let (pipeline, layout) = fullscreen_pass(
+                device,
+                "MicroPatches",
+                "passes/micro_patches.wgsl",
+                &[
                     uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
                     texture_entry(
                         1,
@@ -119,12 +120,6 @@ impl MicroPatches {
                         wgpu::TextureViewDimension::D2,
                     ),
                 ],
-            });
-            let pipeline = fullscreen_pipeline(
-                device,
-                "MicroPatches::pipeline",
-                &pipeline_layout(device, "MicroPatches", &[&layout]),
-                &module,
                 PATCH_FORMAT,
             );
             PatchPipeline { pipeline, layout }

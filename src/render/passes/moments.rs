@@ -6,8 +6,8 @@
 
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, cleared, fullscreen_pipeline, pipeline_layout, shader_module, texture_entry,
-    uniform_entry, view_entry, GpuContext, Texture,
+    buffer_entry, cleared, fullscreen_pass, texture_entry, uniform_entry, view_entry, GpuContext,
+    Texture,
 };
 
 use super::next_generation;
@@ -70,10 +70,11 @@ impl Moments {
         far: f32,
     ) {
         let pipe = ctx.shared(|device| {
-            let module = shader_module(device, "passes/moments.wgsl");
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("Moments::layout"),
-                entries: &[
+            let (pipeline, layout) = fullscreen_pass(
+                device,
+                "Moments",
+                "passes/moments.wgsl",
+                &[
                     uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
                     texture_entry(
                         1,
@@ -81,12 +82,6 @@ impl Moments {
                         wgpu::TextureViewDimension::D2,
                     ),
                 ],
-            });
-            let pipeline = fullscreen_pipeline(
-                device,
-                "Moments::pipeline",
-                &pipeline_layout(device, "Moments", &[&layout]),
-                &module,
                 MOMENTS_FORMAT,
             );
             MomentsPipeline { pipeline, layout }
