@@ -31,6 +31,15 @@ enum Command {
         /// first).
         #[arg(long = "scene", value_name = "N")]
         gltf_scene: Option<usize>,
+        /// Time the window itself and exit: N frames each of an empty viewport (egui's floor),
+        /// the last image shown, a camera orbit and a moving light; prints window fps, CPU and
+        /// GPU per frame (2 to 10000; under Xvfb where there is no display:
+        /// scripts/window-bench.sh).
+        #[arg(long, value_name = "N")]
+        bench: Option<u32>,
+        /// With --bench: also write the numbers to this JSON file.
+        #[arg(long, value_name = "FILE", requires = "bench")]
+        bench_out: Option<std::path::PathBuf>,
     },
     /// Render a scene headless into DIR (image.png, visibility.exr, ...).
     Render {
@@ -230,8 +239,13 @@ fn main() -> ExitCode {
             &method,
             out.as_deref(),
         ),
-        None => cli::gui(None, None, verbose),
-        Some(Command::Gui { scene, gltf_scene }) => cli::gui(scene, gltf_scene, verbose),
+        None => cli::gui(None, None, None, None, verbose),
+        Some(Command::Gui {
+            scene,
+            gltf_scene,
+            bench,
+            bench_out,
+        }) => cli::gui(scene, gltf_scene, bench, bench_out, verbose),
         Some(Command::Render {
             scene,
             gltf_scene,

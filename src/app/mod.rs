@@ -25,6 +25,7 @@ pub mod settings;
 mod smoke;
 mod stats;
 mod viewport;
+pub mod window_bench;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -52,6 +53,10 @@ pub struct LabOptions {
     /// Take a screenshot of the window into this PNG once frames are showing, then exit
     /// (`DBUFFER_SMOKE_SCREENSHOT`; the Xvfb smoke run).
     pub smoke_screenshot: Option<PathBuf>,
+    /// `--bench N`: time the window through [`window_bench`]'s phases of N frames, then exit.
+    pub window_bench: Option<u32>,
+    /// `--bench-out`: where the window bench's JSON goes.
+    pub window_bench_out: Option<PathBuf>,
     /// Start from default settings rather than the saved ones.
     pub fresh_settings: bool,
     /// Tests and snapshots: default settings, and no timings on screen (they differ per run).
@@ -110,6 +115,7 @@ pub struct LabApp {
     stats: Stats,
     open_text: String,
     smoke: Option<smoke::Smoke>,
+    window_bench: Option<window_bench::WindowBench>,
     export: Option<files::PendingExport>,
     /// File → Record orbit…: its window and the recording under way.
     pub record: record::RecordState,
@@ -190,6 +196,9 @@ impl LabApp {
             stats: Stats::default(),
             open_text: String::new(),
             smoke: options.smoke_screenshot.map(smoke::Smoke::new),
+            window_bench: options
+                .window_bench
+                .map(|n| window_bench::WindowBench::new(n, options.window_bench_out.clone())),
             export: None,
             record: record::RecordState::default(),
             overlay_notes: Vec::new(),
@@ -274,6 +283,11 @@ impl LabApp {
     /// Whether the motion meter's plot is on screen.
     pub fn motion_showing(&self) -> bool {
         self.motion.showing()
+    }
+
+    /// What `--bench` ended with, once it has: its report, or why there is none.
+    pub fn window_bench_outcome(&self) -> Option<&Result<window_bench::WindowBenchReport, String>> {
+        self.window_bench.as_ref()?.outcome.as_ref()
     }
 
     pub fn read_bytes(&self) -> Option<(u64, u64)> {
@@ -473,6 +487,7 @@ impl eframe::App for LabApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
         self.stats.ui_frame(&ctx, frame.info().cpu_usage);
+        self.window_bench_step(&ctx, frame.info().cpu_usage);
         self.shortcuts(&ctx);
         self.open_dropped(&ctx);
         self.menu_bar(ui);
@@ -490,7 +505,7 @@ impl eframe::App for LabApp {
     }
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
-        if self.smoke.is_some() || self.deterministic {
+        if self.smoke.is_some() || self.window_bench.is_some() || self.deterministic {
             return; // scripted runs leave the user's settings alone
         }
         eframe::set_value(storage, eframe::APP_KEY, &self.settings);
@@ -531,6 +546,9 @@ pub fn run(options: LabOptions) -> anyhow::Result<()> {
     };
     let outcome = Arc::new(std::sync::Mutex::new(None::<Result<(), String>>));
     let sink = Arc::clone(&outcome);
+    let bench = options.window_bench.is_some();
+    let bench_outcome: window_bench::Sink = Arc::new(std::sync::Mutex::new(None));
+    let bench_sink = Arc::clone(&bench_outcome);
     eframe::run_native(
         // The window's title and where eframe keeps the settings: the program's name.
         env!("CARGO_PKG_NAME"),
@@ -540,10 +558,24 @@ pub fn run(options: LabOptions) -> anyhow::Result<()> {
             if let Some(s) = app.smoke.as_mut() {
                 s.outcome = Some(sink);
             }
+            if let Some(b) = app.window_bench.as_mut() {
+                b.sink = Some(bench_sink);
+            }
             Ok(Box::new(app))
         }),
     )
     .map_err(|e| anyhow::anyhow!("the lab window failed: {e}"))?;
+    if bench {
+        let result = bench_outcome.lock().ok().and_then(|mut o| o.take());
+        match result {
+            Some(Ok(table)) => {
+                use std::io::Write as _;
+                let _ = writeln!(std::io::stdout(), "{table}");
+            }
+            Some(Err(e)) => anyhow::bail!("window bench: {e}"),
+            None => anyhow::bail!("window bench: the window closed before the bench ended"),
+        }
+    }
     if smoke.is_some() {
         let result = outcome.lock().ok().and_then(|mut o| o.take());
         match result {

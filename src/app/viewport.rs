@@ -141,9 +141,17 @@ impl LabApp {
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
         response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "viewport"));
         self.viewport.rect = Some(rect);
-        let [r, g, b, _] = NO_DATA;
-        ui.painter()
-            .rect_filled(rect, 0.0, Color32::from_rgb(r, g, b));
+        // Where last frame's image will cover the viewport, nothing is painted under it: on a CPU
+        // rasteriser every layer egui blends over the viewport costs about what the image does
+        // (`dbuffer gui --bench`).
+        // The window bench's floor: the window with its viewport's background and no image.
+        let bench = self.window_bench.as_ref().and_then(|b| b.phase());
+        let floor = bench == Some(super::window_bench::Phase::Blank);
+        if floor || !self.image_covers_viewport() {
+            let [r, g, b, _] = NO_DATA;
+            ui.painter()
+                .rect_filled(rect, 0.0, Color32::from_rgb(r, g, b));
+        }
         let ppp = ctx.pixels_per_point();
         let scale = self.settings.render_scale;
         let w = (rect.width() * ppp * scale).round().max(0.0) as u32;
@@ -159,7 +167,12 @@ impl LabApp {
         if !settled {
             ctx.request_repaint();
         }
-        self.render_if_needed(&ctx, frame, w, h);
+        if floor {
+            return;
+        }
+        if bench != Some(super::window_bench::Phase::Image) {
+            self.render_if_needed(&ctx, frame, w, h);
+        }
         self.paint_frames(ui, image_rect);
         if self.settings.view != View::DBuffer {
             self.draw_overlays(ui.painter(), image_rect);
@@ -605,6 +618,20 @@ impl LabApp {
         }
     }
 
+    /// Whether [`Self::paint_frames`] will cover the whole viewport with an image: a view as
+    /// large as the viewport (not the D-buffer's square) with a texture for every side shown.
+    fn image_covers_viewport(&self) -> bool {
+        let Some(core) = self.core.as_ref() else {
+            return false;
+        };
+        let sides = if self.settings.split { 2 } else { 1 };
+        self.settings.view != View::DBuffer
+            && (0..sides).all(|k| {
+                self.viewport.shown[k].is_some()
+                    && core.slots.get(k).is_some_and(|s| s.texture.is_some())
+            })
+    }
+
     fn split_x(&self, rect: Rect) -> Option<f32> {
         (self.settings.split && self.viewport.shown[1].is_some())
             .then(|| rect.left() + rect.width() * self.settings.split_at)
@@ -619,9 +646,7 @@ impl LabApp {
             return;
         };
         let split_x = self.split_x(rect);
-        // The final image is the camera's colour target itself, transparent where no surface
-        // is: black behind it, as the view pass draws "no surface" in the other views.
-        painter.rect_filled(rect, 0.0, Color32::BLACK);
+        // Every view's display is opaque (the view pass draws "no surface"): nothing under it.
         let texture = |slot: usize| core.slots[slot].texture.map(|(id, _)| id);
         if let Some(id) = texture(0) {
             match split_x {

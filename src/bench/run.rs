@@ -128,7 +128,7 @@ pub fn run(
         backend: format!("{:?}", ctx.adapter.backend),
         device_type: format!("{:?}", ctx.adapter.device_type),
         timestamps: ctx.timestamps,
-        host: host_description(),
+        host: crate::render::adapter::host_description(),
         quick: config.quick,
         warmup: config.warmup,
         frames: config.frames,
@@ -599,21 +599,6 @@ fn reference_throughput(runs: &[Run]) -> Option<f64> {
         .map(|(px, ms)| px as f64 / (ms * 1e-3))
         .collect();
     Stat::of(&rates).map(|s| s.median)
-}
-
-/// "AMD EPYC 7B13, 2 cores" from /proc/cpuinfo where there is one.
-fn host_description() -> String {
-    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
-    let model = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, m)| m.trim().to_string())
-        })
-        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
-    format!("{model}, {cores} cores")
 }
 
 #[cfg(test)]

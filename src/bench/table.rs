@@ -257,8 +257,8 @@ fn display(out: &mut String, r: &Report) {
     }
     let _ = writeln!(
         out,
-        "\n*lab frame*: what the window does per frame, headless — the camera pass (the final image is \
-         its colour target, shown as it is; the other views add the view pass), one submit, fenced; with a still light the D-buffer is cached, with a moving \
+        "\n*lab frame*: what the window does per frame, headless — the camera pass and the view pass (which \
+         makes every view opaque, the final image included, so the window paints nothing under it), one submit, fenced; with a still light the D-buffer is cached, with a moving \
          one the geometry stage and the light pass run too. *readback path*: `Session::frame` as \
          `dbuffer render` calls it (camera targets and D-buffer read back), which is what the lab did every \
          frame before. *floor*: the scene in flat colour into Rgba8 + depth, the cheapest image of it.\n"

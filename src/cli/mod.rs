@@ -254,12 +254,25 @@ pub fn render(args: &RenderArgs) -> Result<()> {
 
 /// The lab window. `DBUFFER_SMOKE_SCREENSHOT=shot.png` makes it screenshot itself once frames
 /// show and exit (the scripted smoke run under Xvfb).
-pub fn gui(scene: Option<String>, gltf_scene: Option<usize>, verbose: bool) -> Result<()> {
+pub fn gui(
+    scene: Option<String>,
+    gltf_scene: Option<usize>,
+    bench: Option<u32>,
+    bench_out: Option<std::path::PathBuf>,
+    verbose: bool,
+) -> Result<()> {
+    if let Some(n) = bench {
+        if !(2..=10_000).contains(&n) {
+            bail!("--bench expects a frame count from 2 to 10000, found {n}");
+        }
+    }
     let smoke_screenshot = std::env::var_os("DBUFFER_SMOKE_SCREENSHOT").map(Into::into);
     dbuffer::app::run(dbuffer::app::LabOptions {
         scene,
         gltf_scene,
-        fresh_settings: smoke_screenshot.is_some(),
+        fresh_settings: smoke_screenshot.is_some() || bench.is_some(),
+        window_bench: bench,
+        window_bench_out: bench_out,
         smoke_screenshot,
         verbose,
         ..Default::default()

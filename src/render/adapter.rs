@@ -299,3 +299,19 @@ pub fn quiet_device_select() {
         std::env::set_var("MESA_EXTENSION_OVERRIDE", "+GL_ARB_color_buffer_float");
     }
 }
+
+/// The machine the adapter runs on, "AMD EPYC 7B13, 2 cores" from /proc/cpuinfo where there is
+/// one (a CPU rasteriser's times are this machine's), else the architecture.
+pub fn host_description() -> String {
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, m)| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    format!("{model}, {cores} cores")
+}

@@ -11,7 +11,7 @@ use super::methods::{
 };
 use super::passes::camera::{Camera, CameraTargets, CameraUniforms};
 use super::passes::probe::Probe;
-use super::passes::view::{View, ViewInputs, ViewParams, ViewTarget};
+use super::passes::view::{ViewInputs, ViewParams, ViewTarget};
 use super::readback::{f32s_of, Readback, TextureRead};
 use super::timer::Recorder;
 use super::{GpuContext, RenderError};
@@ -81,13 +81,10 @@ pub struct FrameTargets {
     pub rendered: Option<Rendered>,
     /// Values read back from the targets a frame later (the inspector, the display range).
     pub probe: Option<Probe>,
-    /// The last view asked for was `final`: the camera's colour target is what is shown, and no
-    /// view pass ran (it would copy it byte for byte).
-    pub shows_camera: bool,
 }
 
-/// The texture a viewport shows: the view pass's display, or for the final image the camera's
-/// colour target itself (as gamma-encoded bytes).
+/// The texture a viewport shows: the view pass's display, opaque in every view (the final
+/// image's "no surface" black), so that a window draws nothing under it.
 pub struct ShownTexture<'a> {
     pub texture: &'a wgpu::Texture,
     pub view: &'a wgpu::TextureView,
@@ -113,22 +110,11 @@ impl FrameTargets {
             view: None,
             rendered: None,
             probe: None,
-            shows_camera: false,
         }
     }
 
     /// What a viewport shows of these targets, once something was recorded into them.
     pub fn shown(&self) -> Option<ShownTexture<'_>> {
-        if self.shows_camera {
-            let c = self.camera.as_ref()?;
-            return Some(ShownTexture {
-                texture: &c.color.texture,
-                view: &c.color_bytes,
-                width: c.width,
-                height: c.height,
-                generation: c.generation,
-            });
-        }
         let d = self.view.as_ref()?.display()?;
         Some(ShownTexture {
             texture: &d.texture.texture,
@@ -230,11 +216,10 @@ pub fn record_view(
     maps: Option<LightMaps<'_>>,
     rec: &mut Recorder<'_>,
 ) {
-    // The final image is the camera's colour target as it is: shown directly, no pass.
-    targets.shows_camera = params.view == View::Final;
-    if targets.shows_camera {
-        return;
-    }
+    // The final image too goes through the pass, which makes it opaque (black where no surface):
+    // shown as the camera's colour target itself it was transparent there, and a window had to
+    // paint black under it — on a CPU rasteriser a blended layer the size of the viewport on
+    // every repaint costs more than this pass on every render (`dbuffer gui --bench`).
     let FrameTargets {
         camera,
         view,

@@ -1,7 +1,7 @@
 //! The lab as a user drives it: the whole eframe app on the wgpu (lavapipe) adapter, through its
 //! widgets and the mouse. Snapshot thresholds are in `kittest.toml`.
 
-use dbuffer::app::{LabApp, Level, Selection, View};
+use dbuffer::app::{LabApp, LabOptions, Level, Selection, View};
 use dbuffer::render::Method;
 use eframe::egui;
 use egui_kittest::kittest::Queryable;
@@ -881,4 +881,78 @@ fn hovering_never_restarts_the_reference() {
     // The cursor at rest, the samples go on growing from where they were.
     let grew = step_until_worker(&mut h, Worker::Area, WORKER_LIMIT, |h| done(h) > last);
     assert!(grew && done(&h) >= last, "the reference made progress");
+}
+
+/// `dbuffer gui --bench N`: the scripted window goes through its five phases, renders only where
+/// a phase asks for it (never in `blank`, `image` or `still`; in `orbit` and `light`, as the
+/// camera or the light moves), puts the camera and the light back where they were, and writes
+/// its JSON.
+#[test]
+fn the_window_bench_runs_its_phases_and_puts_the_scene_back() {
+    use dbuffer::app::window_bench::Phase;
+    const FRAMES: u32 = 3;
+    let out =
+        std::env::temp_dir().join(format!("dbuffer-window-bench-{}.json", std::process::id()));
+    let _ = std::fs::remove_file(&out);
+    let bench_out = out.clone();
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(900.0, 720.0))
+        .with_max_steps(500)
+        .wgpu()
+        .build_eframe(move |cc| {
+            let mut app = LabApp::new(
+                cc,
+                LabOptions {
+                    deterministic: true,
+                    window_bench: Some(FRAMES),
+                    window_bench_out: Some(bench_out),
+                    ..LabOptions::default()
+                },
+            );
+            app.settings.dbuffer_size = 256;
+            app.settings.render_scale = 0.5;
+            app
+        });
+    h.step();
+    let camera = h.state().camera;
+    let light = h.state().scene().expect("a scene").light;
+    let mut steps = 0;
+    while h.state().window_bench_outcome().is_none() && steps < 200 {
+        h.step();
+        steps += 1;
+    }
+    let report = match h.state().window_bench_outcome() {
+        Some(Ok(r)) => r,
+        other => panic!("the bench did not end with a report: {other:?}"),
+    };
+    let phases: Vec<Phase> = report.phases.iter().map(|p| p.phase).collect();
+    assert_eq!(phases, dbuffer::app::window_bench::PHASES.to_vec());
+    for p in &report.phases {
+        assert_eq!(p.frames, FRAMES);
+        assert!(p.fps > 0.0 && p.seconds > 0.0, "{p:?}");
+        let moving = matches!(p.phase, Phase::Orbit | Phase::Light);
+        if moving {
+            assert!(
+                p.renders >= 1 && p.renders <= u64::from(FRAMES),
+                "{:?}: a render a frame at most, {p:?}",
+                p.phase
+            );
+        } else {
+            assert_eq!(p.renders, 0, "{:?} renders nothing: {p:?}", p.phase);
+        }
+    }
+    assert!(report.orbit_over_floor.is_some_and(|r| r > 0.0));
+    assert_eq!(h.state().camera, camera, "the orbit puts the camera back");
+    let after = h.state().scene().expect("a scene").light;
+    assert!(
+        (after.center() - light.center()).length() < 1e-6,
+        "the light is put back: {:?} against {:?}",
+        after.center(),
+        light.center()
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&out).expect("the JSON was written")).expect("JSON");
+    assert_eq!(json["phases"].as_array().map(Vec::len), Some(5));
+    assert_eq!(json["phases"][3]["phase"], "orbit");
+    let _ = std::fs::remove_file(&out);
 }
