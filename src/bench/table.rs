@@ -713,6 +713,8 @@ mod tests {
                     Some(timing(20.0, 100.0, 8.0, FrameSource::FencedWall)),
                 ),
                 run("shadow-volume", Some(timing(15.0, 45.0, 4.0, gpu))),
+                run("dbuffer-fused", Some(timing(40.0, 70.0, 8.0, gpu))),
+                run("wedges", Some(timing(30.0, 60.0, 4.0, gpu))),
             ],
             display: vec![DisplayRun {
                 scene: "table1-5760".into(),
@@ -767,20 +769,32 @@ mod tests {
                 .find(|t| t.name.starts_with(name))
                 .unwrap_or_else(|| panic!("{name}: {:?}", r.targets))
         };
+        // Reported since issue 22 retired them: measured, neither passed nor missed.
         let lab = get("lab frame (light still)");
         assert_eq!(lab.measured, Some(0.4));
-        assert_eq!(lab.pass(), Some(true));
+        assert_eq!(lab.pass(), None);
         let fps = get("lab frame fps");
         assert_eq!(fps.measured, None, "table1-960 at 600² was not run");
-        let light = get("D-buffer light pass / hard");
-        assert_eq!(light.measured, Some(2.0));
-        assert_eq!(light.pass(), Some(false), "2× misses ≤ 1.5×");
         let camera = get("D-buffer camera pass / hard");
         assert_eq!(camera.measured, Some(2.0));
-        assert_eq!(camera.pass(), Some(false));
-        let frame = get("D-buffer frame / hard");
+        assert_eq!(camera.pass(), None);
+        let light = get("D-buffer light pass / hard");
+        assert_eq!(light.measured, Some(2.0));
+        assert_eq!(light.pass(), Some(false), "2× misses ≤ 1.6×");
+        let frame = get("D-buffer frame / hard-shadow frame (median)");
         assert_eq!(frame.measured, Some(2.0));
-        assert_eq!(frame.pass(), Some(false));
+        assert_eq!(frame.pass(), Some(false), "2× misses ≤ 1.3×");
+        let worst = get("D-buffer frame / hard-shadow frame (worst");
+        assert_eq!(worst.measured, Some(2.0));
+        assert_eq!(worst.pass(), Some(false), "2× misses ≤ 1.45×");
+        let fused = get("dbuffer-fused frame / D-buffer");
+        assert_eq!(fused.measured, Some(2.0));
+        assert_eq!(fused.pass(), Some(true), "2× is within 2.5×");
+        let fused_wedges = get("dbuffer-fused frame / wedges");
+        assert!(fused_wedges
+            .measured
+            .is_some_and(|m| (m - 4.0 / 3.0).abs() < 1e-9));
+        assert_eq!(fused_wedges.pass(), Some(false), "1.33× misses ≤ 1×");
         let pcss = get("D-buffer camera pass / PCSS");
         assert_eq!(pcss.measured, Some(0.5));
         assert_eq!(pcss.pass(), Some(true));
@@ -808,7 +822,9 @@ mod tests {
         );
         assert!(md.contains("| `table1-5760` | 1024² | 5.0 | 12.0 (11.0) | 25.0 (22.0) | 40 | 30.0 (11.0) | 0.40× | 4.00× |"), "{md}");
         assert!(
-            md.contains("| D-buffer frame / hard-shadow frame | 2.000 × | ≤ 1.5 × | MISS |"),
+            md.contains(
+                "| D-buffer frame / hard-shadow frame (median) | 2.000 × | ≤ 1.3 × | MISS |"
+            ),
             "{md}"
         );
         assert!(md.contains("(reported)"));

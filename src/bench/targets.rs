@@ -1,5 +1,8 @@
-//! The issue's targets, judged from a finished [`Report`]: ratios of the D-buffer to the hard
-//! shadow map, PCSS and the floor, the lab's display path, and the geometry stage's time.
+//! The targets, judged from a finished [`Report`] (issue 22's since 2026-12-04): `dbuffer-fused`
+//! against the D-buffer and the wedges, the D-buffer against the hard shadow map (median and
+//! worst scene) and PCSS, the polygon light, and the geometry stage's time; the lab's display
+//! path, the camera pass against the hard shadow's and the floor are reported, no longer targets
+//! (the window itself is timed by `dbuffer gui --bench`).
 
 use super::{Case, Report, Stat, Target, TABLE1_SCENES, TARGET_SIZE};
 use crate::render::methods::pcss;
@@ -18,39 +21,52 @@ pub fn targets(report: &Report) -> Vec<Target> {
         .scenes
         .iter()
         .any(|s| TABLE1_SCENES.contains(&s.name.as_str()));
-    let judged = || {
-        report
-            .scenes
-            .iter()
-            .filter(move |s| !table1 || TABLE1_SCENES.contains(&s.name.as_str()))
-    };
-    let worst = |f: &dyn Fn(&str) -> Option<f64>| -> (Option<f64>, String) {
-        let mut best: Option<(f64, &str)> = None;
+    // Over the judged scenes (`every`: every scene run, the fusion ones too): the median, the
+    // worst and where.
+    let over = |f: &dyn Fn(&str) -> Option<f64>, every: bool| -> Spread {
+        let mut worst: Option<(f64, &str)> = None;
         let mut all = Vec::new();
         let mut missing = Vec::new();
-        for s in judged() {
+        for s in report
+            .scenes
+            .iter()
+            .filter(|s| every || !table1 || TABLE1_SCENES.contains(&s.name.as_str()))
+        {
             match f(&s.name) {
                 Some(v) => {
                     all.push(v);
-                    if best.is_none_or(|(b, _)| v > b) {
-                        best = Some((v, &s.name));
+                    if worst.is_none_or(|(b, _)| v > b) {
+                        worst = Some((v, &s.name));
                     }
                 }
                 None => missing.push(s.name.as_str()),
             }
         }
-        let median = Stat::of(&all).map_or(f64::NAN, |s| s.median);
-        match best {
-            Some((v, name)) => {
-                let mut detail =
-                    format!("worst scene {name} at {size}² (median over scenes {median:.2})");
-                if !missing.is_empty() {
-                    detail += &format!("; not measured on {}", missing.join(", "));
-                }
-                (Some(v), detail)
-            }
-            None => (None, format!("not measured at {size}²")),
+        let median = Stat::of(&all).map(|s| s.median);
+        let mut detail = match worst {
+            Some((v, name)) => format!(
+                "median over {} scene{} at {size}²; worst {name} {v:.2}",
+                all.len(),
+                if all.len() == 1 { "" } else { "s" }
+            ),
+            None => format!("not measured at {size}²"),
+        };
+        if worst.is_some() && !missing.is_empty() {
+            detail += &format!("; not measured on {}", missing.join(", "));
         }
+        Spread {
+            median,
+            worst: worst.map(|w| w.0),
+            detail,
+        }
+    };
+    let worst = |f: &dyn Fn(&str) -> Option<f64>| {
+        let s = over(f, false);
+        (s.worst, s.detail)
+    };
+    let median = |f: &dyn Fn(&str) -> Option<f64>, every: bool| {
+        let s = over(f, every);
+        (s.median, s.detail)
     };
     let ratio = |a: Option<Stat>, b: Option<Stat>| {
         let (a, b) = (a?.median, b?.median);
@@ -58,11 +74,31 @@ pub fn targets(report: &Report) -> Vec<Target> {
     };
     let dbuffer = |s: &str| report.timing(s, size, Method::DBUFFER);
     let hard = |s: &str| report.timing(s, size, Method::HARD);
-    let frame = worst(&|s| {
+    let frame_ratio = |s: &str| {
         let (d, h) = (dbuffer(s)?, hard(s)?);
         ratio(Some(d.frame_ms), h.frame_by(d.frame_source))
-    });
-    let light = worst(&|s| ratio(dbuffer(s)?.light_ms, hard(s)?.light_ms));
+    };
+    let frame = median(&frame_ratio, false);
+    let frame_worst = worst(&frame_ratio);
+    let light = median(&|s| ratio(dbuffer(s)?.light_ms, hard(s)?.light_ms), false);
+    // dbuffer-fused over the D-buffer and over the wedges, frame to frame, on every scene run
+    // (Table 1 and the fusion scenes when the run has them).
+    let fused_over = |other: Method| {
+        median(
+            &|s| {
+                let f = report.timing(s, size, Method::DBUFFER_FUSED)?;
+                let o = report.timing(s, size, other)?;
+                ratio(Some(f.frame_ms), o.frame_by(f.frame_source))
+            },
+            true,
+        )
+    };
+    let fused_dbuffer = fused_over(Method::DBUFFER);
+    let wedges = Method::of(&crate::render::methods::wedges::WEDGES);
+    let fused_wedges = match wedges {
+        Some(w) => fused_over(w),
+        None => (None, "wedges are not on the registry".into()),
+    };
     let camera_hard = worst(&|s| {
         ratio(
             dbuffer(s)?.pass("camera_pass"),
@@ -113,25 +149,29 @@ pub fn targets(report: &Report) -> Vec<Target> {
         unit: "×".into(),
         detail,
     };
+    let reported = |t: Target| Target { limit: None, ..t };
     vec![
-        at_most("lab frame (light still) / readback path", lab, 0.6),
-        Target {
-            name: "lab frame fps, light moving, table1-960 at 600²".into(),
-            measured: moving.flatten(),
-            limit: Some(30.0),
-            strict: false,
-            at_least: true,
-            unit: "fps".into(),
-            detail: "wall time of geometry, light pass and camera pass (the final image), fenced"
-                .into(),
-        },
-        at_most("D-buffer light pass / hard-shadow light pass", light, 1.5),
         at_most(
-            "D-buffer camera pass / hard-shadow camera pass",
-            camera_hard,
-            1.05,
+            "dbuffer-fused frame / D-buffer frame (median)",
+            fused_dbuffer,
+            2.5,
         ),
-        at_most("D-buffer frame / hard-shadow frame", frame, 1.5),
+        at_most(
+            "dbuffer-fused frame / wedges frame (median)",
+            fused_wedges,
+            1.0,
+        ),
+        at_most("D-buffer frame / hard-shadow frame (median)", frame, 1.3),
+        at_most(
+            "D-buffer frame / hard-shadow frame (worst scene)",
+            frame_worst,
+            1.45,
+        ),
+        at_most(
+            "D-buffer light pass / hard-shadow light pass (median)",
+            light,
+            1.6,
+        ),
         at_most(
             "D-buffer frame under a 16-gon light / under the disk",
             polygon,
@@ -141,10 +181,26 @@ pub fn targets(report: &Report) -> Vec<Target> {
             strict: true,
             ..at_most("D-buffer camera pass / PCSS camera pass", camera_pcss, 1.0)
         },
-        Target {
+        reported(at_most(
+            "D-buffer frame / floor (flat colour + depth)",
+            floor,
+            0.0,
+        )),
+        reported(at_most(
+            "D-buffer camera pass / hard-shadow camera pass",
+            camera_hard,
+            0.0,
+        )),
+        reported(at_most("lab frame (light still) / readback path", lab, 0.0)),
+        reported(Target {
+            name: "lab frame fps, light moving, table1-960 at 600²".into(),
+            measured: moving.flatten(),
             limit: None,
-            ..at_most("D-buffer frame / floor (flat colour + depth)", floor, 0.0)
-        },
+            strict: false,
+            at_least: true,
+            unit: "fps".into(),
+            detail: "wall time of geometry, light pass, camera pass and view pass, fenced".into(),
+        }),
         Target {
             name: "geometry of the 5760-triangle caster".into(),
             measured: geometry.as_ref().map(|g| g.0),
@@ -155,4 +211,11 @@ pub fn targets(report: &Report) -> Vec<Target> {
             detail: geometry.map_or_else(|| "table1-5760 not run".into(), |g| g.1),
         },
     ]
+}
+
+/// A ratio over the judged scenes.
+struct Spread {
+    median: Option<f64>,
+    worst: Option<f64>,
+    detail: String,
 }

@@ -76,7 +76,17 @@ fn tiny_bench_writes_json_markdown_and_plot() {
         c.rebuilds as usize, c.frames,
         "one geometry build per rebuilt frame"
     );
-    assert_eq!(report.targets.len(), 9);
+    assert_eq!(report.targets.len(), 12);
+    // The fused D-buffer's targets are judged on this run's scene, against the D-buffer's and
+    // the wedges' frames.
+    for name in ["dbuffer-fused frame / D-buffer", "dbuffer-fused frame / wedges"] {
+        let t = report
+            .targets
+            .iter()
+            .find(|t| t.name.starts_with(name))
+            .unwrap_or_else(|| panic!("{name}: {:?}", report.targets));
+        assert!(t.measured.is_some_and(|m| m > 0.0), "{t:?}");
+    }
     let display = report.display.first().expect("the display path measured");
     assert_eq!((display.scene.as_str(), display.size), ("table1-224", 32));
     assert!(display.lab_still.wall_ms.median > 0.0 && display.readback.wall_ms.median > 0.0);
