@@ -86,8 +86,8 @@ pub const MAX_DBUFFER_SIZE: u32 = 8192;
 /// naming both flags.
 pub const MAX_FUSED_LIST_BYTES: u64 = 128 << 20;
 
-/// Candidate silhouette edges `dbuffer-fused` keeps for one light: 512 Ki (96 bytes of record
-/// and 128 of proxy each on the GPU, 112 MiB). A scene with more (millions of caster triangles
+/// Candidate silhouette edges `dbuffer-fused` keeps for one light: 512 Ki (112 bytes of record
+/// and 128 of proxy each on the GPU, 120 MiB). A scene with more (millions of caster triangles
 /// under a large light) gets the paper's `dbuffer` V everywhere: every list counts as
 /// overflowing (the method's `overflow` light-map channel shows 1 everywhere).
 pub const MAX_FUSED_EDGES: u64 = 1 << 19;

@@ -1,10 +1,18 @@
 // `dbuffer-fused`: the D-buffer with every silhouette chord a receiver needs
 // (src/render/methods/dbuffer_fused.rs; docs/method/dbuffer-fused.md). Per pixel: its list texel's edges (the
-// light pass's lists), each edge's chord as seen from x, the layers between x and each of 128
-// disk samples added up from the centre (bit-sliced 5-bit counters), L(c) from the light pass's
-// caster crossings, then V: exact where the disk is one layer deep, else the lit fraction of the
-// samples. An overflowing list gets the paper's V. Its CPU twin is FusedTwin::sample
-// (src/geometry/fused/twin.rs) with MaskEval::Lut, function by function.
+// light pass's lists), each edge's chord as seen from x and its exact area, L(c) from the light
+// pass's caster crossings, then V (geometry::fused::VPath): exact where the chords that cut the
+// disk are one convex caster's; exact from the parts of the disk where at most two chords cut
+// it, each a whole circular segment; else the layers between x and each of 128 disk samples
+// added up from the centre (bit-sliced 5-bit counters, a second walk over the list): exact where
+// that shows the disk one layer deep, the lit fraction of the samples otherwise. An overflowing
+// list gets the paper's V. Its CPU twin is FusedTwin::sample (src/geometry/fused/twin.rs) with
+// MaskEval::Lut, function by function.
+//
+// A CPU rasteriser runs a SIMD group of pixels through both sides of every branch, but leaves a
+// loop when all of its pixels have: so every piece of work that only some pixels need is a loop
+// that runs once for them and not at all for the others (`for k < once(...)`), and a group where
+// no pixel needs it skips it.
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 // #include shared/fused.wgsl
@@ -24,8 +32,10 @@
 // LUT_ANGLES × LUT_OFFSETS chords.
 @group(1) @binding(9) var<storage, read> lut: array<vec4<u32>>;
 
-// geometry::fused::ANCHOR_SAMPLES.
+// geometry::fused::{ANCHOR_SAMPLES, ANCHOR_SHARE, CONVEX_SLACK}.
 const ANCHOR_SAMPLES: u32 = 3u;
+const ANCHOR_SHARE: f32 = 0.01953125;
+const CONVEX_SLACK: f32 = 1e-3;
 const PI: f32 = 3.14159265358979;
 
 // The paper's V at the pixel: methods/dbuffer.wgsl's lookup (tests/gpu/render_fused.rs holds the
@@ -45,17 +55,6 @@ fn paper_visibility(l: LightLookup, hidden: bool) -> Visibility {
     out.v = v_of_t(out.t);
     return out;
 }
-
-// An edge seen from x (geometry::fused::EdgeChord).
-struct Chord {
-    // A u + B v + C, C < 0 (the centre on the negative side).
-    line: vec3<f32>,
-    // Lines through the centre and the projected ends.
-    end_a: vec2<f32>,
-    end_b: vec2<f32>,
-    delta: i32,
-    area: f32,
-};
 
 fn cross2(a: vec2<f32>, b: vec2<f32>) -> f32 {
     return a.x * b.y - a.y * b.x;
@@ -98,6 +97,18 @@ fn disk_triangle_area(p: vec2<f32>, q: vec2<f32>) -> f32 {
     return sector(p, s1) + cross2(s1, s2) * 0.5 + sector(s2, q);
 }
 
+// Whether the region of the segment p q is a whole circular segment: both ends outside the disk
+// and the segment across it (geometry::fused::whole_segment).
+fn whole_segment(p: vec2<f32>, q: vec2<f32>) -> bool {
+    let c = cross2(p, q);
+    let d = q - p;
+    let a = dot(d, d);
+    let h2 = c * c / a;
+    let t0 = -dot(p, d) / a;
+    let half = sqrt(max(1.0 - h2, 0.0) / a);
+    return dot(p, p) > 1.0 && dot(q, q) > 1.0 && h2 < 1.0 && t0 - half > 0.0 && t0 + half < 1.0;
+}
+
 // The part of the disk beyond the segment p q seen from the centre, as a fraction of the disk
 // (geometry::fused::region_area).
 fn region_area(p: vec2<f32>, q: vec2<f32>) -> f32 {
@@ -105,18 +116,13 @@ fn region_area(p: vec2<f32>, q: vec2<f32>) -> f32 {
     if !(abs(c) > 0.0) || !(abs(c) < 3.0e38) {
         return 0.0;
     }
-    // The common case without an arc tangent: both ends outside the disk and the segment across
-    // it. The sectors beside the crossings cancel against the sector p 0 q, and the region is the
-    // circular segment cut by the line at distance h from the centre (what the general formula
-    // gives, in exact arithmetic).
-    let d = q - p;
-    let a = dot(d, d);
-    let h2 = c * c / a;
-    let t0 = -dot(p, d) / a;
-    let half = sqrt(max(1.0 - h2, 0.0) / a);
-    if dot(p, p) > 1.0 && dot(q, q) > 1.0 && h2 < 1.0 && t0 - half > 0.0 && t0 + half < 1.0 {
+    // The common case without an arc tangent: a whole circular segment, cut by the line at
+    // distance h from the centre (what the general formula gives, in exact arithmetic).
+    if whole_segment(p, q) {
+        let d = q - p;
+        let h2 = c * c / dot(d, d);
         let h = sqrt(h2);
-        return (acos(h) - h * sqrt(1.0 - h2)) / PI;
+        return (acos(h) - h * sqrt(max(1.0 - h2, 0.0))) / PI;
     }
     return abs((sector(p, q) - disk_triangle_area(p, q)) / PI);
 }
@@ -140,14 +146,26 @@ fn edge_cuts_disk(e: FusedEdge, x: vec3<f32>, hx: f32) -> bool {
     return near && cc != 0.0 && fold != 0.0 && abs(cc) < 3.0e38 && cc * cc < dot(ab, ab);
 }
 
-// geometry::fused::edge_chord for an edge that cuts the disk (edge_cuts_disk).
+// An edge seen from x (geometry::fused::EdgeChord): its chord and what a path from the centre
+// gains beyond it, the (clipped) edge's ends, and those ends projected onto the light's plane.
+struct Chord {
+    // A u + B v + C, C < 0 (the centre on the negative side).
+    line: vec3<f32>,
+    delta: i32,
+    pa: vec3<f32>,
+    pb: vec3<f32>,
+    // The projected ends in unit-disk coordinates (radii along e1, e2).
+    ua: vec2<f32>,
+    ub: vec2<f32>,
+};
+
+// geometry::fused::edge_chord for an edge that cuts the disk (edge_cuts_disk), without its area
+// and its sector lines.
 fn edge_chord(e: FusedEdge, x: vec3<f32>, hx: f32) -> Chord {
     var out: Chord;
     let limit = hx * (1.0 - FUSED_CLIP);
     let ha = fused_height(fused, e.a.xyz);
     let hb = fused_height(fused, e.b.xyz);
-    let a_near = ha < limit;
-    let b_near = hb < limit;
     let c = fused.center;
     let r = fused.radius;
     let m = cross(e.a.xyz - x, e.b.xyz - x);
@@ -155,46 +173,53 @@ fn edge_chord(e: FusedEdge, x: vec3<f32>, hx: f32) -> Chord {
     let fold = dot(m, e.fold.xyz);
     let ab = r * vec2<f32>(dot(m, fused.e1), dot(m, fused.e2));
     let cut = e.a.xyz + (e.b.xyz - e.a.xyz) * ((limit - ha) / (hb - ha));
-    let pa = select(cut, e.a.xyz, a_near);
-    let pb = select(cut, e.b.xyz, b_near);
+    out.pa = select(cut, e.a.xyz, ha < limit);
+    out.pb = select(cut, e.b.xyz, hb < limit);
     let layers = i32(e.a.w);
     out.delta = select(layers, -layers, (cc > 0.0) == (fold > 0.0));
     let s = -sign(cc);
     out.line = vec3<f32>(s * ab, s * cc);
-    let k1 = cross(c - x, fused.e1);
-    let k2 = cross(c - x, fused.e2);
-    out.end_a = vec2<f32>(r * dot(k1, pa - x), r * dot(k2, pa - x));
-    out.end_b = vec2<f32>(r * dot(k1, pb - x), r * dot(k2, pb - x));
-    let qa = x + (pa - x) * (hx / (hx - fused_height(fused, pa)));
-    let qb = x + (pb - x) * (hx / (hx - fused_height(fused, pb)));
-    let ua = vec2<f32>(dot(qa - c, fused.e1), dot(qa - c, fused.e2)) / r;
-    let ub = vec2<f32>(dot(qb - c, fused.e1), dot(qb - c, fused.e2)) / r;
-    if polygon_light() {
-        // The same region of the polygon (camera.light_corners are in metres along e1, e2).
-        out.area = abs(polygon_edge_coverage(
-            camera.light_corners,
-            camera.light_corner_count,
-            camera.light_area,
-            ua * r,
-            ub * r
-        ));
-    } else {
-        out.area = region_area(ua, ub);
-    }
+    let qa = x + (out.pa - x) * (hx / (hx - fused_height(fused, out.pa)));
+    let qb = x + (out.pb - x) * (hx / (hx - fused_height(fused, out.pb)));
+    out.ua = vec2<f32>(dot(qa - c, fused.e1), dot(qa - c, fused.e2)) / r;
+    out.ub = vec2<f32>(dot(qb - c, fused.e1), dot(qb - c, fused.e2)) / r;
     return out;
 }
 
-// The samples in an edge's region (DiskMask::lut_region).
-fn lut_region(ch: Chord) -> vec4<u32> {
+// The exact area of a chord's region, as a fraction of the light.
+fn chord_area(ch: Chord) -> f32 {
+    if polygon_light() {
+        // The same region of the polygon (camera.light_corners are in metres along e1, e2).
+        let r = fused.radius;
+        return abs(polygon_edge_coverage(
+            camera.light_corners,
+            camera.light_corner_count,
+            camera.light_area,
+            ch.ua * r,
+            ch.ub * r
+        ));
+    }
+    return region_area(ch.ua, ch.ub);
+}
+
+// The samples in a chord's region (DiskMask::lut_region): beyond the chord, between the lines
+// from the centre through the projected ends.
+fn lut_region(ch: Chord, x: vec3<f32>) -> vec4<u32> {
     let len = length(ch.line.xy);
     let rho = -ch.line.z / len;
     if !(len > 0.0) || !(rho < 1.0) {
         return vec4<u32>(0u);
     }
+    let c = fused.center;
+    let r = fused.radius;
+    let k1 = cross(c - x, fused.e1);
+    let k2 = cross(c - x, fused.e2);
+    let end_a = vec2<f32>(r * dot(k1, ch.pa - x), r * dot(k2, ch.pa - x));
+    let end_b = vec2<f32>(r * dot(k1, ch.pb - x), r * dot(k2, ch.pb - x));
     let j = min(u32(rho * f32(LUT_OFFSETS)), LUT_OFFSETS - 1u);
     let beyond = lut[LUT_ANGLES + lut_bin(ch.line.xy) * LUT_OFFSETS + j];
-    let sa = lut[lut_bin(ch.end_a)];
-    let sb = lut[lut_bin(ch.end_b)];
+    let sa = lut[lut_bin(end_a)];
+    let sb = lut[lut_bin(end_b)];
     return beyond & (sa ^ sb);
 }
 
@@ -326,26 +351,111 @@ fn popcount(v: vec4<u32>) -> u32 {
     return c.x + c.y + c.z + c.w;
 }
 
-// The mask over a list of `count` edges starting at `first` (FusedTwin::sample's Mask path).
-fn mask_visibility(x: vec3<f32>, l: LightLookup, hidden: bool, first: u32, count: u32) -> f32 {
+// The share of the unit disk beyond the chord at distance h from its centre.
+fn segment_share(h: f32) -> f32 {
+    let k = clamp(h, -1.0, 1.0);
+    return (acos(k) - k * sqrt(max(1.0 - k * k, 0.0))) / PI;
+}
+
+// V where at most two chords cut the disk, each a whole circular segment (geometry::fused's
+// two_chords): the parts beyond neither, one or both (Jakobsen et al. 2004, §6.3; the part
+// beyond both by disk_cut2_area), each delta layers deeper than the centre; L(c) anchored at
+// least at floor_c, and no part larger than ANCHOR_SHARE below 0 layers.
+fn two_chords(l1: vec3<f32>, d1: i32, l2: vec3<f32>, d2: i32, floor_c: i32) -> f32 {
+    let len1 = length(l1.xy);
+    let len2 = length(l2.xy);
+    let m1 = select(vec2<f32>(1.0, 0.0), l1.xy / len1, len1 > 0.0);
+    let m2 = select(vec2<f32>(1.0, 0.0), l2.xy / len2, len2 > 0.0);
+    let h1 = select(2.0, -l1.z / len1, len1 > 0.0);
+    let h2 = select(2.0, -l2.z / len2, len2 > 0.0);
+    let a1 = segment_share(h1);
+    let a2 = segment_share(h2);
+    let both = disk_cut2_area(m1, h1, m2, h2) / PI;
+    let area = vec4<f32>(1.0 - a1 - a2 + both, a1 - both, a2 - both, both);
+    let delta = vec4<i32>(0, d1, d2, d1 + d2);
+    // The lowest delta of a part larger than ANCHOR_SHARE (0 where none is).
+    var lowest = 1048576;
+    for (var j = 0u; j < 4u; j++) {
+        if area[j] > ANCHOR_SHARE {
+            lowest = min(lowest, delta[j]);
+        }
+    }
+    let anchor = max(-select(lowest, 0, lowest == 1048576), floor_c);
+    var v = 0.0;
+    for (var j = 0u; j < 4u; j++) {
+        if delta[j] + anchor <= 0 {
+            v += max(area[j], 0.0);
+        }
+    }
+    return clamp(v, 0.0, 1.0);
+}
+
+// What the walk over a list knows of L(c) and of the pixel.
+struct Centre {
+    // The layers between x and c counted along the texel's ray (known: x beyond every crossing)
+    // and corrected by the sweep to x's ray.
+    count: i32,
+    known: bool,
+    hidden: bool,
+    hx: f32,
+};
+
+// What the samples' counters say (FusedTwin::sample's mask): L(c) anchored, the lit samples
+// counted; exact where they show the disk one layer deep. V and the path (3: the samples'
+// count, 6: one layer deep).
+fn mask_result(counter: Counter, k: Centre, layers: i32, integral: f32) -> vec2<f32> {
+    // The samples in use (the LUT leaves the others out of every region: they count 0).
+    let n_samples = min(fused.samples, 128u);
+    let filled = clamp(vec4<i32>(i32(n_samples)) - vec4<i32>(0, 32, 64, 96), vec4<i32>(0), vec4<i32>(32));
+    let valid = select((vec4<u32>(1u) << vec4<u32>(filled)) - 1u, vec4<u32>(0xffffffffu), filled == vec4<i32>(32));
+    // The ANCHOR_SAMPLES-th smallest count (geometry::fused::ANCHOR_SAMPLES says why not the
+    // smallest), bit by bit from the top of u = count + 16: a radix select.
+    var candidates = valid;
+    var rank = min(ANCHOR_SAMPLES, n_samples);
+    var min_u = 0;
+    select_plane(~counter.p4, 16, &candidates, &rank, &min_u);
+    select_plane(counter.p3, 8, &candidates, &rank, &min_u);
+    select_plane(counter.p2, 4, &candidates, &rank, &min_u);
+    select_plane(counter.p1, 2, &candidates, &rank, &min_u);
+    select_plane(counter.p0, 1, &candidates, &rank, &min_u);
+    let floor_c = select(select(0, 1, k.hidden), k.count, k.known);
+    let anchor = max(16 - min_u, floor_c);
+    let v = f32(popcount(at_most(counter, 16 - anchor) & valid)) / f32(max(n_samples, 1u));
+    // One layer deep: every sample sees 0 or `layers` layers; then V is exact.
+    let lc = select(select(0, layers, k.hidden), k.count, k.known);
+    let one_deep = equal_to(counter, 16 - lc) | equal_to(counter, 16 + layers - lc);
+    let exact = clamp(1.0 - (f32(lc) + integral) / f32(max(layers, 1)), 0.0, 1.0);
+    return select(vec2<f32>(v, 3.0), vec2<f32>(exact, 6.0), all((one_deep & valid) == valid));
+}
+
+// V over a non-empty list of `count` edges starting at `first` (FusedTwin::sample): one walk
+// over the list for L(c), the chords' exact areas and what decides the path, then the closed
+// forms or the mask.
+fn listed_visibility(x: vec3<f32>, l: LightLookup, first: u32, count: u32, start: Centre) -> f32 {
+    var k = start;
+    let c = fused.center;
     // L(c) for a receiver beyond every caster crossing of its ray (CasterCrossings::layers_at):
     // the crossings along the D-buffer texel's ray, corrected where the ray, swept sideways to
     // x's, passes an outline seen from c (an edge of the list).
-    let c = fused.center;
-    let crossings = textureLoad(fused_maps, l.texel, 0);
-    let hx = fused_height(fused, x);
-    let known = hx > crossings.y * (1.0 + 1e-4);
     let y = c + fused_texel_dir(fused, vec2<f32>(l.texel), fused.map_size) * distance(x, c);
-    var centre = i32(crossings.x);
-    var counter = Counter(vec4<u32>(0u), vec4<u32>(0u), vec4<u32>(0u), vec4<u32>(0u), vec4<u32>(0u));
     // ∫Δ over the disk, exactly, and the layers of a crossing.
     var integral = 0.0;
     var layers = 0;
-    // The chord of an edge that cuts the disk (its ends, area and samples) is made one per round
-    // of the outer loop. A CPU rasteriser runs a SIMD group of pixels through both sides of every
-    // branch but leaves a loop when all its pixels have: so the pixels skip the other edges each
-    // at their own pace in the inner loop, and the rounds are as many as the most such edges in
-    // the group, not as the longest list.
+    // The chords that cut the disk: how many, whether all one convex caster's, whether each a
+    // whole circular segment, and the first two.
+    var cuts = 0u;
+    var caster = -1.0;
+    var convex = true;
+    var whole = true;
+    var l1 = vec3<f32>(0.0, 0.0, -1.0);
+    var l2 = vec3<f32>(0.0, 0.0, -1.0);
+    var d1 = 0;
+    var d2 = 0;
+    // The samples beyond the chords, for where the closed forms do not hold.
+    var counter = Counter(vec4<u32>(0u), vec4<u32>(0u), vec4<u32>(0u), vec4<u32>(0u), vec4<u32>(0u));
+    // One chord that cuts the disk a round of the outer loop; the pixels of a group skip the
+    // other edges each at their own pace in the inner loop, so the rounds are as many as the
+    // most such edges in the group, not as the longest list.
     var i = 0u;
     loop {
         var e: FusedEdge;
@@ -361,17 +471,13 @@ fn mask_visibility(x: vec3<f32>, l: LightLookup, hidden: bool, first: u32, count
             // outline seen from c, within the edge.
             let sx = dot(e.mc.xyz, x - c);
             let sy = dot(e.mc.xyz, y - c);
-            if known && e.fold.w != 0.0 && e.mc.w != 0.0 && (sx > 0.0) != (sy > 0.0) {
+            if k.known && e.fold.w != 0.0 && e.mc.w != 0.0 && (sx > 0.0) != (sy > 0.0) {
                 if segment_meets_triangle(e.a.xyz, e.b.xyz, c, y, x) {
-                    let k = i32(e.a.w);
-                    centre += select(-k, k, (sx > 0.0) == (e.mc.w > 0.0));
+                    let n = i32(e.a.w);
+                    k.count += select(-n, n, (sx > 0.0) == (e.mc.w > 0.0));
                 }
             }
-            var cuts = false;
-            if edge_silhouette(e, x) {
-                cuts = edge_cuts_disk(e, x, hx);
-            }
-            if cuts {
+            if edge_silhouette(e, x) && edge_cuts_disk(e, x, k.hx) {
                 found = true;
                 break;
             }
@@ -379,71 +485,146 @@ fn mask_visibility(x: vec3<f32>, l: LightLookup, hidden: bool, first: u32, count
         if !found {
             break;
         }
-        let ch = edge_chord(e, x, hx);
-        if ch.area > 0.0 {
-            integral += f32(ch.delta) * ch.area;
+        let ch = edge_chord(e, x, k.hx);
+        let area = chord_area(ch);
+        if area > 0.0 {
+            integral += f32(ch.delta) * area;
             layers = max(layers, abs(ch.delta));
         }
-        counter_add(&counter, lut_region(ch), ch.delta);
+        cuts += 1u;
+        convex = convex && e.caster.y > 0.5 && (cuts == 1u || e.caster.x == caster);
+        caster = e.caster.x;
+        whole = whole && whole_segment(ch.ua, ch.ub);
+        l1 = select(l1, ch.line, cuts == 1u);
+        d1 = select(d1, ch.delta, cuts == 1u);
+        l2 = select(l2, ch.line, cuts == 2u);
+        d2 = select(d2, ch.delta, cuts == 2u);
+        counter_add(&counter, lut_region(ch, x), ch.delta);
     }
-    let hidden_c = select(hidden, centre > 0, known);
     // No chord cuts the disk: all of it is as the centre is.
-    var v = select(1.0, 0.0, hidden_c);
-    took_path(1.0);
+    var v = select(1.0, 0.0, select(k.hidden, k.count > 0, k.known));
+    // One convex caster: one layer deep, V exact from the chords' areas (VPath::Convex).
+    let lc = select(select(0, layers, k.hidden), k.count, k.known);
+    let one_layer = 1.0 - (f32(lc) + integral) / f32(max(layers, 1));
+    let by_convex = convex && (lc == 0 || lc == layers)
+        && one_layer >= -CONVEX_SLACK && one_layer <= 1.0 + CONVEX_SLACK;
+    // At most two chords, each a whole circular segment (VPath::Chords).
+    let by_chords = !by_convex && !polygon_light() && cuts <= 2u && whole;
+    let closed = two_chords(l1, d1, l2, d2, select(select(0, 1, k.hidden), k.count, k.known));
+    // Else the samples (VPath::OneLayer, VPath::Samples).
+    let masked = mask_result(counter, k, layers, integral);
     if layers > 0 {
-        took_path(3.0);
-        // The samples in use (the LUT leaves the others out of every region: they count 0).
-        let n_samples = min(fused.samples, 128u);
-        let filled = clamp(vec4<i32>(i32(n_samples)) - vec4<i32>(0, 32, 64, 96), vec4<i32>(0), vec4<i32>(32));
-        let valid = select((vec4<u32>(1u) << vec4<u32>(filled)) - 1u, vec4<u32>(0xffffffffu), filled == vec4<i32>(32));
-        // The ANCHOR_SAMPLES-th smallest count (geometry::fused::ANCHOR_SAMPLES says why not the
-        // smallest), bit by bit from the top of u = count + 16: a radix select.
-        var candidates = valid;
-        var rank = min(ANCHOR_SAMPLES, n_samples);
-        var min_u = 0;
-        select_plane(~counter.p4, 16, &candidates, &rank, &min_u);
-        select_plane(counter.p3, 8, &candidates, &rank, &min_u);
-        select_plane(counter.p2, 4, &candidates, &rank, &min_u);
-        select_plane(counter.p1, 2, &candidates, &rank, &min_u);
-        select_plane(counter.p0, 1, &candidates, &rank, &min_u);
-        let floor_c = select(select(0, 1, hidden), centre, known);
-        let anchor = max(16 - min_u, floor_c);
-        v = f32(popcount(at_most(counter, 16 - anchor) & valid)) / f32(max(n_samples, 1u));
-        // One layer deep: every sample sees 0 or `layers` layers; then V is exact.
-        let lc = select(select(0, layers, hidden), centre, known);
-        let one_deep = equal_to(counter, 16 - lc) | equal_to(counter, 16 + layers - lc);
-        if all((one_deep & valid) == valid) {
-            v = clamp(1.0 - (f32(lc) + integral) / f32(layers), 0.0, 1.0);
-            took_path(2.0);
-        }
+        v = select(select(masked.x, closed, by_chords), clamp(one_layer, 0.0, 1.0), by_convex);
+        took_path(select(select(masked.y, 5.0, by_chords), 2.0, by_convex));
     }
     return v;
 }
 
-fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
+// What the first draw of the camera pass makes of a pixel (the surfaces drawn twice: fs_first,
+// then fs_refine where the first marked): V where its list is empty or overflowed (or none, out
+// of the light view or dark), or that it has a list (`listed`).
+struct First {
+    vis: Visibility,
+    listed: bool,
+};
+
+// The list texel of a light lookup.
+fn list_of(l: LightLookup) -> u32 {
+    let size = u32(fused.list_size);
+    let lt = vec2<u32>(clamp(floor(l.uv * fused.list_size), vec2<f32>(0.0), vec2<f32>(fused.list_size - 1.0)));
+    return lt.y * size + lt.x;
+}
+
+// L(c) as the light pass counted it along the D-buffer texel's ray.
+fn centre_of(x: vec3<f32>, l: LightLookup, hidden: bool) -> Centre {
+    let crossings = textureLoad(fused_maps, l.texel, 0);
+    var k: Centre;
+    k.hx = fused_height(fused, x);
+    k.known = k.hx > crossings.y * (1.0 + 1e-4);
+    k.count = i32(crossings.x);
+    k.hidden = hidden;
+    return k;
+}
+
+fn fused_first(x: vec3<f32>, n: vec3<f32>) -> First {
     let l = light_lookup(x, n);
     let hidden = hidden_from_center(l);
     // Outside the fitted frustum no penumbra can reach: lit. Behind the one-sided light, or on
     // a side turned away from the centre: nothing arrives.
     let dark = !in_front_of_light(x) || !faces_light_center(x, n);
-    var out = plain(select(1.0, 0.0, dark));
-    if l.inside && !dark {
-        let size = u32(fused.list_size);
-        let lt = vec2<u32>(clamp(floor(l.uv * fused.list_size), vec2<f32>(0.0), vec2<f32>(fused.list_size - 1.0)));
-        let list = lt.y * size + lt.x;
-        let count = counts[list];
-        let overflow = count > fused.cap || fused.all_overflow != 0u;
-        if overflow {
-            // With the receiver's horizon, as dbuffer's default (its fans' chords: no corners).
-            out = paper_visibility(l, hidden);
-            took_path(4.0);
-            let horizon = horizon_fraction(x, n);
-            if horizon < out.v {
-                out = plain(horizon);
-            }
-        } else {
-            out = plain(mask_visibility(x, l, hidden, list * fused.cap, count));
+    var out: First;
+    out.vis = plain(select(1.0, 0.0, dark));
+    out.listed = false;
+    let live = l.inside && !dark;
+    let count = counts[list_of(l)];
+    let overflow = count > fused.cap || fused.all_overflow != 0u;
+    if live && overflow {
+        // With the receiver's horizon, as dbuffer's default (its fans' chords: no corners).
+        out.vis = paper_visibility(l, hidden);
+        took_path(4.0);
+        let horizon = horizon_fraction(x, n);
+        if horizon < out.vis.v {
+            out.vis = plain(horizon);
         }
     }
+    if live && !overflow {
+        // An empty list: no chord crosses the disk, all of it is as the centre is.
+        let k = centre_of(x, l, hidden);
+        out.vis = plain(select(1.0, 0.0, select(hidden, k.count > 0, k.known)));
+        took_path(1.0);
+        out.listed = count > 0u;
+    }
     return out;
+}
+
+// V at a pixel fused_first marked: its list's edges.
+fn fused_listed(x: vec3<f32>, n: vec3<f32>) -> Visibility {
+    let l = light_lookup(x, n);
+    let hidden = hidden_from_center(l);
+    let list = list_of(l);
+    took_path(1.0);
+    return plain(listed_visibility(x, l, list * fused.cap, counts[list], centre_of(x, l, hidden)));
+}
+
+// The method in one draw (what fs_main of shared/camera.wgsl calls).
+fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
+    let first = fused_first(x, n);
+    if first.listed {
+        return fused_listed(x, n);
+    }
+    return first.vis;
+}
+
+// The first draw: every pixel's V but a listed one's, which it marks for the second by its depth
+// one step (one float) farther than the surface's (reversed depth: smaller). Writing the depth
+// puts this draw's depth test after its fragment shader.
+struct FirstTargets {
+    @location(0) color: vec4<f32>,
+    @location(1) data: vec2<f32>,
+    @location(2) cost: vec2<f32>,
+    @builtin(frag_depth) depth: f32,
+};
+
+@fragment
+fn fs_first(f: SurfaceOut) -> FirstTargets {
+    let n = surface_normal(f);
+    method_cost = vec2<f32>(0.0);
+    let first = fused_first(f.world, n);
+    let t = shade(f, n, first.vis);
+    var out: FirstTargets;
+    out.color = t.color;
+    out.data = t.data;
+    out.cost = t.cost;
+    let z = f.clip.z;
+    out.depth = select(z, bitcast<f32>(bitcast<u32>(z) - 1u), first.listed && z > 0.0);
+    return out;
+}
+
+// The second draw, depth test greater (and its depth written back): only the marked pixels pass,
+// and a group of pixels of which none passes runs none of this shader.
+@fragment
+fn fs_refine(f: SurfaceOut) -> Targets {
+    let n = surface_normal(f);
+    method_cost = vec2<f32>(0.0);
+    return shade(f, n, fused_listed(f.world, n));
 }

@@ -310,18 +310,20 @@ struct Targets {
     @location(2) cost: vec2<f32>,
 };
 
-@fragment
-fn fs_main(f: SurfaceOut) -> Targets {
-    // The flat normal of the triangle from the derivatives of its (affine) position, turned to
-    // the side the camera sees: surfaces are two-sided.
+// The flat normal of the triangle from the derivatives of its (affine) position, turned to the
+// side the camera sees: surfaces are two-sided.
+fn surface_normal(f: SurfaceOut) -> vec3<f32> {
     let to_eye = camera.eye - f.world;
     let m = cross(dpdx(f.world), dpdy(f.world));
     var n = select(normalize(to_eye), normalize(m), dot(m, m) > 1e-30);
     if dot(n, to_eye) < 0.0 {
         n = -n;
     }
-    method_cost = vec2<f32>(0.0);
-    let vis = method_visibility(f.world, n, f.clip.xy);
+    return n;
+}
+
+// The targets of a surface point with normal n and the method's visibility there.
+fn shade(f: SurfaceOut, n: vec3<f32>, vis: Visibility) -> Targets {
     let l = normalize(camera.light_center - f.world);
     let cos_receiver = max(dot(n, l), 0.0);
     let cos_emitter = select(max(dot(-l, camera.light_normal), 0.0), 1.0, camera.light_kind == LIGHT_LINE);
@@ -333,4 +335,11 @@ fn fs_main(f: SurfaceOut) -> Targets {
     out.data = vec2<f32>(vis.v, vis.t + 2.0 * vis.branch);
     out.cost = method_cost;
     return out;
+}
+
+@fragment
+fn fs_main(f: SurfaceOut) -> Targets {
+    let n = surface_normal(f);
+    method_cost = vec2<f32>(0.0);
+    return shade(f, n, method_visibility(f.world, n, f.clip.xy));
 }

@@ -40,7 +40,8 @@ struct FusedUniforms {
 
 // A candidate edge (geometry::fused::FusedEdge::gpu_record): a.xyz, layers · b.xyz, max |a_i| ·
 // n0.xyz, offset0 · n1.xyz, offset1 · fold.xyz, 1 where a silhouette from the light centre c ·
-// m_c.xyz, m_c·fold with m_c = (a − c) × (b − c). Face planes n·p − offset, positive in front.
+// m_c.xyz, m_c·fold with m_c = (a − c) × (b − c) · its caster, 1 where that caster is convex.
+// Face planes n·p − offset, positive in front.
 struct FusedEdge {
     a: vec4<f32>,
     b: vec4<f32>,
@@ -48,6 +49,7 @@ struct FusedEdge {
     n1: vec4<f32>,
     fold: vec4<f32>,
     mc: vec4<f32>,
+    caster: vec4<f32>,
 };
 
 // One list texel's ray and where its receivers can be (geometry::fused::TexelRay), as the merge

@@ -79,7 +79,10 @@ fn tiny_bench_writes_json_markdown_and_plot() {
     assert_eq!(report.targets.len(), 12);
     // The fused D-buffer's targets are judged on this run's scene, against the D-buffer's and
     // the wedges' frames.
-    for name in ["dbuffer-fused frame / D-buffer", "dbuffer-fused frame / wedges"] {
+    for name in [
+        "dbuffer-fused frame / D-buffer",
+        "dbuffer-fused frame / wedges",
+    ] {
         let t = report
             .targets
             .iter()

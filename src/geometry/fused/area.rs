@@ -15,6 +15,20 @@ pub fn region_area(p: Vec2, q: Vec2) -> f64 {
     ((sector - disk_triangle_area(p, q)) / std::f64::consts::PI).abs()
 }
 
+/// Whether the region of the segment `p q` (unit-disk coordinates) is a whole circular segment:
+/// both ends outside the disk and the segment across it, so the region is all of the disk beyond
+/// the chord. In `f32`, as `region_area` of `shaders/methods/dbuffer_fused.wgsl` decides its
+/// common case, so the CPU twin and the GPU take the same path.
+pub fn whole_segment(p: Vec2, q: Vec2) -> bool {
+    let c = p.perp_dot(q);
+    let d = q - p;
+    let a = d.dot(d);
+    let h2 = c * c / a;
+    let t0 = -p.dot(d) / a;
+    let half = ((1.0 - h2).max(0.0) / a).sqrt();
+    p.dot(p) > 1.0 && q.dot(q) > 1.0 && h2 < 1.0 && t0 - half > 0.0 && t0 + half < 1.0
+}
+
 /// Signed area of the unit disk ∩ the triangle (0, p, q).
 fn disk_triangle_area(p: glam::DVec2, q: glam::DVec2) -> f64 {
     let sector = |a: glam::DVec2, b: glam::DVec2| a.perp_dot(b).atan2(a.dot(b)) / 2.0;

@@ -11,7 +11,7 @@ use crate::geometry::outline::polygon_edge_coverage;
 use crate::scene::AreaLight;
 
 /// A candidate silhouette edge: what the light pass rasterises and the camera pass reads, per edge
-/// (the GPU's storage-buffer record, 5 × `vec4<f32>`: see `docs/method/dbuffer-fused.md`).
+/// (the GPU's storage-buffer record, 7 × `vec4<f32>`: see `docs/method/dbuffer-fused.md`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FusedEdge {
     pub a: Vec3,
@@ -30,6 +30,9 @@ pub struct FusedEdge {
     pub layers: u32,
     /// Index of the caster.
     pub caster: u32,
+    /// Whether the caster bounds a convex solid (`CasterMesh::convex`): where its edges alone cut
+    /// the disk, the disk is one layer deep.
+    pub convex: bool,
 }
 
 impl FusedEdge {
@@ -38,8 +41,9 @@ impl FusedEdge {
     /// `n0.xyz, offset0` · `n1.xyz, offset1` · `fold.xyz, 1 if a silhouette from the light
     /// centre c else 0` (an outline seen from `c`, which [`CasterCrossings::layers_at`] looks
     /// for) · `m_c.xyz, m_c·fold` with `m_c = (a − c) × (b − c)`, the normal of the plane through
-    /// `c` and the edge. The same `f32`s the CPU twin computes with.
-    pub fn gpu_record(&self, c: Vec3) -> [[f32; 4]; 6] {
+    /// `c` and the edge · `caster, 1 if the caster is convex else 0, 0, 0`. The same `f32`s the
+    /// CPU twin computes with.
+    pub fn gpu_record(&self, c: Vec3) -> [[f32; 4]; 7] {
         let m = (self.a - c).cross(self.b - c);
         [
             self.a.extend(self.layers as f32).to_array(),
@@ -50,6 +54,12 @@ impl FusedEdge {
                 .extend(f32::from(u8::from(self.is_silhouette_from(c))))
                 .to_array(),
             m.extend(m.dot(self.fold)).to_array(),
+            [
+                self.caster as f32,
+                f32::from(u8::from(self.convex)),
+                0.0,
+                0.0,
+            ],
         ]
     }
 
@@ -112,6 +122,7 @@ pub fn candidate_edges(mesh: &CasterMesh, classes: &[FaceClass], caster: u32) ->
             fold: d0 + d1,
             layers: if boundary { 1 } else { 2 },
             caster,
+            convex: mesh.convex,
         });
     }
     out

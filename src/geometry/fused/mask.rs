@@ -4,10 +4,14 @@
 
 use glam::{Vec2, Vec3};
 
+use super::area::whole_segment;
 use super::chord::{edge_chord, EdgeChord, FusedEdge};
-use super::{ANCHOR_SAMPLES, COUNTER_BITS, MAX_LUT_SAMPLES, MAX_SAMPLES};
+use super::{
+    ANCHOR_SAMPLES, ANCHOR_SHARE, CONVEX_SLACK, COUNTER_BITS, MAX_LUT_SAMPLES, MAX_SAMPLES,
+};
 use crate::geometry::oracle::disk_samples;
 use crate::geometry::outline::area_samples;
+use crate::geometry::visibility::disk_cut2_area;
 use crate::scene::AreaLight;
 
 /// How the camera pass decides which samples a half-plane holds.
@@ -307,6 +311,24 @@ pub(super) fn wrap(v: i32) -> i32 {
     (v + span / 2).rem_euclid(span) - span / 2
 }
 
+/// How the camera pass reached V at a receiver with a list (the cost view's paths of
+/// `dbuffer-fused`, `render::methods::dbuffer_fused`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum VPath {
+    /// No chord cuts the disk: all of it is as its centre is.
+    NoChord,
+    /// The chords that cut the disk are all one convex caster's: one layer deep, the exact area.
+    Convex,
+    /// One or two chords cut the disk, each a whole circular segment (a disk light): the exact
+    /// area of the parts they make (Jakobsen et al. 2004, §6.3).
+    Chords,
+    /// The samples' counts showed the disk one layer deep: the exact area.
+    OneLayer,
+    /// The samples' count.
+    #[default]
+    Samples,
+}
+
 /// The result of the mask for one receiver.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MaskResult {
@@ -319,8 +341,10 @@ pub struct MaskResult {
     pub active_edges: u32,
     /// Layers of a crossing (2 for closed casters; 0 when no chord crosses the disk).
     pub layers: u32,
-    /// Where every sample sees zero or one layer's worth, the exact visible fraction.
+    /// Where V is known in closed form (every path but [`VPath::Samples`]), the exact visible
+    /// fraction.
     pub exact: Option<f64>,
+    pub path: VPath,
 }
 
 impl MaskResult {
@@ -381,16 +405,23 @@ pub fn mask_details<'a>(
     let mut integral = 0.0f64;
     let mut layers = 0;
     let mut chords = Vec::new();
+    // The chords that cut the disk, with their edges' casters and convexity.
+    let mut cutting: Vec<(EdgeChord, u32, bool)> = Vec::new();
     for (k, e) in edges.into_iter().enumerate() {
         let Some(ch) = edge_chord(e, x, light) else {
             continue;
         };
-        if ch.area > 0.0 {
-            integral += f64::from(ch.delta) * ch.area;
-            layers = layers.max(ch.delta.abs());
-        }
         if mask.add_region(&ch, &mut count) {
             active += 1;
+        }
+        // A chord that misses the disk has no area (the GPU leaves it out before its area).
+        let [a, b, c] = ch.chord;
+        if c * c < a * a + b * b {
+            if ch.area > 0.0 {
+                integral += f64::from(ch.delta) * ch.area;
+                layers = layers.max(ch.delta.abs());
+            }
+            cutting.push((ch, e.caster, e.convex));
         }
         chords.push((k, ch));
     }
@@ -413,25 +444,41 @@ pub fn mask_details<'a>(
     };
     let anchor = (-min).max(floor);
     let visible = count.iter().filter(|&&k| k + anchor <= 0).count() as u32;
-    // One layer deep: where every sample sees 0 or `layers` layers (L(c) = `layers` if hidden),
-    // the hidden fraction is the mean of L / layers, which the chords give exactly.
-    let exact = if layers == 0 {
-        Some(if hidden { 0.0 } else { 1.0 })
-    } else {
-        let lc = match centre {
-            CentreLayers::Known(k) => k,
-            CentreLayers::Hidden(h) => {
-                if h {
-                    layers
-                } else {
-                    0
-                }
+    // L(c) of the closed forms that take the disk as one layer deep.
+    let lc = match centre {
+        CentreLayers::Known(k) => k,
+        CentreLayers::Hidden(h) => {
+            if h {
+                layers
+            } else {
+                0
             }
-        };
-        count
-            .iter()
-            .all(|&k| k + lc == 0 || k + lc == layers)
-            .then(|| (1.0 - (f64::from(lc) + integral) / f64::from(layers)).clamp(0.0, 1.0))
+        }
+    };
+    let one_layer = 1.0 - (f64::from(lc) + integral) / f64::from(layers.max(1));
+    let one_convex = cutting
+        .iter()
+        .all(|&(_, caster, convex)| convex && caster == cutting[0].1);
+    let whole = cutting
+        .iter()
+        .all(|(ch, ..)| whole_segment(ch.ends[0], ch.ends[1]));
+    let (exact, path) = if layers == 0 {
+        (Some(if hidden { 0.0 } else { 1.0 }), VPath::NoChord)
+    } else if one_convex
+        && (lc == 0 || lc == layers)
+        && (-CONVEX_SLACK..=1.0 + CONVEX_SLACK).contains(&one_layer)
+    {
+        // One convex caster's chords: seen from x it covers one convex region, so every part of
+        // the disk is 0 or `layers` deeper than the rest, and the chords' areas give V.
+        (Some(one_layer.clamp(0.0, 1.0)), VPath::Convex)
+    } else if light.is_disk() && cutting.len() <= 2 && whole {
+        (Some(two_chords(&cutting, floor)), VPath::Chords)
+    } else if count.iter().all(|&k| k + lc == 0 || k + lc == layers) {
+        // One layer deep: where every sample sees 0 or `layers` layers (L(c) = `layers` if
+        // hidden), the hidden fraction is the mean of L / layers, which the chords give exactly.
+        (Some(one_layer.clamp(0.0, 1.0)), VPath::OneLayer)
+    } else {
+        (None, VPath::Samples)
     };
     MaskDetails {
         result: MaskResult {
@@ -441,8 +488,52 @@ pub fn mask_details<'a>(
             active_edges: active,
             layers: layers as u32,
             exact,
+            path,
         },
         chords,
         delta: count,
     }
+}
+
+/// V where at most two chords cut the disk, each a whole circular segment (`cutting`, with
+/// their edges' casters and convexity): the disk falls into the parts beyond neither, one or
+/// both chords (Jakobsen et al. 2004, §6.3: the area beyond two chords in closed form,
+/// `disk_cut2_area`), each `Δ` layers deeper than the centre. `L(c)` is anchored as over the
+/// samples: at least `floor`, and no part larger than [`ANCHOR_SHARE`] below 0 layers.
+fn two_chords(cutting: &[(EdgeChord, u32, bool)], floor: i32) -> f64 {
+    use std::f64::consts::PI;
+    // Each chord as (unit normal, distance): the region beyond it is m·p > h.
+    let line = |k: usize| {
+        cutting.get(k).map_or((glam::DVec2::X, 2.0, 0), |(ch, ..)| {
+            let [a, b, c] = ch.chord.map(f64::from);
+            let len = (a * a + b * b).sqrt();
+            (glam::DVec2::new(a, b) / len, -c / len, ch.delta)
+        })
+    };
+    let ((m1, h1, d1), (m2, h2, d2)) = (line(0), line(1));
+    let segment = |h: f64| {
+        let h = h.clamp(-1.0, 1.0);
+        (h.acos() - h * (1.0 - h * h).max(0.0).sqrt()) / PI
+    };
+    let (a1, a2) = (segment(h1), segment(h2));
+    let both = disk_cut2_area(m1, h1, m2, h2) / PI;
+    let parts = [
+        (0, 1.0 - a1 - a2 + both),
+        (d1, a1 - both),
+        (d2, a2 - both),
+        (d1 + d2, both),
+    ];
+    let lowest = parts
+        .iter()
+        .filter(|p| p.1 > ANCHOR_SHARE)
+        .map(|p| p.0)
+        .min()
+        .unwrap_or(0);
+    let anchor = (-lowest).max(floor);
+    parts
+        .iter()
+        .filter(|p| p.0 + anchor <= 0)
+        .map(|p| p.1.max(0.0))
+        .sum::<f64>()
+        .clamp(0.0, 1.0)
 }

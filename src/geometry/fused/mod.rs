@@ -70,14 +70,14 @@ mod mask;
 mod tests;
 mod twin;
 
-pub use area::region_area;
+pub use area::{region_area, whole_segment};
 pub use chord::{candidate_edges, edge_chord, EdgeChord, FusedEdge};
 pub use lists::{
     edge_in_texel, proxy_hull, wedge_proxy, CasterCrossings, Patch, TexelList, TexelRay,
 };
 pub use mask::{
     diamond_angle, mask_details, mask_visibility, Bits, CentreLayers, DiskMask, MaskDetails,
-    MaskEval, MaskResult, LUT_ANGLES, LUT_OFFSETS,
+    MaskEval, MaskResult, VPath, LUT_ANGLES, LUT_OFFSETS,
 };
 pub use twin::{FusedParams, FusedPath, FusedSample, FusedTwin, LightFromPoint, PointChord};
 
@@ -105,6 +105,17 @@ pub const DEFAULT_LIST_SIZE: u32 = 512;
 /// visible part of the disk smaller than 3 samples is not seen where `L(c)` is anchored by `Δ`
 /// (at most 2/128 of V).
 pub const ANCHOR_SAMPLES: usize = 3;
+
+/// Where V comes in closed form from one or two chords (each a whole circular segment), `L(c)`
+/// is anchored as over the samples ([`ANCHOR_SAMPLES`]), by the smallest `Δ` of the parts of
+/// the disk the chords make, leaving out parts smaller than this share of it (the area of
+/// `ANCHOR_SAMPLES` − ½ samples of [`DEFAULT_SAMPLES`]).
+pub const ANCHOR_SHARE: f64 = (ANCHOR_SAMPLES as f64 - 0.5) / DEFAULT_SAMPLES as f64;
+
+/// The exact V of one convex caster (`1 − (L(c) + ∫Δ) / layers`) is used only within this much
+/// of `[0, 1]` before it is clamped: further out, `L(c)` or a chord is off (a receiver at an
+/// outline seen from `c`) and the samples decide.
+pub const CONVEX_SLACK: f64 = 1e-3;
 
 /// Bit planes of the camera pass's per-sample layer counter (two's complement, wrapping): values
 /// from −16 to 15.

@@ -92,6 +92,7 @@ fn chord_is_the_edge_seen_from_the_receiver() {
             fold: n,
             layers: 2,
             caster: 0,
+            convex: false,
         };
         let ch = edge_chord(&edge, x, &l).expect("a silhouette from x");
         let [ca, cb, cc] = ch.chord;

@@ -39,7 +39,7 @@ use crate::geometry::fused::{
 use crate::geometry::SceneGeometry;
 use crate::render::passes::fused_layers::{FusedLayers, FusedSizes, FusedUniforms};
 use crate::render::passes::fused_lists::{
-    list_bytes, EdgeBuffers, FusedLists, EDGE_BYTES, HULL_BYTES, HULL_CORNERS,
+    list_bytes, EdgeBuffers, EdgeRecord, FusedLists, EDGE_BYTES, HULL_BYTES, HULL_CORNERS,
 };
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
 use crate::render::{
@@ -78,10 +78,12 @@ pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, 
 .knobs(&[&LIST_SIZE, &LIST_CAP, &MASK_SAMPLES])
 .cost(Cost::counted("listed edges visited").paths(&[
     "outside the map, or dark: no list",
-    "mask: no chord cuts the light",
-    "mask, one layer deep: exact V",
-    "mask, layers overlap: the samples' count",
+    "no chord cuts the light",
+    "one convex caster: exact V",
+    "mask: the samples' count",
     "list overflowed: the paper's V",
+    "one or two chords: exact V",
+    "mask, one layer deep: exact V",
 ]))
 .lights(super::AREA_LIGHTS); // its chords cut a disk or a convex polygon
 
@@ -140,8 +142,6 @@ pub const CHANNELS: &[Channel] = &[
     },
 ];
 
-/// One candidate edge as the GPU reads it (`FusedEdge::gpu_record`).
-type EdgeRecord = [[f32; 4]; 6];
 /// One edge's proxy hull, light-view NDC corners.
 type HullCorners = [[f32; 2]; HULL_CORNERS];
 
@@ -225,7 +225,7 @@ impl DBufferFused {
         let uniforms = uniform_buffer::<FusedUniforms>(&ctx.device, "DBufferFused::uniforms");
         DBufferFused {
             paper: DBuffer::new(ctx, false),
-            camera: CameraGroup::new(ctx, SHADER, &entries),
+            camera: CameraGroup::two_draws(ctx, SHADER, &entries),
             shadow_uniforms: uniform_buffer::<ShadowUniforms>(
                 &ctx.device,
                 "DBufferFused::shadow_uniforms",

@@ -767,17 +767,21 @@ pub struct MethodPipeline {
     shader: &'static str,
     module: wgpu::ShaderModule,
     pub layout: wgpu::BindGroupLayout,
-    /// By V(t) variant and light shape (disk or line, rectangle or polygon).
-    pipelines: [OnceLock<wgpu::RenderPipeline>; 8],
+    /// By V(t) variant and light shape (disk or line, rectangle or polygon): the pipeline, and
+    /// for a method drawn in two draws ([`CameraGroup::two_draws`]) the second's.
+    pipelines: [OnceLock<(wgpu::RenderPipeline, Option<wgpu::RenderPipeline>)>; 8],
+    two_draws: bool,
     camera: Arc<super::passes::camera::CameraPass>,
 }
 
 impl MethodPipeline {
-    /// The pipelines of `shader` (`methods/NAME.wgsl`) whose group 1 has `entries`.
+    /// The pipelines of `shader` (`methods/NAME.wgsl`) whose group 1 has `entries`, drawn in
+    /// two draws or one (`two_draws`, the same for every user of `shader`).
     pub fn get(
         ctx: &GpuContext,
         shader: &'static str,
         entries: &[wgpu::BindGroupLayoutEntry],
+        two_draws: bool,
     ) -> Arc<MethodPipeline> {
         ctx.shared_named(shader, |device| MethodPipeline {
             shader,
@@ -787,35 +791,47 @@ impl MethodPipeline {
                 entries,
             }),
             pipelines: Default::default(),
+            two_draws,
             camera: super::passes::camera::CameraPass::get(ctx),
         })
     }
 
     /// The pipeline for V(t) variant `vt` under a rectangle or polygon light (`polygon`) or
-    /// not.
+    /// not, and the second draw's for a method drawn in two.
     pub fn pipeline(
         &self,
         device: &wgpu::Device,
         vt: VtVariant,
         polygon: bool,
-    ) -> &wgpu::RenderPipeline {
+    ) -> (&wgpu::RenderPipeline, Option<&wgpu::RenderPipeline>) {
+        use super::passes::camera::Draw;
         let slot = &self.pipelines[2 * (vt.code() as usize).min(3) + usize::from(polygon)];
-        slot.get_or_init(|| {
-            self.camera.method_pipeline(
-                device,
-                self.shader,
-                &self.module,
-                &self.layout,
-                vt,
-                polygon,
-            )
-        })
+        let (first, second) = slot.get_or_init(|| {
+            let make = |draw| {
+                self.camera.method_pipeline(
+                    device,
+                    self.shader,
+                    &self.module,
+                    &self.layout,
+                    (vt, polygon),
+                    draw,
+                )
+            };
+            if self.two_draws {
+                (make(Draw::First), Some(make(Draw::Refine)))
+            } else {
+                (make(Draw::Only), None)
+            }
+        });
+        (first, second.as_ref())
     }
 }
 
-/// The camera pass's view of a method: its pipeline and its bind group (group 1).
+/// The camera pass's view of a method: its pipeline (and a second draw's, for a method drawn in
+/// two: [`CameraGroup::two_draws`]) and its bind group (group 1).
 pub struct CameraBindings<'a> {
     pub pipeline: &'a wgpu::RenderPipeline,
+    pub refine: Option<&'a wgpu::RenderPipeline>,
     pub bind_group: &'a wgpu::BindGroup,
 }
 
@@ -841,7 +857,25 @@ impl CameraGroup {
         layout: &[wgpu::BindGroupLayoutEntry],
     ) -> CameraGroup {
         CameraGroup {
-            pipeline: MethodPipeline::get(ctx, shader, layout),
+            pipeline: MethodPipeline::get(ctx, shader, layout, false),
+            bound: None,
+        }
+    }
+
+    /// The same for a method whose V costs much at few pixels: the camera pass draws the
+    /// surfaces twice. The first draw (`fs_first` of its shader) shades every pixel it can
+    /// cheaply and marks the others by writing their depth one float step farther (reversed
+    /// depth: smaller); the second (`fs_refine`), depth test greater, passes only there and
+    /// writes the surface's depth back. A CPU rasteriser runs every branch of a shader for a
+    /// whole group of pixels, but none of it for a group the depth test rejects: the expensive
+    /// code runs only for groups with a marked pixel.
+    pub fn two_draws(
+        ctx: &GpuContext,
+        shader: &'static str,
+        layout: &[wgpu::BindGroupLayoutEntry],
+    ) -> CameraGroup {
+        CameraGroup {
+            pipeline: MethodPipeline::get(ctx, shader, layout, true),
             bound: None,
         }
     }
@@ -874,9 +908,13 @@ impl CameraGroup {
         vt: VtVariant,
         polygon: bool,
     ) -> Option<CameraBindings<'_>> {
-        self.bound.as_ref().map(|(group, _)| CameraBindings {
-            pipeline: self.pipeline.pipeline(device, vt, polygon),
-            bind_group: group,
+        self.bound.as_ref().map(|(group, _)| {
+            let (pipeline, refine) = self.pipeline.pipeline(device, vt, polygon);
+            CameraBindings {
+                pipeline,
+                refine,
+                bind_group: group,
+            }
         })
     }
 }

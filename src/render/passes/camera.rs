@@ -199,6 +199,17 @@ pub fn camera_range(eye: Vec3, (lo, hi): (Vec3, Vec3)) -> (f32, f32) {
     (far * 1e-4, far)
 }
 
+/// Which draw of the surfaces a camera pipeline makes: a method's one, or one of the two of a
+/// method drawn twice (`methods::CameraGroup::two_draws`): `fs_first` (every pixel, marking
+/// some by a depth one float step farther) and `fs_refine` (depth test greater: the marked
+/// pixels, their depth written back).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Draw {
+    Only,
+    First,
+    Refine,
+}
+
 /// Group 0 of every method's camera pipeline, built once per device.
 pub struct CameraPass {
     pub layout: wgpu::BindGroupLayout,
@@ -217,15 +228,15 @@ impl CameraPass {
     /// A method's camera pipeline for V(t) variant `vt` and a rectangle or polygon light
     /// (`polygon`: `POLYGON_LIGHT` of `shared/camera.wgsl`) or not: `module` (from
     /// `methods/NAME.wgsl`, which includes `shared/camera.wgsl`), with the method's own bindings
-    /// as group 1.
+    /// as group 1, for the one draw of the surfaces or one of two ([`Draw`]).
     pub fn method_pipeline(
         &self,
         device: &wgpu::Device,
         label: &str,
         module: &wgpu::ShaderModule,
         method_layout: &wgpu::BindGroupLayout,
-        vt: VtVariant,
-        polygon: bool,
+        (vt, polygon): (VtVariant, bool),
+        draw: Draw,
     ) -> wgpu::RenderPipeline {
         let layout = pipeline_layout(
             device,
@@ -266,7 +277,11 @@ impl CameraPass {
             multisample: wgpu::MultisampleState::default(),
             fragment: Some(wgpu::FragmentState {
                 module,
-                entry_point: Some("fs_main"),
+                entry_point: Some(match draw {
+                    Draw::Only => "fs_main",
+                    Draw::First => "fs_first",
+                    Draw::Refine => "fs_refine",
+                }),
                 compilation_options: options,
                 targets: &targets,
             }),
@@ -443,5 +458,9 @@ impl Camera {
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_bind_group(1, method.bind_group, &[]);
         surfaces.draw(&mut pass);
+        if let Some(refine) = method.refine {
+            pass.set_pipeline(refine);
+            surfaces.draw(&mut pass);
+        }
     }
 }

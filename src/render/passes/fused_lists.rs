@@ -29,7 +29,9 @@ use crate::render::{
 /// Bytes of one list texel's ray (`TexelRay` of `shaders/shared/fused.wgsl`).
 pub const TEXEL_RAY_BYTES: u64 = 128;
 /// Bytes of one candidate edge (`FusedEdge`).
-pub const EDGE_BYTES: u64 = 96;
+pub const EDGE_BYTES: u64 = 112;
+/// One candidate edge as the GPU reads it (`geometry::fused::FusedEdge::gpu_record`).
+pub type EdgeRecord = [[f32; 4]; 7];
 /// Corners of one proxy hull (`geometry::fused::proxy_hull` has at most 16).
 pub const HULL_CORNERS: usize = 16;
 /// Bytes of one proxy hull.
@@ -190,13 +192,13 @@ impl EdgeBuffers {
     /// edge's proxy corners, padded to [`HULL_CORNERS`] by repeating the last.
     pub fn new(
         device: &wgpu::Device,
-        records: &[[[f32; 4]; 6]],
+        records: &[EdgeRecord],
         hulls: &[[[f32; 2]; HULL_CORNERS]],
     ) -> EdgeBuffers {
         use wgpu::util::DeviceExt;
         // Storage bindings may not be empty.
-        let records: Vec<[[f32; 4]; 6]> = if records.is_empty() {
-            vec![[[0.0; 4]; 6]]
+        let records: Vec<EdgeRecord> = if records.is_empty() {
+            vec![[[0.0; 4]; 7]]
         } else {
             records.to_vec()
         };
