@@ -144,7 +144,8 @@ enum Command {
     /// Time every method on the D-buffer paper's Table 1 scenes, and the geometry from 1k to 1M triangles;
     /// print markdown tables and write bench.json, bench.md and geometry-scaling.png.
     Bench {
-        /// Fewer frames and scaling up to 256k triangles (under two minutes on 2 CPU cores).
+        /// Fewer frames and scaling up to 256k triangles (about 2.5 minutes on 2 CPU cores, most of
+        /// it bitmask's frames).
         #[arg(long)]
         quick: bool,
         /// Folder for bench.json, bench.md and geometry-scaling.png (created if missing).
