@@ -351,10 +351,13 @@ fn plot(ui: &egui::Ui, rect: Rect, series: &[(Vec<f32>, Color32)]) {
     );
 }
 
-/// Label / monospace value rows, two columns.
+/// Label / monospace value rows, two columns. The columns start as wide as the longest label
+/// ("listed edges visited"): egui sizes a grid's columns from its last frame, so rows that
+/// arrive with a probe would otherwise be laid out over a narrower column until the next repaint.
 fn rows_grid(ui: &mut egui::Ui, id: &str, rows: Vec<(String, String)>) {
     egui::Grid::new(id)
         .num_columns(2)
+        .min_col_width(118.0)
         .max_col_width(140.0)
         .show(ui, |ui| {
             for (k, v) in rows {
