@@ -166,6 +166,10 @@ enum Command {
         /// Largest caster of the geometry-scaling curve, in triangles.
         #[arg(long)]
         max_triangles: Option<u32>,
+        /// Comma-separated methods to time instead of every one, e.g. dbuffer,hard (a target
+        /// whose methods were not timed is reported as not measured).
+        #[arg(long)]
+        methods: Option<String>,
     },
     /// List the built-in scenes, one a line.
     Scenes,
@@ -321,6 +325,7 @@ fn main() -> ExitCode {
             scenes,
             sizes,
             max_triangles,
+            methods,
         }) => cli::bench::run(&cli::bench::BenchArgs {
             quick,
             out: &out,
@@ -329,6 +334,7 @@ fn main() -> ExitCode {
             scenes: scenes.as_deref(),
             sizes: sizes.as_deref(),
             max_triangles,
+            methods: methods.as_deref(),
         }),
     };
     // Output that could not be written (other than to a reader that went away) fails the run.

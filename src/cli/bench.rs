@@ -17,6 +17,7 @@ pub struct BenchArgs<'a> {
     pub scenes: Option<&'a str>,
     pub sizes: Option<&'a str>,
     pub max_triangles: Option<u32>,
+    pub methods: Option<&'a str>,
 }
 
 /// The run the flags ask for: `--quick` or the full one, then the overrides.
@@ -62,6 +63,22 @@ pub fn config(args: &BenchArgs) -> Result<Config> {
         if config.scaling.is_empty() {
             config.scaling.push(max);
         }
+    }
+    if let Some(list) = args.methods {
+        let wanted = list
+            .split(',')
+            .map(|s| s.trim())
+            .filter(|s| !s.is_empty())
+            .map(|s| {
+                s.parse::<dbuffer::render::Method>()
+                    .map_err(anyhow::Error::msg)
+            })
+            .collect::<Result<Vec<_>>>()
+            .context("--methods")?;
+        if wanted.is_empty() {
+            bail!("--methods expects a comma-separated list of methods, e.g. dbuffer,hard");
+        }
+        config.cases.retain(|c| wanted.contains(&c.method));
     }
     config.validate()?;
     Ok(config)
