@@ -20,7 +20,9 @@ use crate::geometry::volume_vertices::{
 };
 use crate::geometry::{SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::VertexChunks;
-use crate::render::passes::dbuffer_volumes::{disjoint_groups, CasterVolumes, DBufferVolumes};
+use crate::render::passes::dbuffer_volumes::{
+    disjoint_groups, CasterVolumes, DBufferVolumes, VolumeLayout,
+};
 use crate::render::passes::shadow_map::{lookup_entries, LightUniforms, ShadowUniforms};
 use crate::render::{
     buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError,
@@ -76,13 +78,18 @@ pub static HORIZON: Switch = Switch::new(
 const SHADER: &str = "methods/dbuffer.wgsl";
 
 /// The centre's shadow map (`|cx_o|`) and the volume channels: distance, `|cx_s|` and the lit
-/// side per texel, as `Rgba32Float` (`passes::dbuffer_volumes::VOLUME_FORMAT`).
+/// side per texel (`passes::dbuffer_volumes::VolumeLayout`: `Rg32Float`, or `Rgba32Float` with
+/// the side for `V exact`).
 const NEEDS: super::AdapterNeeds = super::AdapterNeeds::formats(&[
     super::SHADOW_MAP[0],
     super::SHADOW_MAP[1],
     crate::render::adapter::FormatNeed::new(
         crate::render::adapter::Usage::Render,
-        &[crate::render::passes::dbuffer_volumes::VOLUME_FORMAT],
+        &[VolumeLayout::Distances.format()],
+    ),
+    crate::render::adapter::FormatNeed::new(
+        crate::render::adapter::Usage::Render,
+        &[VolumeLayout::WithSides.format()],
     ),
 ]);
 
@@ -152,6 +159,7 @@ struct Made {
     map_size: u32,
     /// The shadow map's generation (the penumbra channel is drawn over its depth).
     map: u64,
+    layout: VolumeLayout,
 }
 
 /// What the camera bind group binds: the shadow map's and the volume channels' generations, and
@@ -350,6 +358,7 @@ impl MethodState for DBuffer {
             revision: inputs.revision,
             map_size: map.size,
             map: map.generation,
+            layout: VolumeLayout::for_vt(inputs.vt),
         };
         if self.made_for != Some(key) {
             let depth = shared.shadow_map.depth_for_drawing(inputs, rec)?;
@@ -361,6 +370,7 @@ impl MethodState for DBuffer {
                 &self.casters,
                 &self.penumbra,
                 self.penumbra_rect,
+                key.layout,
             );
             self.made_for = Some(key);
             self.view_proj = inputs.light_view.view_projection();

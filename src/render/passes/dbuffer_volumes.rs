@@ -1,7 +1,8 @@
 //! The D-buffer's volume channels (`shaders/passes/dbuffer_volumes.wgsl`), drawn from the light
 //! centre after the shadow map: umbra `(|cx_uv|, |cx_s|)` and penumbra `(|cx_pv|, |cx_s|)`,
-//! `size`² texels of Rgba32Float each (distance, `|cx_s|`, and the winning triangle's lit side
-//! in the light's plane, which `V exact` of a polygon light reads).
+//! `size`² texels each, as `Rg32Float` — or `Rgba32Float` with the winning triangle's lit side
+//! in the light's plane, which only `V exact` reads ([`VolumeLayout`]: the narrower texel took a
+//! quarter off the volume pass on Table 1, issue 22).
 //!
 //! - Penumbra: every caster's entry faces (the pipeline culls the faces turned away from `c`)
 //!   over a copy of the shadow map's depth, nearest wins: an entry behind the nearest surface is
@@ -24,10 +25,38 @@ use crate::render::{
     VolumeVertex,
 };
 
-pub const VOLUME_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// What a volume texel holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VolumeLayout {
+    /// `(distance, |cx_s|)`: all that `V(t)` reads but `V exact`.
+    Distances,
+    /// `(distance, |cx_s|, lit side)`: what `V exact` reads (the chord's direction under a
+    /// polygon light, a closing fan's corner marker).
+    WithSides,
+}
 
-/// The pipelines, built once per device.
+impl VolumeLayout {
+    /// The layout `V(t)` of `vt` reads.
+    pub fn for_vt(vt: crate::geometry::VtVariant) -> VolumeLayout {
+        if vt == crate::geometry::VtVariant::Exact {
+            VolumeLayout::WithSides
+        } else {
+            VolumeLayout::Distances
+        }
+    }
+
+    pub const fn format(self) -> wgpu::TextureFormat {
+        match self {
+            VolumeLayout::Distances => wgpu::TextureFormat::Rg32Float,
+            VolumeLayout::WithSides => wgpu::TextureFormat::Rgba32Float,
+        }
+    }
+}
+
+/// Every format the volume channels may take (what an adapter must render to).
+/// The pipelines of one [`VolumeLayout`], built once per device.
 pub struct DBufferVolumesPass {
+    layout: VolumeLayout,
     /// Penumbra entries and umbra exits in one pass with both targets.
     penumbra: wgpu::RenderPipeline,
     umbra: wgpu::RenderPipeline,
@@ -56,8 +85,13 @@ fn depth_state(
 }
 
 impl DBufferVolumesPass {
-    pub fn get(ctx: &GpuContext) -> Arc<DBufferVolumesPass> {
-        ctx.shared(|device| {
+    pub fn get(ctx: &GpuContext, layout: VolumeLayout) -> Arc<DBufferVolumesPass> {
+        let name = match layout {
+            VolumeLayout::Distances => "distances",
+            VolumeLayout::WithSides => "with sides",
+        };
+        ctx.shared_named(name, |device| {
+            let format = layout.format();
             let module = shader_module(device, "passes/dbuffer_volumes.wgsl");
             let light_layout = light_layout(device, "DBufferVolumesPass::light_layout");
             let merge_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -68,7 +102,7 @@ impl DBufferVolumesPass {
                     wgpu::TextureViewDimension::D2,
                 )],
             });
-            let layout = pipeline_layout(device, "DBufferVolumesPass::layout", &[&light_layout]);
+            let pipelines = pipeline_layout(device, "DBufferVolumesPass::layout", &[&light_layout]);
             let merge_pipeline_layout = pipeline_layout(
                 device,
                 "DBufferVolumesPass::merge_layout",
@@ -78,7 +112,7 @@ impl DBufferVolumesPass {
             // each pipeline writing one of them.
             let mask = |m| {
                 Some(wgpu::ColorTargetState {
-                    format: VOLUME_FORMAT,
+                    format,
                     blend: None,
                     write_mask: m,
                 })
@@ -97,7 +131,7 @@ impl DBufferVolumesPass {
                     &PipelineSpec {
                         label,
                         module: &module,
-                        layout: &layout,
+                        layout: &pipelines,
                         vs: "vs_volume",
                         fs: Some(fs),
                         buffers: &[Some(VolumeVertex::layout())],
@@ -133,7 +167,7 @@ impl DBufferVolumesPass {
             let umbra_alone = volume(
                 "DBufferVolumesPass::umbra_alone",
                 "fs_volume",
-                &[opaque(VOLUME_FORMAT)],
+                &[opaque(format)],
                 wgpu::Face::Front,
                 wgpu::DepthBiasState::default(),
             );
@@ -146,7 +180,7 @@ impl DBufferVolumesPass {
                     vs: "vs_fullscreen",
                     fs: Some("fs_merge"),
                     buffers: &[],
-                    targets: &[opaque(VOLUME_FORMAT)],
+                    targets: &[opaque(format)],
                     cull: None,
                     depth: depth_state(
                         wgpu::CompareFunction::Greater,
@@ -160,7 +194,7 @@ impl DBufferVolumesPass {
                     &PipelineSpec {
                         label,
                         module: &module,
-                        layout: &layout,
+                        layout: &pipelines,
                         vs: "vs_clear",
                         fs: Some("fs_clear"),
                         buffers: &[],
@@ -181,6 +215,7 @@ impl DBufferVolumesPass {
             let clear_penumbra = clear("DBufferVolumesPass::clear_penumbra", &only_penumbra, false);
             let clear_umbra = clear("DBufferVolumesPass::clear_umbra", &only_umbra, true);
             DBufferVolumesPass {
+                layout,
                 penumbra,
                 umbra,
                 umbra_alone,
@@ -205,6 +240,7 @@ pub struct CasterVolumes {
 /// The volume channels' textures.
 pub struct VolumeTargets {
     pub size: u32,
+    pub layout: VolumeLayout,
     pub umbra: Texture,
     pub penumbra: Texture,
     depth: Texture,
@@ -218,9 +254,9 @@ pub struct VolumeTargets {
 
 /// A session's D-buffer volume channels.
 pub struct DBufferVolumes {
-    pass: Arc<DBufferVolumesPass>,
+    /// The pipelines of the layout last drawn, and the light uniforms bound for them.
+    pass: Option<(Arc<DBufferVolumesPass>, wgpu::BindGroup)>,
     uniforms: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
     targets: Option<VolumeTargets>,
 }
 
@@ -265,17 +301,9 @@ fn union_all(rects: &[[f32; 4]]) -> [f32; 4] {
 
 impl DBufferVolumes {
     pub fn new(ctx: &GpuContext) -> DBufferVolumes {
-        let pass = DBufferVolumesPass::get(ctx);
-        let uniforms = uniform_buffer::<LightUniforms>(&ctx.device, "DBufferVolumes::uniforms");
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("DBufferVolumes::bind_group"),
-            layout: &pass.light_layout,
-            entries: &[buffer_entry(0, &uniforms)],
-        });
         DBufferVolumes {
-            pass,
-            uniforms,
-            bind_group,
+            pass: None,
+            uniforms: uniform_buffer::<LightUniforms>(&ctx.device, "DBufferVolumes::uniforms"),
             targets: None,
         }
     }
@@ -284,24 +312,45 @@ impl DBufferVolumes {
         self.targets.as_ref()
     }
 
-    fn ensure_targets(&mut self, device: &wgpu::Device, size: u32, scratch: bool) {
+    /// The pipelines of `layout` and the light uniforms bound for them.
+    fn pass_for(&mut self, ctx: &GpuContext, layout: VolumeLayout) -> Arc<DBufferVolumesPass> {
+        if let Some((pass, _)) = self.pass.as_ref().filter(|(p, _)| p.layout == layout) {
+            return pass.clone();
+        }
+        let pass = DBufferVolumesPass::get(ctx, layout);
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("DBufferVolumes::bind_group"),
+            layout: &pass.light_layout,
+            entries: &[buffer_entry(0, &self.uniforms)],
+        });
+        self.pass = Some((pass.clone(), bind_group));
+        pass
+    }
+
+    fn ensure_targets(
+        &mut self,
+        pass: &DBufferVolumesPass,
+        device: &wgpu::Device,
+        size: u32,
+        scratch: bool,
+    ) {
         use wgpu::TextureUsages as U;
         let color = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
-        if self.targets.as_ref().is_none_or(|t| t.size != size) {
+        let format = pass.layout.format();
+        if self
+            .targets
+            .as_ref()
+            .is_none_or(|t| t.size != size || t.layout != pass.layout)
+        {
             self.targets = Some(VolumeTargets {
                 size,
-                umbra: Texture::new(
-                    device,
-                    "VolumeTargets::umbra",
-                    (size, size),
-                    VOLUME_FORMAT,
-                    color,
-                ),
+                layout: pass.layout,
+                umbra: Texture::new(device, "VolumeTargets::umbra", (size, size), format, color),
                 penumbra: Texture::new(
                     device,
                     "VolumeTargets::penumbra",
                     (size, size),
-                    VOLUME_FORMAT,
+                    format,
                     color,
                 ),
                 depth: Texture::new(
@@ -325,7 +374,7 @@ impl DBufferVolumes {
                 device,
                 "VolumeTargets::scratch",
                 (size, size),
-                VOLUME_FORMAT,
+                format,
                 color,
             );
             let merge_depth = Texture::new(
@@ -337,7 +386,7 @@ impl DBufferVolumes {
             );
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("VolumeTargets::merge_bind_group"),
-                layout: &self.pass.merge_layout,
+                layout: &pass.merge_layout,
                 entries: &[view_entry(0, &texture.view)],
             });
             t.scratch = Some((texture, merge_depth, bind_group));
@@ -346,7 +395,8 @@ impl DBufferVolumes {
 
     /// Record the volume channels for `light`, the penumbra over `surface_depth` (the shadow
     /// map's depth, drawn for the same light view just before; this pass draws into it).
-    /// `penumbra_rect` bounds the penumbra's triangles in the light view's image.
+    /// `penumbra_rect` bounds the penumbra's triangles in the light view's image; `layout` is
+    /// what a texel holds.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
@@ -357,19 +407,19 @@ impl DBufferVolumes {
         casters: &[CasterVolumes],
         penumbra: &VertexChunks,
         penumbra_rect: [f32; 4],
+        layout: VolumeLayout,
     ) {
         let size = surface_depth.texture.width();
         let rects: Vec<[f32; 4]> = casters.iter().map(|c| c.rect).collect();
         let groups = disjoint_groups(&rects);
-        self.ensure_targets(&ctx.device, size, groups.len() > 1);
-        let Some(t) = self.targets.as_mut() else {
+        let pass = self.pass_for(ctx, layout);
+        self.ensure_targets(&pass, &ctx.device, size, groups.len() > 1);
+        let (Some(t), Some((_, bind_group))) = (self.targets.as_mut(), self.pass.as_ref()) else {
             return;
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(light));
         let span = rec.span("dbuffer_volumes");
-        let pass = &self.pass;
-        let bind_group = &self.bind_group;
         // Clear what the last frame drew in and what this one draws in; the rest already holds
         // "no crossing". New targets are cleared whole.
         let umbra_now = scissor(union_all(&rects), size);
