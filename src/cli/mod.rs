@@ -422,6 +422,7 @@ pub fn inspect(
         );
     }
     outln!("geometry  prepare {prepare_ms:.3} ms (once per mesh), classes+silhouettes+volumes {build_ms:.3} ms");
+    print_volume_fill(&scene, &geometry, &l);
     for w in &geometry.warnings {
         outln!("warning   {w}");
     }
@@ -442,6 +443,47 @@ pub fn inspect(
         }
     }
     Ok(())
+}
+
+/// The light map the D-buffer is drawn at by default (`--dbuffer-size`).
+const INSPECT_MAP_SIZE: u32 = 1024;
+
+/// What the D-buffer's volumes cost the rasteriser of a light map: fragments per texel, every
+/// triangle over its whole footprint before the depth test, as the light pass draws them (ended
+/// where no receiver lies beyond) and whole (to the extrusion's far end).
+fn print_volume_fill(
+    scene: &scene::Scene,
+    geometry: &dbuffer::geometry::SceneGeometry,
+    l: &scene::AreaLight,
+) {
+    use dbuffer::geometry::light_view::LightView;
+    use dbuffer::geometry::volume_vertices::{drawn_volumes, footprint_texels, reach_below};
+    let view = LightView::fit(scene);
+    let bounds = scene.objects.iter().filter_map(|o| o.mesh.bounds()).fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+    );
+    let size = INSPECT_MAP_SIZE;
+    let texels = f64::from(size) * f64::from(size);
+    let fill = |reach| {
+        let d = drawn_volumes(geometry, l, &view, reach);
+        let umbra: f64 = d
+            .umbrae
+            .iter()
+            .map(|(u, _)| footprint_texels(u, &view, size))
+            .sum();
+        (
+            umbra / texels,
+            footprint_texels(&d.penumbra, &view, size) / texels,
+        )
+    };
+    let (umbra, penumbra) = fill(Some(reach_below(l, bounds)));
+    let (umbra_whole, penumbra_whole) = fill(None);
+    outln!(
+        "fill      volume fragments per texel of a {size}² light map (footprints, before the \
+         depth test): umbra {umbra:.3}, penumbra {penumbra:.3} as drawn (ended below the \
+         lowest receiver); {umbra_whole:.3} and {penumbra_whole:.3} whole"
+    );
 }
 
 /// `WxH` of a rendered image: both from 1 to `MAX_IMAGE_SIDE`, at most `MAX_IMAGE_PIXELS`.

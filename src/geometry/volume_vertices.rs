@@ -1,13 +1,16 @@
 //! The casters' shadow volumes as the D-buffer's light pass draws them: each volume triangle's
 //! vertices with what `|cx_s|` needs ([`volume_vertices`]), the volumes ended where no receiver
 //! lies beyond ([`end_at`]), ordered nearest the light first ([`sort_near_first`]), and the part of
-//! the light view they can cover ([`light_view_rect`]). Plain CPU geometry: the render method
-//! (`render::methods::dbuffer`) uploads what these return, and the tests reach them here.
+//! the light view they can cover ([`light_view_rect`]), all of it per frame in [`drawn_volumes`];
+//! and the fill they cost the rasteriser ([`footprint_texels`]). Plain CPU geometry: the render
+//! method (`render::methods::dbuffer`) uploads what these return, `dbuffer inspect` reports their
+//! fill, and the tests reach them here.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use super::light_view::LightView;
 use super::volumes::CasterGeometry;
+use super::SceneGeometry;
 use crate::scene::AreaLight;
 
 /// The vertex of a shadow-volume triangle the light pass draws: position, kind, and what
@@ -214,6 +217,187 @@ pub fn sort_near_first(volume: &mut [VolumeVertex], c: Vec3) {
     tris.sort_unstable_by(|a, b| key(a).total_cmp(&key(b)));
 }
 
+/// How far below the light's plane the surfaces within `bounds` (an axis-aligned box) reach, a
+/// little beyond: where the volumes may end ([`end_at`]); `f32::MAX` when that is not finite.
+pub fn reach_below(light: &AreaLight, (lo, hi): (Vec3, Vec3)) -> f32 {
+    let reach = (0..8)
+        .map(|k| {
+            let corner = Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            );
+            light.height_of(corner)
+        })
+        .fold(0.0f32, f32::max);
+    if reach.is_finite() {
+        reach * 1.01 + 1e-3
+    } else {
+        f32::MAX
+    }
+}
+
+/// The volumes as the D-buffer's light pass draws them.
+#[derive(Clone, Debug, Default)]
+pub struct DrawnVolumes {
+    /// Per caster: its umbra, and the part of the light view's image it can cover.
+    pub umbrae: Vec<(Vec<VolumeVertex>, [f32; 4])>,
+    /// Every caster's penumbra, drawn together.
+    pub penumbra: Vec<VolumeVertex>,
+    /// Where the penumbra entries can be in the light view's image.
+    pub penumbra_rect: [f32; 4],
+}
+
+/// Every caster's volumes ready to draw: ended at `reach` ([`reach_below`]; `None`: whole, to
+/// the extrusion's far end), nearest the light first, with the rectangles of the light view
+/// they can cover. An umbra ends too only where no other caster's umbra overlaps its rectangle
+/// ([`disjoint_groups`]: merged umbrae need every caster's exits).
+pub fn drawn_volumes(
+    geometry: &SceneGeometry,
+    light: &AreaLight,
+    view: &LightView,
+    reach: Option<f32>,
+) -> DrawnVolumes {
+    // Each caster's umbra rectangle (from its volume's corners, before any ending), to know
+    // whether umbrae are merged over casters.
+    let rects: Vec<[f32; 4]> = geometry
+        .casters
+        .iter()
+        .map(|g| {
+            let corners = (0..g.volumes.triangle_count())
+                .map(|i| g.volumes.triangle(i))
+                .filter(|(_, attrs)| attrs.kind.is_umbra())
+                .flat_map(|(corners, _)| corners);
+            light_view_rect(view, corners)
+        })
+        .collect();
+    let merged = disjoint_groups(&rects).len() > 1;
+    let umbra_reach = reach.filter(|_| !merged);
+    let mut penumbra = Vec::new();
+    let mut corner_base = 0;
+    let umbrae = geometry
+        .casters
+        .iter()
+        .zip(rects)
+        .map(|(g, rect)| {
+            let (mut umbra, pen) =
+                volume_vertices_within(g, light, umbra_reach, reach, corner_base);
+            corner_base += g.volumes.corners.len();
+            penumbra.extend(pen);
+            // Nearest first: the depth test then turns the farther crossings away before
+            // shading.
+            sort_near_first(&mut umbra, light.center);
+            (umbra, rect)
+        })
+        .collect();
+    sort_near_first(&mut penumbra, light.center);
+    let penumbra_rect = light_view_rect(view, penumbra.iter().map(|v| Vec3::from(v.position)));
+    DrawnVolumes {
+        umbrae,
+        penumbra,
+        penumbra_rect,
+    }
+}
+
+/// Groups of casters whose umbra rectangles do not overlap (greedy, in order), with the
+/// rectangle each group covers; casters whose rectangle is empty belong to none.
+pub fn disjoint_groups(rects: &[[f32; 4]]) -> Vec<(Vec<usize>, [f32; 4])> {
+    let overlap =
+        |a: [f32; 4], b: [f32; 4]| a[0] < b[2] && b[0] < a[2] && a[1] < b[3] && b[1] < a[3];
+    let mut groups: Vec<(Vec<usize>, Vec<[f32; 4]>)> = Vec::new();
+    for (i, &rect) in rects.iter().enumerate() {
+        if !(rect[0] < rect[2] && rect[1] < rect[3]) {
+            continue;
+        }
+        match groups
+            .iter_mut()
+            .find(|(_, rs)| rs.iter().all(|r| !overlap(*r, rect)))
+        {
+            Some(g) => {
+                g.0.push(i);
+                g.1.push(rect);
+            }
+            None => groups.push((vec![i], vec![rect])),
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(members, rs)| (members, union_all(&rs)))
+        .collect()
+}
+
+/// The bounding rectangle of `rects`.
+pub fn union_all(rects: &[[f32; 4]]) -> [f32; 4] {
+    rects.iter().fold([1.0f32, 1.0, 0.0, 0.0], |h, r| {
+        [
+            h[0].min(r[0]),
+            h[1].min(r[1]),
+            h[2].max(r[2]),
+            h[3].max(r[3]),
+        ]
+    })
+}
+
+/// The texels of a `size`² map of `view` that the triangles of `volume` cover, each triangle
+/// over its whole footprint inside the view (clipped to it; overlaps counted as often as they
+/// overlap, no depth test): the fragments the rasteriser makes for them. Divided by `size`², the
+/// volumes' fill per texel.
+pub fn footprint_texels(volume: &[VolumeVertex], view: &LightView, size: u32) -> f64 {
+    let vp = view.view_projection();
+    let half = f64::from(size) / 2.0;
+    volume
+        .chunks_exact(3)
+        .map(|t| {
+            let clip = [t[0], t[1], t[2]].map(|v| vp * Vec3::from(v.position).extend(1.0));
+            clipped_area_ndc(&clip) * half * half
+        })
+        .filter(|a| a.is_finite())
+        .sum()
+}
+
+/// The area in normalised device coordinates of a clip-space triangle's part inside the view
+/// volume (`-w ≤ x, y ≤ w`, `0 ≤ z ≤ w`, `w > 0`).
+fn clipped_area_ndc(triangle: &[Vec4; 3]) -> f64 {
+    let planes: [fn(Vec4) -> f32; 7] = [
+        |p| p.w + p.x,
+        |p| p.w - p.x,
+        |p| p.w + p.y,
+        |p| p.w - p.y,
+        |p| p.z,
+        |p| p.w - p.z,
+        |p| p.w - 1e-6,
+    ];
+    let mut poly: Vec<Vec4> = triangle.to_vec();
+    for plane in planes {
+        let mut next = Vec::with_capacity(poly.len() + 1);
+        for (k, &p) in poly.iter().enumerate() {
+            let q = poly[(k + 1) % poly.len()];
+            let (dp, dq) = (plane(p), plane(q));
+            if dp >= 0.0 {
+                next.push(p);
+            }
+            if (dp >= 0.0) != (dq >= 0.0) {
+                next.push(p + (q - p) * (dp / (dp - dq)));
+            }
+        }
+        poly = next;
+        if poly.len() < 3 {
+            return 0.0;
+        }
+    }
+    let xy: Vec<(f64, f64)> = poly
+        .iter()
+        .map(|p| (f64::from(p.x / p.w), f64::from(p.y / p.w)))
+        .collect();
+    let twice: f64 = (0..xy.len())
+        .map(|k| {
+            let (a, b) = (xy[k], xy[(k + 1) % xy.len()]);
+            a.0 * b.1 - a.1 * b.0
+        })
+        .sum();
+    twice.abs() / 2.0
+}
+
 /// The part `[x0, y0, x1, y1]` of the light view's image (`[0, 1]²`, y down) that triangles
 /// with these corners can cover; all of it if a corner lies behind the light centre.
 pub fn light_view_rect(view: &LightView, points: impl Iterator<Item = Vec3>) -> [f32; 4] {
@@ -367,5 +551,98 @@ mod tests {
         let behind = light.center - light.normal;
         let whole = light_view_rect(&view, corners.iter().copied().chain([behind]));
         assert_eq!(whole, [0.0, 0.0, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn casters_whose_umbrae_do_not_overlap_share_a_group() {
+        let groups = disjoint_groups(&[
+            [0.0, 0.0, 0.4, 0.4],
+            [0.5, 0.5, 0.9, 0.9],
+            [0.3, 0.3, 0.6, 0.6],
+            [0.2, 0.2, 0.2, 0.2],
+        ]);
+        let members: Vec<Vec<usize>> = groups.iter().map(|g| g.0.clone()).collect();
+        assert_eq!(
+            members,
+            [vec![0, 1], vec![2]],
+            "the empty one belongs to none"
+        );
+        assert_eq!(groups[0].1, [0.0, 0.0, 0.9, 0.9]);
+    }
+
+    #[test]
+    fn a_footprint_is_the_projected_area_inside_the_view() {
+        let scene = builtin_scene();
+        let view = LightView::fit(&scene);
+        let inv = view.view_projection().inverse();
+        let at = |x: f32, y: f32| {
+            let p = inv * Vec4::new(x, y, 0.5, 1.0);
+            VolumeVertex {
+                position: (p.truncate() / p.w).to_array(),
+                ..VolumeVertex::default()
+            }
+        };
+        let quad = |x0: f32, y0: f32, x1: f32, y1: f32| {
+            [
+                at(x0, y0),
+                at(x1, y0),
+                at(x1, y1),
+                at(x0, y0),
+                at(x1, y1),
+                at(x0, y1),
+            ]
+        };
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-3 * b.max(1.0);
+        // The whole view: every texel once; twice as wide is clipped to the same.
+        let whole = footprint_texels(&quad(-1.0, -1.0, 1.0, 1.0), &view, 64);
+        assert!(close(whole, 4096.0), "{whole}");
+        let wide = footprint_texels(&quad(-2.0, -2.0, 2.0, 2.0), &view, 64);
+        assert!(close(wide, 4096.0), "{wide}");
+        // A quarter of it, either winding; overlapping triangles count twice.
+        let quarter = footprint_texels(&quad(0.0, 0.0, 1.0, 1.0), &view, 64);
+        assert!(close(quarter, 1024.0), "{quarter}");
+        let flipped = footprint_texels(&quad(1.0, 1.0, 0.0, 0.0), &view, 64);
+        assert!(close(flipped, 1024.0), "{flipped}");
+        let twice = [quad(0.0, 0.0, 1.0, 1.0), quad(0.0, 0.0, 1.0, 1.0)].concat();
+        assert!(close(footprint_texels(&twice, &view, 64), 2048.0));
+        // Behind the light centre: nothing.
+        let c = scene.light.area_or_centre();
+        let behind = VolumeVertex {
+            position: (c.center - c.normal).to_array(),
+            ..VolumeVertex::default()
+        };
+        assert_eq!(footprint_texels(&[behind; 3], &view, 64), 0.0);
+    }
+
+    #[test]
+    fn volumes_ended_below_the_receivers_cover_less_of_the_map() {
+        let scene = builtin_scene();
+        let light = scene.light.area_or_centre();
+        let view = LightView::fit(&scene);
+        let prepared = crate::geometry::PreparedCasters::new(&scene);
+        let geometry = prepared.build(&light, &crate::geometry::VolumeParams::for_scene(&scene));
+        let bounds = scene
+            .objects
+            .iter()
+            .filter_map(|o| o.mesh.bounds())
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| {
+                (lo.min(a), hi.max(b))
+            });
+        let fill = |reach| {
+            let d = drawn_volumes(&geometry, &light, &view, reach);
+            let umbra: f64 = d
+                .umbrae
+                .iter()
+                .map(|(u, _)| footprint_texels(u, &view, 256))
+                .sum();
+            (umbra, footprint_texels(&d.penumbra, &view, 256))
+        };
+        let ended = fill(Some(reach_below(&light, bounds)));
+        let whole = fill(None);
+        assert!(ended.0 > 0.0 && ended.1 > 0.0, "{ended:?}");
+        assert!(
+            ended.0 < 0.8 * whole.0 && ended.1 < 0.8 * whole.1,
+            "{ended:?} {whole:?}"
+        );
     }
 }

@@ -229,6 +229,21 @@ fn a_gltf_model_through_render_inspect_and_compare() {
             .any(|l| l.starts_with("Fox ") && l.contains(&casters.to_string())),
         "{stdout}"
     );
+    // The volumes' fill as drawn and whole: four numbers, the drawn ones the smaller.
+    let fill: Vec<f64> = stdout
+        .lines()
+        .find(|l| l.starts_with("fill "))
+        .map(|l| {
+            l.split(|c: char| !(c.is_ascii_digit() || c == '.'))
+                .filter(|w| w.contains('.'))
+                .filter_map(|w| w.trim_end_matches('.').parse().ok())
+                .collect()
+        })
+        .unwrap_or_default();
+    assert!(
+        fill.len() == 4 && fill[0] <= fill[2] && fill[1] <= fill[3] && fill[1] > 0.0,
+        "{fill:?} in {stdout}"
+    );
 
     let dir = temp_dir("fox-compare");
     let (stdout, _) = run_ok(

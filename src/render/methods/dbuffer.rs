@@ -9,20 +9,16 @@
 
 use std::time::Instant;
 
-use glam::Vec3;
-
 use super::{
     require, CameraGroup, Channel, Cost, Empty, FrameInputs, LightMaps, MethodSpec, MethodState, Prepare,
     SharedMaps, Switch,
 };
 use crate::geometry::volume_vertices::{
-    light_view_rect, sort_near_first, volume_vertices_within, CORNERS_PER_ROW, MAX_CORNERS,
+    drawn_volumes, reach_below, CORNERS_PER_ROW, MAX_CORNERS,
 };
 use crate::geometry::{SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::VertexChunks;
-use crate::render::passes::dbuffer_volumes::{
-    disjoint_groups, CasterVolumes, DBufferVolumes, VolumeLayout,
-};
+use crate::render::passes::dbuffer_volumes::{CasterVolumes, DBufferVolumes, VolumeLayout};
 use crate::render::passes::shadow_map::{lookup_entries, LightUniforms, ShadowUniforms};
 use crate::render::{
     buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError,
@@ -227,64 +223,18 @@ impl DBuffer {
         self.geometry_ms = t.elapsed().as_secs_f64() * 1e3;
         self.builds += 1;
         let device = &inputs.ctx.device;
-        // The farthest any surface lies below the light's plane (a little beyond).
-        let (lo, hi) = inputs.surfaces.bounds;
-        let reach = (0..8)
-            .map(|k| {
-                let corner = Vec3::new(
-                    if k & 1 == 0 { lo.x } else { hi.x },
-                    if k & 2 == 0 { lo.y } else { hi.y },
-                    if k & 4 == 0 { lo.z } else { hi.z },
-                );
-                light.height_of(corner)
-            })
-            .fold(0.0f32, f32::max);
-        let reach = if reach.is_finite() {
-            reach * 1.01 + 1e-3
-        } else {
-            f32::MAX
-        };
-        // Each caster's umbra rectangle (from its volume's corners, before any ending), to
-        // know whether umbrae are merged over casters: only umbrae drawn straight into the
-        // target may end at the reach too.
-        let rects: Vec<[f32; 4]> = geometry
-            .casters
+        let reach = reach_below(&light, inputs.surfaces.bounds);
+        let drawn = drawn_volumes(&geometry, &light, inputs.light_view, Some(reach));
+        self.casters = drawn
+            .umbrae
             .iter()
-            .map(|g| {
-                let corners = (0..g.volumes.triangle_count())
-                    .map(|i| g.volumes.triangle(i))
-                    .filter(|(_, attrs)| attrs.kind.is_umbra())
-                    .flat_map(|(corners, _)| corners);
-                light_view_rect(inputs.light_view, corners)
+            .map(|(umbra, rect)| CasterVolumes {
+                rect: *rect,
+                umbra: VertexChunks::new(device, "DBuffer::umbra", umbra),
             })
             .collect();
-        let merged = disjoint_groups(&rects).len() > 1;
-        let umbra_reach = (!merged).then_some(reach);
-        let mut penumbra = Vec::new();
-        let mut corner_base = 0;
-        self.casters = geometry
-            .casters
-            .iter()
-            .zip(rects)
-            .map(|(g, rect)| {
-                let (mut umbra, pen) =
-                    volume_vertices_within(g, &light, umbra_reach, Some(reach), corner_base);
-                corner_base += g.volumes.corners.len();
-                penumbra.extend(pen);
-                // Nearest first: the depth test then turns the farther crossings away before
-                // shading.
-                sort_near_first(&mut umbra, light.center);
-                CasterVolumes {
-                    rect,
-                    umbra: VertexChunks::new(device, "DBuffer::umbra", &umbra),
-                }
-            })
-            .collect();
-        sort_near_first(&mut penumbra, light.center);
-        self.penumbra_rect = light_view_rect(
-            inputs.light_view,
-            penumbra.iter().map(|v| Vec3::from(v.position)),
-        );
+        self.penumbra_rect = drawn.penumbra_rect;
+        let penumbra = drawn.penumbra;
         self.penumbra = VertexChunks::new(device, "DBuffer::penumbra", &penumbra);
         let corners: Vec<[f32; 4]> = geometry
             .casters

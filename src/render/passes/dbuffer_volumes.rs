@@ -17,6 +17,7 @@ use std::sync::Arc;
 
 use super::next_generation;
 use super::shadow_map::{light_layout, LightUniforms, DEPTH_FORMAT};
+use crate::geometry::volume_vertices::{disjoint_groups, union_all};
 use crate::render::gpu_scene::VertexChunks;
 use crate::render::timer::Recorder;
 use crate::render::{
@@ -258,45 +259,6 @@ pub struct DBufferVolumes {
     pass: Option<(Arc<DBufferVolumesPass>, wgpu::BindGroup)>,
     uniforms: wgpu::Buffer,
     targets: Option<VolumeTargets>,
-}
-
-/// Groups of casters whose umbra rectangles do not overlap (greedy, in order), with the
-/// rectangle each group covers; casters whose rectangle is empty belong to none.
-pub fn disjoint_groups(rects: &[[f32; 4]]) -> Vec<(Vec<usize>, [f32; 4])> {
-    let overlap =
-        |a: [f32; 4], b: [f32; 4]| a[0] < b[2] && b[0] < a[2] && a[1] < b[3] && b[1] < a[3];
-    let mut groups: Vec<(Vec<usize>, Vec<[f32; 4]>)> = Vec::new();
-    for (i, &rect) in rects.iter().enumerate() {
-        if !(rect[0] < rect[2] && rect[1] < rect[3]) {
-            continue;
-        }
-        match groups
-            .iter_mut()
-            .find(|(_, rs)| rs.iter().all(|r| !overlap(*r, rect)))
-        {
-            Some(g) => {
-                g.0.push(i);
-                g.1.push(rect);
-            }
-            None => groups.push((vec![i], vec![rect])),
-        }
-    }
-    groups
-        .into_iter()
-        .map(|(members, rs)| (members, union_all(&rs)))
-        .collect()
-}
-
-/// The bounding rectangle of `rects`.
-fn union_all(rects: &[[f32; 4]]) -> [f32; 4] {
-    rects.iter().fold([1.0f32, 1.0, 0.0, 0.0], |h, r| {
-        [
-            h[0].min(r[0]),
-            h[1].min(r[1]),
-            h[2].max(r[2]),
-            h[3].max(r[3]),
-        ]
-    })
 }
 
 impl DBufferVolumes {
@@ -597,22 +559,5 @@ mod tests {
         assert!(r[0] < r[2] && r[1] < r[3] && r[2] <= 10 && r[3] <= 10);
         assert_eq!(bounding([0; 4], [1, 2, 3, 4]), [1, 2, 3, 4]);
         assert_eq!(bounding([0, 5, 2, 6], [1, 2, 3, 4]), [0, 2, 3, 6]);
-    }
-
-    #[test]
-    fn casters_whose_umbrae_do_not_overlap_share_a_group() {
-        let groups = disjoint_groups(&[
-            [0.0, 0.0, 0.4, 0.4],
-            [0.5, 0.5, 0.9, 0.9],
-            [0.3, 0.3, 0.6, 0.6],
-            [0.2, 0.2, 0.2, 0.2],
-        ]);
-        let members: Vec<Vec<usize>> = groups.iter().map(|g| g.0.clone()).collect();
-        assert_eq!(
-            members,
-            [vec![0, 1], vec![2]],
-            "the empty one belongs to none"
-        );
-        assert_eq!(groups[0].1, [0.0, 0.0, 0.9, 0.9]);
     }
 }
