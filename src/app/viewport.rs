@@ -286,6 +286,7 @@ impl LabApp {
             knobs: knobs.with(&SAMPLES, self.settings.reference_samples),
             read_dbuffer: false,
             read_cost: false,
+            colour_only: false,
         }
     }
 
@@ -326,6 +327,15 @@ impl LabApp {
                 ..
             })
         );
+        // Turning the camera: the inspector waits for the drag to end (its pixel shows another
+        // surface every frame), so the final image needs the colour alone
+        // (`FrameRequest::colour_only`: on lavapipe a third of the camera pass).
+        let turning = matches!(self.viewport.drag, Some(Drag::Orbit | Drag::Pan));
+        let hover = hover.filter(|_| !turning);
+        let base = FrameRequest {
+            colour_only: params.view == View::Final && !moving && hover.is_none(),
+            ..base
+        };
         let camera = self.camera;
         let Some(core) = self.core.as_mut() else {
             return;

@@ -7,8 +7,9 @@
 //!   the image costs the window;
 //! - `still`: the lab as it runs when nothing changes (the render core asked, nothing new to
 //!   render) — what hovering a panel costs;
-//! - `orbit`: the camera goes once round its target — one render a frame, the shadow's light
-//!   pass cached;
+//! - `orbit`: the camera goes once round its target, as a drag of the mouse turns it — one
+//!   render a frame, the shadow's light pass cached, the colour alone (the inspector waits for
+//!   the drag's end);
 //! - `light`: the light goes round a circle — the geometry stage, the light pass and the camera
 //!   pass every frame.
 //!
@@ -65,7 +66,7 @@ impl Phase {
             Phase::Blank => "viewport background, no image: the floor",
             Phase::Image => "last image painted, render core not asked",
             Phase::Still => "as the lab idles: render core asked, nothing new",
-            Phase::Orbit => "camera orbit, a render a frame",
+            Phase::Orbit => "camera orbit as a drag turns it, a render a frame",
             Phase::Light => "light moving, geometry + light pass + render",
         }
     }
@@ -227,6 +228,8 @@ impl LabApp {
         match phase {
             Phase::Blank | Phase::Image | Phase::Still => {}
             Phase::Orbit => {
+                // As a drag of the mouse turns it (the inspector waits for the drag's end).
+                self.viewport.drag = Some(super::viewport::Drag::Orbit);
                 self.camera =
                     camera::orbit(&self.camera, std::f32::consts::TAU / frames as f32, 0.0);
             }
@@ -293,10 +296,11 @@ impl LabApp {
             camera_start = bench.start_camera.take();
             light_start = bench.start_light.take();
         }
-        // Each phase starts from where the scene was.
+        // Each phase starts from where the scene was, the mouse let go.
         if let Some(c) = camera_start {
             self.camera = c;
         }
+        self.viewport.drag = None;
         if let (Phase::Light, Some((light, _))) = (phase, light_start) {
             let mut edit = self.doc.edit();
             edit.light = light;

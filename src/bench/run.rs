@@ -191,6 +191,7 @@ fn request(config: &Config, size: u32, case: &Case) -> FrameRequest {
         knobs: case.knobs,
         read_dbuffer: false,
         read_cost: false,
+        colour_only: false,
     }
 }
 

@@ -50,6 +50,7 @@ pub fn animate(args: &AnimateArgs) -> Result<()> {
             knobs: args.knobs.knobs()?,
             read_dbuffer: false,
             read_cost: false,
+            colour_only: false,
         },
     };
     spec.validate()?;

@@ -196,6 +196,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         knobs,
         read_dbuffer: true,
         read_cost: false,
+        colour_only: false,
     };
     let name = scene.name.clone();
     let mut session = offline.session(scene);

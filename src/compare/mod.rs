@@ -132,6 +132,7 @@ pub fn run(
         read_dbuffer: false,
         // Each method's work per pixel: its cost heatmap.
         read_cost: true,
+        colour_only: false,
     };
     let k = request.samples();
     progress(&format!(

@@ -320,6 +320,7 @@ pub fn run(
                 knobs: c.knobs,
                 read_dbuffer: false,
                 read_cost: false,
+                colour_only: false,
             };
             let frame = session.frame(&offline.ctx, &req)?;
             if i == 0 {

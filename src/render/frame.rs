@@ -33,6 +33,12 @@ pub struct FrameRequest {
     /// Read the cost target back too ([`Frame::cost`]: each pixel's work, for `compare`'s
     /// cost heatmaps and the tests of each method's cost view).
     pub read_cost: bool,
+    /// Only the shaded colour is wanted (a window showing the final image, reading no pixel): the
+    /// camera pass writes its colour and depth and leaves the V/t and cost targets as they were.
+    /// On lavapipe those two targets' 16 bytes a pixel are about a third of a hard shadow's
+    /// camera pass. A view or probe that reads them renders the frame again in full
+    /// ([`Session::submit`](super::Session::submit)).
+    pub colour_only: bool,
 }
 
 impl Default for FrameRequest {
@@ -46,6 +52,7 @@ impl Default for FrameRequest {
             knobs: Knobs::default(),
             read_dbuffer: false,
             read_cost: false,
+            colour_only: false,
         }
     }
 }
@@ -164,7 +171,8 @@ pub fn record_frame(
         method.prepare(Prepare(&inputs, shared, rec))
     })?;
     let polygon = scene.light.as_area().is_some_and(|a| a.corners().is_some());
-    let Some(bindings) = group.bindings(&ctx.device, request.vt, polygon) else {
+    let Some(bindings) = group.bindings(&ctx.device, request.vt, polygon, request.colour_only)
+    else {
         return Err(RenderError::Gpu("the method has no camera pipeline".into()));
     };
     let view_proj = inputs.view.view_proj;

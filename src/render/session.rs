@@ -426,6 +426,25 @@ impl Session {
         encoder: &mut wgpu::CommandEncoder,
         job: &mut FrameJob<'_>,
     ) -> Result<u64, RenderError> {
+        // A view, probe or readback (a job without a view) that reads the V/t or cost targets
+        // never gets a colour-only frame: asked for one, or holding one, the frame is rendered
+        // in full.
+        let reads_targets = !job.probes.is_empty()
+            || job
+                .view
+                .as_ref()
+                .is_none_or(|v| v.view != super::passes::view::View::Final);
+        if reads_targets {
+            job.request.colour_only = false;
+            if job
+                .targets
+                .rendered
+                .as_ref()
+                .is_some_and(|r| r.request.colour_only)
+            {
+                job.render = true;
+            }
+        }
         let request = job.request;
         request.validate(ctx)?;
         let method = request.method;

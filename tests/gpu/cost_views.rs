@@ -24,6 +24,7 @@ fn request(method: Method, knobs: Knobs) -> FrameRequest {
         vt: VtVariant::Exact,
         knobs: knobs.with(&reference::SAMPLES, 16),
         read_cost: true,
+        colour_only: false,
         ..FrameRequest::default()
     }
 }

@@ -355,6 +355,7 @@ fn bitmask_gap_filling_closes_the_gaps_and_the_pyramid_changes_little() {
             knobs,
             read_dbuffer: false,
             read_cost: false,
+            colour_only: false,
         };
         s.offline
             .render(&s.scene, &request)
@@ -438,6 +439,7 @@ fn bitmask_matches_its_cpu_twin_on_the_map_it_reads() {
             knobs: Knobs::default().with(&COARSE.0, coarse),
             read_dbuffer: true,
             read_cost: false,
+            colour_only: false,
         };
         let (frame, _) = offline
             .render(&scene, &request)

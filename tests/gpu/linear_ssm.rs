@@ -222,6 +222,7 @@ fn render(offline: &mut Offline, scene: &Scene, method: Method, knobs: Knobs) ->
         knobs: knobs.with(&SAMPLES, 512),
         read_dbuffer: false,
         read_cost: false,
+        colour_only: false,
     };
     offline
         .render(scene, &request)

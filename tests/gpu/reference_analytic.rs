@@ -92,6 +92,7 @@ fn reference(scene: &Scene) -> Frame {
         knobs: Knobs::default().with(&SAMPLES, 1024),
         read_dbuffer: false,
         read_cost: false,
+        colour_only: false,
     };
     offline
         .render(scene, &request)
@@ -253,6 +254,7 @@ fn line_light_over_an_edge_end_to_end() {
             knobs: knobs.with(&SAMPLES, 1024),
             read_dbuffer: false,
             read_cost: false,
+            colour_only: false,
         };
         offline
             .render(&s, &request)

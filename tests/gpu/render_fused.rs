@@ -66,6 +66,7 @@ fn render_in(
         knobs,
         read_dbuffer: false,
         read_cost: false,
+        colour_only: false,
     };
     let mut targets = FrameTargets::new();
     session.submit(

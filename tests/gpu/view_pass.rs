@@ -39,6 +39,7 @@ fn fixture(method: Method) -> Fixture {
         knobs: Knobs::default().with(&SAMPLES, 32),
         read_dbuffer: false,
         read_cost: false,
+        colour_only: false,
     };
     let reference_request = FrameRequest {
         method: Method::REFERENCE,
@@ -322,4 +323,54 @@ fn methods_without_maps_show_the_frame_and_the_reference_view_needs_the_referenc
         (128, 128),
         "the light-space view is the map's size"
     );
+}
+
+/// A colour-only frame (the lab turning its camera: `FrameRequest::colour_only`) shows the same
+/// final image as a full one, and a probe asked of it renders the frame again in full: the
+/// values read are this frame's, not what an earlier frame left in the V/t target.
+#[test]
+fn a_colour_only_frame_shows_the_same_image_and_a_probe_renders_it_in_full() {
+    let mut f = fixture(Method::DBUFFER);
+    let final_view = params(View::Final, [true, false, false, false], Mapping::auto());
+    let (_, _, full) = f.gpu_view(final_view);
+    // Another method's frame leaves its V in the targets; then the D-buffer, colour only.
+    let hard = FrameRequest {
+        method: Method::HARD,
+        ..f.request
+    };
+    let colour_only = FrameRequest {
+        colour_only: true,
+        ..f.request
+    };
+    for (request, view) in [(hard, None), (colour_only, Some(final_view))] {
+        f.session
+            .submit(
+                &f.ctx,
+                &mut [FrameJob {
+                    targets: &mut f.targets,
+                    request,
+                    view,
+                    render: true,
+                    probes: Vec::new(),
+                }],
+            )
+            .unwrap_or_else(|e| panic!("{e}"));
+    }
+    f.request = colour_only;
+    let (_, _, shown) = f.gpu_view(final_view);
+    assert!(shown == full, "the colour-only frame's image differs");
+    // A penumbra pixel, where the hard shadow's V (0 or 1) is not the D-buffer's.
+    let i = (0..f.frame.visibility.len())
+        .find(|&i| f.frame.hit(i) && (0.1..0.9).contains(&f.frame.visibility[i]))
+        .expect("a penumbra pixel");
+    let (x, y) = (i as u32 % W, i as u32 / W);
+    let p = params(
+        View::Visibility,
+        [true, false, false, false],
+        Mapping::auto(),
+    );
+    let answers = f.probe(vec![ProbeRequest::Pixel { x, y, params: p }]);
+    let v = PixelValues::decode(&answers[0]).expect("a pixel's values");
+    assert_eq!(v.visibility, f.frame.visibility[i]);
+    assert_eq!(v.t, f.frame.t(i));
 }

@@ -767,9 +767,10 @@ pub struct MethodPipeline {
     shader: &'static str,
     module: wgpu::ShaderModule,
     pub layout: wgpu::BindGroupLayout,
-    /// By V(t) variant and light shape (disk or line, rectangle or polygon): the pipeline, and
-    /// for a method drawn in two draws ([`CameraGroup::two_draws`]) the second's.
-    pipelines: [OnceLock<(wgpu::RenderPipeline, Option<wgpu::RenderPipeline>)>; 8],
+    /// By V(t) variant, light shape (disk or line, rectangle or polygon) and targets (all, or
+    /// the colour only: [`FrameRequest::colour_only`](crate::render::FrameRequest)): the
+    /// pipeline, and for a method drawn in two draws ([`CameraGroup::two_draws`]) the second's.
+    pipelines: [OnceLock<(wgpu::RenderPipeline, Option<wgpu::RenderPipeline>)>; 16],
     two_draws: bool,
     camera: Arc<super::passes::camera::CameraPass>,
 }
@@ -797,15 +798,18 @@ impl MethodPipeline {
     }
 
     /// The pipeline for V(t) variant `vt` under a rectangle or polygon light (`polygon`) or
-    /// not, and the second draw's for a method drawn in two.
+    /// not, writing the colour target only or every one, and the second draw's for a method
+    /// drawn in two.
     pub fn pipeline(
         &self,
         device: &wgpu::Device,
         vt: VtVariant,
         polygon: bool,
+        colour_only: bool,
     ) -> (&wgpu::RenderPipeline, Option<&wgpu::RenderPipeline>) {
         use super::passes::camera::Draw;
-        let slot = &self.pipelines[2 * (vt.code() as usize).min(3) + usize::from(polygon)];
+        let slot = &self.pipelines
+            [4 * (vt.code() as usize).min(3) + 2 * usize::from(polygon) + usize::from(colour_only)];
         let (first, second) = slot.get_or_init(|| {
             let make = |draw| {
                 self.camera.method_pipeline(
@@ -813,7 +817,7 @@ impl MethodPipeline {
                     self.shader,
                     &self.module,
                     &self.layout,
-                    (vt, polygon),
+                    (vt, polygon, colour_only),
                     draw,
                 )
             };
@@ -833,6 +837,8 @@ pub struct CameraBindings<'a> {
     pub pipeline: &'a wgpu::RenderPipeline,
     pub refine: Option<&'a wgpu::RenderPipeline>,
     pub bind_group: &'a wgpu::BindGroup,
+    /// The pipelines write the colour target only.
+    pub colour_only: bool,
 }
 
 /// What every method's camera pass is made of: its pipelines ([`MethodPipeline`], shared by
@@ -907,13 +913,15 @@ impl CameraGroup {
         device: &wgpu::Device,
         vt: VtVariant,
         polygon: bool,
+        colour_only: bool,
     ) -> Option<CameraBindings<'_>> {
         self.bound.as_ref().map(|(group, _)| {
-            let (pipeline, refine) = self.pipeline.pipeline(device, vt, polygon);
+            let (pipeline, refine) = self.pipeline.pipeline(device, vt, polygon, colour_only);
             CameraBindings {
                 pipeline,
                 refine,
                 bind_group: group,
+                colour_only,
             }
         })
     }

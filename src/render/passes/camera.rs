@@ -235,7 +235,7 @@ impl CameraPass {
         label: &str,
         module: &wgpu::ShaderModule,
         method_layout: &wgpu::BindGroupLayout,
-        (vt, polygon): (VtVariant, bool),
+        (vt, polygon, colour_only): (VtVariant, bool, bool),
         draw: Draw,
     ) -> wgpu::RenderPipeline {
         let layout = pipeline_layout(
@@ -251,11 +251,13 @@ impl CameraPass {
             constants: &constants,
             ..Default::default()
         };
-        let targets = [
+        // The shader writes all three; a pipeline without the last two drops them.
+        let all = [
             opaque(COLOR_FORMAT),
             opaque(DATA_FORMAT),
             opaque(COST_FORMAT),
         ];
+        let targets = if colour_only { &all[..1] } else { &all[..] };
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),
             layout: Some(&layout),
@@ -283,7 +285,7 @@ impl CameraPass {
                     Draw::Refine => "fs_refine",
                 }),
                 compilation_options: options,
-                targets: &targets,
+                targets,
             }),
             multiview_mask: None,
             cache: None,
@@ -435,13 +437,18 @@ impl Camera {
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
         let span = rec.span("camera_pass");
+        let all = [
+            cleared(&targets.color.view, wgpu::Color::TRANSPARENT),
+            cleared(&targets.data.view, wgpu::Color::TRANSPARENT),
+            cleared(&targets.cost.view, wgpu::Color::TRANSPARENT),
+        ];
         let mut pass = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("Camera::pass"),
-            color_attachments: &[
-                cleared(&targets.color.view, wgpu::Color::TRANSPARENT),
-                cleared(&targets.data.view, wgpu::Color::TRANSPARENT),
-                cleared(&targets.cost.view, wgpu::Color::TRANSPARENT),
-            ],
+            color_attachments: if method.colour_only {
+                &all[..1]
+            } else {
+                &all[..]
+            },
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &targets.depth.view,
                 depth_ops: Some(wgpu::Operations {

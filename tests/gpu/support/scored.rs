@@ -27,6 +27,7 @@ pub fn render(
         knobs: knobs.with(&SAMPLES, 256),
         read_dbuffer: false,
         read_cost: false,
+        colour_only: false,
     };
     offline
         .render(scene, &request)
