@@ -395,7 +395,6 @@ impl LabApp {
         let hard_ready = core.session.has_reference_hard(&hard_request);
         let hard_serial = if hard_ready { core.hard_serial } else { 0 };
 
-        let mut jobs_meta = Vec::new();
         let [main_slot, split_slot] = &mut core.slots;
         let mut jobs: Vec<FrameJob<'_>> = Vec::new();
         for (i, (slot, method)) in [main_slot, split_slot].into_iter().zip(methods).enumerate() {
@@ -441,8 +440,14 @@ impl LabApp {
                 shown.note = Some("reference-hard: casting its rays (off the UI thread)…".into());
                 continue;
             }
+            // Whether a frame is colour-only is not what it shows: the mouse leaving the
+            // viewport renders nothing again, and a view or probe that needs the V/t target of
+            // a colour-only frame has the render core draw it in full.
             let key = RenderKey {
-                request,
+                request: FrameRequest {
+                    colour_only: false,
+                    ..request
+                },
                 camera,
                 revision,
                 reference: if method.is_reference() {
@@ -514,7 +519,6 @@ impl LabApp {
                 note,
                 serial: self.viewport.serial,
             });
-            jobs_meta.push((i, render));
             jobs.push(FrameJob {
                 targets: &mut slot.targets,
                 request,
@@ -523,12 +527,13 @@ impl LabApp {
                 probes,
             });
         }
-        let renders = jobs_meta.iter().filter(|(_, r)| *r).count();
         if !jobs.is_empty() {
             let builds = core.session.geometry_builds(base.method).0;
             let t = std::time::Instant::now();
             match core.session.submit(&core.ctx, &mut jobs) {
                 Ok(bytes) => {
+                    // As submitted: a view that needs a colour-only frame in full renders it.
+                    let renders = jobs.iter().filter(|j| j.render).count();
                     drop(jobs);
                     let wall_ms = t.elapsed().as_secs_f64() * 1e3;
                     let (after, geometry_ms) = core.session.geometry_builds(base.method);

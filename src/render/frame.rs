@@ -393,6 +393,11 @@ pub fn read_frame(
             "nothing has been rendered yet".into(),
         ));
     };
+    if rendered.request.colour_only {
+        return Err(RenderError::Readback(
+            "the frame was rendered colour-only: render it in full to read its V".into(),
+        ));
+    }
     // A device that cannot copy a depth texture into a buffer (GL) reads an exact float copy.
     let depth_copy = if ctx
         .caps
