@@ -9,7 +9,7 @@ use eframe::egui_wgpu;
 use crate::render::passes::probe::ProbeResult;
 use crate::render::reference::ReferenceWorker;
 use crate::render::session::{FrameJob, Session};
-use crate::render::{Frame, FrameRequest, FrameTargets, GpuContext, Method, RenderError};
+use crate::render::{Frame, FrameTargets, GpuContext, Method, RenderError};
 use crate::scene::Scene;
 
 /// One shown view: its targets on the GPU and the egui texture that shows its display.
@@ -160,28 +160,6 @@ impl Core {
         let Some(s) = self.slots.get_mut(slot) else {
             return Err(RenderError::Request(format!("no view {slot}")));
         };
-        // A colour-only frame (the camera turning) holds no V/t to read: render it in full.
-        if let Some(request) = s
-            .targets
-            .rendered
-            .as_ref()
-            .map(|r| r.request)
-            .filter(|r| r.colour_only)
-        {
-            self.session.submit(
-                &self.ctx,
-                &mut [FrameJob {
-                    targets: &mut s.targets,
-                    request: FrameRequest {
-                        colour_only: false,
-                        ..request
-                    },
-                    view: None,
-                    render: true,
-                    probes: Vec::new(),
-                }],
-            )?;
-        }
-        self.session.read(&self.ctx, &s.targets, maps_of)
+        self.session.read(&self.ctx, &mut s.targets, maps_of)
     }
 }

@@ -951,7 +951,7 @@ fn flip_map(core: &mut super::core::Core, request: &FrameRequest) -> Result<(), 
         .map_err(|e| e.to_string())?;
     let truth = core
         .session
-        .read(&core.ctx, &core.flip_targets, None)
+        .read(&core.ctx, &mut core.flip_targets, None)
         .map_err(|e| e.to_string())?;
     let shown = core.read_slot(0, None).map_err(|e| e.to_string())?;
     let map = flip::ldr_flip(

@@ -20,6 +20,11 @@ pub struct BenchArgs<'a> {
     pub methods: Option<&'a str>,
 }
 
+/// The names of a comma-separated list, trimmed, empty ones left out.
+fn items(list: &str) -> impl Iterator<Item = &str> {
+    list.split(',').map(str::trim).filter(|s| !s.is_empty())
+}
+
 /// The run the flags ask for: `--quick` or the full one, then the overrides.
 pub fn config(args: &BenchArgs) -> Result<Config> {
     let mut config = if args.quick {
@@ -37,11 +42,7 @@ pub fn config(args: &BenchArgs) -> Result<Config> {
         config.warmup = n;
     }
     if let Some(list) = args.scenes {
-        config.scenes = list
-            .split(',')
-            .map(|s| s.trim().to_string())
-            .filter(|s| !s.is_empty())
-            .collect();
+        config.scenes = items(list).map(str::to_string).collect();
         if config.scenes.is_empty() {
             bail!("--scenes expects a comma-separated list of scene names, e.g. table1-224,table1-960");
         }
@@ -65,10 +66,7 @@ pub fn config(args: &BenchArgs) -> Result<Config> {
         }
     }
     if let Some(list) = args.methods {
-        let wanted = list
-            .split(',')
-            .map(|s| s.trim())
-            .filter(|s| !s.is_empty())
+        let wanted = items(list)
             .map(|s| {
                 s.parse::<dbuffer::render::Method>()
                     .map_err(anyhow::Error::msg)

@@ -446,9 +446,6 @@ pub fn inspect(
     Ok(())
 }
 
-/// The light map the D-buffer is drawn at by default (`--dbuffer-size`).
-const INSPECT_MAP_SIZE: u32 = 1024;
-
 /// What the D-buffer's volumes cost the rasteriser of a light map: fragments per texel, every
 /// triangle over its whole footprint before the depth test, as the light pass draws them (ended
 /// where no receiver lies beyond) and whole (to the extrusion's far end).
@@ -460,11 +457,8 @@ fn print_volume_fill(
     use dbuffer::geometry::light_view::LightView;
     use dbuffer::geometry::volume_vertices::{drawn_volumes, footprint_texels, reach_below};
     let view = LightView::fit(scene);
-    let bounds = scene.objects.iter().filter_map(|o| o.mesh.bounds()).fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
-    );
-    let size = INSPECT_MAP_SIZE;
+    // The light map the D-buffer is drawn at by default (`--dbuffer-size`).
+    let size = FrameRequest::default().dbuffer_size;
     let texels = f64::from(size) * f64::from(size);
     let fill = |reach| {
         let d = drawn_volumes(geometry, l, &view, reach);
@@ -478,7 +472,7 @@ fn print_volume_fill(
             footprint_texels(&d.penumbra, &view, size) / texels,
         )
     };
-    let (umbra, penumbra) = fill(Some(reach_below(l, bounds)));
+    let (umbra, penumbra) = fill(Some(reach_below(l, scene.bounds())));
     let (umbra_whole, penumbra_whole) = fill(None);
     outln!(
         "fill      volume fragments per texel of a {size}² light map (footprints, before the \

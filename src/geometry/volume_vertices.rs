@@ -621,13 +621,6 @@ mod tests {
         let view = LightView::fit(&scene);
         let prepared = crate::geometry::PreparedCasters::new(&scene);
         let geometry = prepared.build(&light, &crate::geometry::VolumeParams::for_scene(&scene));
-        let bounds = scene
-            .objects
-            .iter()
-            .filter_map(|o| o.mesh.bounds())
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| {
-                (lo.min(a), hi.max(b))
-            });
         let fill = |reach| {
             let d = drawn_volumes(&geometry, &light, &view, reach);
             let umbra: f64 = d
@@ -637,7 +630,7 @@ mod tests {
                 .sum();
             (umbra, footprint_texels(&d.penumbra, &view, 256))
         };
-        let ended = fill(Some(reach_below(&light, bounds)));
+        let ended = fill(Some(reach_below(&light, scene.bounds())));
         let whole = fill(None);
         assert!(ended.0 > 0.0 && ended.1 > 0.0, "{ended:?}");
         assert!(

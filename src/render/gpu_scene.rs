@@ -102,12 +102,8 @@ impl GpuScene {
             indices: Vec::new(),
             chunks: Vec::new(),
         };
-        let mut bounds = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         let mut triangles = 0u64;
         for object in &scene.objects {
-            if let Some((lo, hi)) = object.mesh.bounds() {
-                bounds = (bounds.0.min(lo), bounds.1.max(hi));
-            }
             let albedo = if object.casts_shadow {
                 CASTER_ALBEDO
             } else {
@@ -119,7 +115,7 @@ impl GpuScene {
         builder.flush();
         GpuScene {
             chunks: builder.chunks,
-            bounds,
+            bounds: scene.bounds(),
             triangles,
         }
     }

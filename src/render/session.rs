@@ -660,13 +660,31 @@ impl Session {
     }
 
     /// Read back whatever `targets` hold, with `method`'s light-space maps if given: for tests
-    /// and exports of a frame a window shows.
+    /// and exports of a frame a window shows. A colour-only frame is rendered in full first (a
+    /// readback is a job without a view: [`Session::submit`] does that).
     pub fn read(
         &mut self,
         ctx: &GpuContext,
-        targets: &FrameTargets,
+        targets: &mut FrameTargets,
         maps_of: Option<Method>,
     ) -> Result<Frame, RenderError> {
+        if let Some(request) = targets
+            .rendered
+            .as_ref()
+            .map(|r| r.request)
+            .filter(|r| r.colour_only)
+        {
+            self.submit(
+                ctx,
+                &mut [FrameJob {
+                    targets: &mut *targets,
+                    request,
+                    view: None,
+                    render: true,
+                    probes: Vec::new(),
+                }],
+            )?;
+        }
         let maps = maps_of.and_then(|m| {
             self.methods
                 .get(&m)

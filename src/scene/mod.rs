@@ -154,6 +154,15 @@ impl Scene {
         self.objects.iter().filter(|o| o.casts_shadow)
     }
 
+    /// The box `(min, max)` that holds every object's vertices (min above max for a scene
+    /// without any).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.objects.iter().filter_map(|o| o.mesh.bounds()).fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+        )
+    }
+
     /// Every triangle of every object, as corners in world space.
     pub fn all_triangles(&self) -> Vec<[Vec3; 3]> {
         self.objects

@@ -770,7 +770,7 @@ fn extended_light_map_rgb_is_its_cpu_twin_and_its_depth_bits_show() {
         )
         .unwrap_or_else(|e| panic!("{e}"));
     let frame = session
-        .read(&offline.ctx, &targets, Some(elm))
+        .read(&offline.ctx, &mut targets, Some(elm))
         .unwrap_or_else(|e| panic!("{e}"));
     let maps = frame.maps.expect("the map's channels");
     assert_eq!(maps.channels.len(), 4);

@@ -79,7 +79,7 @@ fn render_in(
             probes: Vec::new(),
         }],
     )?;
-    session.read(ctx, &targets, Some(method))
+    session.read(ctx, &mut targets, Some(method))
 }
 
 fn render(ctx: &GpuContext, scene: &Scene, method: Method, knobs: Knobs) -> Frame {

@@ -66,7 +66,7 @@ fn fixture(method: Method) -> Fixture {
         )
         .unwrap_or_else(|e| panic!("{e}"));
     let frame = session
-        .read(&ctx, &targets, Some(method))
+        .read(&ctx, &mut targets, Some(method))
         .unwrap_or_else(|e| panic!("{e}"));
     Fixture {
         ctx,
