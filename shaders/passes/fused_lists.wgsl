@@ -1,6 +1,6 @@
 // dbuffer-fused's per-texel edge lists (src/render/passes/fused_lists.rs). Twin:
 // geometry::fused::FusedTwin::texel_ray_of (cs_merge), edge_in_texel (fs_list) and
-// FusedTwin::crossings_of (cs_maps).
+// FusedTwin::crossings_of (fs_maps).
 //   cs_merge  per list texel, its ray and where its receivers can be, from the receivers of the
 //             3×3 texels around it (passes/fused_layers.wgsl): up to three patches and a deeper
 //             stretch (TexelRay);
@@ -9,10 +9,11 @@
 //             the count is below the cap. Overflow rule: a list whose count exceeds the cap is not
 //             used (the camera pass falls back to the paper's V); below it the set of edges does
 //             not depend on the order in which fragments ran;
-//   cs_maps   per D-buffer texel: the caster crossings along its ray, the largest crossing height
+//   fs_maps   per D-buffer texel: the caster crossings along its ray, the largest crossing height
 //             over the 3×3 texels around it, its list texel's count and whether it overflowed
 //             (the method's light maps, and the camera pass's L(c)).
 // #include shared/fused.wgsl
+// #include shared/fullscreen_vs.wgsl
 
 @group(0) @binding(0) var<uniform> fused: FusedUniforms;
 
@@ -36,7 +37,6 @@
 @group(1) @binding(11) var cross_count: texture_2d<f32>;
 @group(1) @binding(12) var cross_far: texture_2d<f32>;
 @group(1) @binding(13) var<storage, read> counts: array<u32>;
-@group(1) @binding(14) var maps_out: texture_storage_2d<rgba32float, write>;
 
 // geometry::fused::{PATCH_TEXELS, PATCH_COS, PATCH_BULGE}.
 const PATCH_TEXELS: f32 = 64.0;
@@ -354,18 +354,17 @@ fn fs_list(f: ProxyOut) -> @location(0) vec4<f32> {
     return vec4<f32>(0.0);
 }
 
-// ---- cs_maps ----
+// ---- fs_maps ----
 
 // Per D-buffer texel: (crossings along its ray, the largest crossing height over the 3×3 around
-// it, the count of its list texel, 1 where that list overflowed). Nine loads an invocation, no
-// workgroup memory: on a CPU rasteriser a barrier costs more than the loads it saves.
-@compute @workgroup_size(16, 16)
-fn cs_maps(@builtin(global_invocation_id) id: vec3<u32>) {
+// it, the count of its list texel, 1 where that list overflowed). A fragment shader over the
+// whole target rather than a compute one: lavapipe writes a colour target in tiles, where a
+// storage texture takes a store of its own per texel (11 of the 24 ms a compute pass took at
+// 1024²).
+@fragment
+fn fs_maps(f: FullscreenVertex) -> @location(0) vec4<f32> {
     let size = i32(fused.map_size);
-    let t = vec2<i32>(id.xy);
-    if any(t >= vec2<i32>(size)) {
-        return;
-    }
+    let t = vec2<i32>(f.position.xy);
     var far = 0.0;
     for (var dy = -1; dy <= 1; dy++) {
         for (var dx = -1; dx <= 1; dx++) {
@@ -378,5 +377,5 @@ fn cs_maps(@builtin(global_invocation_id) id: vec3<u32>) {
     let lt = min(vec2<u32>((vec2<f32>(t) + 0.5) / fused.map_size * fused.list_size), vec2<u32>(l - 1u));
     let count = counts[lt.y * l + lt.x];
     let overflow = count > fused.cap || fused.all_overflow != 0u;
-    textureStore(maps_out, t, vec4<f32>(crossings, far / fused.inv_far, f32(count), select(0.0, 1.0, overflow)));
+    return vec4<f32>(crossings, far / fused.inv_far, f32(count), select(0.0, 1.0, overflow));
 }

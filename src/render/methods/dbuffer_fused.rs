@@ -89,9 +89,9 @@ pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, 
 
 const SHADER: &str = "methods/dbuffer_fused.wgsl";
 
-/// What it needs of the adapter: the layers (half-float counts, float receivers, the first layer's depth), the
-/// edge lists built by compute and read back in fragment shaders (4 storage buffers a stage),
-/// the maps written as a storage texture.
+/// What it needs of the adapter: the layers (half-float counts, float receivers, the first
+/// layer's depth) and the maps drawn as float colour targets, the edge lists built by compute and
+/// read back in fragment shaders (4 storage buffers a stage).
 const NEEDS: AdapterNeeds = AdapterNeeds {
     formats: &[
         SHADOW_MAP[0],
@@ -99,13 +99,11 @@ const NEEDS: AdapterNeeds = AdapterNeeds {
         FormatNeed::new(Usage::Render, &[F::R16Float]),
         FormatNeed::new(Usage::Render, &[F::Rgba32Float]),
         FormatNeed::new(Usage::Render, &[F::R8Unorm]),
-        FormatNeed::new(Usage::Storage, &[F::Rgba32Float]),
     ],
     downlevel: D::COMPUTE_SHADERS
         .union(D::FRAGMENT_WRITABLE_STORAGE)
         .union(D::VERTEX_STORAGE),
     storage_buffers_per_stage: 4,
-    storage_textures_per_stage: 1,
     ..AdapterNeeds::NONE
 };
 

@@ -7,7 +7,7 @@
 //! 2. `fused_lists` (render): per candidate edge its proxy hull, instanced; per texel the list
 //!    test; an edge that passes is counted (`atomicAdd`) and its id stored while the count is
 //!    below the cap. Storage: `list_size`² counters and `list_size`² × cap ids (`u32`).
-//! 3. `fused_maps` (compute, `map_size`²): per D-buffer texel the caster crossings along its
+//! 3. `fused_maps` (a fragment shader over a `map_size`² target): per D-buffer texel the caster crossings along its
 //!    ray, the largest crossing height over the 3×3 around it, its list's count and whether it
 //!    overflowed (Rgba32Float): the method's light maps, and `L(c)` for the camera pass.
 //!
@@ -22,8 +22,8 @@ use super::fused_layers::{uniforms_layout, LayerTargets};
 use super::next_generation;
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, cleared, pipeline_layout, render_pipeline, shader_module, view_entry, GpuContext,
-    PipelineSpec, Texture,
+    buffer_entry, cleared, opaque, pipeline_layout, render_pipeline, shader_module, view_entry,
+    GpuContext, PipelineSpec, Texture,
 };
 
 /// Bytes of one list texel's ray (`TexelRay` of `shaders/shared/fused.wgsl`).
@@ -62,7 +62,7 @@ fn texture(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayou
 pub struct FusedListsPass {
     merge: wgpu::ComputePipeline,
     list: wgpu::RenderPipeline,
-    maps: wgpu::ComputePipeline,
+    maps: wgpu::RenderPipeline,
     uniforms_layout: wgpu::BindGroupLayout,
     merge_layout: wgpu::BindGroupLayout,
     list_layout: wgpu::BindGroupLayout,
@@ -105,19 +105,9 @@ impl FusedListsPass {
             let maps_layout = layout(
                 "FusedListsPass::maps_layout",
                 &[
-                    texture(11, S::COMPUTE),
-                    texture(12, S::COMPUTE),
-                    crate::render::storage_entry(13, S::COMPUTE, true),
-                    wgpu::BindGroupLayoutEntry {
-                        binding: 14,
-                        visibility: S::COMPUTE,
-                        ty: wgpu::BindingType::StorageTexture {
-                            access: wgpu::StorageTextureAccess::WriteOnly,
-                            format: MAPS_FORMAT,
-                            view_dimension: wgpu::TextureViewDimension::D2,
-                        },
-                        count: None,
-                    },
+                    texture(11, S::FRAGMENT),
+                    texture(12, S::FRAGMENT),
+                    crate::render::storage_entry(13, S::FRAGMENT, true),
                 ],
             );
             let merge = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -154,18 +144,24 @@ impl FusedListsPass {
                     depth: None,
                 },
             );
-            let maps = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("FusedListsPass::maps"),
-                layout: Some(&pipeline_layout(
-                    device,
-                    "FusedListsPass::maps_pipeline_layout",
-                    &[&uniforms_layout, &maps_layout],
-                )),
-                module: &module,
-                entry_point: Some("cs_maps"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
+            let maps = render_pipeline(
+                device,
+                &PipelineSpec {
+                    label: "FusedListsPass::maps",
+                    module: &module,
+                    layout: &pipeline_layout(
+                        device,
+                        "FusedListsPass::maps_pipeline_layout",
+                        &[&uniforms_layout, &maps_layout],
+                    ),
+                    vs: "vs_main",
+                    fs: Some("fs_maps"),
+                    buffers: &[],
+                    targets: &[opaque(MAPS_FORMAT)],
+                    cull: None,
+                    depth: None,
+                },
+            );
             FusedListsPass {
                 merge,
                 list,
@@ -312,7 +308,7 @@ impl FusedLists {
                 "ListTargets::maps",
                 (map_size, map_size),
                 MAPS_FORMAT,
-                U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC,
+                U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
             ),
             no_color: Texture::new(
                 device,
@@ -379,7 +375,6 @@ impl FusedLists {
                 view_entry(11, &layers.crossings.view),
                 view_entry(12, &layers.crossing_far.view),
                 buffer_entry(13, &t.counts),
-                view_entry(14, &t.maps.view),
             ],
         );
         {
@@ -415,16 +410,26 @@ impl FusedLists {
             }
         }
         let span = rec.span("fused_maps");
-        let mut p = rec
-            .encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("FusedLists::maps"),
-                timestamp_writes: span.compute_writes(rec.timer),
-            });
+        let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("FusedLists::maps"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &t.maps.view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    // The triangle covers every texel.
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: span.writes(rec.timer, true, true),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
         p.set_pipeline(&pass.maps);
         p.set_bind_group(0, &self.uniforms_group, &[]);
         p.set_bind_group(1, &maps_group, &[]);
-        let groups = map_size.div_ceil(16);
-        p.dispatch_workgroups(groups, groups, 1);
+        p.draw(0..3, 0..1);
     }
 }
