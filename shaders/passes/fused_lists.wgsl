@@ -1,7 +1,7 @@
 // dbuffer-fused's per-texel edge lists (src/render/passes/fused_lists.rs). Twin:
-// geometry::fused::FusedTwin::texel_ray_of (cs_merge), edge_in_texel (fs_list) and
+// geometry::fused::FusedTwin::texel_ray_of (fs_merge), edge_in_texel (fs_list) and
 // FusedTwin::crossings_of (fs_maps).
-//   cs_merge  per list texel, its ray and where its receivers can be, from the receivers of the
+//   fs_merge  per list texel, its ray and where its receivers can be, from the receivers of the
 //             3×3 texels around it (passes/fused_layers.wgsl): up to three patches and a deeper
 //             stretch (TexelRay);
 //   fs_list   per candidate edge its proxy (geometry::fused::proxy_hull, drawn once per texel),
@@ -17,7 +17,7 @@
 
 @group(0) @binding(0) var<uniform> fused: FusedUniforms;
 
-// cs_merge
+// fs_merge
 @group(1) @binding(0) var recv_first: texture_2d<f32>;
 @group(1) @binding(1) var recv_second: texture_2d<f32>;
 @group(1) @binding(2) var recv_last: texture_2d<f32>;
@@ -44,7 +44,7 @@ const PATCH_COS: f32 = 0.9;
 const PATCH_BULGE: f32 = 0.5;
 const BIG: f32 = 3.0e38;
 
-// ---- cs_merge ----
+// ---- fs_merge ----
 
 // One ray's receivers (geometry::fused::ReceiverLayers): first, second, last as (point, normal),
 // and the last on a caster (or the second where there is none).
@@ -124,8 +124,8 @@ fn absorb(m: ptr<function, Merge>, q: vec3<f32>, nq: vec3<f32>) {
     }
 }
 
-@compute @workgroup_size(8, 8)
-fn cs_merge(@builtin(global_invocation_id) id: vec3<u32>) {
+// The merge of list texel `id` into rays_out.
+fn merge_texel(id: vec2<u32>) {
     let size = i32(fused.list_size);
     if i32(id.x) >= size || i32(id.y) >= size {
         return;
@@ -210,6 +210,14 @@ fn cs_merge(@builtin(global_invocation_id) id: vec3<u32>) {
         f32(m.patches)
     );
     rays_out[index] = ray;
+}
+
+// A fragment shader over the list grid (no colour written; the rays go to rays_out), so that a
+// scissor keeps it to the texels a proxy can cover: no other texel's ray is read.
+@fragment
+fn fs_merge(f: FullscreenVertex) -> @location(0) vec4<f32> {
+    merge_texel(vec2<u32>(f.position.xy));
+    return vec4<f32>(0.0);
 }
 
 // ---- fs_list ----

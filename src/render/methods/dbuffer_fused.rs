@@ -36,6 +36,7 @@ use crate::budget::{bytes, MAX_FUSED_EDGES, MAX_FUSED_LIST_BYTES};
 use crate::geometry::fused::{
     candidate_edges, proxy_hull, DiskMask, FusedEdge, MaskEval, DEFAULT_CAP, DEFAULT_SAMPLES,
 };
+use crate::geometry::volume_vertices::{light_view_rect, union_all};
 use crate::geometry::SceneGeometry;
 use crate::render::passes::fused_layers::{FusedLayers, FusedSizes, FusedUniforms};
 use crate::render::passes::fused_lists::{
@@ -152,6 +153,9 @@ struct Edges {
     h_max: f32,
     /// More candidates than the budget or the adapter holds: every list overflows.
     over_budget: bool,
+    /// The part of the light view (`[0, 1]²`, y down) that the casters and the proxies cover:
+    /// outside it no texel has a crossing or a list.
+    rect: [f32; 4],
     buffers: EdgeBuffers,
 }
 
@@ -315,6 +319,24 @@ fn update_edges(
             })
             .unzip()
     };
+    let rect = if over_budget {
+        // Every texel's overflow flag is set.
+        [0.0, 0.0, 1.0, 1.0]
+    } else {
+        let casters = inputs
+            .scene
+            .casters()
+            .flat_map(|o| o.mesh.positions.iter().copied())
+            .filter(|p| p.is_finite());
+        let proxies = hulls.iter().flatten().map(|&[x, y]| {
+            let [x, y] = [x.clamp(-1.0, 1.0), y.clamp(-1.0, 1.0)];
+            [x * 0.5 + 0.5, 0.5 - y * 0.5]
+        });
+        let proxies = proxies.fold([1.0f32, 1.0, 0.0, 0.0], |r, [u, v]| {
+            [r[0].min(u), r[1].min(v), r[2].max(u), r[3].max(v)]
+        });
+        union_all(&[light_view_rect(inputs.light_view, casters), proxies])
+    };
     *slot = Some(Edges {
         revision: inputs.revision,
         list_size,
@@ -322,6 +344,7 @@ fn update_edges(
         count: edges.len(),
         h_max,
         over_budget,
+        rect,
         buffers: EdgeBuffers::new(&inputs.ctx.device, &records, &hulls),
     });
     Some(t.elapsed().as_secs_f64() * 1e3)
@@ -406,7 +429,7 @@ impl MethodState for DBufferFused {
                 "dbuffer-fused's layers were not made",
             )?;
             self.lists
-                .record(inputs.ctx, rec, layers, &edges.buffers, cap);
+                .record(inputs.ctx, rec, layers, &edges.buffers, cap, edges.rect);
             self.made_for = Some(key);
             self.view_proj = inputs.light_view.view_projection();
         }

@@ -2,14 +2,21 @@
 //! (`passes::fused_layers`), once per light or caster move. CPU twin: `geometry::fused`
 //! (`FusedTwin::texel_ray_of`, `edge_in_texel`, `proxy_hull`, `FusedTwin::crossings_of`).
 //!
-//! 1. `fused_merge` (compute, `list_size`²): per list texel its ray and where its receivers can
-//!    be, from the 3×3 texels around it: [`TEXEL_RAY_BYTES`] each.
+//! 1. `fused_merge` (a fragment shader over the list grid, scissored to what the proxies can
+//!    cover): per list texel its ray and where its receivers can be, from the 3×3 texels around
+//!    it: [`TEXEL_RAY_BYTES`] each.
 //! 2. `fused_lists` (render): per candidate edge its proxy hull, instanced; per texel the list
 //!    test; an edge that passes is counted (`atomicAdd`) and its id stored while the count is
 //!    below the cap. Storage: `list_size`² counters and `list_size`² × cap ids (`u32`).
-//! 3. `fused_maps` (a fragment shader over a `map_size`² target): per D-buffer texel the caster crossings along its
-//!    ray, the largest crossing height over the 3×3 around it, its list's count and whether it
-//!    overflowed (Rgba32Float): the method's light maps, and `L(c)` for the camera pass.
+//! 3. `fused_maps` (a fragment shader over the `map_size`² target): per D-buffer texel the
+//!    caster crossings along its ray, the largest crossing height over the 3×3 around it, its
+//!    list's count and whether it overflowed (Rgba32Float): the method's light maps, and `L(c)`
+//!    for the camera pass. Outside the casters and the proxies every texel is 0, so only their
+//!    rectangle and the last one are drawn again.
+//!
+//! Both whole-grid passes are kept to the light view's rectangle that the casters and the
+//! proxies cover (about half of the view on Table 1 and the fusion scenes, whose light view is
+//! fitted to the casters' penumbrae).
 //!
 //! **Overflow rule.** Every edge that passes is counted; a list whose count exceeds the cap is
 //! not used at all (the camera pass gives that pixel the paper's `dbuffer` V), whichever ids the
@@ -19,7 +26,7 @@
 use std::sync::Arc;
 
 use super::fused_layers::{uniforms_layout, LayerTargets};
-use super::next_generation;
+use super::{bounding, next_generation, scissor};
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, cleared, opaque, pipeline_layout, render_pipeline, shader_module, view_entry,
@@ -60,7 +67,7 @@ fn texture(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayou
 
 /// The pipelines, built once per device.
 pub struct FusedListsPass {
-    merge: wgpu::ComputePipeline,
+    merge: wgpu::RenderPipeline,
     list: wgpu::RenderPipeline,
     maps: wgpu::RenderPipeline,
     uniforms_layout: wgpu::BindGroupLayout,
@@ -84,12 +91,12 @@ impl FusedListsPass {
             let merge_layout = layout(
                 "FusedListsPass::merge_layout",
                 &[
-                    texture(0, S::COMPUTE),
-                    texture(1, S::COMPUTE),
-                    texture(2, S::COMPUTE),
-                    texture(3, S::COMPUTE),
-                    texture(4, S::COMPUTE),
-                    crate::render::storage_entry(5, S::COMPUTE, false),
+                    texture(0, S::FRAGMENT),
+                    texture(1, S::FRAGMENT),
+                    texture(2, S::FRAGMENT),
+                    texture(3, S::FRAGMENT),
+                    texture(4, S::FRAGMENT),
+                    crate::render::storage_entry(5, S::FRAGMENT, false),
                 ],
             );
             let list_layout = layout(
@@ -110,18 +117,29 @@ impl FusedListsPass {
                     crate::render::storage_entry(13, S::FRAGMENT, true),
                 ],
             );
-            let merge = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("FusedListsPass::merge"),
-                layout: Some(&pipeline_layout(
-                    device,
-                    "FusedListsPass::merge_pipeline_layout",
-                    &[&uniforms_layout, &merge_layout],
-                )),
-                module: &module,
-                entry_point: Some("cs_merge"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
+            let no_color = [Some(wgpu::ColorTargetState {
+                format: NO_COLOR_FORMAT,
+                blend: None,
+                write_mask: wgpu::ColorWrites::empty(),
+            })];
+            let merge = render_pipeline(
+                device,
+                &PipelineSpec {
+                    label: "FusedListsPass::merge",
+                    module: &module,
+                    layout: &pipeline_layout(
+                        device,
+                        "FusedListsPass::merge_pipeline_layout",
+                        &[&uniforms_layout, &merge_layout],
+                    ),
+                    vs: "vs_main",
+                    fs: Some("fs_merge"),
+                    buffers: &[],
+                    targets: &no_color,
+                    cull: None,
+                    depth: None,
+                },
+            );
             let list = render_pipeline(
                 device,
                 &PipelineSpec {
@@ -135,11 +153,7 @@ impl FusedListsPass {
                     vs: "vs_proxy",
                     fs: Some("fs_list"),
                     buffers: &[],
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: NO_COLOR_FORMAT,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::empty(),
-                    })],
+                    targets: &no_color,
                     cull: None,
                     depth: None,
                 },
@@ -231,6 +245,8 @@ pub struct ListTargets {
     pub lists: wgpu::Buffer,
     /// Per D-buffer texel: crossings, farthest crossing height, list count, overflow.
     pub maps: Texture,
+    /// The maps' texels drawn last, outside of which every texel is 0 (none yet: all of it).
+    maps_drawn: Option<[u32; 4]>,
     no_color: Texture,
     pub generation: u64,
 }
@@ -310,6 +326,7 @@ impl FusedLists {
                 MAPS_FORMAT,
                 U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC,
             ),
+            maps_drawn: None,
             no_color: Texture::new(
                 device,
                 "ListTargets::no_color",
@@ -323,6 +340,9 @@ impl FusedLists {
 
     /// Record the merge, the lists of `edges` and the maps from `layers` (drawn for the same
     /// light, sizes and uniforms just before), with `cap` ids per list.
+    /// `rect`: the part of the light view (`[0, 1]²`, y down) that the casters and the edges'
+    /// proxies cover.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
         ctx: &GpuContext,
@@ -330,12 +350,32 @@ impl FusedLists {
         layers: &LayerTargets,
         edges: &EdgeBuffers,
         cap: u32,
+        rect: [f32; 4],
     ) {
         let (map_size, list_size) = (layers.map_size, layers.list_size);
         self.ensure_targets(&ctx.device, map_size, list_size, cap);
-        let Some(t) = self.targets.as_ref() else {
+        let Some(t) = self.targets.as_mut() else {
             return;
         };
+        // The maps: this rectangle grown by a list texel (a list texel partly inside it has
+        // D-buffer texels outside), and the last one, which may hold values this frame has not.
+        let grow = 1.0 / list_size.max(1) as f32;
+        let maps_now = scissor(
+            [
+                rect[0] - grow,
+                rect[1] - grow,
+                rect[2] + grow,
+                rect[3] + grow,
+            ],
+            map_size,
+        );
+        let maps_rect = bounding(
+            t.maps_drawn
+                .replace(maps_now)
+                .unwrap_or([0, 0, map_size, map_size]),
+            maps_now,
+        );
+        let t = &*t;
         let device = &ctx.device;
         let pass = &self.pass;
         let group = |label, layout, entries: &[wgpu::BindGroupEntry<'_>]| {
@@ -379,17 +419,23 @@ impl FusedLists {
         );
         {
             let span = rec.span("fused_merge");
-            let mut p = rec
-                .encoder
-                .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("FusedLists::merge"),
-                    timestamp_writes: span.compute_writes(rec.timer),
-                });
-            p.set_pipeline(&pass.merge);
-            p.set_bind_group(0, &self.uniforms_group, &[]);
-            p.set_bind_group(1, &merge_group, &[]);
-            let groups = list_size.div_ceil(8);
-            p.dispatch_workgroups(groups, groups, 1);
+            let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("FusedLists::merge"),
+                color_attachments: &[cleared(&t.no_color.view, wgpu::Color::TRANSPARENT)],
+                depth_stencil_attachment: None,
+                timestamp_writes: span.writes(rec.timer, true, true),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            // Only the texels a proxy can cover: the list pass reads no other ray.
+            let [x0, y0, x1, y1] = scissor(rect, list_size);
+            if x0 < x1 && y0 < y1 {
+                p.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
+                p.set_pipeline(&pass.merge);
+                p.set_bind_group(0, &self.uniforms_group, &[]);
+                p.set_bind_group(1, &merge_group, &[]);
+                p.draw(0..3, 0..1);
+            }
         }
         rec.encoder.clear_buffer(&t.counts, 0, None);
         {
@@ -417,7 +463,7 @@ impl FusedLists {
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
-                    // The triangle covers every texel.
+                    // Outside the rectangle drawn the texels hold 0 already.
                     load: wgpu::LoadOp::Load,
                     store: wgpu::StoreOp::Store,
                 },
@@ -427,9 +473,13 @@ impl FusedLists {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        p.set_pipeline(&pass.maps);
-        p.set_bind_group(0, &self.uniforms_group, &[]);
-        p.set_bind_group(1, &maps_group, &[]);
-        p.draw(0..3, 0..1);
+        let [x0, y0, x1, y1] = maps_rect;
+        if x0 < x1 && y0 < y1 {
+            p.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
+            p.set_pipeline(&pass.maps);
+            p.set_bind_group(0, &self.uniforms_group, &[]);
+            p.set_bind_group(1, &maps_group, &[]);
+            p.draw(0..3, 0..1);
+        }
     }
 }

@@ -100,3 +100,47 @@ pub fn next_generation() -> u64 {
     static NEXT: AtomicU64 = AtomicU64::new(1);
     NEXT.fetch_add(1, Ordering::Relaxed)
 }
+
+/// The bounding box of two texel rectangles `[x0, y0, x1, y1]` (an empty one adds nothing).
+pub fn bounding(a: [u32; 4], b: [u32; 4]) -> [u32; 4] {
+    let empty = |r: [u32; 4]| r[0] >= r[2] || r[1] >= r[3];
+    match (empty(a), empty(b)) {
+        (true, _) => b,
+        (_, true) => a,
+        _ => [
+            a[0].min(b[0]),
+            a[1].min(b[1]),
+            a[2].max(b[2]),
+            a[3].max(b[3]),
+        ],
+    }
+}
+
+/// A rectangle of `[0, 1]²` (y down, as `geometry::volume_vertices::light_view_rect` makes
+/// them) as whole texels `[x0, y0, x1, y1]` of a `size`² target, one texel of margin; empty
+/// (`x0 == x1`) for an empty rectangle.
+pub fn scissor(rect: [f32; 4], size: u32) -> [u32; 4] {
+    if !(rect[0] < rect[2] && rect[1] < rect[3]) {
+        return [0; 4];
+    }
+    let n = size as f32;
+    let lo = |v: f32| ((v * n).floor() - 1.0).clamp(0.0, n) as u32;
+    let hi = |v: f32| ((v * n).ceil() + 1.0).clamp(0.0, n) as u32;
+    [lo(rect[0]), lo(rect[1]), hi(rect[2]), hi(rect[3])]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scissor_covers_the_rect_with_a_margin_and_stays_inside() {
+        assert_eq!(scissor([0.0, 0.0, 1.0, 1.0], 100), [0, 0, 100, 100]);
+        assert_eq!(scissor([0.25, 0.5, 0.5, 0.75], 100), [24, 49, 51, 76]);
+        assert_eq!(scissor([0.5, 0.5, 0.5, 0.9], 100), [0; 4], "empty");
+        let r = scissor([0.999, 0.999, 1.0, 1.0], 10);
+        assert!(r[0] < r[2] && r[1] < r[3] && r[2] <= 10 && r[3] <= 10);
+        assert_eq!(bounding([0; 4], [1, 2, 3, 4]), [1, 2, 3, 4]);
+        assert_eq!(bounding([0, 5, 2, 6], [1, 2, 3, 4]), [0, 2, 3, 6]);
+    }
+}
