@@ -5,8 +5,9 @@
 // disk are one convex caster's; exact from the parts of the disk where at most two chords cut
 // it, each a whole circular segment; else the layers between x and each of 128 disk samples
 // added up from the centre (bit-sliced 5-bit counters, a second walk over the list): exact where
-// that shows the disk one layer deep, the lit fraction of the samples otherwise. An overflowing
-// list gets the paper's V. Its CPU twin is FusedTwin::sample (src/geometry/fused/twin.rs) with
+// that shows the disk one layer deep, the lit fraction of the samples otherwise. A pixel whose
+// list overflowed walks every candidate edge instead (the same V as a list long enough, at more
+// cost) where there are at most WHOLE_WALK_EDGES of them; else it gets the paper's V. Its CPU twin is FusedTwin::sample (src/geometry/fused/twin.rs) with
 // MaskEval::Lut, function by function.
 //
 // A CPU rasteriser runs a SIMD group of pixels through both sides of every branch, but leaves a
@@ -37,6 +38,8 @@ const ANCHOR_SAMPLES: u32 = 3u;
 const ANCHOR_SHARE: f32 = 0.01953125;
 const CONVEX_SLACK: f32 = 1e-3;
 const PI: f32 = 3.14159265358979;
+// geometry::fused::WHOLE_WALK_EDGES: the most candidate edges a pixel whose list overflowed walks.
+const WHOLE_WALK_EDGES: u32 = 4096u;
 
 // The paper's V at the pixel: methods/dbuffer.wgsl's lookup (tests/gpu/render_fused.rs holds the
 // overflowing pixels to the paper's V).
@@ -430,8 +433,9 @@ fn mask_result(counter: Counter, k: Centre, layers: i32, integral: f32) -> vec2<
 
 // V over a non-empty list of `count` edges starting at `first` (FusedTwin::sample): one walk
 // over the list for L(c), the chords' exact areas and what decides the path, then the closed
-// forms or the mask.
-fn listed_visibility(x: vec3<f32>, l: LightLookup, first: u32, count: u32, start: Centre) -> f32 {
+// forms or the mask. `every`: the list overflowed, and the walk is over every candidate edge
+// (ids 0 .. count) instead.
+fn listed_visibility(x: vec3<f32>, l: LightLookup, first: u32, count: u32, every: bool, start: Centre) -> f32 {
     var k = start;
     let c = fused.center;
     // L(c) for a receiver beyond every caster crossing of its ray (CasterCrossings::layers_at):
@@ -464,7 +468,7 @@ fn listed_visibility(x: vec3<f32>, l: LightLookup, first: u32, count: u32, start
             if i >= count {
                 break;
             }
-            e = edges[lists[first + i]];
+            e = edges[select(lists[first + min(i, fused.cap - 1u)], i, every)];
             i++;
             count_work(1.0);
             // L(c): the sweep from the texel's ray to x passes the plane through c and an
@@ -557,18 +561,21 @@ fn fused_first(x: vec3<f32>, n: vec3<f32>) -> First {
     out.listed = false;
     let live = l.inside && !dark;
     let count = counts[list_of(l)];
-    let overflow = count > fused.cap || fused.all_overflow != 0u;
+    // More candidate edges than the budget (none is on the GPU), or a list over the cap with more
+    // candidates than a pixel walks: the paper's V.
+    let overflow = fused.all_overflow != 0u || (count > fused.cap && fused.edge_count > WHOLE_WALK_EDGES);
     if live && overflow {
         // With the receiver's horizon, as dbuffer's default (its fans' chords: no corners).
         out.vis = paper_visibility(l, hidden);
-        took_path(4.0);
+        took_path(7.0);
         let horizon = horizon_fraction(x, n);
         if horizon < out.vis.v {
             out.vis = plain(horizon);
         }
     }
     if live && !overflow {
-        // An empty list: no chord crosses the disk, all of it is as the centre is.
+        // An empty list: no chord crosses the disk, all of it is as the centre is. A list over
+        // the cap is walked too, over every candidate edge.
         let k = centre_of(x, l, hidden);
         out.vis = plain(select(1.0, 0.0, select(hidden, k.count > 0, k.known)));
         took_path(1.0);
@@ -582,8 +589,14 @@ fn fused_listed(x: vec3<f32>, n: vec3<f32>) -> Visibility {
     let l = light_lookup(x, n);
     let hidden = hidden_from_center(l);
     let list = list_of(l);
+    let count = counts[list];
+    let whole = count > fused.cap;
     took_path(1.0);
-    return plain(listed_visibility(x, l, list * fused.cap, counts[list], centre_of(x, l, hidden)));
+    let v = listed_visibility(x, l, list * fused.cap, select(count, fused.edge_count, whole), whole, centre_of(x, l, hidden));
+    if whole {
+        took_path(4.0);
+    }
+    return plain(v);
 }
 
 // The method in one draw (what fs_main of shared/camera.wgsl calls).

@@ -14,7 +14,7 @@
 //!   `PROPTEST_CASES=1000` found 3 of 650 185, on interpenetrating tori.)
 //! - **the bounded twin** (texel lists, cap, 128-sample mask, the light pass's counts): penumbra
 //!   MAE at most 0.03 in every case with 20 penumbra receivers or more (not counting those whose
-//!   list overflowed: they get the paper's V); over all cases, overflow included, at most 0.015
+//!   list overflowed: they walk every candidate edge); over all cases, overflow included, at most 0.015
 //!   with a 99th percentile of |ΔV| at most 0.08, and at most 3 % of the penumbra receivers on an
 //!   overflowing list. (Small casters with many edges under a large light overflow: every edge of
 //!   their silhouette seen from the ground is a chord of the disk.)

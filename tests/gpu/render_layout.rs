@@ -262,6 +262,19 @@ fn codes_match_their_wgsl() {
             dbuffer::geometry::wedges::SLAB_EPS as f32 as f64,
         )],
     );
+    // dbuffer-fused's twin and camera pass: the anchor, the convex path's slack, and how many
+    // candidate edges a pixel whose list overflowed walks.
+    use dbuffer::geometry::fused;
+    wgsl_layout::assert_consts(
+        &source("methods/dbuffer_fused.wgsl"),
+        "methods/dbuffer_fused.wgsl",
+        &[
+            ("ANCHOR_SAMPLES", fused::ANCHOR_SAMPLES as f64),
+            ("ANCHOR_SHARE", fused::ANCHOR_SHARE as f32 as f64),
+            ("CONVEX_SLACK", fused::CONVEX_SLACK as f32 as f64),
+            ("WHOLE_WALK_EDGES", fused::WHOLE_WALK_EDGES as f64),
+        ],
+    );
     let camera = source("methods/hard.wgsl");
     // VT_VARIANT is a pipeline constant (render::passes::camera::CameraPass::method_pipeline
     // sets it to VtVariant::code()); the branches of v_of_t compare it with these.

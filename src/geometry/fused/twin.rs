@@ -8,6 +8,7 @@ use super::lists::{edge_in_texel, CasterCrossings, Patch, TexelList, TexelRay};
 use super::mask::{mask_details, mask_visibility, CentreLayers, DiskMask, MaskEval, MaskResult};
 use super::{
     DEFAULT_CAP, DEFAULT_LIST_SIZE, DEFAULT_SAMPLES, PATCH_BULGE, PATCH_COS, PATCH_TEXELS,
+    WHOLE_WALK_EDGES,
 };
 use crate::geometry::bvh::Bvh;
 use crate::geometry::light_view::LightView;
@@ -54,7 +55,8 @@ pub enum FusedPath {
     Outside,
     /// The texel's list is empty: no chord crosses the disk, V is 1 or 0 as the centre is seen.
     Uniform,
-    /// The texel's list overflowed: the paper's V(t).
+    /// The texel's list overflowed: V over every candidate edge, as over a list long enough
+    /// (the paper's V(t) where there are more than [`WHOLE_WALK_EDGES`]).
     Overflow,
     /// The mask over the texel's list.
     Mask,
@@ -495,14 +497,22 @@ impl FusedTwin {
             return FusedSample { v: 1.0, ..outside };
         };
         let list = self.texel_list(list_texel);
-        if list.overflow {
+        if list.overflow && self.edges.len() > WHOLE_WALK_EDGES {
             return FusedSample {
                 path: FusedPath::Overflow,
                 list_count: list.count,
                 ..outside
             };
         }
-        let edges = || list.edges.iter().map(|&k| &self.edges[k as usize]);
+        // An overflowing list is not used: every candidate edge is walked instead (a superset
+        // of any list, so V is what a list long enough gives).
+        let all: Vec<u32> = if list.overflow {
+            (0..self.edges.len() as u32).collect()
+        } else {
+            Vec::new()
+        };
+        let ids = if list.overflow { &all } else { &list.edges };
+        let edges = || ids.iter().map(|&k| &self.edges[k as usize]);
         let centre = match self.crossings_of(texel).layers_at(x, edges(), &self.light) {
             Some(k) => CentreLayers::Known(k),
             None => CentreLayers::Hidden(dbuffer.hidden),
@@ -522,7 +532,11 @@ impl FusedTwin {
         let m = mask_visibility(edges(), x, centre, &self.light, &self.mask);
         FusedSample {
             v: m.v(),
-            path: FusedPath::Mask,
+            path: if list.overflow {
+                FusedPath::Overflow
+            } else {
+                FusedPath::Mask
+            },
             dbuffer,
             mask: Some(m),
             list_count: list.count,

@@ -10,14 +10,16 @@
 //! `shaders/methods/dbuffer_fused.wgsl`.
 //!
 //! **Knobs.** `--list-size` (texels per side of the list grid, default 256), `--list-cap` (edge
-//! ids one list stores, default 128), `--mask-samples` (disk samples of the mask, default and
+//! ids one list stores, default 256), `--mask-samples` (disk samples of the mask, default and
 //! at most 128). The lists take `list-size² × (list-cap + 1) × 4` bytes: at most
 //! [`MAX_FUSED_LIST_BYTES`] and the adapter's largest storage binding, else the frame is refused
 //! naming both flags.
 //!
-//! **Overflow rule.** A list texel whose edges outnumber the cap is not used: its pixels get the
-//! paper's V(t). So do all pixels when the candidate edges exceed [`MAX_FUSED_EDGES`] (or what
-//! the adapter's storage bindings hold).
+//! **Overflow rule.** A list texel whose edges outnumber the cap is not used: its pixels walk
+//! every candidate edge instead, which gives the V a list long enough would (small casters of
+//! many edges under a large light overflow, and have few candidates in all), where there are at
+//! most [`WHOLE_WALK_EDGES`](crate::geometry::fused::WHOLE_WALK_EDGES); with more they get the paper's V(t). So do all pixels when the
+//! candidate edges exceed [`MAX_FUSED_EDGES`] (or what the adapter's storage bindings hold).
 
 use super::Cost;
 use wgpu::DownlevelFlags as D;
@@ -58,7 +60,7 @@ pub static LIST_SIZE: Knob = Knob::int(
 /// Edge ids one list holds.
 pub static LIST_CAP: Knob = Knob::int(
     "list-cap",
-    "dbuffer-fused: edges one list holds (a longer list falls back to dbuffer's V)",
+    "dbuffer-fused: edges one list holds (a longer one is not used: its pixels walk every candidate edge)",
     1..=1024,
     DEFAULT_CAP as u32,
 );
@@ -82,9 +84,10 @@ pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, 
     "no chord cuts the light",
     "one convex caster: exact V",
     "mask: the samples' count",
-    "list overflowed: the paper's V",
+    "list overflowed: every candidate edge",
     "one or two chords: exact V",
     "mask, one layer deep: exact V",
+    "too many candidate edges: the paper's V",
 ]))
 .lights(super::AREA_LIGHTS); // its chords cut a disk or a convex polygon
 
