@@ -222,9 +222,17 @@ fn fs_merge(f: FullscreenVertex) -> @location(0) vec4<f32> {
 
 // ---- fs_list ----
 
+// What the list test reads of the edge, the same for every fragment of its proxy: handed down
+// flat from the vertex stage rather than loaded by every fragment (a sixth off the pass).
 struct ProxyOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) @interpolate(flat) edge: u32,
+    @location(1) @interpolate(flat) a: vec4<f32>,
+    @location(2) @interpolate(flat) b: vec4<f32>,
+    @location(3) @interpolate(flat) n0: vec4<f32>,
+    @location(4) @interpolate(flat) n1: vec4<f32>,
+    // The ends' heights and the face planes at the light centre: (ha, hb, f0, f1).
+    @location(5) @interpolate(flat) at_c: vec4<f32>,
 };
 
 // 14 triangles per edge: a fan over its hull's 16 corners (those past the last corner repeat it,
@@ -237,6 +245,18 @@ fn vs_proxy(@builtin(vertex_index) v: u32, @builtin(instance_index) e: u32) -> P
     var out: ProxyOut;
     out.clip = vec4<f32>(hulls[e][min(corner, 15u)], 0.5, 1.0);
     out.edge = e;
+    let edge = edges[e];
+    out.a = edge.a;
+    out.b = edge.b;
+    out.n0 = edge.n0;
+    out.n1 = edge.n1;
+    let c = fused.center;
+    out.at_c = vec4<f32>(
+        fused_height(fused, edge.a.xyz),
+        fused_height(fused, edge.b.xyz),
+        dot(edge.n0.xyz, c) - edge.n0.w,
+        dot(edge.n1.xyz, c) - edge.n1.w
+    );
     return out;
 }
 
@@ -262,8 +282,9 @@ fn distance_to_segment(a: vec2<f32>, b: vec2<f32>) -> f32 {
     return length(a + d * t);
 }
 
-// The list test (geometry::fused::edge_in_texel) for the edge and the ray of list texel `texel`.
-fn edge_in_texel(e: FusedEdge, texel: u32) -> bool {
+// The list test (geometry::fused::edge_in_texel) for the proxy's edge and the ray of list texel
+// `texel`.
+fn edge_in_texel(e: ProxyOut, texel: u32) -> bool {
     let c = fused.center;
     let dir = rays[texel].dir.xyz;
     let span = rays[texel].span;
@@ -275,8 +296,8 @@ fn edge_in_texel(e: FusedEdge, texel: u32) -> bool {
     let y = c + dir * far;
     let hy = far * along;
     let limit = hy * (1.0 - FUSED_CLIP);
-    let ha = fused_height(fused, e.a.xyz);
-    let hb = fused_height(fused, e.b.xyz);
+    let ha = e.at_c.x;
+    let hb = e.at_c.y;
     var pa = e.a.xyz;
     var pb = e.b.xyz;
     var qa = ha;
@@ -311,9 +332,9 @@ fn edge_in_texel(e: FusedEdge, texel: u32) -> bool {
     }
     let t_edge = min(ha, hb) / along;
     let tol = FUSED_FACING_TOL * (1.0 + fused_max_abs(y) + fused_max_abs(e.a.xyz));
-    let f0 = dot(e.n0.xyz, c) - e.n0.w;
+    let f0 = e.at_c.z;
     let g0 = dot(e.n0.xyz, dir);
-    let f1 = dot(e.n1.xyz, c) - e.n1.w;
+    let f1 = e.at_c.w;
     let g1 = dot(e.n1.xyz, dir);
     let s = fused.half_slope;
     let sil0 = meet(positive_on(f0 + tol, g0 + s), positive_on(tol - f1, s - g1));
@@ -353,7 +374,7 @@ fn fs_list(f: ProxyOut) -> @location(0) vec4<f32> {
     let size = u32(fused.list_size);
     let t = vec2<u32>(f.clip.xy);
     let texel = min(t.y, size - 1u) * size + min(t.x, size - 1u);
-    if rays[texel].dir.w > 0.0 && edge_in_texel(edges[f.edge], texel) {
+    if rays[texel].dir.w > 0.0 && edge_in_texel(f, texel) {
         let k = atomicAdd(&list_counts[texel], 1u);
         if k < fused.cap {
             lists[texel * fused.cap + k] = f.edge;

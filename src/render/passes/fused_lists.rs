@@ -103,7 +103,7 @@ impl FusedListsPass {
                 "FusedListsPass::list_layout",
                 &[
                     crate::render::storage_entry(6, S::FRAGMENT, true),
-                    crate::render::storage_entry(7, S::FRAGMENT, true),
+                    crate::render::storage_entry(7, S::VERTEX, true),
                     crate::render::storage_entry(8, S::VERTEX, true),
                     crate::render::storage_entry(9, S::FRAGMENT, false),
                     crate::render::storage_entry(10, S::FRAGMENT, false),
