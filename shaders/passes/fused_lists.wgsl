@@ -135,17 +135,22 @@ fn merge_texel(id: vec2<u32>) {
     var ray: TexelRay;
     ray.dir = vec4<f32>(0.0);
     ray.span = vec4<f32>(1.0, 0.0, 0.0, 0.0);
-    // The centre ray's receivers, or the first of the 3×3 (rows, then columns) that has any.
-    var centre = tc;
-    var centre_count = receivers_at(tc);
+    // The receivers of the 3×3 (rows, then columns; none outside the grid), each loaded once.
+    var around: array<u32, 9>;
     for (var k = 0; k < 9; k++) {
         let t = tc + vec2<i32>(k % 3 - 1, k / 3 - 1);
-        if centre_count == 0u && all(t >= vec2<i32>(0)) && all(t < vec2<i32>(size)) {
-            let n = receivers_at(t);
-            if n > 0u {
-                centre = t;
-                centre_count = n;
-            }
+        around[k] = 0u;
+        if all(t >= vec2<i32>(0)) && all(t < vec2<i32>(size)) {
+            around[k] = receivers_at(t);
+        }
+    }
+    // The centre ray's receivers, or the first of the 3×3 that has any.
+    var centre = tc;
+    var centre_count = around[4];
+    for (var k = 0; k < 9; k++) {
+        if centre_count == 0u && around[k] > 0u {
+            centre = tc + vec2<i32>(k % 3 - 1, k / 3 - 1);
+            centre_count = around[k];
         }
     }
     let w = fused_texel_dir(fused, vec2<f32>(tc), fused.list_size);
@@ -156,11 +161,7 @@ fn merge_texel(id: vec2<u32>) {
     }
     var counts_differ = false;
     for (var k = 0; k < 9; k++) {
-        let t = tc + vec2<i32>(k % 3 - 1, k / 3 - 1);
-        if all(t >= vec2<i32>(0)) && all(t < vec2<i32>(size)) {
-            let n = receivers_at(t);
-            counts_differ = counts_differ || (n > 0u && n != centre_count);
-        }
+        counts_differ = counts_differ || (around[k] > 0u && around[k] != centre_count);
     }
     // Patches on the centre ray's first, second and last receivers (as many as it has).
     let c = layers_at(centre, centre_count);
@@ -182,15 +183,11 @@ fn merge_texel(id: vec2<u32>) {
     m.p[2] = vec4<f32>(c.p2, b2);
     m.n[2] = vec4<f32>(c.n2, b2 * PATCH_BULGE);
     for (var k = 0; k < 9; k++) {
-        let t = tc + vec2<i32>(k % 3 - 1, k / 3 - 1);
-        if any(t < vec2<i32>(0)) || any(t >= vec2<i32>(size)) {
-            continue;
-        }
-        let n = receivers_at(t);
+        let n = around[k];
         if n == 0u {
             continue;
         }
-        let l = layers_at(t, n);
+        let l = layers_at(tc + vec2<i32>(k % 3 - 1, k / 3 - 1), n);
         if n > 3u || (counts_differ && n > 1u) {
             m.lo = min(m.lo, fused_height(fused, l.p1) - reach(l.p1, l.n1, w));
             m.hi = max(m.hi, fused_height(fused, l.pc) + reach(l.pc, l.nc, w));
