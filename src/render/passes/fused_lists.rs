@@ -233,6 +233,41 @@ impl EdgeBuffers {
     }
 }
 
+/// The full-screen triangle of `pipeline` with bind groups 0 and 1, inside texel rectangle `r`
+/// `[x0, y0, x1, y1]` (nothing where it is empty).
+fn full_screen_in(
+    p: &mut wgpu::RenderPass<'_>,
+    r: [u32; 4],
+    pipeline: &wgpu::RenderPipeline,
+    groups: [&wgpu::BindGroup; 2],
+) {
+    let [x0, y0, x1, y1] = r;
+    if x0 < x1 && y0 < y1 {
+        p.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
+        p.set_pipeline(pipeline);
+        p.set_bind_group(0, groups[0], &[]);
+        p.set_bind_group(1, groups[1], &[]);
+        p.draw(0..3, 0..1);
+    }
+}
+
+/// A render pass over one colour target and no depth, timed as `span` (its label).
+fn timed_pass<'e>(
+    rec: &'e mut Recorder<'_>,
+    span: &'static str,
+    color: Option<wgpu::RenderPassColorAttachment<'e>>,
+) -> wgpu::RenderPass<'e> {
+    let timer = rec.span(span);
+    rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(span),
+        color_attachments: &[color],
+        depth_stencil_attachment: None,
+        timestamp_writes: timer.writes(rec.timer, true, true),
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
 /// The lists' storage and the maps, for one (map size, list size, cap).
 pub struct ListTargets {
     pub map_size: u32,
@@ -417,37 +452,16 @@ impl FusedLists {
                 buffer_entry(13, &t.counts),
             ],
         );
+        let no_color = || cleared(&t.no_color.view, wgpu::Color::TRANSPARENT);
         {
-            let span = rec.span("fused_merge");
-            let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("FusedLists::merge"),
-                color_attachments: &[cleared(&t.no_color.view, wgpu::Color::TRANSPARENT)],
-                depth_stencil_attachment: None,
-                timestamp_writes: span.writes(rec.timer, true, true),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut p = timed_pass(rec, "fused_merge", no_color());
             // Only the texels a proxy can cover: the list pass reads no other ray.
-            let [x0, y0, x1, y1] = scissor(rect, list_size);
-            if x0 < x1 && y0 < y1 {
-                p.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
-                p.set_pipeline(&pass.merge);
-                p.set_bind_group(0, &self.uniforms_group, &[]);
-                p.set_bind_group(1, &merge_group, &[]);
-                p.draw(0..3, 0..1);
-            }
+            let groups = [&self.uniforms_group, &merge_group];
+            full_screen_in(&mut p, scissor(rect, list_size), &pass.merge, groups);
         }
         rec.encoder.clear_buffer(&t.counts, 0, None);
         {
-            let span = rec.span("fused_lists");
-            let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("FusedLists::lists"),
-                color_attachments: &[cleared(&t.no_color.view, wgpu::Color::TRANSPARENT)],
-                depth_stencil_attachment: None,
-                timestamp_writes: span.writes(rec.timer, true, true),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut p = timed_pass(rec, "fused_lists", no_color());
             if edges.count > 0 {
                 p.set_pipeline(&pass.list);
                 p.set_bind_group(0, &self.uniforms_group, &[]);
@@ -455,31 +469,18 @@ impl FusedLists {
                 p.draw(0..PROXY_VERTICES, 0..edges.count);
             }
         }
-        let span = rec.span("fused_maps");
-        let mut p = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("FusedLists::maps"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &t.maps.view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    // Outside the rectangle drawn the texels hold 0 already.
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: span.writes(rec.timer, true, true),
-            occlusion_query_set: None,
-            multiview_mask: None,
+        let maps = Some(wgpu::RenderPassColorAttachment {
+            view: &t.maps.view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                // Outside the rectangle drawn the texels hold 0 already.
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            },
         });
-        let [x0, y0, x1, y1] = maps_rect;
-        if x0 < x1 && y0 < y1 {
-            p.set_scissor_rect(x0, y0, x1 - x0, y1 - y0);
-            p.set_pipeline(&pass.maps);
-            p.set_bind_group(0, &self.uniforms_group, &[]);
-            p.set_bind_group(1, &maps_group, &[]);
-            p.draw(0..3, 0..1);
-        }
+        let mut p = timed_pass(rec, "fused_maps", maps);
+        let groups = [&self.uniforms_group, &maps_group];
+        full_screen_in(&mut p, maps_rect, &pass.maps, groups);
     }
 }
