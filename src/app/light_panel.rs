@@ -78,7 +78,7 @@ impl PixelLight {
             let path = match f.path {
                 FusedPath::Outside => "outside the light view",
                 FusedPath::Uniform => "empty list",
-                FusedPath::Overflow => "list overflowed: every candidate edge",
+                FusedPath::Overflow => "list overflowed: every candidate edge (or dbuffer's V)",
                 FusedPath::Mask => "mask over the list",
             };
             rows.push(("twin V".into(), format!("{:.4}", f.v)));

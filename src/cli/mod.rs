@@ -614,8 +614,9 @@ fn compare_twin(
         let overflow = lists.iter().filter(|l| l.1).count();
         outln!(
             "  edge lists: {} px read one (mean {mean:.1} edges, longest {longest}); {overflow} px \
-             overflowed and fell back to dbuffer",
-            lists.len()
+             overflowed theirs and walked every candidate edge (dbuffer's V past {} candidates)",
+            lists.len(),
+            dbuffer::geometry::fused::WHOLE_WALK_EDGES
         );
     }
     outln!(
