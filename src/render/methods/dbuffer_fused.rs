@@ -94,8 +94,9 @@ pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, 
 const SHADER: &str = "methods/dbuffer_fused.wgsl";
 
 /// What it needs of the adapter: the layers (half-float counts, float receivers, the first
-/// layer's depth) and the maps drawn as float colour targets, the edge lists built by compute and
-/// read back in fragment shaders (4 storage buffers a stage).
+/// layer's depth) and the maps drawn as float colour targets, the edge lists counted and stored by
+/// fragment shaders (atomics into storage buffers) over proxies the vertex stage reads from
+/// storage, and read back by the camera pass's (4 storage buffers a stage). No compute pass.
 const NEEDS: AdapterNeeds = AdapterNeeds {
     formats: &[
         SHADOW_MAP[0],
@@ -104,9 +105,7 @@ const NEEDS: AdapterNeeds = AdapterNeeds {
         FormatNeed::new(Usage::Render, &[F::Rgba32Float]),
         FormatNeed::new(Usage::Render, &[F::R8Unorm]),
     ],
-    downlevel: D::COMPUTE_SHADERS
-        .union(D::FRAGMENT_WRITABLE_STORAGE)
-        .union(D::VERTEX_STORAGE),
+    downlevel: D::FRAGMENT_WRITABLE_STORAGE.union(D::VERTEX_STORAGE),
     storage_buffers_per_stage: 4,
     ..AdapterNeeds::NONE
 };
