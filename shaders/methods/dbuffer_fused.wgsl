@@ -7,8 +7,9 @@
 // added up from the centre (bit-sliced 5-bit counters, a second walk over the list): exact where
 // that shows the disk one layer deep, the lit fraction of the samples otherwise. A pixel whose
 // list overflowed walks every candidate edge instead (the same V as a list long enough, at more
-// cost) where there are at most WHOLE_WALK_EDGES of them; else it gets the paper's V. Its CPU twin is FusedTwin::sample (src/geometry/fused/twin.rs) with
-// MaskEval::Lut, function by function.
+// cost) where there are at most WHOLE_WALK_EDGES of them; else it gets the paper's V. Its CPU
+// twin is FusedTwin::sample (src/geometry/fused/twin.rs) with MaskEval::Lut, function by
+// function.
 //
 // A CPU rasteriser runs a SIMD group of pixels through both sides of every branch, but leaves a
 // loop when all of its pixels have: so every piece of work that only some pixels need is a loop
@@ -41,8 +42,8 @@ const PI: f32 = 3.14159265358979;
 // geometry::fused::WHOLE_WALK_EDGES: the most candidate edges a pixel whose list overflowed walks.
 const WHOLE_WALK_EDGES: u32 = 4096u;
 
-// The paper's V at the pixel: methods/dbuffer.wgsl's lookup (tests/gpu/render_fused.rs holds the
-// overflowing pixels to the paper's V).
+// The paper's V at the pixel: methods/dbuffer.wgsl's lookup (where the candidate edges are over
+// the budget, or a list overflowed and there are more than WHOLE_WALK_EDGES of them).
 fn paper_visibility(l: LightLookup, hidden: bool) -> Visibility {
     let d = l.d;
     let xs = select(textureLoad(d_p, l.texel, 0).xy, textureLoad(d_u, l.texel, 0).xy, hidden);

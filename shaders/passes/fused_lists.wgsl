@@ -7,8 +7,8 @@
 //   fs_list   per candidate edge its proxy (geometry::fused::proxy_hull, drawn once per texel),
 //             per texel the list test; an edge that passes is counted (atomicAdd) and stored while
 //             the count is below the cap. Overflow rule: a list whose count exceeds the cap is not
-//             used (the camera pass falls back to the paper's V); below it the set of edges does
-//             not depend on the order in which fragments ran;
+//             used (the camera pass walks every candidate edge instead); below it the set of
+//             edges does not depend on the order in which fragments ran;
 //   fs_maps   per D-buffer texel: the caster crossings along its ray, the largest crossing height
 //             over the 3×3 texels around it, its list texel's count and whether it overflowed
 //             (the method's light maps, and the camera pass's L(c)).
@@ -220,7 +220,7 @@ fn fs_merge(f: FullscreenVertex) -> @location(0) vec4<f32> {
 // ---- fs_list ----
 
 // What the list test reads of the edge, the same for every fragment of its proxy: handed down
-// flat from the vertex stage rather than loaded by every fragment (a sixth off the pass).
+// flat from the vertex stage rather than loaded by every fragment (a fifth off the pass).
 struct ProxyOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) @interpolate(flat) edge: u32,
