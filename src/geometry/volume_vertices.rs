@@ -322,13 +322,13 @@ pub fn disjoint_groups(rects: &[[f32; 4]]) -> Vec<(Vec<usize>, [f32; 4])> {
     }
     groups
         .into_iter()
-        .map(|(members, rs)| (members, union_all(&rs)))
+        .map(|(members, rs)| (members, union_all(rs)))
         .collect()
 }
 
-/// The bounding rectangle of `rects`.
-pub fn union_all(rects: &[[f32; 4]]) -> [f32; 4] {
-    rects.iter().fold([1.0f32, 1.0, 0.0, 0.0], |h, r| {
+/// The bounding rectangle of `rects` (a point is the rectangle `[u, v, u, v]`).
+pub fn union_all(rects: impl IntoIterator<Item = [f32; 4]>) -> [f32; 4] {
+    rects.into_iter().fold([1.0f32, 1.0, 0.0, 0.0], |h, r| {
         [
             h[0].min(r[0]),
             h[1].min(r[1]),

@@ -506,13 +506,13 @@ impl FusedTwin {
         }
         // An overflowing list is not used: every candidate edge is walked instead (a superset
         // of any list, so V is what a list long enough gives).
-        let all: Vec<u32> = if list.overflow {
-            (0..self.edges.len() as u32).collect()
-        } else {
-            Vec::new()
+        let edges = || -> Box<dyn Iterator<Item = &FusedEdge> + '_> {
+            if list.overflow {
+                Box::new(self.edges.iter())
+            } else {
+                Box::new(list.edges.iter().map(|&k| &self.edges[k as usize]))
+            }
         };
-        let ids = if list.overflow { &all } else { &list.edges };
-        let edges = || ids.iter().map(|&k| &self.edges[k as usize]);
         let centre = match self.crossings_of(texel).layers_at(x, edges(), &self.light) {
             Some(k) => CentreLayers::Known(k),
             None => CentreLayers::Hidden(dbuffer.hidden),

@@ -18,8 +18,9 @@
 //! **Overflow rule.** A list texel whose edges outnumber the cap is not used: its pixels walk
 //! every candidate edge instead, which gives the V a list long enough would (small casters of
 //! many edges under a large light overflow, and have few candidates in all), where there are at
-//! most [`WHOLE_WALK_EDGES`](crate::geometry::fused::WHOLE_WALK_EDGES); with more they get the paper's V(t). So do all pixels when the
-//! candidate edges exceed [`MAX_FUSED_EDGES`] (or what the adapter's storage bindings hold).
+//! most [`WHOLE_WALK_EDGES`](crate::geometry::fused::WHOLE_WALK_EDGES); with more they get the
+//! paper's V(t). So do all pixels when the candidate edges exceed [`MAX_FUSED_EDGES`] (or what
+//! the adapter's storage bindings hold).
 
 use super::Cost;
 use wgpu::DownlevelFlags as D;
@@ -330,14 +331,12 @@ fn update_edges(
             .casters()
             .flat_map(|o| o.mesh.positions.iter().copied())
             .filter(|p| p.is_finite());
-        let proxies = hulls.iter().flatten().map(|&[x, y]| {
-            let [x, y] = [x.clamp(-1.0, 1.0), y.clamp(-1.0, 1.0)];
-            [x * 0.5 + 0.5, 0.5 - y * 0.5]
+        // The proxies' corners (light-view NDC) as points of the image.
+        let corners = hulls.iter().flatten().map(|&[x, y]| {
+            let [u, v] = [x.clamp(-1.0, 1.0) * 0.5 + 0.5, 0.5 - y.clamp(-1.0, 1.0) * 0.5];
+            [u, v, u, v]
         });
-        let proxies = proxies.fold([1.0f32, 1.0, 0.0, 0.0], |r, [u, v]| {
-            [r[0].min(u), r[1].min(v), r[2].max(u), r[3].max(v)]
-        });
-        union_all(&[light_view_rect(inputs.light_view, casters), proxies])
+        union_all(corners.chain([light_view_rect(inputs.light_view, casters)]))
     };
     *slot = Some(Edges {
         revision: inputs.revision,

@@ -384,7 +384,7 @@ impl DBufferVolumes {
         let span = rec.span("dbuffer_volumes");
         // Clear what the last frame drew in and what this one draws in; the rest already holds
         // "no crossing". New targets are cleared whole.
-        let umbra_now = scissor(union_all(&rects), size);
+        let umbra_now = scissor(union_all(rects.iter().copied()), size);
         let penumbra_now = scissor(penumbra_rect, size);
         let drawn = t.drawn.replace((umbra_now, penumbra_now));
         let load = |fresh: bool| {
