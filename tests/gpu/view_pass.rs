@@ -359,6 +359,26 @@ fn a_colour_only_frame_shows_the_same_image_and_a_probe_renders_it_in_full() {
     f.request = colour_only;
     let (_, _, shown) = f.gpu_view(final_view);
     assert!(shown == full, "the colour-only frame's image differs");
+    // It is shown as the camera pass drew it (no view pass), and opaque as the view pass's
+    // displays are: a window paints nothing under it.
+    let display = f.targets.shown().expect("a display");
+    let camera = f.targets.camera.as_ref().expect("camera targets");
+    assert_eq!(
+        display.generation, camera.generation,
+        "a colour-only frame's final image is its colour target"
+    );
+    let bytes = Readback::default()
+        .read(&f.ctx, &[TextureRead::color(display.texture, 4)])
+        .unwrap_or_else(|e| panic!("{e}"))
+        .remove(0);
+    assert!(
+        bytes.chunks_exact(4).all(|c| c[3] == 255),
+        "a colour-only frame is drawn opaque"
+    );
+    let misses = (0..f.frame.color.len())
+        .filter(|&i| !f.frame.hit(i))
+        .count();
+    assert!(misses > 0, "the view shows pixels with no surface");
     // A penumbra pixel, where the hard shadow's V (0 or 1) is not the D-buffer's.
     let i = (0..f.frame.visibility.len())
         .find(|&i| f.frame.hit(i) && (0.1..0.9).contains(&f.frame.visibility[i]))

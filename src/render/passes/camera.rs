@@ -437,8 +437,15 @@ impl Camera {
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(uniforms));
         let span = rec.span("camera_pass");
+        // A colour-only frame is shown as its colour target is (frame::record_view), so it is
+        // opaque: black where no surface is, as the view pass makes a full frame's final image.
+        let background = if method.colour_only {
+            wgpu::Color::BLACK
+        } else {
+            wgpu::Color::TRANSPARENT
+        };
         let all = [
-            cleared(&targets.color.view, wgpu::Color::TRANSPARENT),
+            cleared(&targets.color.view, background),
             cleared(&targets.data.view, wgpu::Color::TRANSPARENT),
             cleared(&targets.cost.view, wgpu::Color::TRANSPARENT),
         ];
