@@ -1,6 +1,8 @@
 //! `dbuffer gui SCENE --bench N`: the lab's real window, scripted and timed as a window.
 //!
-//! Five phases of N window frames each, after a few warm-up frames, every frame repainted:
+//! Five phases of N window frames each, after a few warm-up frames, every frame repainted, in
+//! [`ROUNDS`] rounds (the floor moved by 15 % between runs of one phase after another, and a
+//! phase's neighbour in time is the fairest yardstick it has):
 //! - `blank`: the viewport neither renders nor paints an image — what the rest of the window
 //!   costs egui, eframe and the surface (the floor);
 //! - `image`: the viewport's last image painted, the render core not asked for a frame — what
@@ -13,10 +15,12 @@
 //! - `light`: the light goes round a circle — the geometry stage, the light pass and the camera
 //!   pass every frame.
 //!
-//! Per phase: window frames a second (wall clock), the process's CPU time a frame (every
-//! thread: the UI's, eframe's and the rasteriser's where the GPU is a CPU one), eframe's own
-//! measure of the UI thread, and the GPU time per pass of the renders. Printed as a table, and
-//! written as JSON with `--bench-out`; then the window closes.
+//! Per phase and round: window frames a second (wall clock), the process's CPU time a frame
+//! (every thread: the UI's, eframe's and the rasteriser's where the GPU is a CPU one), eframe's
+//! own measure of the UI thread, and the GPU time per pass of the renders; per phase the median
+//! round's frames a second, and the orbit over the floor as the median of the rounds' ratios
+//! (each round's orbit over the same round's floor). Printed as a table, and written as JSON
+//! with `--bench-out`; then the window closes.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -28,6 +32,8 @@ use super::{camera, LabApp};
 
 /// Window frames before each phase's clock starts (the first compiles pipelines).
 const WARMUP: u32 = 5;
+/// Times the five phases run, one after another.
+pub const ROUNDS: u32 = 3;
 /// Give up (and say so) when a run takes longer than this.
 const TIMEOUT: Duration = Duration::from_secs(900);
 
@@ -76,8 +82,10 @@ impl Phase {
 #[derive(Clone, Debug, Serialize)]
 pub struct PhaseResult {
     pub phase: Phase,
+    /// Frames timed (over every round, in the report's `phases`).
     pub frames: u32,
     pub seconds: f64,
+    /// Frames a second (the median round's, in the report's `phases`).
     pub fps: f64,
     /// The process's CPU time over the phase a window frame (every thread), where the platform
     /// says it (`/proc/self/stat`).
@@ -86,7 +94,8 @@ pub struct PhaseResult {
     pub ui_cpu_ms: Option<f64>,
     /// Renders the core made in the phase.
     pub renders: u64,
-    /// Median GPU milliseconds per pass of those renders (where the adapter has timestamps).
+    /// Median GPU milliseconds per pass of those renders (where the adapter has timestamps; in
+    /// the report's `phases`, the median of the rounds').
     pub gpu_ms: Vec<(String, f64)>,
 }
 
@@ -99,10 +108,16 @@ pub struct WindowBenchReport {
     pub method: String,
     pub window_px: [u32; 2],
     pub viewport_px: [u32; 2],
+    /// Frames a phase a round.
     pub frames_per_phase: u32,
+    /// Each phase over every round.
     pub phases: Vec<PhaseResult>,
-    /// Orbit frames a second over the blank window's.
+    /// Each round's phases.
+    pub rounds: Vec<Vec<PhaseResult>>,
+    /// Orbit frames a second over the blank window's, the median of the rounds'.
     pub orbit_over_floor: Option<f64>,
+    /// Each round's orbit frames a second over its blank window's.
+    pub orbit_over_floor_rounds: Vec<f64>,
 }
 
 pub struct WindowBench {
@@ -111,6 +126,7 @@ pub struct WindowBench {
     started: Instant,
     /// Whether the scene has been on screen (the phases start after its first render).
     begun: bool,
+    round: u32,
     phase: usize,
     frame: u32,
     clock: Option<(Instant, Option<f64>)>,
@@ -118,6 +134,7 @@ pub struct WindowBench {
     renders_at_start: u64,
     start_camera: Option<crate::scene::Camera>,
     start_light: Option<(crate::scene::file::LightSpec, glam::Vec3)>,
+    /// Every round's results, in order.
     results: Vec<PhaseResult>,
     /// Set when the run ended: the report, or why there is none.
     pub outcome: Option<Result<WindowBenchReport, String>>,
@@ -136,6 +153,7 @@ impl WindowBench {
             out,
             started: Instant::now(),
             begun: false,
+            round: 0,
             phase: 0,
             frame: 0,
             clock: None,
@@ -291,6 +309,10 @@ impl LabApp {
                 gpu_ms: if renders > 0 { gpu_ms } else { Vec::new() },
             });
             bench.phase += 1;
+            if bench.phase >= PHASES.len() && bench.round + 1 < ROUNDS {
+                bench.round += 1;
+                bench.phase = 0;
+            }
             bench.frame = 0;
             bench.clock = None;
             camera_start = bench.start_camera.take();
@@ -329,7 +351,22 @@ impl LabApp {
                 (r.height() * ppp).round().max(0.0) as u32,
             ]
         };
-        let fps = |p: Phase| bench.results.iter().find(|r| r.phase == p).map(|r| r.fps);
+        let rounds: Vec<Vec<PhaseResult>> = bench
+            .results
+            .chunks(PHASES.len())
+            .map(<[PhaseResult]>::to_vec)
+            .collect();
+        let fps = |round: &[PhaseResult], p: Phase| {
+            round
+                .iter()
+                .find(|r| r.phase == p)
+                .map(|r| r.fps)
+                .filter(|f| *f > 0.0)
+        };
+        let ratios: Vec<f64> = rounds
+            .iter()
+            .filter_map(|r| Some(fps(r, Phase::Orbit)? / fps(r, Phase::Blank)?))
+            .collect();
         let report = WindowBenchReport {
             host: crate::render::adapter::host_description(),
             adapter: self.adapter().unwrap_or_else(|| "none".into()),
@@ -338,11 +375,13 @@ impl LabApp {
             window_px: px(screen),
             viewport_px: px(viewport),
             frames_per_phase: bench.frames,
-            phases: bench.results.clone(),
-            orbit_over_floor: fps(Phase::Orbit)
-                .zip(fps(Phase::Blank))
-                .filter(|(_, f)| *f > 0.0)
-                .map(|(o, f)| o / f),
+            phases: PHASES
+                .iter()
+                .map(|&p| over_rounds(p, &bench.results))
+                .collect(),
+            orbit_over_floor: median(ratios.clone()),
+            orbit_over_floor_rounds: ratios,
+            rounds,
         };
         if let Some(path) = &bench.out {
             let json = serde_json::to_vec_pretty(&report).map_err(|e| e.to_string())?;
@@ -353,10 +392,59 @@ impl LabApp {
     }
 }
 
+/// The median of `v` (the mean of the middle two where their count is even); none of nothing.
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(v[n / 2]),
+        _ => Some((v[n / 2 - 1] + v[n / 2]) / 2.0),
+    }
+}
+
+/// One phase over every round: frames and seconds added up, the median round's frames a second,
+/// the mean CPU a frame, the renders added up, each pass's median of the rounds' GPU times.
+fn over_rounds(phase: Phase, results: &[PhaseResult]) -> PhaseResult {
+    let of: Vec<&PhaseResult> = results.iter().filter(|r| r.phase == phase).collect();
+    let mean = |f: &dyn Fn(&PhaseResult) -> Option<f64>| {
+        let v: Vec<f64> = of.iter().filter_map(|r| f(r)).collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let mut passes: Vec<String> = Vec::new();
+    for r in &of {
+        for (p, _) in &r.gpu_ms {
+            if !passes.contains(p) {
+                passes.push(p.clone());
+            }
+        }
+    }
+    let gpu_ms = passes
+        .into_iter()
+        .filter_map(|p| {
+            let times = of
+                .iter()
+                .filter_map(|r| r.gpu_ms.iter().find(|(q, _)| *q == p).map(|(_, ms)| *ms))
+                .collect();
+            Some((p, median(times)?))
+        })
+        .collect();
+    PhaseResult {
+        phase,
+        frames: of.iter().map(|r| r.frames).sum(),
+        seconds: of.iter().map(|r| r.seconds).sum(),
+        fps: median(of.iter().map(|r| r.fps).collect()).unwrap_or(0.0),
+        cpu_ms_per_frame: mean(&|r| r.cpu_ms_per_frame),
+        ui_cpu_ms: mean(&|r| r.ui_cpu_ms),
+        renders: of.iter().map(|r| r.renders).sum(),
+        gpu_ms,
+    }
+}
+
 /// The report as a markdown table, for the terminal and the docs.
 pub fn markdown(report: &WindowBenchReport) -> String {
     let mut s = format!(
-        "The lab's window: {}, method {}, on {} ({}), window {}×{} px, viewport {}×{} px, {} frames a phase.\n\n",
+        "The lab's window: {}, method {}, on {} ({}), window {}×{} px, viewport {}×{} px, {} frames a phase, {} rounds.\n\n",
         report.scene,
         report.method,
         report.adapter,
@@ -365,31 +453,46 @@ pub fn markdown(report: &WindowBenchReport) -> String {
         report.window_px[1],
         report.viewport_px[0],
         report.viewport_px[1],
-        report.frames_per_phase
+        report.frames_per_phase,
+        report.rounds.len(),
     );
     s.push_str(
-        "| phase | what | window fps | × floor | CPU ms a frame (process) | UI thread ms | renders | GPU ms a render |\n|---|---|---:|---:|---:|---:|---:|---|\n",
+        "| phase | what | window fps (median round) | fps by round | × floor (median of rounds) | CPU ms a frame (process) | UI thread ms | renders | GPU ms a render |\n|---|---|---:|---|---:|---:|---:|---:|---|\n",
     );
-    let floor = report
-        .phases
-        .iter()
-        .find(|r| r.phase == Phase::Blank)
-        .map(|r| r.fps);
+    let fps_in = |round: &[PhaseResult], p: Phase| {
+        round
+            .iter()
+            .find(|r| r.phase == p)
+            .map(|r| r.fps)
+            .filter(|f| *f > 0.0)
+    };
     for r in &report.phases {
         let gpu: Vec<String> = r
             .gpu_ms
             .iter()
             .map(|(p, ms)| format!("{p} {ms:.1}"))
             .collect();
+        let by_round: Vec<String> = report
+            .rounds
+            .iter()
+            .filter_map(|round| fps_in(round, r.phase))
+            .map(|f| format!("{f:.1}"))
+            .collect();
+        let ratio = median(
+            report
+                .rounds
+                .iter()
+                .filter_map(|round| Some(fps_in(round, r.phase)? / fps_in(round, Phase::Blank)?))
+                .collect(),
+        );
         let opt = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.1}"));
         s.push_str(&format!(
-            "| {} | {} | {:.1} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {:.1} | {} | {} | {} | {} | {} | {} |\n",
             r.phase.name(),
             r.phase.about(),
             r.fps,
-            floor
-                .filter(|f| *f > 0.0)
-                .map_or("—".into(), |f| format!("{:.2}×", r.fps / f)),
+            by_round.join(" / "),
+            ratio.map_or("—".into(), |f| format!("{f:.2}×")),
             opt(r.cpu_ms_per_frame),
             opt(r.ui_cpu_ms),
             r.renders,
@@ -400,5 +503,17 @@ pub fn markdown(report: &WindowBenchReport) -> String {
             }
         ));
     }
+    let rounds: Vec<String> = report
+        .orbit_over_floor_rounds
+        .iter()
+        .map(|r| format!("{r:.2}×"))
+        .collect();
+    s.push_str(&format!(
+        "\nOrbit over the floor, round by round: {} (median {}).\n",
+        rounds.join(", "),
+        report
+            .orbit_over_floor
+            .map_or("—".into(), |r| format!("{r:.2}×"))
+    ));
     s
 }

@@ -883,13 +883,14 @@ fn hovering_never_restarts_the_reference() {
     assert!(grew && done(&h) >= last, "the reference made progress");
 }
 
-/// `dbuffer gui --bench N`: the scripted window goes through its five phases, renders only where
-/// a phase asks for it (never in `blank`, `image` or `still`; in `orbit` and `light`, as the
-/// camera or the light moves), puts the camera and the light back where they were, and writes
-/// its JSON.
+/// `dbuffer gui --bench N`: the scripted window goes through its five phases in each of its
+/// rounds, renders only where a phase asks for it (never in `blank`, `image` or `still`; in
+/// `orbit` and `light`, as the camera or the light moves), puts the camera and the light back
+/// where they were, and writes its JSON: each phase over the rounds, and the orbit over the
+/// floor as the median of the rounds' ratios.
 #[test]
 fn the_window_bench_runs_its_phases_and_puts_the_scene_back() {
-    use dbuffer::app::window_bench::Phase;
+    use dbuffer::app::window_bench::{Phase, PHASES, ROUNDS};
     const FRAMES: u32 = 3;
     let out =
         std::env::temp_dir().join(format!("dbuffer-window-bench-{}.json", std::process::id()));
@@ -917,7 +918,7 @@ fn the_window_bench_runs_its_phases_and_puts_the_scene_back() {
     let camera = h.state().camera;
     let light = h.state().scene().expect("a scene").light;
     let mut steps = 0;
-    while h.state().window_bench_outcome().is_none() && steps < 200 {
+    while h.state().window_bench_outcome().is_none() && steps < 600 {
         h.step();
         steps += 1;
     }
@@ -926,22 +927,47 @@ fn the_window_bench_runs_its_phases_and_puts_the_scene_back() {
         other => panic!("the bench did not end with a report: {other:?}"),
     };
     let phases: Vec<Phase> = report.phases.iter().map(|p| p.phase).collect();
-    assert_eq!(phases, dbuffer::app::window_bench::PHASES.to_vec());
-    for p in &report.phases {
-        assert_eq!(p.frames, FRAMES);
-        assert!(p.fps > 0.0 && p.seconds > 0.0, "{p:?}");
-        let moving = matches!(p.phase, Phase::Orbit | Phase::Light);
-        if moving {
-            assert!(
-                p.renders >= 1 && p.renders <= u64::from(FRAMES),
-                "{:?}: a render a frame at most, {p:?}",
-                p.phase
-            );
-        } else {
-            assert_eq!(p.renders, 0, "{:?} renders nothing: {p:?}", p.phase);
+    assert_eq!(phases, PHASES.to_vec());
+    assert_eq!(report.rounds.len(), ROUNDS as usize);
+    for round in &report.rounds {
+        let order: Vec<Phase> = round.iter().map(|p| p.phase).collect();
+        assert_eq!(order, PHASES.to_vec(), "every round runs the five phases");
+        for p in round {
+            assert_eq!(p.frames, FRAMES);
+            assert!(p.fps > 0.0 && p.seconds > 0.0, "{p:?}");
+            let moving = matches!(p.phase, Phase::Orbit | Phase::Light);
+            if moving {
+                assert!(
+                    p.renders >= 1 && p.renders <= u64::from(FRAMES),
+                    "{:?}: a render a frame at most, {p:?}",
+                    p.phase
+                );
+            } else {
+                assert_eq!(p.renders, 0, "{:?} renders nothing: {p:?}", p.phase);
+            }
         }
     }
-    assert!(report.orbit_over_floor.is_some_and(|r| r > 0.0));
+    for p in &report.phases {
+        let of: Vec<&_> = report
+            .rounds
+            .iter()
+            .flatten()
+            .filter(|r| r.phase == p.phase)
+            .collect();
+        assert_eq!(p.frames, FRAMES * ROUNDS, "{p:?}");
+        let mut fps: Vec<f64> = of.iter().map(|r| r.fps).collect();
+        fps.sort_by(f64::total_cmp);
+        assert_eq!(
+            p.fps,
+            fps[fps.len() / 2],
+            "the median round's frames a second"
+        );
+        assert_eq!(p.renders, of.iter().map(|r| r.renders).sum::<u64>());
+    }
+    let mut ratios: Vec<f64> = report.rounds.iter().map(|r| r[3].fps / r[0].fps).collect();
+    assert_eq!(report.orbit_over_floor_rounds, ratios);
+    ratios.sort_by(f64::total_cmp);
+    assert_eq!(report.orbit_over_floor, Some(ratios[ratios.len() / 2]));
     assert_eq!(h.state().camera, camera, "the orbit puts the camera back");
     let after = h.state().scene().expect("a scene").light;
     assert!(
