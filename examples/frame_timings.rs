@@ -4,6 +4,7 @@
 //!
 //!     cargo run --release --example frame_timings -- table1-960 table1-5760 --size 1024 --frames 8 --methods dbuffer,hard
 //!
+//! `--knob name=value` sets a method's knob (`--knob list-size=128`), as `dbuffer render` does.
 //! `--stats` adds, per scene and method, one more frame read back with its cost view: the share
 //! of the pixels on each of the method's paths, its work per pixel (mean over the pixels that
 //! show a surface, over those that work, the largest), the share of 4×2 pixel blocks (a SIMD
@@ -40,6 +41,19 @@ fn main() -> anyhow::Result<()> {
         .map(|(_, a)| a)
         .collect();
     let stats = args.iter().any(|a| a == "--stats");
+    // `--knob name=value` (again for more): a method's knob, as `dbuffer render --name value`.
+    let mut knobs = dbuffer::render::Knobs::default();
+    for (i, a) in args.iter().enumerate() {
+        if a == "--knob" {
+            let (name, value) = args
+                .get(i + 1)
+                .and_then(|v| v.split_once('='))
+                .ok_or_else(|| anyhow::anyhow!("--knob takes name=value"))?;
+            knobs
+                .set(name, value.parse()?)
+                .map_err(anyhow::Error::msg)?;
+        }
+    }
     let ctx = GpuContext::headless()?;
     println!(
         "adapter {}; {size}², D-buffer 1024², median of {frames} frames after 2 warm-up",
@@ -65,6 +79,7 @@ fn main() -> anyhow::Result<()> {
                         .unwrap_or(1024),
                     method,
                     vt: VtVariant::Smoothstep,
+                    knobs,
                     ..FrameRequest::default()
                 };
                 sessions[k].invalidate_light_maps();
@@ -94,6 +109,7 @@ fn main() -> anyhow::Result<()> {
                     height: size,
                     method,
                     vt: VtVariant::Smoothstep,
+                    knobs,
                     read_cost: true,
                     ..FrameRequest::default()
                 };
