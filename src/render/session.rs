@@ -660,25 +660,33 @@ impl Session {
     }
 
     /// Read back whatever `targets` hold, with `method`'s light-space maps if given: for tests
-    /// and exports of a frame a window shows. A colour-only frame is rendered in full first (a
-    /// readback is a job without a view: [`Session::submit`] does that).
+    /// and exports of a frame a window shows. A colour-only frame is rendered in full first,
+    /// into targets of its own (what `targets` show stays as it is).
     pub fn read(
         &mut self,
         ctx: &GpuContext,
         targets: &mut FrameTargets,
         maps_of: Option<Method>,
     ) -> Result<Frame, RenderError> {
+        // A colour-only frame is rendered again in full into targets of its own: the viewport
+        // shows a colour-only frame's colour target itself (FrameTargets::shown), which must
+        // keep the picture it shows.
+        let mut full = None;
         if let Some(request) = targets
             .rendered
             .as_ref()
             .map(|r| r.request)
             .filter(|r| r.colour_only)
         {
+            let scratch = full.insert(FrameTargets::new());
             self.submit(
                 ctx,
                 &mut [FrameJob {
-                    targets: &mut *targets,
-                    request,
+                    targets: scratch,
+                    request: FrameRequest {
+                        colour_only: false,
+                        ..request
+                    },
                     view: None,
                     render: true,
                     probes: Vec::new(),
@@ -690,7 +698,12 @@ impl Session {
                 .get(&m)
                 .and_then(|s| s.light_maps(&self.shared))
         });
-        read_frame(ctx, &mut self.readback, targets, maps.as_ref())
+        read_frame(
+            ctx,
+            &mut self.readback,
+            full.as_ref().unwrap_or(targets),
+            maps.as_ref(),
+        )
     }
 
     /// Bytes the last submit reads back.

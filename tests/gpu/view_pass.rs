@@ -367,6 +367,7 @@ fn a_colour_only_frame_shows_the_same_image_and_a_probe_renders_it_in_full() {
         display.generation, camera.generation,
         "a colour-only frame's final image is its colour target"
     );
+    let camera_generation = camera.generation;
     let bytes = Readback::default()
         .read(&f.ctx, &[TextureRead::color(display.texture, 4)])
         .unwrap_or_else(|e| panic!("{e}"))
@@ -379,6 +380,20 @@ fn a_colour_only_frame_shows_the_same_image_and_a_probe_renders_it_in_full() {
         .filter(|&i| !f.frame.hit(i))
         .count();
     assert!(misses > 0, "the view shows pixels with no surface");
+    // A readback of it (an export) renders the frame in full into targets of its own: it reads
+    // the frame's V, and what the viewport shows stays as it was.
+    let read = f
+        .session
+        .read(&f.ctx, &mut f.targets, None)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(read.visibility == f.frame.visibility, "the readback's V");
+    let display = f.targets.shown().expect("a display");
+    assert_eq!(display.generation, camera_generation);
+    let after = Readback::default()
+        .read(&f.ctx, &[TextureRead::color(display.texture, 4)])
+        .unwrap_or_else(|e| panic!("{e}"))
+        .remove(0);
+    assert!(after == bytes, "a readback changed what the viewport shows");
     // A penumbra pixel, where the hard shadow's V (0 or 1) is not the D-buffer's.
     let i = (0..f.frame.visibility.len())
         .find(|&i| f.frame.hit(i) && (0.1..0.9).contains(&f.frame.visibility[i]))
