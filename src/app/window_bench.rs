@@ -356,16 +356,9 @@ impl LabApp {
             .chunks(PHASES.len())
             .map(<[PhaseResult]>::to_vec)
             .collect();
-        let fps = |round: &[PhaseResult], p: Phase| {
-            round
-                .iter()
-                .find(|r| r.phase == p)
-                .map(|r| r.fps)
-                .filter(|f| *f > 0.0)
-        };
         let ratios: Vec<f64> = rounds
             .iter()
-            .filter_map(|r| Some(fps(r, Phase::Orbit)? / fps(r, Phase::Blank)?))
+            .filter_map(|r| over_floor(r, Phase::Orbit))
             .collect();
         let report = WindowBenchReport {
             host: crate::render::adapter::host_description(),
@@ -390,6 +383,20 @@ impl LabApp {
         }
         Ok(report)
     }
+}
+
+/// A phase's frames a second in one round's results (none where it did not run or stood still).
+fn fps_in(round: &[PhaseResult], phase: Phase) -> Option<f64> {
+    round
+        .iter()
+        .find(|r| r.phase == phase)
+        .map(|r| r.fps)
+        .filter(|f| *f > 0.0)
+}
+
+/// A phase's frames a second over the same round's floor (`blank`).
+fn over_floor(round: &[PhaseResult], phase: Phase) -> Option<f64> {
+    Some(fps_in(round, phase)? / fps_in(round, Phase::Blank)?)
 }
 
 /// The median of `v` (the mean of the middle two where their count is even); none of nothing.
@@ -459,13 +466,6 @@ pub fn markdown(report: &WindowBenchReport) -> String {
     s.push_str(
         "| phase | what | window fps (median round) | fps by round | × floor (median of rounds) | CPU ms a frame (process) | UI thread ms | renders | GPU ms a render |\n|---|---|---:|---|---:|---:|---:|---:|---|\n",
     );
-    let fps_in = |round: &[PhaseResult], p: Phase| {
-        round
-            .iter()
-            .find(|r| r.phase == p)
-            .map(|r| r.fps)
-            .filter(|f| *f > 0.0)
-    };
     for r in &report.phases {
         let gpu: Vec<String> = r
             .gpu_ms
@@ -482,7 +482,7 @@ pub fn markdown(report: &WindowBenchReport) -> String {
             report
                 .rounds
                 .iter()
-                .filter_map(|round| Some(fps_in(round, r.phase)? / fps_in(round, Phase::Blank)?))
+                .filter_map(|round| over_floor(round, r.phase))
                 .collect(),
         );
         let opt = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.1}"));
