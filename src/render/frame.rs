@@ -84,9 +84,10 @@ impl FrameRequest {
 pub struct FrameTargets {
     pub camera: Option<CameraTargets>,
     pub view: Option<ViewTarget>,
-    /// The viewport shows the camera's colour target itself, not `view`'s display: the final
-    /// image of a colour-only frame (record_view).
-    shows_colour: bool,
+    /// The view last asked for is the final image (record_view): where the targets hold a
+    /// colour-only frame, the viewport then shows the camera's colour target itself, not
+    /// `view`'s display.
+    final_view: bool,
     /// What the targets hold now.
     pub rendered: Option<Rendered>,
     /// Values read back from the targets a frame later (the inspector, the display range).
@@ -119,7 +120,7 @@ impl FrameTargets {
         FrameTargets {
             camera: None,
             view: None,
-            shows_colour: false,
+            final_view: false,
             rendered: None,
             probe: None,
         }
@@ -127,7 +128,8 @@ impl FrameTargets {
 
     /// What a viewport shows of these targets, once something was recorded into them.
     pub fn shown(&self) -> Option<ShownTexture<'_>> {
-        if let (true, Some(c)) = (self.shows_colour, &self.camera) {
+        let colour_only = self.rendered.is_some_and(|r| r.request.colour_only);
+        if let (true, true, Some(c)) = (self.final_view, colour_only, &self.camera) {
             return Some(ShownTexture {
                 texture: &c.bytes_copy.as_ref().unwrap_or(&c.color).texture,
                 view: &c.color_bytes,
@@ -248,14 +250,14 @@ pub fn record_view(
         camera,
         view,
         rendered,
-        shows_colour,
+        final_view,
         ..
     } = targets;
+    *final_view = params.view == View::Final;
     let (Some(camera), Some(rendered)) = (camera.as_ref(), rendered.as_ref()) else {
         return;
     };
-    *shows_colour = rendered.request.colour_only && params.view == View::Final;
-    if *shows_colour {
+    if *final_view && rendered.request.colour_only {
         return;
     }
     let inputs = ViewInputs {

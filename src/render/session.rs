@@ -668,9 +668,7 @@ impl Session {
         targets: &mut FrameTargets,
         maps_of: Option<Method>,
     ) -> Result<Frame, RenderError> {
-        // A colour-only frame is rendered again in full into targets of its own: the viewport
-        // shows a colour-only frame's colour target itself (FrameTargets::shown), which must
-        // keep the picture it shows.
+        // The viewport shows a colour-only frame's colour target itself (FrameTargets::shown).
         let mut full = None;
         if let Some(request) = targets
             .rendered
