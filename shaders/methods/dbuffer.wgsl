@@ -6,9 +6,11 @@
 // formula serves both of eq. (3)'s (they differ only in which channel and in t ↔ 1 − t).
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
+// #include shared/frame_tag.wgsl
 
 // (|cx_uv|, |cx_s|, lit side) and (|cx_pv|, |cx_s|, lit side): 0 where no umbra exit / penumbra
-// entry. The lit side is the chord's direction V exact needs under a polygon light.
+// entry. The lit side is the chord's direction V exact needs under a polygon light. Both carry
+// the frame tag shadow.knobs.z (passes/dbuffer_volumes.wgsl): read through frame_untagged.
 @group(1) @binding(2) var d_u: texture_2d<f32>;
 @group(1) @binding(3) var d_p: texture_2d<f32>;
 // The closing fans' silhouette corners, three texels per fan (apex, the two edges' far ends;
@@ -82,7 +84,10 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     // Hidden from c: the umbra's exit U; visible: the penumbra's entry P. With X and S its
     // distance and |cx_s|, f = S (D − X) / (2 X (D − S)) is t (hidden) or 1 − t (visible), for
     // D > X; no crossing before the point (X = 0 or D <= X) is umbra (hidden) or lit (visible).
-    let xs = select(textureLoad(d_p, l.texel, 0), textureLoad(d_u, l.texel, 0), hidden);
+    let xs = frame_untagged(
+        select(textureLoad(d_p, l.texel, 0), textureLoad(d_u, l.texel, 0), hidden),
+        u32(shadow.knobs.z)
+    );
     // The cost view counts texels read: |cx_o| and both channels (a select reads both).
     count_work(3.0);
     let crossed = xs.x > 0.0 && d > xs.x;

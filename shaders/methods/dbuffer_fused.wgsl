@@ -19,8 +19,9 @@
 // #include shared/shadow_lookup.wgsl
 // #include shared/fused.wgsl
 // #include shared/light_bits.wgsl
+// #include shared/frame_tag.wgsl
 
-// The paper's D-buffer channels, as methods/dbuffer.wgsl binds them.
+// The paper's D-buffer channels, as methods/dbuffer.wgsl binds them (frame tag shadow.knobs.z).
 @group(1) @binding(2) var d_u: texture_2d<f32>;
 @group(1) @binding(3) var d_p: texture_2d<f32>;
 // Per D-buffer texel: caster crossings along its ray, the largest crossing height over the 3×3
@@ -46,7 +47,10 @@ const WHOLE_WALK_EDGES: u32 = 4096u;
 // the budget, or a list overflowed and there are more than WHOLE_WALK_EDGES of them).
 fn paper_visibility(l: LightLookup, hidden: bool) -> Visibility {
     let d = l.d;
-    let xs = select(textureLoad(d_p, l.texel, 0).xy, textureLoad(d_u, l.texel, 0).xy, hidden);
+    let xs = frame_untagged(
+        select(textureLoad(d_p, l.texel, 0), textureLoad(d_u, l.texel, 0), hidden),
+        u32(shadow.knobs.z)
+    ).xy;
     let crossed = xs.x > 0.0 && d > xs.x;
     let f = clamp(xs.y * (d - xs.x) / (2.0 * xs.x * (d - xs.y)), 0.0, 0.5);
     var out: Visibility;

@@ -6,13 +6,17 @@
 //            with the depth test Greater)
 //   |cx_pv|  the nearest penumbra entry (faces whose normal points toward c), drawn over the
 //            surfaces' depth: an entry behind the nearest surface is never looked up
-// The targets are cleared only inside the rectangles the volumes can cover (vs_clear, fs_clear):
-// everywhere else they still hold "no crossing" from before.
+// The targets are never cleared (but when new, and every 255 frames): each texel drawn carries
+// the frame's tag in the low bits of its distance (shared/frame_tag.wgsl), and a texel of any
+// other frame reads as "no crossing". Only the exits' depth is reset, over the rectangle their
+// volumes can cover (vs_reset, fs_reset, colours masked).
 //   |cx_s|   eq. (2) from the fragment that won, kept per volume (the .y of the volume targets)
 //   side     the winning triangle's lit side in the light's plane (.zw), for V exact under a
 //            polygon light (geometry::volume_vertices::lit_side)
-// Distances are true Euclidean |p - c| per fragment, not interpolated vertex distances.
+// Distances are true Euclidean |p - c| per fragment, not interpolated vertex distances, rounded
+// as a tagged texel holds them (a silhouette face's |cx_s| is the same rounded distance).
 // #include shared/light.wgsl
+// #include shared/frame_tag.wgsl
 
 @group(0) @binding(0) var<uniform> light: LightUniforms;
 
@@ -59,8 +63,12 @@ fn vs_volume(v: VolumeIn) -> VolumeOut {
 // |cx_s| (eq. 2 as its definition in words has it, docs/method/dbuffer.md): the distance along the ray from c to the plane
 // through the silhouette edge parallel to the disk, at the edge point this fragment was extruded
 // from. A silhouette face is its own edge. Twin: VolumeVertex::edge_plane_distance.
+fn is_silhouette_face(f: VolumeOut) -> bool {
+    return f.kind == KIND_SILHOUETTE_FACE_A || f.kind == KIND_SILHOUETTE_FACE_B;
+}
+
 fn edge_plane_distance(f: VolumeOut, to_fragment: vec3<f32>, d: f32) -> f32 {
-    if f.kind == KIND_SILHOUETTE_FACE_A || f.kind == KIND_SILHOUETTE_FACE_B {
+    if is_silhouette_face(f) {
         return d;
     }
     let along = dot(to_fragment, light.normal) / d;
@@ -70,11 +78,13 @@ fn edge_plane_distance(f: VolumeOut, to_fragment: vec3<f32>, d: f32) -> f32 {
     return (f.base + f.num / f.den) / along;
 }
 
-// (|p - c|, |cx_s|, the lit side) of a volume fragment.
+// (|p - c| tagged with this frame, |cx_s|, the lit side) of a volume fragment.
 fn crossing(f: VolumeOut) -> vec4<f32> {
     let to_fragment = f.world - light.center;
     let d = length(to_fragment);
-    return vec4<f32>(d, edge_plane_distance(f, to_fragment, d), f.side);
+    let held = frame_quantized(d);
+    let s = select(edge_plane_distance(f, to_fragment, d), held, is_silhouette_face(f));
+    return vec4<f32>(frame_tagged(held, light.tag), s, f.side);
 }
 
 // Umbra exits and penumbra entries alike: the pipelines' culling keeps only the faces that count.
@@ -99,17 +109,18 @@ fn fs_volume_both(f: VolumeOut) -> Both {
     return out;
 }
 
-// ---- Clearing a rectangle: "no crossing" (0) and, for the umbra, depth 1 ----
+// ---- Resetting the exits' depth to 1 over a rectangle (the colours masked) ----
 
 @vertex
-fn vs_clear(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+fn vs_reset(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
     let x = f32((i << 1u) & 2u) * 2.0 - 1.0;
     let y = f32(i & 2u) * 2.0 - 1.0;
     return vec4<f32>(x, y, 1.0, 1.0);
 }
 
+// The pipeline masks both colours: only the depth is written.
 @fragment
-fn fs_clear() -> Both {
+fn fs_reset() -> Both {
     var out: Both;
     out.penumbra = vec4<f32>(0.0);
     out.umbra = vec4<f32>(0.0);

@@ -8,5 +8,7 @@ struct LightUniforms {
     inv_far: f32,
     // The unit normal n_c, toward the emitting side.
     normal: vec3<f32>,
-    _pad: f32,
+    // The frame tag the D-buffer's volume channels are drawn with (shared/frame_tag.wgsl; 0
+    // for every other pass).
+    tag: u32,
 };

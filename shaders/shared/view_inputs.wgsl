@@ -1,6 +1,7 @@
 // What the view pass and the probe read of a frame (src/render/passes/view.rs, probe.rs): the
 // camera pass's targets, the reference V, and the shown method's light-space maps, with the
 // uniforms that say how to show them. Both passes bind this same layout as group 0.
+// #include shared/frame_tag.wgsl
 
 struct ViewUniforms {
     // VIEW_* below.
@@ -21,6 +22,9 @@ struct ViewUniforms {
     // Per channel: texture, component, EMPTY_*, fallback (NO_FALLBACK, or texture × 4 + component
     // of the value used where this one has none).
     channels: array<vec4<u32>, 4>,
+    // Per light-map texture, the frame tag its live texels carry (0: read as stored;
+    // shared/frame_tag.wgsl).
+    tags: vec4<u32>,
     // World to clip of the camera, inverted (positions from the reversed depth).
     inv_view_proj: mat4x4<f32>,
     // World to clip of the light maps' view.
@@ -70,9 +74,9 @@ fn branch_of(td: f32) -> f32 {
 
 fn map_texel(t: u32, q: vec2<i32>) -> vec4<f32> {
     switch t {
-        case 1u: { return textureLoad(map1, q, 0); }
-        case 2u: { return textureLoad(map2, q, 0); }
-        default: { return textureLoad(map0, q, 0); }
+        case 1u: { return frame_untagged(textureLoad(map1, q, 0), view.tags.y); }
+        case 2u: { return frame_untagged(textureLoad(map2, q, 0), view.tags.z); }
+        default: { return frame_untagged(textureLoad(map0, q, 0), view.tags.x); }
     }
 }
 

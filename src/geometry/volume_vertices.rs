@@ -244,8 +244,6 @@ pub struct DrawnVolumes {
     pub umbrae: Vec<(Vec<VolumeVertex>, [f32; 4])>,
     /// Every caster's penumbra, drawn together.
     pub penumbra: Vec<VolumeVertex>,
-    /// Where the penumbra entries can be in the light view's image.
-    pub penumbra_rect: [f32; 4],
 }
 
 /// Every caster's volumes ready to draw: ended at `reach` ([`reach_below`]; `None`: whole, to
@@ -291,12 +289,7 @@ pub fn drawn_volumes(
         })
         .collect();
     sort_near_first(&mut penumbra, light.center);
-    let penumbra_rect = light_view_rect(view, penumbra.iter().map(|v| Vec3::from(v.position)));
-    DrawnVolumes {
-        umbrae,
-        penumbra,
-        penumbra_rect,
-    }
+    DrawnVolumes { umbrae, penumbra }
 }
 
 /// Groups of casters whose umbra rectangles do not overlap (greedy, in order), with the

@@ -5,6 +5,7 @@
 
 use glam::{Mat4, Vec3};
 
+use super::frame_tag::FrameTag;
 use super::gpu_scene::GpuScene;
 use super::methods::{
     Channel, FrameInputs, Knobs, LightMaps, Method, MethodState, Prepare, SharedMaps,
@@ -360,6 +361,38 @@ pub struct LightMapsData {
 }
 
 impl LightMapsData {
+    /// The maps' texels as read back (`values` per distinct texture, which `slots` maps the
+    /// three slots to), frame tags taken off: what untagged textures would hold.
+    fn read(
+        maps: &LightMaps<'_>,
+        rows: std::ops::Range<u32>,
+        slots: [usize; 3],
+        distinct: &[&wgpu::Texture],
+        values: Vec<Vec<f32>>,
+    ) -> LightMapsData {
+        let data = distinct
+            .iter()
+            .zip(values)
+            .enumerate()
+            .map(|(k, (t, mut v))| {
+                let n = components(t.format());
+                let tag = slots
+                    .iter()
+                    .zip(maps.tags)
+                    .find_map(|(s, tag)| (*s == k).then_some(tag));
+                tag.unwrap_or(FrameTag::NONE).untag_all(&mut v, n);
+                (n, v)
+            })
+            .collect();
+        LightMapsData {
+            size: maps.size,
+            channels: maps.channels,
+            rows,
+            slots,
+            data,
+        }
+    }
+
     /// The three textures' RGBA at texel (`x`, `y`) (missing components 0).
     pub fn texel(&self, x: u32, y: u32) -> Option<[[f32; 4]; 3]> {
         if x >= self.size || !self.rows.contains(&y) {
@@ -445,22 +478,9 @@ pub fn read_frame(
     }
     // The light maps' reads come after the frame's.
     let first_map = reads.len();
-    // Each distinct light-map texture once.
-    let mut slots = [0usize; 3];
-    let mut distinct: Vec<&wgpu::Texture> = Vec::new();
-    if let Some(m) = maps {
-        for (slot, raw) in slots.iter_mut().zip(m.raw) {
-            *slot = match distinct.iter().position(|t| *t == raw) {
-                Some(k) => k,
-                None => {
-                    distinct.push(raw);
-                    distinct.len() - 1
-                }
-            };
-        }
-        for t in &distinct {
-            reads.push(TextureRead::color(t, 4 * components(t.format()) as u32));
-        }
+    let (slots, distinct) = maps.map_or(([0; 3], Vec::new()), distinct_textures);
+    for t in &distinct {
+        reads.push(TextureRead::color(t, 4 * components(t.format()) as u32));
     }
     let (w, h) = (camera.width, camera.height);
     let n = w as usize * h as usize;
@@ -517,28 +537,12 @@ pub fn read_frame(
             "a target did not come back whole".into(),
         ));
     }
-    frame.maps = maps.map(|m| LightMapsData {
-        size: m.size,
-        channels: m.channels,
-        rows: 0..m.size,
-        slots,
-        data: distinct
-            .iter()
-            .zip(map_values)
-            .map(|(t, values)| (components(t.format()), values))
-            .collect(),
-    });
+    frame.maps = maps.map(|m| LightMapsData::read(m, 0..m.size, slots, &distinct, map_values));
     Ok(frame)
 }
 
-/// Rows `rows` of the light-space maps `maps` (a band of them: a render's 8192² D-buffer is
-/// written to its files a band at a time, never held whole).
-pub fn read_light_map_rows(
-    ctx: &GpuContext,
-    readback: &mut Readback,
-    maps: &LightMaps<'_>,
-    rows: std::ops::Range<u32>,
-) -> Result<LightMapsData, RenderError> {
+/// Each distinct texture of `maps` once, and which of them each slot is.
+fn distinct_textures<'a>(maps: &LightMaps<'a>) -> ([usize; 3], Vec<&'a wgpu::Texture>) {
     let mut slots = [0usize; 3];
     let mut distinct: Vec<&wgpu::Texture> = Vec::new();
     for (slot, raw) in slots.iter_mut().zip(maps.raw) {
@@ -550,6 +554,18 @@ pub fn read_light_map_rows(
             }
         };
     }
+    (slots, distinct)
+}
+
+/// Rows `rows` of the light-space maps `maps` (a band of them: a render's 8192² D-buffer is
+/// written to its files a band at a time, never held whole).
+pub fn read_light_map_rows(
+    ctx: &GpuContext,
+    readback: &mut Readback,
+    maps: &LightMaps<'_>,
+    rows: std::ops::Range<u32>,
+) -> Result<LightMapsData, RenderError> {
+    let (slots, distinct) = distinct_textures(maps);
     let reads: Vec<TextureRead<'_>> = distinct
         .iter()
         .map(|t| TextureRead::color(t, 4 * components(t.format()) as u32).rows(rows.clone()))
@@ -568,15 +584,5 @@ pub fn read_light_map_rows(
         }
     })?;
     let rows = reads.first().map_or(0..0, |r| r.rows.clone());
-    Ok(LightMapsData {
-        size: maps.size,
-        channels: maps.channels,
-        rows,
-        slots,
-        data: distinct
-            .iter()
-            .zip(values)
-            .map(|(t, v)| (components(t.format()), v))
-            .collect(),
-    })
+    Ok(LightMapsData::read(maps, rows, slots, &distinct, values))
 }

@@ -14,6 +14,7 @@
 pub mod adapter;
 pub mod context;
 pub mod frame;
+pub mod frame_tag;
 pub mod gpu_scene;
 pub mod methods;
 pub mod offline;

@@ -34,7 +34,7 @@ fn uniforms_match_their_wgsl() {
             center,
             inv_far,
             normal,
-            _pad
+            tag
         );
     }
     // Every method's shader includes the camera pass's half; the map methods the lookup.
@@ -236,6 +236,7 @@ fn uniforms_match_their_wgsl() {
             map_size,
             channel_count,
             channels,
+            tags,
             inv_view_proj,
             map_view_proj,
             probe

@@ -295,8 +295,9 @@ fn a_caster_moved_back_leaves_nothing_of_the_wide_view() {
     }
 }
 
-/// The D-buffer's volume channels are cleared only where volumes were or will be drawn, and
-/// `dbuffer-fused`'s maps drawn only where casters and proxies were or will be: after the light
+/// The D-buffer's volume channels are never cleared (a texel of an earlier frame is read as no
+/// crossing by its frame tag), and `dbuffer-fused`'s maps drawn only where casters and proxies
+/// were or will be: after the light
 /// moves (the shadow shrinks, moves, grows) a frame must equal a fresh session's, the D-buffer
 /// (the paper's, which `read_dbuffer` reads for either method) included.
 #[test]
@@ -353,6 +354,67 @@ fn a_moved_light_leaves_nothing_of_the_old_d_buffer() {
                     );
                 }
             }
+        }
+    }
+}
+
+/// The volume channels' frame tags run 1 … 255 and start over: the targets are cleared whole
+/// then, or a texel drawn 255 light passes ago (and never since) would read as this frame's.
+/// The first frame's light is far aside, and its shadow elsewhere than all later frames'.
+#[test]
+fn the_frame_tags_start_over_with_a_clear() {
+    let ctx = ctx();
+    let scene = scene::load("table1-224").unwrap_or_else(|e| panic!("{e}"));
+    let light = scene.light;
+    let aside = light.with_center(light.center() + Vec3::new(1.5, 0.0, 0.8));
+    let request = FrameRequest {
+        width: 48,
+        height: 48,
+        dbuffer_size: 64,
+        read_dbuffer: true,
+        method: Method::DBUFFER,
+        ..FrameRequest::default()
+    };
+    let mut first = scene.clone();
+    first.light = aside;
+    let mut session = Session::new(&ctx, first);
+    let frame = |session: &mut Session| {
+        session
+            .frame(&ctx, &request)
+            .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let crossings = |f: &dbuffer::render::Frame| {
+        let maps = f.maps.as_ref().expect("maps");
+        (1..3)
+            .map(|slot| maps.raw(slot, 0).iter().filter(|&&v| v > 0.0).count())
+            .sum::<usize>()
+    };
+    assert!(
+        crossings(&frame(&mut session)) > 0,
+        "the first frame's volumes"
+    );
+    session.set_light(light);
+    let mut fresh_scene = scene.clone();
+    fresh_scene.light = light;
+    let fresh = frame(&mut Session::new(&ctx, fresh_scene));
+    assert!(crossings(&fresh) > 0, "volumes to compare");
+    // The light pass of frame 2 … 256: tags 2 … 255, then 1 again.
+    for k in 2..=256 {
+        if k > 2 {
+            session.invalidate_light_maps();
+        }
+        let kept = frame(&mut session);
+        if k == 2 || k >= 255 {
+            let (a, b) = (kept.maps.expect("maps"), fresh.maps.as_ref().expect("maps"));
+            for slot in 1..3 {
+                for c in 0..2 {
+                    assert!(
+                        a.raw(slot, c) == b.raw(slot, c),
+                        "light pass {k}: light map {slot}.{c} differs from a fresh session's"
+                    );
+                }
+            }
+            assert_eq!(kept.visibility, fresh.visibility, "light pass {k}: V");
         }
     }
 }

@@ -17,6 +17,7 @@ use crate::geometry::volume_vertices::{
     drawn_volumes, reach_below, CORNERS_PER_ROW, MAX_CORNERS,
 };
 use crate::geometry::{SceneGeometry, VolumeParams};
+use crate::render::frame_tag::FrameTag;
 use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::dbuffer_volumes::{CasterVolumes, DBufferVolumes, VolumeLayout};
 use crate::render::passes::shadow_map::{lookup_entries, LightUniforms, ShadowUniforms};
@@ -134,8 +135,6 @@ pub struct DBuffer {
     geometry_ms: f64,
     casters: Vec<CasterVolumes>,
     penumbra: VertexChunks,
-    /// Where the penumbra entries can be in the light view's image.
-    penumbra_rect: [f32; 4],
     volumes: DBufferVolumes,
     /// The closing fans' corners over all casters, three `Rgba32Float` texels each (apex, the
     /// two edges' far ends), `CORNERS_PER_ROW` to a row: `corners` of
@@ -197,7 +196,6 @@ impl DBuffer {
             geometry_ms: 0.0,
             casters: Vec::new(),
             penumbra: VertexChunks::empty(),
-            penumbra_rect: [0.0, 0.0, 1.0, 1.0],
             volumes: DBufferVolumes::new(ctx),
             corners: corner_texture(ctx, &[]),
             made_for: None,
@@ -233,7 +231,6 @@ impl DBuffer {
                 umbra: VertexChunks::new(device, "DBuffer::umbra", umbra),
             })
             .collect();
-        self.penumbra_rect = drawn.penumbra_rect;
         let penumbra = drawn.penumbra;
         self.penumbra = VertexChunks::new(device, "DBuffer::penumbra", &penumbra);
         let corners: Vec<[f32; 4]> = geometry
@@ -319,7 +316,6 @@ impl MethodState for DBuffer {
                 depth,
                 &self.casters,
                 &self.penumbra,
-                self.penumbra_rect,
                 key.layout,
             );
             self.made_for = Some(key);
@@ -328,16 +324,17 @@ impl MethodState for DBuffer {
         let map = shared.shadow_map.made()?;
         let horizon = f32::from(inputs.knobs.get(&HORIZON));
         let corners = f32::from(inputs.knobs.get(&CORNERS));
-        let uniforms =
-            ShadowUniforms::new(inputs.light_view, map.size, [horizon, corners, 0.0, 0.0]);
-        inputs
-            .ctx
-            .queue
-            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
         let v = require(
             self.volumes.targets(),
             "the D-buffer's targets were not made",
         )?;
+        let tag = v.tag.bits() as f32;
+        let uniforms =
+            ShadowUniforms::new(inputs.light_view, map.size, [horizon, corners, tag, 0.0]);
+        inputs
+            .ctx
+            .queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
         let bound = Bound {
             map: map.generation,
             volumes: v.generation,
@@ -363,13 +360,10 @@ impl MethodState for DBuffer {
         let v = self.volumes.targets()?;
         let generation = map.generation ^ v.generation.rotate_left(32);
         let textures = [&map.distance, &v.umbra, &v.penumbra];
-        Some(LightMaps::new(
-            v.size,
-            self.view_proj,
-            textures,
-            CHANNELS,
-            generation,
-        ))
+        Some(
+            LightMaps::new(v.size, self.view_proj, textures, CHANNELS, generation)
+                .tagged([FrameTag::NONE, v.tag, v.tag]),
+        )
     }
 
     fn geometry(&self) -> Option<&SceneGeometry> {

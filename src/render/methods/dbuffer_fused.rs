@@ -435,11 +435,6 @@ impl MethodState for DBufferFused {
             self.view_proj = inputs.light_view.view_projection();
         }
         let map = shared.shadow_map.made()?;
-        let shadow = ShadowUniforms::new(inputs.light_view, map.size, [0.0; 4]);
-        inputs
-            .ctx
-            .queue
-            .write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow));
         let (Some(paper), Some(lists), Some((lut, ..))) = (
             self.paper.light_maps(shared),
             self.lists.targets(),
@@ -449,6 +444,13 @@ impl MethodState for DBufferFused {
                 "dbuffer-fused's maps were not made".into(),
             ));
         };
+        // knobs.z: the frame tag of the paper's volume channels (methods/dbuffer.wgsl's).
+        let tag = paper.tags[1].bits() as f32;
+        let shadow = ShadowUniforms::new(inputs.light_view, map.size, [0.0, 0.0, tag, 0.0]);
+        inputs
+            .ctx
+            .queue
+            .write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow));
         let bound = Bound {
             map: map.generation,
             paper: paper.generation,

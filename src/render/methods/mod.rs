@@ -26,6 +26,7 @@ use std::sync::{Arc, OnceLock};
 use glam::{Mat4, Vec3};
 
 use super::adapter::{Capabilities, FormatNeed, Usage, Verdict};
+use super::frame_tag::FrameTag;
 use super::gpu_scene::GpuScene;
 use super::passes::camera::ScreenView;
 use super::passes::shadow_map::ShadowMap;
@@ -680,6 +681,8 @@ pub struct LightMaps<'a> {
     pub channels: &'static [Channel],
     /// Changes whenever the textures are made again (whoever binds them binds again).
     pub generation: u64,
+    /// Per texture, the frame tag its live texels carry ([`FrameTag::NONE`]: read as stored).
+    pub tags: [FrameTag; 3],
 }
 
 impl<'a> LightMaps<'a> {
@@ -699,7 +702,13 @@ impl<'a> LightMaps<'a> {
             raw: textures.map(|t| &t.texture),
             channels,
             generation,
+            tags: [FrameTag::NONE; 3],
         }
+    }
+
+    /// The same maps, whose textures carry frame tags (the D-buffer's volume channels).
+    pub fn tagged(self, tags: [FrameTag; 3]) -> LightMaps<'a> {
+        LightMaps { tags, ..self }
     }
 
     /// The maps of one texture whose components are all the channels.

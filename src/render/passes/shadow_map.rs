@@ -30,7 +30,11 @@ pub struct LightUniforms {
     pub center: [f32; 3],
     pub inv_far: f32,
     pub normal: [f32; 3],
-    pub _pad: f32,
+    /// The frame tag the D-buffer's volume channels are drawn with ([`FrameTag`]); 0 for every
+    /// other pass.
+    ///
+    /// [`FrameTag`]: crate::render::frame_tag::FrameTag
+    pub tag: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<LightUniforms>() == 96);
@@ -48,7 +52,7 @@ impl LightUniforms {
             center: light.center().to_array(),
             inv_far: 1.0 / view.far,
             normal: normal.to_array(),
-            _pad: 0.0,
+            tag: 0,
         }
     }
 }

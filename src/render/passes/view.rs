@@ -214,12 +214,14 @@ pub struct ViewUniforms {
     pub map_size: f32,
     pub channel_count: u32,
     pub channels: [[u32; 4]; MAX_CHANNELS],
+    /// Per light-map texture, its frame tag (0: read as stored).
+    pub tags: [u32; 4],
     pub inv_view_proj: [[f32; 4]; 4],
     pub map_view_proj: [[f32; 4]; 4],
     pub probe: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<ViewUniforms>() == 240);
+const _: () = assert!(std::mem::size_of::<ViewUniforms>() == 256);
 
 /// `NO_FALLBACK` of `shaders/shared/view_inputs.wgsl`.
 pub const NO_FALLBACK: u32 = 255;
@@ -232,10 +234,14 @@ impl ViewUniforms {
         has_reference: bool,
     ) -> ViewUniforms {
         let mut channels = [[0, 0, 0, NO_FALLBACK]; MAX_CHANNELS];
+        let mut tags = [0; 4];
         let (count, size, map_vp) = match maps {
             Some((m, _)) => {
                 for (slot, c) in channels.iter_mut().zip(m.channels) {
                     *slot = channel_code(c);
+                }
+                for (slot, t) in tags.iter_mut().zip(m.tags) {
+                    *slot = t.bits();
                 }
                 (
                     m.channels.len().min(MAX_CHANNELS) as u32,
@@ -261,6 +267,7 @@ impl ViewUniforms {
             map_size: size as f32,
             channel_count: count,
             channels,
+            tags,
             inv_view_proj: camera_view_proj.inverse().to_cols_array_2d(),
             map_view_proj: map_vp.to_cols_array_2d(),
             probe: [0; 4],
