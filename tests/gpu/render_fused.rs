@@ -450,3 +450,48 @@ fn uniforms_match_their_wgsl() {
         );
     }
 }
+
+/// Past `WHOLE_WALK_EDGES` candidate edges an overflowing list's pixels get the paper's V (the
+/// only pixels that read the paper's volume channels, which are drawn only then): the knot of
+/// `fig8c-complex` at eight times its triangles, with a cap small enough to overflow.
+#[test]
+fn past_the_whole_walk_overflowing_lists_get_the_papers_v() {
+    let ctx = context();
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/fig8c-complex.toml"),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let dense = text.replace("torus-knot:240x12", "torus-knot:960x24");
+    assert_ne!(dense, text, "the knot's mesh line");
+    let dir = std::env::temp_dir().join(format!("dbuffer-dense-knot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+    let path = dir.join("dense-knot.toml");
+    std::fs::write(&path, dense).unwrap_or_else(|e| panic!("{e}"));
+    let scene = scene::load(&path.to_string_lossy()).unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    let candidates = twin(&scene, 12).edges().len();
+    assert!(
+        candidates > dbuffer::geometry::fused::WHOLE_WALK_EDGES,
+        "{candidates} candidate edges"
+    );
+    let mut session = Session::new(&ctx, scene.clone());
+    let fused = render_in(&ctx, &mut session, Method::DBUFFER_FUSED, knobs(12))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let one_chord = Knobs::default().with(&dbuffer::render::methods::dbuffer::CORNERS, 0);
+    let paper =
+        render_in(&ctx, &mut session, Method::DBUFFER, one_chord).unwrap_or_else(|e| panic!("{e}"));
+    let twin = twin(&scene, 12);
+    let (mut overflowed, mut same) = (0, 0);
+    for (i, x) in receivers(&scene, &fused) {
+        let Some(t) = twin.texel_of(x, DBUFFER) else {
+            continue;
+        };
+        if maps_at(&fused, t).0[3] == 1.0 {
+            overflowed += 1;
+            same += usize::from((fused.visibility[i] - paper.visibility[i]).abs() <= 1e-5);
+        }
+    }
+    println!("{candidates} candidate edges; {overflowed} px overflowed, {same} with the paper's V");
+    assert!(overflowed > 200, "only {overflowed} px overflowed");
+    assert_eq!(same, overflowed, "overflowing pixels with the paper's V");
+}

@@ -19,6 +19,7 @@ use crate::geometry::volume_vertices::{
 use crate::geometry::{SceneGeometry, VolumeParams};
 use crate::render::frame_tag::FrameTag;
 use crate::render::gpu_scene::VertexChunks;
+use crate::render::timer::Recorder;
 use crate::render::passes::dbuffer_volumes::{CasterVolumes, DBufferVolumes, VolumeLayout};
 use crate::render::passes::shadow_map::{lookup_entries, LightUniforms, ShadowUniforms};
 use crate::render::{
@@ -291,15 +292,27 @@ fn corner_texture(ctx: &GpuContext, corners: &[[f32; 4]]) -> wgpu::TextureView {
         .create_view(&wgpu::TextureViewDescriptor::default())
 }
 
-impl MethodState for DBuffer {
-    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
-        let Prepare(inputs, shared, rec) = p;
+impl DBuffer {
+    /// The geometry stage (face classes, silhouettes, volumes) for the current light, when the
+    /// light or a caster moved.
+    pub fn geometry_stage(&mut self, inputs: &FrameInputs<'_>) -> Result<(), RenderError> {
         let light = *inputs.area(if self.center_silhouettes {
             DBUFFER_CENTER.name
         } else {
             DBUFFER.name
         })?;
         self.update_geometry(inputs, light);
+        Ok(())
+    }
+
+    /// The light pass after [`DBuffer::geometry_stage`]: the shadow map and the volume
+    /// channels, when something moved since they were made.
+    pub fn light_pass(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        shared: &mut SharedMaps,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), RenderError> {
         let map = shared.shadow_map.update(inputs, rec)?;
         let key = Made {
             revision: inputs.revision,
@@ -321,6 +334,15 @@ impl MethodState for DBuffer {
             self.made_for = Some(key);
             self.view_proj = inputs.light_view.view_projection();
         }
+        Ok(())
+    }
+}
+
+impl MethodState for DBuffer {
+    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Prepare(inputs, shared, rec) = p;
+        self.geometry_stage(inputs)?;
+        self.light_pass(inputs, shared, rec)?;
         let map = shared.shadow_map.made()?;
         let horizon = f32::from(inputs.knobs.get(&HORIZON));
         let corners = f32::from(inputs.knobs.get(&CORNERS));

@@ -3,8 +3,8 @@
 //! of one caster, combine as they do in reality. CPU twin: `geometry::fused::FusedTwin`.
 //!
 //! Per light or caster move: the paper's D-buffer (this method keeps a [`DBuffer`] of its own:
-//! its `|cx_o|` is the hidden-from-centre test and its V(t) the fallback of an overflowing list),
-//! the candidate edges and their proxy hulls (CPU), then the light passes
+//! its `|cx_o|` is the hidden-from-centre test and its V(t) the fallback of an overflowing list;
+//! its volume channels are drawn only where that fallback can be read, below), the candidate edges and their proxy hulls (CPU), then the light passes
 //! `passes::fused_layers` (caster crossings; receivers along each list texel's ray) and
 //! `passes::fused_lists` (merge, lists, maps). Per frame: the camera pass with
 //! `shaders/methods/dbuffer_fused.wgsl`.
@@ -20,7 +20,8 @@
 //! many edges under a large light overflow, and have few candidates in all), where there are at
 //! most [`WHOLE_WALK_EDGES`](crate::geometry::fused::WHOLE_WALK_EDGES); with more they get the
 //! paper's V(t). So do all pixels when the candidate edges exceed [`MAX_FUSED_EDGES`] (or what
-//! the adapter's storage bindings hold).
+//! the adapter's storage bindings hold). With fewer candidates than that no pixel reads the
+//! paper's V, and its volume pass (2–15 ms of lavapipe's light pass at 1024²) is not drawn.
 
 use super::Cost;
 use wgpu::DownlevelFlags as D;
@@ -38,6 +39,7 @@ use super::{
 use crate::budget::{bytes, MAX_FUSED_EDGES, MAX_FUSED_LIST_BYTES};
 use crate::geometry::fused::{
     candidate_edges, proxy_hull, DiskMask, FusedEdge, MaskEval, DEFAULT_CAP, DEFAULT_SAMPLES,
+    WHOLE_WALK_EDGES,
 };
 use crate::geometry::volume_vertices::{light_view_rect, union_all};
 use crate::geometry::SceneGeometry;
@@ -45,9 +47,12 @@ use crate::render::passes::fused_layers::{FusedLayers, FusedSizes, FusedUniforms
 use crate::render::passes::fused_lists::{
     list_bytes, EdgeBuffers, EdgeRecord, FusedLists, EDGE_BYTES, HULL_BYTES, HULL_CORNERS,
 };
+use crate::render::frame_tag::FrameTag;
+use crate::render::passes::dbuffer_volumes::VolumeLayout;
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
 use crate::render::{
     buffer_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
+    Texture,
 };
 
 /// Texels per side of the grid of edge lists.
@@ -164,6 +169,8 @@ struct Edges {
 
 pub struct DBufferFused {
     paper: DBuffer,
+    /// Bound for the paper's volume channels where its V is never read (no crossing).
+    no_paper: Texture,
     /// Bound for the generations of what it reads ([`Bound`]).
     camera: CameraGroup,
     shadow_uniforms: wgpu::Buffer,
@@ -230,6 +237,13 @@ impl DBufferFused {
         let uniforms = uniform_buffer::<FusedUniforms>(&ctx.device, "DBufferFused::uniforms");
         DBufferFused {
             paper: DBuffer::new(ctx, false),
+            no_paper: Texture::new(
+                &ctx.device,
+                "DBufferFused::no_paper",
+                (1, 1),
+                VolumeLayout::Distances.format(),
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
             camera: CameraGroup::two_draws(ctx, SHADER, &entries),
             shadow_uniforms: uniform_buffer::<ShadowUniforms>(
                 &ctx.device,
@@ -370,9 +384,9 @@ impl MethodState for DBufferFused {
                 bytes(max_binding)
             )));
         }
-        // The paper's D-buffer: |cx_o| and the fallback, and the geometry (face classes).
-        self.paper
-            .prepare(Prepare(inputs, &mut *shared, &mut *rec))?;
+        // The paper's geometry (face classes), then its light pass: |cx_o| always, the volume
+        // channels only where the paper's V can be read (below).
+        self.paper.geometry_stage(inputs)?;
         let geometry = require(
             self.paper.geometry(),
             "the D-buffer's geometry was not made",
@@ -381,6 +395,14 @@ impl MethodState for DBufferFused {
             self.geometry_ms = ms;
         }
         let edges = require(self.edges.as_ref(), "dbuffer-fused's edges were not made")?;
+        // The paper's V is read only where every list overflows or an overflowing list has more
+        // candidate edges than a pixel walks; else its volume channels are not drawn at all.
+        let paper_read = edges.over_budget || edges.count > WHOLE_WALK_EDGES;
+        if paper_read {
+            self.paper.light_pass(inputs, shared, rec)?;
+        } else {
+            shared.shadow_map.update(inputs, rec)?;
+        }
         let light = inputs.scene.light.area_or_centre();
         // A disk's samples are the same for every disk; a polygon's follow its shape.
         let same_shape = |l: &AreaLight| (l.is_disk() && light.is_disk()) || *l == light;
@@ -435,17 +457,26 @@ impl MethodState for DBufferFused {
             self.view_proj = inputs.light_view.view_projection();
         }
         let map = shared.shadow_map.made()?;
-        let (Some(paper), Some(lists), Some((lut, ..))) = (
-            self.paper.light_maps(shared),
-            self.lists.targets(),
-            self.lut.as_ref(),
-        ) else {
+        let (Some(lists), Some((lut, ..))) = (self.lists.targets(), self.lut.as_ref()) else {
             return Err(RenderError::Gpu(
                 "dbuffer-fused's maps were not made".into(),
             ));
         };
+        // The paper's volume channels and their frame tag, or where its V is never read, a
+        // texel of no crossing in their place. Generation 0 is no made texture's.
+        let (paper, umbra, penumbra, tag) = if paper_read {
+            let maps = require(
+                self.paper.light_maps(shared),
+                "the D-buffer's targets were not made",
+            )?;
+            let [_, umbra, penumbra] = maps.textures;
+            (maps.generation, umbra, penumbra, maps.tags[1])
+        } else {
+            let none = &self.no_paper.view;
+            (0, none, none, FrameTag::NONE)
+        };
         // knobs.z: the frame tag of the paper's volume channels (methods/dbuffer.wgsl's).
-        let tag = paper.tags[1].bits() as f32;
+        let tag = tag.bits() as f32;
         let shadow = ShadowUniforms::new(inputs.light_view, map.size, [0.0, 0.0, tag, 0.0]);
         inputs
             .ctx
@@ -453,7 +484,7 @@ impl MethodState for DBufferFused {
             .write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow));
         let bound = Bound {
             map: map.generation,
-            paper: paper.generation,
+            paper,
             lists: lists.generation,
             edges: edges.buffers.generation,
             samples,
@@ -464,8 +495,8 @@ impl MethodState for DBufferFused {
             &[
                 buffer_entry(0, &self.shadow_uniforms),
                 view_entry(1, &map.distance.view),
-                view_entry(2, paper.textures[1]),
-                view_entry(3, paper.textures[2]),
+                view_entry(2, umbra),
+                view_entry(3, penumbra),
                 view_entry(4, &lists.maps.view),
                 buffer_entry(5, &self.uniforms),
                 buffer_entry(6, &edges.buffers.edges),
