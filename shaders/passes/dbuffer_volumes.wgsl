@@ -6,9 +6,9 @@
 //            with the depth test Greater)
 //   |cx_pv|  the nearest penumbra entry (faces whose normal points toward c), drawn over the
 //            surfaces' depth: an entry behind the nearest surface is never looked up
-// The targets are never cleared (but when new, and every 255 frames): each texel drawn carries
-// the frame's tag in the low bits of its distance (shared/frame_tag.wgsl), and a texel of any
-// other frame reads as "no crossing". Only the exits' depth is reset, over the rectangle their
+// The targets are never cleared (but when new, and every 255 light passes): each texel drawn
+// carries the frame's tag in the low bits of its distance (shared/frame_tag.wgsl), and a texel
+// of any other frame reads as "no crossing". Only the exits' depth is reset, over the rectangle their
 // volumes can cover (vs_reset, fs_reset, colours masked).
 //   |cx_s|   eq. (2) from the fragment that won, kept per volume (the .y of the volume targets)
 //   side     the winning triangle's lit side in the light's plane (.zw), for V exact under a

@@ -255,44 +255,7 @@ impl DBuffer {
         self.geometry = Some((geometry, inputs.revision));
         self.made_for = None;
     }
-}
 
-/// The corners' texture: `3 × CORNERS_PER_ROW` texels wide (less for fewer corners), a row per
-/// `CORNERS_PER_ROW` corners; one zero corner where there are none (a binding is never empty).
-fn corner_texture(ctx: &GpuContext, corners: &[[f32; 4]]) -> wgpu::TextureView {
-    use wgpu::util::DeviceExt;
-    let texels_per_row = 3 * CORNERS_PER_ROW;
-    let mut data = corners.to_vec();
-    if data.is_empty() {
-        data.resize(3, [0.0; 4]);
-    }
-    let width = data.len().min(texels_per_row);
-    data.resize(data.len().div_ceil(width) * width, [0.0; 4]);
-    let rows = data.len() / width;
-    ctx.device
-        .create_texture_with_data(
-            &ctx.queue,
-            &wgpu::TextureDescriptor {
-                label: Some("DBuffer::corners"),
-                size: wgpu::Extent3d {
-                    width: width as u32,
-                    height: rows as u32,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba32Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
-            bytemuck::cast_slice(&data),
-        )
-        .create_view(&wgpu::TextureViewDescriptor::default())
-}
-
-impl DBuffer {
     /// The geometry stage (face classes, silhouettes, volumes) for the current light, when the
     /// light or a caster moved.
     pub fn geometry_stage(&mut self, inputs: &FrameInputs<'_>) -> Result<(), RenderError> {
@@ -336,6 +299,41 @@ impl DBuffer {
         }
         Ok(())
     }
+}
+
+/// The corners' texture: `3 × CORNERS_PER_ROW` texels wide (less for fewer corners), a row per
+/// `CORNERS_PER_ROW` corners; one zero corner where there are none (a binding is never empty).
+fn corner_texture(ctx: &GpuContext, corners: &[[f32; 4]]) -> wgpu::TextureView {
+    use wgpu::util::DeviceExt;
+    let texels_per_row = 3 * CORNERS_PER_ROW;
+    let mut data = corners.to_vec();
+    if data.is_empty() {
+        data.resize(3, [0.0; 4]);
+    }
+    let width = data.len().min(texels_per_row);
+    data.resize(data.len().div_ceil(width) * width, [0.0; 4]);
+    let rows = data.len() / width;
+    ctx.device
+        .create_texture_with_data(
+            &ctx.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("DBuffer::corners"),
+                size: wgpu::Extent3d {
+                    width: width as u32,
+                    height: rows as u32,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(&data),
+        )
+        .create_view(&wgpu::TextureViewDescriptor::default())
 }
 
 impl MethodState for DBuffer {

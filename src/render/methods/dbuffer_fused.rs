@@ -4,10 +4,10 @@
 //!
 //! Per light or caster move: the paper's D-buffer (this method keeps a [`DBuffer`] of its own:
 //! its `|cx_o|` is the hidden-from-centre test and its V(t) the fallback of an overflowing list;
-//! its volume channels are drawn only where that fallback can be read, below), the candidate edges and their proxy hulls (CPU), then the light passes
-//! `passes::fused_layers` (caster crossings; receivers along each list texel's ray) and
-//! `passes::fused_lists` (merge, lists, maps). Per frame: the camera pass with
-//! `shaders/methods/dbuffer_fused.wgsl`.
+//! its volume channels are drawn only where that fallback can be read, below), the candidate
+//! edges and their proxy hulls (CPU), then the light passes `passes::fused_layers` (caster
+//! crossings; receivers along each list texel's ray) and `passes::fused_lists` (merge, lists,
+//! maps). Per frame: the camera pass with `shaders/methods/dbuffer_fused.wgsl`.
 //!
 //! **Knobs.** `--list-size` (texels per side of the list grid, default 256), `--list-cap` (edge
 //! ids one list stores, default 256), `--mask-samples` (disk samples of the mask, default and
