@@ -13,50 +13,111 @@
 // the frame tag shadow.knobs.z (passes/dbuffer_volumes.wgsl): read through frame_untagged.
 @group(1) @binding(2) var d_u: texture_2d<f32>;
 @group(1) @binding(3) var d_p: texture_2d<f32>;
-// The closing fans' silhouette corners, three texels per fan (apex, the two edges' far ends;
-// geometry::FanCorner), CORNERS_PER_ROW fans to a row. A fan's texel holds -(2 + its index) in
-// .z (geometry::volume_vertices::corner_marker) instead of a lit side.
+// The closing fans' silhouette corners, TEXELS_PER_CORNER texels per fan (apex, the two edges'
+// far ends, each edge's two faces' normals, the two extrusion points; geometry::FanCorner),
+// CORNERS_PER_ROW fans to a row.
+// A fan's texel holds -(2 + its index) in .z (geometry::volume_vertices::corner_marker) instead of
+// a lit side, where V exact may be taken from its corner.
 @group(1) @binding(4) var corners: texture_2d<f32>;
-const CORNERS_PER_ROW: u32 = 512u;
+const TEXELS_PER_CORNER: u32 = 9u;
+const CORNERS_PER_ROW: u32 = 224u;
+// geometry::wedges::SILHOUETTE_MARGIN, REACH_MARGIN and SEAM_MARGIN.
+const SILHOUETTE_MARGIN: f32 = 0.1;
+const REACH_MARGIN: f32 = 0.25;
+const SEAM_MARGIN: f32 = 0.15;
 
 fn corner_point(k: u32, j: u32) -> vec3<f32> {
     count_work(1.0);
-    return textureLoad(corners, vec2<u32>(3u * (k % CORNERS_PER_ROW) + j, k / CORNERS_PER_ROW), 0).xyz;
+    return textureLoad(corners, vec2<u32>(TEXELS_PER_CORNER * (k % CORNERS_PER_ROW) + j, k / CORNERS_PER_ROW), 0).xyz;
 }
 
-// V at x behind one convex silhouette corner: the light less the part behind both planes
-// through x and an edge (each on the side of the other edge's far end), the corner's wedge as
-// x sees it (a reflex corner: the light less it); -1 where the corner is unclear or degenerate
-// from x (twin: DiskFrame::corner_visibility).
-fn corner_visibility(x: vec3<f32>, k: u32) -> f32 {
+// How far outside the light `end` lies seen from x (projected from x onto the light's plane), in
+// light radii (light_bound: a polygon's enclosing disk); an end no nearer the light's plane than
+// x is far outside (its edge runs away from the light).
+fn corner_reach(x: vec3<f32>, end: vec3<f32>) -> f32 {
+    let hx = dot(camera.light_normal, x - camera.light_center);
+    let he = dot(camera.light_normal, end - camera.light_center);
+    if !(he < hx) {
+        return 1e30;
+    }
+    let g = x + (end - x) * (hx / (hx - he)) - camera.light_center;
+    let q = vec2<f32>(dot(g, camera.light_u), dot(g, camera.light_w));
+    var out = length(q) - camera.light_bound;
+    if polygon_light() {
+        out = -1e30;
+        for (var i = 0u; i < camera.light_corner_count; i++) {
+            let a = polygon_corner(camera.light_corners, i);
+            let d = polygon_corner(camera.light_corners, (i + 1u) % camera.light_corner_count) - a;
+            out = max(out, dot(vec2<f32>(d.y, -d.x), q - a) / max(length(d), 1e-30));
+        }
+    }
+    return out / max(camera.light_bound, 1e-30);
+}
+
+// Where x lies across the fan at `apex` between the extrusion points s0 and s1: the distance to
+// the nearer of the planes through the light's centre, the apex and each (the fan's texels lie
+// between them) over the sum of both; 0 on a side, 1/2 on the middle (twin: DiskFrame::fan_share).
+fn fan_share(x: vec3<f32>, apex: vec3<f32>, s0: vec3<f32>, s1: vec3<f32>) -> f32 {
+    let c = camera.light_center;
+    let p = array<vec3<f32>, 2>(s0 - c, s1 - c);
+    var d = vec2<f32>(0.0);
+    for (var k = 0u; k < 2u; k++) {
+        let n = cross(apex - c, p[k]);
+        let away = select(n, -n, dot(n, p[1u - k]) > 0.0);
+        d[k] = max(dot(away, x - c), 0.0) / max(length(away), 1e-30);
+    }
+    let sum = d.x + d.y;
+    return select(0.0, min(d.x, d.y) / sum, sum > 0.0);
+}
+
+// V at x behind one convex silhouette corner, and how far it may be trusted there: (v, weight),
+// V exact being the chord's moved `weight` of the way to v; weight 0 where the corner does not
+// apply (twin: DiskFrame::corner_visibility, with why). v is the light less the part behind both
+// planes through x and an edge (each on the side of the other edge's far end). It applies where
+// both edges are silhouettes seen from x, the corner is convex seen from x and both edges reach
+// past the light seen from x; the weight fades in over SILHOUETTE_MARGIN and REACH_MARGIN, and
+// out toward the fan's sides (SEAM_MARGIN), where its texels meet the quads' chord.
+fn corner_visibility(x: vec3<f32>, k: u32) -> vec2<f32> {
     let size = textureDimensions(corners);
-    if 3u * (k % CORNERS_PER_ROW) + 2u >= size.x || k / CORNERS_PER_ROW >= size.y {
-        return -1.0;
+    if TEXELS_PER_CORNER * (k % CORNERS_PER_ROW) + TEXELS_PER_CORNER > size.x || k / CORNERS_PER_ROW >= size.y {
+        return vec2<f32>(0.0);
     }
-    // apex.w: 1 convex, -1 reflex, 0 unclear (geometry::FanCorner::convex).
-    let apex = textureLoad(corners, vec2<u32>(3u * (k % CORNERS_PER_ROW), k / CORNERS_PER_ROW), 0);
-    count_work(1.0);
-    let convex = apex.w;
-    if convex == 0.0 {
-        return -1.0;
-    }
-    let a = apex.xyz;
-    let ends = array<vec3<f32>, 2>(corner_point(k, 1u) - a, corner_point(k, 2u) - a);
+    let a = corner_point(k, 0u);
+    let far = array<vec3<f32>, 2>(corner_point(k, 1u), corner_point(k, 2u));
+    let ends = array<vec3<f32>, 2>(far[0] - a, far[1] - a);
+    let to_x = x - a;
+    let dist = length(to_x);
+    var weight = 1.0;
     var m: array<vec2<f32>, 3>;
     var h = vec3<f32>(-1.0);
     for (var i = 0u; i < 2u; i++) {
+        let na = corner_point(k, 3u + 2u * i);
+        let nb = corner_point(k, 4u + 2u * i);
+        // A silhouette from x: its faces on two sides of x (an open edge: its one face's two sides).
+        let da = dot(na, to_x);
+        let db = select(dot(nb, to_x), -da, all(nb == vec3<f32>(0.0)));
+        if !(da * db < 0.0) {
+            return vec2<f32>(0.0);
+        }
+        weight = min(weight, min(abs(da), abs(db)) / (dist * SILHOUETTE_MARGIN));
         let edge = ends[i];
         let other = ends[1u - i];
-        var n = cross(edge, x - a);
+        var n = cross(edge, to_x);
         let side = dot(n, other);
         if !(abs(side) > 1e-6 * length(n) * length(other)) {
-            return -1.0;
+            return vec2<f32>(0.0);
         }
         n = select(n, -n, side < 0.0);
+        // Convex from x: the caster (against its outward direction) on the other end's side.
+        if !(dot(n, na + nb) < 0.0) {
+            return vec2<f32>(0.0);
+        }
         // Behind: n . (c + p - a) >= 0, p a corner-plane point about the centre.
         m[i] = vec2<f32>(dot(n, camera.light_u), dot(n, camera.light_w));
         h[i] = dot(n, a - camera.light_center);
     }
+    weight = min(weight, min(corner_reach(x, far[0]), corner_reach(x, far[1])) / REACH_MARGIN);
+    weight = min(weight, fan_share(x, a, corner_point(k, 7u), corner_point(k, 8u)) / SEAM_MARGIN);
     var hidden: f32;
     if polygon_light() {
         hidden = polygon_cut_area(camera.light_corners, camera.light_corner_count, m, h) / max(camera.light_area, 1e-30);
@@ -73,8 +134,8 @@ fn corner_visibility(x: vec3<f32>, k: u32) -> f32 {
         }
         hidden = disk_cut2_area(mu[0], hu[0], mu[1], hu[1]) / 3.14159265358979;
     }
-    // A reflex corner covers the light less the wedge.
-    return clamp(select(hidden, 1.0 - hidden, convex > 0.0), 0.0, 1.0);
+    let v = clamp(1.0 - hidden, 0.0, 1.0);
+    return select(vec2<f32>(0.0), vec2<f32>(v, clamp(weight, 0.0, 1.0)), v == v && weight == weight);
 }
 
 fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
@@ -100,13 +161,13 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         hidden
     );
     out.v = v_of_t_toward(out.t, xs.zw);
-    // V exact where a closing fan won: the corner's wedge, not a chord's strip (which grows
-    // with the depth where the wedge grows with its square).
-    // (shadow.knobs.y = 1, --dbuffer-corners.)
+    // V exact where a closing fan won: toward the corner's wedge, not a chord's strip (which
+    // grows with the depth where the wedge grows with its square), as far as the corner is the
+    // caster there. (shadow.knobs.y = 1, --dbuffer-corners.)
     if VT_VARIANT == VT_EXACT && crossed && xs.z < -1.5 && shadow.knobs.y > 0.5 {
         let corner = corner_visibility(x, u32(round(-xs.z - 2.0)));
-        if corner >= 0.0 {
-            out.v = corner;
+        if corner.y > 0.0 {
+            out.v = mix(out.v, corner.x, corner.y);
             took_path(1.0);
         }
     }

@@ -107,7 +107,7 @@ pub struct DBufferTwin {
     /// of the light in front of the receiver's own plane.
     pub horizon: bool,
     /// `--dbuffer-corners` (on unless set off): V exact behind a closing fan from the fan's
-    /// corner ([`DiskFrame::corner_visibility`]).
+    /// corner where it can be trusted ([`DiskFrame::corner_visibility`]).
     pub corners: bool,
     surfaces: Bvh,
     casters: Vec<CasterVolumes>,
@@ -258,20 +258,23 @@ impl DBufferTwin {
     }
 
     /// `V(t)` at `x` with the chosen variant: the lookup alone, whatever surface `x` is on.
-    /// V exact where a closing fan won the channel: the light less the caster's corner seen
-    /// from `x` ([`DiskFrame::corner_visibility`]), not one chord's strip.
+    /// V exact where a closing fan won the channel at an [`FanCorner::exact`] corner: the chord's
+    /// V moved toward the light less the caster's corner seen from `x`, as far as
+    /// [`DiskFrame::corner_visibility`] trusts the corner there.
     pub fn visibility(&self, x: Vec3, vt: VtVariant) -> f64 {
         let s = self.sample(x);
+        let chord = vt.apply_toward(s.t, s.side(), &self.outline);
         let in_penumbra = matches!(s.branch, Branch::PenumbraHidden | Branch::PenumbraVisible);
         if vt == VtVariant::Exact && in_penumbra && self.corners {
-            let corner = s.corner().and_then(|c| Some((c, c.convex?)));
-            if let Some((c, convex)) = corner {
-                if let Some(v) = self.frame.corner_visibility(x, c.apex, c.ends, convex) {
-                    return v;
-                }
+            let corner = s.corner().filter(|c| c.exact);
+            if let Some((v, weight)) = corner.and_then(|c| {
+                self.frame
+                    .corner_visibility(x, c.apex, c.ends, c.normals, c.supports)
+            }) {
+                return chord + weight * (v - chord);
             }
         }
-        vt.apply_toward(s.t, s.side(), &self.outline)
+        chord
     }
 
     /// What the camera pass gives at `x` on a surface of normal `n`: nothing on a side turned

@@ -66,8 +66,13 @@ pub fn volume_vertices(
     volume_vertices_within(g, light, None, None, 0)
 }
 
-/// Corners to a row of the D-buffer's corner texture (three texels each).
-pub const CORNERS_PER_ROW: usize = 512;
+/// Texels of the D-buffer's corner texture a corner takes: the apex, the two edges' far ends,
+/// the two faces' normals of each edge and the two extrusion points ([`super::FanCorner`]).
+pub const TEXELS_PER_CORNER: usize = 9;
+
+/// Corners to a row of the D-buffer's corner texture: 2,016 texels, within the smallest largest
+/// texture a device has (WebGL2's 2048).
+pub const CORNERS_PER_ROW: usize = 224;
 
 /// The most corners the texture holds: 2048 rows, the smallest largest texture a device has
 /// (WebGL2's). Every whole number below it is exact in an `f32`.
@@ -116,11 +121,11 @@ pub fn volume_vertices_within(
         } else {
             (&mut penumbra, penumbra_reach)
         };
-        // Only a corner whose side is clear: the others keep their lit side (the chord's V).
+        // Only a corner V exact may be taken from: the others keep their lit side (the chord's V).
         let marker = g
             .volumes
             .corner_index(i)
-            .filter(|&k| g.volumes.corners[k].convex.is_some())
+            .filter(|&k| g.volumes.corners[k].exact)
             .and_then(|k| corner_marker(corner_base + k));
         let side = marker.unwrap_or_else(|| lit_side(corners, light));
         let t = corners.map(|q| {

@@ -136,23 +136,36 @@ pub struct VolumeMesh {
     pub corners: Vec<FanCorner>,
 }
 
-/// A closing fan's silhouette corner: the apex and the far ends of its two silhouette edges, and
-/// the fan's triangles `first .. first + count`. Seen from a point behind the fan the caster's
-/// corner covers the light where it lies behind both planes through the point and an edge (on
-/// each plane's side that holds the other edge): a wedge, whose area grows with the square of
-/// the depth, where one chord's strip grows linearly.
+/// A closing fan's silhouette corner: the apex and the far ends of its two silhouette edges,
+/// the normals of each edge's faces, and the fan's triangles `first .. first + count`. Seen from
+/// a point behind the fan the caster's corner covers the light where it lies behind both planes
+/// through the point and an edge (on each plane's side that holds the other edge): a wedge,
+/// whose area grows with the square of the depth, where one chord's strip grows linearly.
 ///
-/// `convex`: whether the caster lies inside that wedge (`Some(true)`), outside it (a reflex
-/// corner, `Some(false)`: it covers the light less the wedge), or neither is clear (`None`: an
-/// edge's two faces on two sides of its plane, seen from behind the apex): the chord's V then.
+/// `exact`: whether V exact may be taken from this corner at all (the camera pass still decides
+/// per point, [`super::wedges::DiskFrame::corner_visibility`]). It is, where the corner seen
+/// from behind its apex is convex and the whole caster lies inside its wedge (every vertex, for
+/// a caster that does not bound a convex solid; at most [`CORNER_CHECK_VERTICES`] of them): the
+/// wedge is then all of the caster that point sees near the light. A reflex corner, one whose
+/// sides are unclear, a caster reaching past the corner's edges (an L's other leg) or one of more
+/// vertices keeps the chord.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FanCorner {
     pub first: u32,
     pub count: u32,
     pub apex: Vec3,
     pub ends: [Vec3; 2],
-    pub convex: Option<bool>,
+    /// Each edge's two faces' unit normals; the second is zero on an open boundary edge.
+    pub normals: [[Vec3; 2]; 2],
+    /// The two edges' extrusion points on the light's boundary, between which the fan runs.
+    pub supports: [Vec3; 2],
+    pub exact: bool,
 }
+
+/// The most vertices of a caster that does not bound a convex solid whose corners are checked
+/// for [`FanCorner::exact`] (every vertex against every corner's wedge); a larger one keeps the
+/// chord at every corner.
+pub const CORNER_CHECK_VERTICES: usize = 4096;
 
 impl VolumeMesh {
     /// The corner of the fan triangle `i` belongs to, if it is a fan's.
@@ -629,12 +642,15 @@ impl Fans<'_> {
                 if made > 0 {
                     let ends = [self.far_end(&group[i]), self.far_end(&group[j])];
                     let behind = apex + (apex - 0.5 * (group[i].extrusion + group[j].extrusion));
+                    let convex = self.corner_convexity(apex, [&group[i], &group[j]], ends, behind);
                     volumes.corners.push(FanCorner {
                         first: before as u32,
                         count: made as u32,
                         apex,
                         ends,
-                        convex: self.corner_convexity(apex, [&group[i], &group[j]], ends, behind),
+                        normals: [self.normals(&group[i]), self.normals(&group[j])],
+                        supports: [group[i].extrusion, group[j].extrusion],
+                        exact: convex == Some(true) && self.caster_in_wedge(apex, ends, behind),
                     });
                 }
                 count += usize::from(made > 0);
@@ -697,9 +713,10 @@ impl Fans<'_> {
     }
 
     /// Whether the caster lies inside the wedge of the corner at `apex` seen from `from` (behind
-    /// it): for each edge, the side of the plane through `from` and the edge the caster is on
-    /// (against its outward direction there, the sum of the edge's faces' normals), against the
-    /// side the other edge's far end is on ([`FanCorner::convex`]).
+    /// it), near the corner: for each edge, the side of the plane through `from` and the edge the
+    /// caster is on (against its outward direction there, the sum of the edge's faces' normals),
+    /// against the side the other edge's far end is on. `Some(false)`: a reflex corner; `None`:
+    /// the two edges disagree, or a side is not defined.
     fn corner_convexity(
         &self,
         apex: Vec3,
@@ -725,6 +742,44 @@ impl Fans<'_> {
             inside[k] = other.signum() == caster.signum();
         }
         (inside[0] == inside[1]).then_some(inside[0])
+    }
+
+    /// Whether every vertex of the caster lies inside the wedge of the convex corner at `apex`
+    /// seen from `from` ([`FanCorner::exact`]): true for a caster bounding a convex solid, false
+    /// for one of more than [`CORNER_CHECK_VERTICES`] vertices.
+    fn caster_in_wedge(&self, apex: Vec3, far: [Vec3; 2], from: Vec3) -> bool {
+        if self.mesh.convex {
+            return true;
+        }
+        if self.mesh.positions.len() > CORNER_CHECK_VERTICES {
+            return false;
+        }
+        let mut planes = [(Vec3::ZERO, 0.0f32); 2];
+        for k in 0..2 {
+            let n = (far[k] - apex).cross(from - apex).normalize_or_zero();
+            let n = if n.dot(far[1 - k] - apex) < 0.0 {
+                -n
+            } else {
+                n
+            };
+            planes[k] = (n, n.dot(apex));
+        }
+        let tol = 1e-4 * apex.distance(far[0]).max(apex.distance(far[1]));
+        self.mesh
+            .positions
+            .iter()
+            .all(|&p| planes.iter().all(|&(n, d)| n.dot(p) - d >= -tol))
+    }
+
+    /// The unit normals of the faces of an end's edge (the second zero on an open edge).
+    fn normals(&self, end: &EdgeEnd) -> [Vec3; 2] {
+        let e = &self.mesh.edges[end.edge as usize];
+        e.faces.map(|f| {
+            self.mesh
+                .faces
+                .get(f as usize)
+                .map_or(Vec3::ZERO, |f| f.normal)
+        })
     }
 
     /// The other vertex of the edge an end belongs to.

@@ -95,6 +95,23 @@ pub fn edge_coverage_2d(a: DVec2, b: DVec2) -> f64 {
     (cross - cross.atan2(p0.dot(p1))) / (2.0 * std::f64::consts::PI)
 }
 
+/// The faces' angle (its sine) to the direction from a corner's apex to the shaded point over
+/// which V exact fades in from the chord to the corner's wedge
+/// ([`DiskFrame::corner_visibility`]): an edge whose face turns toward the point stops being its
+/// silhouette there.
+pub const SILHOUETTE_MARGIN: f64 = 0.1;
+
+/// Light radii past the light's rim over which V exact fades in from the chord to the corner's
+/// wedge as a corner's edges reach past the light seen from the shaded point
+/// ([`DiskFrame::corner_visibility`]).
+pub const REACH_MARGIN: f64 = 0.25;
+
+/// The share of a closing fan's angle, from each of its two sides, over which V exact fades in
+/// from the chord (what the quad beyond that side gives) to the corner's wedge
+/// ([`DiskFrame::corner_visibility`]): the two meet there, so a fan's texels join the quads'
+/// without a seam.
+pub const SEAM_MARGIN: f64 = 0.15;
+
 /// The light's frame for the coverage: centre, normal (toward the scene), radius (of the disk,
 /// or of the disk a polygon fits in) and the basis `(u, w)` of its plane, with `u × w = −n` (the
 /// orientation the sign rule is stated in); for a rectangle or polygon its corners in that basis
@@ -193,27 +210,63 @@ impl DiskFrame {
         self.share_beyond(m, -k / self.radius)
     }
 
-    /// V at `x` behind one silhouette corner of a caster: the light less the part behind both
-    /// planes through `x` and an edge from `apex` to an end, each on the side that holds the
-    /// other end (the corner's wedge, seen from `x`); a reflex corner (`convex` false) covers the
-    /// light less that wedge. A polygon is clipped, a disk cut by `disk_cut2_area`. `None` where
-    /// the corner is degenerate seen from `x` (an end on the other edge's plane): the chord's V
-    /// then. The twin of `corner_visibility` in `shaders/methods/dbuffer.wgsl`.
+    /// V at `x` behind one convex silhouette corner of a caster, and how far it may be trusted
+    /// there: `(v, weight)`, V exact at `x` being the chord's V moved `weight` of the way to `v`.
+    ///
+    /// `v` is the light less the corner's wedge as `x` sees it: the part behind both planes
+    /// through `x` and an edge from `apex` to an end, each on the side that holds the other end.
+    /// A polygon is clipped, a disk cut by `disk_cut2_area`. The corner is only the caster near
+    /// the light where three things hold, each decided at `x`, not once per fan (a fine
+    /// tessellation's silhouette zig-zags, so a corner convex from behind its apex is reflex
+    /// from a point beside it):
+    /// - both edges are silhouettes seen from `x` (their two faces on two sides of it; an open
+    ///   edge always is): where a face of the edge turns toward `x` the caster's outline from
+    ///   `x` runs past the edge. `weight` fades in over [`SILHOUETTE_MARGIN`] of the faces'
+    ///   angle to the direction of `x`;
+    /// - the corner is convex seen from `x` (the caster, against the edges' faces' normals, on
+    ///   the side of each plane that holds the other end);
+    /// - both edges reach past the light seen from `x` (their far ends, projected from `x` onto
+    ///   the light's plane, outside the light): a corner whose edges end over the light (a
+    ///   caster smaller than the light, a finely tessellated one) is not the caster there — its
+    ///   other edges cut the light too — and the wedge, drawn fan by fan, would streak the
+    ///   shadow. `weight` fades in over [`REACH_MARGIN`] light radii past the light's rim.
+    ///
+    /// And `weight` fades to 0 toward the fan's two sides ([`SEAM_MARGIN`]), where its texels
+    /// meet the quads', which keep the chord: the wedge there differs from the strip by what the
+    /// other edge hides, and a fan drawn over its neighbours' V would show its outline.
+    ///
+    /// `None` where one fails (the chord's V then). The twin of `corner_visibility` in
+    /// `shaders/methods/dbuffer.wgsl`.
     pub fn corner_visibility(
         &self,
         x: Vec3,
         apex: Vec3,
         ends: [Vec3; 2],
-        convex: bool,
-    ) -> Option<f64> {
+        normals: [[Vec3; 2]; 2],
+        supports: [Vec3; 2],
+    ) -> Option<(f64, f64)> {
         if self.corner_count > 0 && (self.corner_area.is_nan() || self.corner_area <= 0.0) {
             return None;
         }
         let (x, a) = (x.as_dvec3(), apex.as_dvec3());
-        let (b1, b2) = (ends[0].as_dvec3() - a, ends[1].as_dvec3() - a);
+        let to_x = x - a;
+        let dist = to_x.length();
+        let edges = [ends[0].as_dvec3() - a, ends[1].as_dvec3() - a];
+        let mut weight = 1.0f64;
         let mut cuts = [(DVec2::ZERO, 0.0); 2];
-        for (k, (edge, other)) in [(b1, b2), (b2, b1)].into_iter().enumerate() {
-            let mut n = edge.cross(x - a);
+        for k in 0..2 {
+            let [na, nb] = normals[k].map(|n| n.as_dvec3());
+            // A silhouette from x: its faces on two sides of x (an open edge's virtual back
+            // face is the other side of its one face).
+            let da = na.dot(to_x);
+            let db = if nb == DVec3::ZERO { -da } else { nb.dot(to_x) };
+            let straddles = da * db < 0.0;
+            if !straddles {
+                return None;
+            }
+            weight = weight.min(da.abs().min(db.abs()) / (dist * SILHOUETTE_MARGIN));
+            let (edge, other) = (edges[k], edges[1 - k]);
+            let mut n = edge.cross(to_x);
             let side = n.dot(other);
             let floor = 1e-9 * n.length() * other.length();
             if side.is_nan() || floor.is_nan() || side.abs() <= floor {
@@ -222,10 +275,17 @@ impl DiskFrame {
             if side < 0.0 {
                 n = -n;
             }
+            // Convex from x: the caster (against its outward direction) on the other end's side.
+            let caster_inside = n.dot(na + nb) < 0.0;
+            if !caster_inside {
+                return None;
+            }
             // Behind: n · (c + r p − a) ≥ 0, p in radius units of the basis.
             let m = DVec2::new(n.dot(self.u), n.dot(self.w)) * self.radius;
             cuts[k] = (m, n.dot(a - self.center));
         }
+        weight = weight.min(self.reach(x, ends) / REACH_MARGIN);
+        weight = weight.min(self.fan_share(x, a, supports) / SEAM_MARGIN);
         let hidden = if self.corner_count > 0 {
             convex_cut_area(self.corners(), &cuts) / self.corner_area
         } else {
@@ -242,8 +302,63 @@ impl DiskFrame {
             let ((m1, h1), (m2, h2)) = (unit(cuts[0]), unit(cuts[1]));
             disk_cut2_area(m1, h1, m2, h2) / std::f64::consts::PI
         };
-        let v = if convex { 1.0 - hidden } else { hidden };
-        Some(v.clamp(0.0, 1.0))
+        let v = (1.0 - hidden).clamp(0.0, 1.0);
+        weight = weight.clamp(0.0, 1.0);
+        (v.is_finite() && weight.is_finite()).then_some((v, weight))
+    }
+
+    /// Where `x` lies across the fan at `apex` between the extrusion points `supports`: the
+    /// fan's texels are the rays from the light's centre through its triangles, between the
+    /// planes through the centre, the apex and each support; the share is the distance to the
+    /// nearer plane over the sum of both (0 on a side, ½ on the middle), 0 outside.
+    fn fan_share(&self, x: DVec3, apex: DVec3, supports: [Vec3; 2]) -> f64 {
+        let mut d = [0.0f64; 2];
+        for k in 0..2 {
+            let p = supports[k].as_dvec3() - self.center;
+            let q = supports[1 - k].as_dvec3() - self.center;
+            let n = (apex - self.center).cross(p);
+            // The fan lies on the side away from the other support (its rays run from the apex
+            // away from the rim points).
+            let away = if n.dot(q) > 0.0 { -n } else { n };
+            d[k] = away.dot(x - self.center).max(0.0) / away.length();
+        }
+        let sum = d[0] + d[1];
+        if sum > 0.0 && sum.is_finite() {
+            d[0].min(d[1]) / sum
+        } else {
+            0.0
+        }
+    }
+
+    /// How far outside the light the nearer of `ends` lies, seen from `x` (projected from it onto
+    /// the light's plane), in radii: negative inside. An end no nearer the light's plane than
+    /// `x` is infinitely far (its edge runs away from the light).
+    fn reach(&self, x: DVec3, ends: [Vec3; 2]) -> f64 {
+        let hx = self.normal.dot(x - self.center);
+        let mut least = f64::INFINITY;
+        for end in ends {
+            let e = end.as_dvec3();
+            let he = self.normal.dot(e - self.center);
+            let nearer = he < hx;
+            if !nearer {
+                continue;
+            }
+            let g = x + (e - x) * (hx / (hx - he)) - self.center;
+            let q = DVec2::new(g.dot(self.u), g.dot(self.w)) / self.radius;
+            let ring = self.corners();
+            let out = if ring.is_empty() {
+                q.length() - 1.0
+            } else {
+                (0..ring.len())
+                    .map(|i| {
+                        let d = ring[(i + 1) % ring.len()] - ring[i];
+                        DVec2::new(d.y, -d.x).dot(q - ring[i]) / d.length()
+                    })
+                    .fold(f64::NEG_INFINITY, f64::max)
+            };
+            least = least.min(out);
+        }
+        least
     }
 
     /// The coverage of the disk by the edge `e0 → e1` as `x` sees it (`e0 → e1` in the

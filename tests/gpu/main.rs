@@ -8,6 +8,7 @@ mod support;
 
 mod compare_report;
 mod cost_views;
+mod dbuffer_knobs;
 mod engine_methods;
 mod hard_methods;
 mod linear_ssm;

@@ -307,14 +307,22 @@ fn codes_match_their_wgsl() {
     pairs.push(("LIGHT_DISK", f64::from(LIGHT_DISK)));
     pairs.push(("LIGHT_LINE", f64::from(LIGHT_LINE)));
     wgsl_layout::assert_consts(&camera, "shared/camera.wgsl", &pairs);
-    // The D-buffer's corner texture: as many corners to a row as the geometry numbers them by.
+    // The D-buffer's corner texture: as many corners to a row, and texels to a corner, as the
+    // geometry packs them; the corner rule's margins as the twin's.
+    use dbuffer::geometry::{volume_vertices, wedges};
     wgsl_layout::assert_consts(
         &source("methods/dbuffer.wgsl"),
         "methods/dbuffer.wgsl",
-        &[(
-            "CORNERS_PER_ROW",
-            dbuffer::geometry::volume_vertices::CORNERS_PER_ROW as f64,
-        )],
+        &[
+            ("CORNERS_PER_ROW", volume_vertices::CORNERS_PER_ROW as f64),
+            (
+                "TEXELS_PER_CORNER",
+                volume_vertices::TEXELS_PER_CORNER as f64,
+            ),
+            ("SILHOUETTE_MARGIN", wedges::SILHOUETTE_MARGIN as f32 as f64),
+            ("REACH_MARGIN", wedges::REACH_MARGIN as f32 as f64),
+            ("SEAM_MARGIN", wedges::SEAM_MARGIN as f32 as f64),
+        ],
     );
 
     let view = source("passes/view.wgsl");

@@ -14,7 +14,7 @@ use super::{
     SharedMaps, Switch,
 };
 use crate::geometry::volume_vertices::{
-    drawn_volumes, reach_below, CORNERS_PER_ROW, MAX_CORNERS,
+    drawn_volumes, reach_below, CORNERS_PER_ROW, MAX_CORNERS, TEXELS_PER_CORNER,
 };
 use crate::geometry::{SceneGeometry, VolumeParams};
 use crate::render::frame_tag::FrameTag;
@@ -137,8 +137,9 @@ pub struct DBuffer {
     casters: Vec<CasterVolumes>,
     penumbra: VertexChunks,
     volumes: DBufferVolumes,
-    /// The closing fans' corners over all casters, three `Rgba32Float` texels each (apex, the
-    /// two edges' far ends), `CORNERS_PER_ROW` to a row: `corners` of
+    /// The closing fans' corners over all casters, `TEXELS_PER_CORNER` `Rgba32Float` texels
+    /// each (apex, the two edges' far ends, each edge's faces' normals, the two extrusion
+    /// points), `CORNERS_PER_ROW` to a row: `corners` of
     /// `shaders/methods/dbuffer.wgsl`, named by the fans' markers
     /// (`volume_vertices::corner_marker`). A texture, not a storage buffer: the weakest devices
     /// have none in fragment shaders.
@@ -242,13 +243,10 @@ impl DBuffer {
             // there, within the smallest texture a device allows.
             .take(MAX_CORNERS)
             .flat_map(|c| {
-                let convex = match c.convex {
-                    Some(true) => 1.0,
-                    Some(false) => -1.0,
-                    None => 0.0,
-                };
-                [c.apex.extend(convex), c.ends[0].extend(0.0), c.ends[1].extend(0.0)]
-                    .map(|p| p.to_array())
+                let [[n0, n1], [n2, n3]] = c.normals;
+                let [s0, s1] = c.supports;
+                [c.apex, c.ends[0], c.ends[1], n0, n1, n2, n3, s0, s1]
+                    .map(|p| p.extend(0.0).to_array())
             })
             .collect();
         self.corners = corner_texture(inputs.ctx, &corners);
@@ -301,14 +299,14 @@ impl DBuffer {
     }
 }
 
-/// The corners' texture: `3 × CORNERS_PER_ROW` texels wide (less for fewer corners), a row per
+/// The corners' texture: `TEXELS_PER_CORNER × CORNERS_PER_ROW` texels wide (less for fewer corners), a row per
 /// `CORNERS_PER_ROW` corners; one zero corner where there are none (a binding is never empty).
 fn corner_texture(ctx: &GpuContext, corners: &[[f32; 4]]) -> wgpu::TextureView {
     use wgpu::util::DeviceExt;
-    let texels_per_row = 3 * CORNERS_PER_ROW;
+    let texels_per_row = TEXELS_PER_CORNER * CORNERS_PER_ROW;
     let mut data = corners.to_vec();
     if data.is_empty() {
-        data.resize(3, [0.0; 4]);
+        data.resize(TEXELS_PER_CORNER, [0.0; 4]);
     }
     let width = data.len().min(texels_per_row);
     data.resize(data.len().div_ceil(width) * width, [0.0; 4]);
