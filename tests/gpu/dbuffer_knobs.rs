@@ -15,6 +15,7 @@
 //! `KNOB_SAMPLES` another view size and K (the long run is in docs/results/accuracy.md);
 //! `-- --nocapture` prints the tables.
 
+use crate::support::rng::Rng;
 use dbuffer::geometry::bvh::Bvh;
 use dbuffer::geometry::metrics::{self, Metrics};
 use dbuffer::geometry::oracle::Oracle;
@@ -23,7 +24,7 @@ use dbuffer::render::methods::dbuffer::{CORNERS, HORIZON};
 use dbuffer::render::offline::Offline;
 use dbuffer::render::{FrameRequest, Knobs, Method};
 use dbuffer::scene::{self, shapes, AreaLight, Camera, Mesh, Object, Scene};
-use glam::{Affine3A, EulerRot, Quat, Vec3};
+use glam::{Affine3A, Vec3};
 
 const SIZE: u32 = 112;
 const SAMPLES: usize = 256;
@@ -47,27 +48,6 @@ const RELATIVE: f64 = 0.02;
 
 /// Scenes with fewer penumbra pixels than this say nothing about a penumbra's error.
 const LEAST_PENUMBRA: usize = 150;
-
-/// A small deterministic generator (SplitMix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        ((self.next() * n as f32) as usize).min(n - 1)
-    }
-}
 
 /// Built-in shapes of the family: smooth casters coarsely and finely tessellated, flat-faced
 /// ones, convex and not.
@@ -160,17 +140,8 @@ fn family_scene(seed: u64) -> Scene {
             (name.to_string(), mesh)
         };
         let s = size * r.range(0.7, 1.3);
-        let scale = Vec3::new(
-            s * r.range(0.6, 1.4),
-            s * r.range(0.5, 1.2),
-            s * r.range(0.6, 1.4),
-        );
-        let rotation = Quat::from_euler(
-            EulerRot::XYZ,
-            r.range(0.0, 3.0),
-            r.range(0.0, 3.0),
-            r.range(0.0, 3.0),
-        );
+        let scale = r.stretched(s);
+        let rotation = r.rotation([3.0; 3]);
         let at = Vec3::new(
             r.range(-spread, spread),
             r.range(0.5, 2.2),

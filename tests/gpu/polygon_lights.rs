@@ -9,6 +9,7 @@
 //! K = 1024);
 //! docs/results/polygon-lights.md has the last long run.
 
+use crate::support::rng::Rng;
 use dbuffer::geometry::bvh::Bvh;
 use dbuffer::geometry::metrics::{self, Metrics};
 use dbuffer::geometry::oracle::Oracle;
@@ -17,7 +18,7 @@ use dbuffer::render::methods::reference;
 use dbuffer::render::offline::Offline;
 use dbuffer::render::{FrameRequest, Knobs, Method};
 use dbuffer::scene::{self, shapes, AreaLight, Camera, LightKind, Mesh, Object, Scene};
-use glam::{Affine3A, EulerRot, Quat, Vec3};
+use glam::{Affine3A, Vec3};
 
 /// The D-buffer's size for a view of `size`²: the command line's 1024² for the random scenes'
 /// views, 512² for the small views of the disk built-ins.
@@ -109,23 +110,6 @@ fn the_inscribed_16_gon_meets_the_disk_on_every_disk_built_in() {
     );
 }
 
-/// A small deterministic generator (SplitMix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
-    }
-}
-
 /// Random scene `seed`: one convex caster (a box or a sphere, scaled and turned) over a ground,
 /// under a rectangle (even seeds; width 0.4–1.6 m, aspect up to 10:1, tilted up to 15°, spun)
 /// or a convex polygon (odd seeds; 3–10 vertices on an ellipse of aspect up to 5:1, spun).
@@ -181,17 +165,8 @@ fn random_scene(seed: u64) -> Scene {
         "sphere:32x16"
     };
     let s = r.range(0.4, 1.0);
-    let scale = Vec3::new(
-        s * r.range(0.6, 1.4),
-        s * r.range(0.5, 1.2),
-        s * r.range(0.6, 1.4),
-    );
-    let rotation = Quat::from_euler(
-        EulerRot::XYZ,
-        r.range(0.0, 0.7),
-        r.range(0.0, 1.6),
-        r.range(0.0, 0.7),
-    );
+    let scale = r.stretched(s);
+    let rotation = r.rotation([0.7, 1.6, 0.7]);
     let at = Vec3::new(r.range(-0.3, 0.3), r.range(0.8, 1.8), r.range(-0.3, 0.3));
     let caster = shapes::build(shape).expect("a built-in shape").transformed(
         &Affine3A::from_scale_rotation_translation(scale, rotation, at),
