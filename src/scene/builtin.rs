@@ -69,6 +69,9 @@ const SCENES: &[(&str, &str)] = &[
         "fusion-many",
         include_str!("../../assets/scenes/fusion-many.toml"),
     ),
+    // Many casters: the content engines face, where one chord per pixel breaks.
+    ("cluster", include_str!("../../assets/scenes/cluster.toml")),
+    ("blinds", include_str!("../../assets/scenes/blinds.toml")),
     // Linear lights (the figures of Heidrich et al. 2000).
     (
         "line-fig2",
@@ -111,6 +114,7 @@ const SCENES: &[(&str, &str)] = &[
         "rect-fusion",
         include_str!("../../assets/scenes/rect-fusion.toml"),
     ),
+    ("pergola", include_str!("../../assets/scenes/pergola.toml")),
 ];
 
 /// The names of the built-in scenes, in a fixed order.

@@ -249,6 +249,8 @@ const EXPECTED_NAMES: &[&str] = &[
     "fusion-cross",
     "fusion-links",
     "fusion-many",
+    "cluster",
+    "blinds",
     "line-fig2",
     "line-fig3-tilted",
     "line-fig6-gap",
@@ -259,6 +261,7 @@ const EXPECTED_NAMES: &[&str] = &[
     "rect-fig7",
     "polygon-triangle",
     "rect-fusion",
+    "pergola",
 ];
 
 fn scene(name: &str) -> Scene {
