@@ -1,12 +1,12 @@
 //! The registry holds a method together: walking `methods::ALL`, every method has its camera
-//! shader (embedded and valid under naga), its snapshot, its bench row and a command-line flag per
-//! knob — with no list of methods kept here — and no code outside the method modules names a
+//! shader (embedded and valid under naga), its snapshot, its bench row, its place in the study
+//! (a sweep over its quality knobs, or why it has none) and a command-line flag per knob — with no list of methods kept here — and no code outside the method modules names a
 //! method by a string literal (a rename cannot break a match elsewhere silently).
 
 use std::path::{Path, PathBuf};
 
 use dbuffer::bench::{Case, Config};
-use dbuffer::render::methods::{all_knobs, KnobKind};
+use dbuffer::render::methods::{all_knobs, KnobKind, Quality};
 use dbuffer::render::Method;
 use dbuffer::scene::LightKind;
 use dbuffer::shader_source;
@@ -74,6 +74,55 @@ fn every_method_has_a_bench_row_with_valid_knobs() {
         let case = Case::for_method(m);
         for &(knob, value) in m.spec().bench.knobs {
             assert_eq!(case.knobs.raw(knob), value, "{m}: --{}", knob.name);
+        }
+    }
+}
+
+#[test]
+fn every_method_states_its_study_sweep() {
+    for &m in Method::all() {
+        let sweep = m.sweep();
+        assert!(
+            sweep.is_stated(),
+            "{m}: its MethodSpec says neither .sweep(..) over its quality knobs nor \
+             .fixed_quality(why) (docs/development/adding-a-method.md)"
+        );
+        if let Some(why) = sweep.fixed {
+            assert!(
+                sweep.settings.is_empty(),
+                "{m}: fixed ({why}) with settings"
+            );
+            assert!(!why.trim().is_empty(), "{m}: fixed without a reason");
+            continue;
+        }
+        // The quick study takes three settings of every method that has a quality knob.
+        assert!(
+            sweep.settings.len() >= 3,
+            "{m}: a sweep of {} settings (at least 3)",
+            sweep.settings.len()
+        );
+        for axis in sweep.axes {
+            if let Quality::Knob(k) = axis {
+                assert!(
+                    m.knobs().iter().any(|own| own.name == k.name),
+                    "{m}: sweeps --{} which is not one of its knobs",
+                    k.name
+                );
+            }
+        }
+        for (i, setting) in sweep.settings.iter().enumerate() {
+            assert_eq!(setting.len(), sweep.axes.len(), "{m}: setting {i}");
+            for (axis, &v) in sweep.axes.iter().zip(setting.iter()) {
+                assert!(
+                    axis.check(v).is_none(),
+                    "{m}: setting {i}: {:?}",
+                    axis.check(v)
+                );
+            }
+            assert!(
+                !sweep.settings[..i].contains(setting),
+                "{m}: setting {i} repeats an earlier one"
+            );
         }
     }
 }

@@ -10,8 +10,7 @@
 
 use super::{
     require, AdapterNeeds, CameraGroup, Cost, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
-    Prepare, Scaled, SharedMaps, Switch, SHADOW_MAP,
-};
+    Prepare, Scaled, SharedMaps, Switch, SHADOW_MAP, Quality};
 use crate::geometry::fused::{DiskMask, MaskEval};
 use crate::render::adapter::{FormatNeed, Usage};
 use crate::render::passes::micro_patches::{pyramid_shape, MicroPatches};
@@ -58,7 +57,8 @@ pub static BITMASK: MethodSpec = MethodSpec::new("bitmask", SHADER, |ctx| {
 .about("bitmask soft shadows (Schwarz & Stamminger 2007): micro-patches back-projected onto light samples")
 .knobs(&[&SAMPLES, &GAP_FILL.0, &COARSE.0, &DETAIL.0])
 .cost(Cost::counted("pyramid nodes and texels visited"))
-.lights(super::AREA_LIGHTS);
+.lights(super::AREA_LIGHTS)
+.sweep(&[Quality::Knob(&SAMPLES)], &[&[64], &[128], &[256]]);
 
 const SHADER: &str = "methods/bitmask.wgsl";
 

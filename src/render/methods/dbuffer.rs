@@ -11,8 +11,7 @@ use std::time::Instant;
 
 use super::{
     require, CameraGroup, Channel, Cost, Empty, FrameInputs, LightMaps, MethodSpec, MethodState, Prepare,
-    SharedMaps, Switch,
-};
+    SharedMaps, Switch, Quality};
 use crate::geometry::volume_vertices::{
     drawn_volumes, reach_below, CORNERS_PER_ROW, MAX_CORNERS, TEXELS_PER_CORNER,
 };
@@ -42,7 +41,8 @@ pub static DBUFFER: MethodSpec =
         .about("D-buffer soft shadows (Jakobsen et al. 2004)")
         .knobs(&[&HORIZON.0, &CORNERS.0])
         .cost(DBUFFER_COST)
-        .lights(super::AREA_LIGHTS); // volumes from a planar light's outline
+        .lights(super::AREA_LIGHTS)
+.sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]); // volumes from a planar light's outline
 
 pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER, |ctx| {
     Box::new(DBuffer::new(ctx, true))
@@ -51,7 +51,8 @@ pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER
 .about("D-buffer with silhouettes from the light centre only")
 .knobs(&[&HORIZON.0, &CORNERS.0])
 .cost(DBUFFER_COST)
-.lights(super::AREA_LIGHTS); // volumes from a planar light's outline
+.lights(super::AREA_LIGHTS)
+.sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]); // volumes from a planar light's outline
 
 /// `--dbuffer-corners`: V exact behind a closing fan from the fan's corner (`shadow.knobs.y`).
 pub static CORNERS: Switch = Switch::new(

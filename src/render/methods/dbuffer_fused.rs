@@ -26,7 +26,7 @@
 use super::Cost;
 use wgpu::DownlevelFlags as D;
 use wgpu::TextureFormat as F;
-use super::{AdapterNeeds, SHADOW_MAP};
+use super::{AdapterNeeds, SHADOW_MAP, Quality};
 use crate::render::adapter::{FormatNeed, Usage};
 use std::time::Instant;
 use crate::scene::AreaLight;
@@ -95,7 +95,11 @@ pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, 
     "mask, one layer deep: exact V",
     "too many candidate edges: the paper's V",
 ]))
-.lights(super::AREA_LIGHTS); // its chords cut a disk or a convex polygon
+.lights(super::AREA_LIGHTS)
+.sweep(
+    &[Quality::MapSize, Quality::Knob(&MASK_SAMPLES)],
+    &[&[512, 32], &[1024, 64], &[1024, 128], &[2048, 128]],
+); // its chords cut a disk or a convex polygon
 
 const SHADER: &str = "methods/dbuffer_fused.wgsl";
 

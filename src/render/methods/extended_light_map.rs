@@ -14,7 +14,7 @@
 
 use super::Cost;
 use wgpu::TextureFormat as F;
-use super::{AdapterNeeds, SHADOW_MAP};
+use super::{AdapterNeeds, SHADOW_MAP, Quality};
 use crate::render::adapter::{FormatNeed, Usage};
 use glam::{Mat4, Vec3, Vec4};
 
@@ -53,7 +53,8 @@ pub static EXTENDED_LIGHT_MAP: MethodSpec = MethodSpec::new("extended-light-map"
 .knobs(&[&DEPTH_BITS, &PATTERN.0])
 .hard()
 .overlay_note("extended-light-map: its channels are in the View panel")
-.cost(Cost::counted("light-map taps").constant("one lookup"));
+.cost(Cost::counted("light-map taps").constant("one lookup"))
+.sweep(&[Quality::Knob(&DEPTH_BITS)], &[&[8], &[16], &[24]]);
 
 /// What it needs of the adapter: float maps and the light's gobo, filtered.
 const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[

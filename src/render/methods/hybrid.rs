@@ -13,7 +13,7 @@
 //! [`MethodState::geometry`] holds them as silhouette edges, a frame after the walls were made.
 
 use wgpu::DownlevelFlags as D;
-use super::{AdapterNeeds, SHADOW_MAP, STENCIL_VOLUMES};
+use super::{AdapterNeeds, SHADOW_MAP, STENCIL_VOLUMES, Quality};
 use super::{
     require, v_texture_entries, CameraGroup, Knobs, MethodSpec, MethodState, Prepare, Scaled,
     SharedMaps, Switch,
@@ -58,7 +58,8 @@ pub static HYBRID: MethodSpec =
         .knobs(&[&THRESHOLD.0, &TEMPLATES.0, &EDGES.0])
         .hard()
         .overlay_note("hybrid: silhouette edges = rebuilt from the depth map")
-.cost(super::SCREEN_COST);
+.cost(super::SCREEN_COST)
+.sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]);
 
 /// What it needs of the adapter: the shadow map, the stencil volumes and its walls found by a compute pass (six
 /// storage buffers in its compute stage).

@@ -16,6 +16,8 @@ pub mod on_shadow_map;
 
 mod knobs;
 pub use knobs::{all_knobs, Choice, Knob, KnobKind, KnobType, Knobs, Scaled, Switch, MAX_KNOBS};
+mod sweep;
+pub use sweep::{Quality, Sweep, MAP_SIZES, MAP_SIZE_NAME};
 
 use std::any::Any;
 use std::cell::OnceCell;
@@ -100,6 +102,9 @@ pub struct MethodSpec {
     pub line_samples: Option<fn(&LineLight, &Knobs) -> Vec<Vec3>>,
     /// What its cost view counts (`count_work`, `took_path` in its WGSL).
     pub cost: Cost,
+    /// What `dbuffer study` sweeps: its quality knobs and the default study's settings, or why
+    /// it has none ([`Sweep`]).
+    pub sweep: Sweep,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
 }
@@ -180,8 +185,27 @@ impl MethodSpec {
             overlay_note: None,
             line_samples: None,
             cost: Cost::DEFAULT,
+            sweep: Sweep::UNSTATED,
             new,
         }
+    }
+
+    /// `dbuffer study` sweeps its quality `axes` over `settings` (a value per axis each,
+    /// cheapest first).
+    pub const fn sweep(
+        mut self,
+        axes: &'static [Quality],
+        settings: &'static [&'static [u32]],
+    ) -> Self {
+        self.sweep = Sweep::over(axes, settings);
+        self
+    }
+
+    /// It has no setting that trades cost for quality, for the reason `why`: `dbuffer study`
+    /// measures its defaults alone.
+    pub const fn fixed_quality(mut self, why: &'static str) -> Self {
+        self.sweep = Sweep::fixed(why);
+        self
     }
 
     /// What its cost view counts ([`Cost`]).
@@ -457,6 +481,11 @@ impl Method {
 
     pub fn knobs(self) -> &'static [&'static Knob] {
         self.0.knobs
+    }
+
+    /// What `dbuffer study` sweeps for it.
+    pub fn sweep(self) -> &'static Sweep {
+        &self.0.sweep
     }
 
     /// Whether V is computed on the CPU (the reference).

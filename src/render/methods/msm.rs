@@ -9,8 +9,7 @@
 use super::Cost;
 use super::{
     require, AdapterNeeds, CameraGroup, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
-    Prepare, Scaled, SharedMaps, SHADOW_MAP,
-};
+    Prepare, Scaled, SharedMaps, SHADOW_MAP, Quality};
 use crate::render::passes::moment_sat::MomentSat;
 use crate::render::storage_entry;
 use crate::render::passes::shadow_map::{lookup_entries, MapFrame, ShadowUniforms};
@@ -40,7 +39,8 @@ pub static MSM: MethodSpec = MethodSpec::new("msm", SHADER, |ctx| {
 .about("moment shadow maps (Peters & Klein 2015), four moments, filtered")
 .knobs(&[&RADIUS, &BIAS.0])
 .hard()
-.cost(Cost::counted("summed-area table reads").constant("two boxes of four corners"));
+.cost(Cost::counted("summed-area table reads").constant("two boxes of four corners"))
+.sweep(&[Quality::Knob(&RADIUS)], &[&[1], &[3], &[6], &[12]]);
 
 const SHADER: &str = "methods/msm.wgsl";
 

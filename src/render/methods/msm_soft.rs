@@ -7,7 +7,7 @@
 
 use super::Cost;
 use super::msm::{MomentMapped, NEEDS};
-use super::{FrameInputs, MethodSpec, Scaled};
+use super::{FrameInputs, MethodSpec, Scaled, Quality};
 
 /// The moment bias, in millionths.
 pub static BIAS: Scaled = Scaled::new(
@@ -34,7 +34,8 @@ pub static MSM_SOFT: MethodSpec = MethodSpec::new("msm-soft", SHADER, |ctx| {
 .about("moment soft shadow mapping (Peters et al. 2016): blocker search and filter from moments")
 .knobs(&[&BIAS.0, &LEAST_BLOCKER.0])
 .lights(super::AREA_LIGHTS)
-.cost(Cost::counted("summed-area table reads"));
+.cost(Cost::counted("summed-area table reads"))
+.sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]);
 
 const SHADER: &str = "methods/msm_soft.wgsl";
 

@@ -4,7 +4,7 @@
 
 use super::Cost;
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{Knob, MethodSpec};
+use super::{Knob, MethodSpec, Quality};
 
 /// The kernel radius R in shadow-map texels.
 pub static RADIUS: Knob = Knob::int(
@@ -21,7 +21,8 @@ pub static PCF: MethodSpec = MethodSpec::new("pcf", SHADER, |ctx| {
 .about("percentage-closer filtering of the shadow map")
 .knobs(&[&RADIUS])
 .hard()
-.cost(Cost::counted("shadow-map taps").constant("(2R + 1)² taps, R its radius"));
+.cost(Cost::counted("shadow-map taps").constant("(2R + 1)² taps, R its radius"))
+.sweep(&[Quality::Knob(&RADIUS)], &[&[1], &[2], &[4], &[8]]);
 
 const SHADER: &str = "methods/pcf.wgsl";
 

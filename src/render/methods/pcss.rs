@@ -5,7 +5,7 @@
 
 use super::Cost;
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{FrameInputs, Knob, MethodSpec};
+use super::{FrameInputs, Knob, MethodSpec, Quality};
 use crate::scene::Scene;
 
 pub static BLOCKER_TAPS: Knob = Knob::int(
@@ -32,7 +32,12 @@ pub static PCSS: MethodSpec = MethodSpec::new("pcss", SHADER, |ctx| {
 // about its centroid (docs/method/README.md#pcss).
 .lights(super::AREA_LIGHTS)
 .bench("pcss 16/32", &[(&BLOCKER_TAPS, 16), (&FILTER_TAPS, 32)])
-.cost(Cost::counted("shadow-map taps (blocker search and filter)").paths(&["not searched: nearer the light than the nearest caster, off the map, or dark", "no blocker found: lit", "blockers found: filtered"]));
+.cost(Cost::counted("shadow-map taps (blocker search and filter)").paths(&["not searched: nearer the light than the nearest caster, off the map, or dark", "no blocker found: lit", "blockers found: filtered"]))
+// Engines' presets: PlayCanvas 8/12 and 28/42, Unity HDRP 16/24.
+.sweep(
+    &[Quality::Knob(&BLOCKER_TAPS), Quality::Knob(&FILTER_TAPS)],
+    &[&[8, 12], &[16, 24], &[16, 32], &[28, 42], &[32, 64]],
+);
 
 /// Points of the Poisson disk (`PoissonDisk` of the shader: two per vec4).
 pub const POISSON_POINTS: usize = 64;

@@ -42,7 +42,8 @@ pub static PLANAR: MethodSpec =
         .knobs(&[&OPACITY.0])
         .hard()
         .overlay_note("planar: shadows on flat objects only, no volumes")
-.cost(super::SCREEN_COST);
+.cost(super::SCREEN_COST)
+.fixed_quality("projected hard shadows, exact on their planes: nothing to trade");
 
 /// What it needs of the adapter: the stencil volumes and a half-float shade it blends.
 const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[

@@ -21,7 +21,8 @@ pub static REFERENCE_HARD: MethodSpec = MethodSpec::new("reference-hard", SHADER
 .about("exact hard shadow: one ray per pixel to the light centre")
 .cpu_side()
 .hard()
-.cost(Cost::counted("rays").constant("one ray to the light's centre per pixel in front of it"));
+.cost(Cost::counted("rays").constant("one ray to the light's centre per pixel in front of it"))
+.fixed_quality("the exact hard shadow: one ray a pixel");
 
 /// The area reference's camera shader: V from a texture at the pixel.
 const SHADER: &str = "methods/reference.wgsl";

@@ -5,7 +5,7 @@
 use super::Cost;
 use glam::Vec3;
 
-use super::{require, CameraGroup, Knob, Knobs, MethodSpec, MethodState, Prepare};
+use super::{require, CameraGroup, Knob, Knobs, MethodSpec, MethodState, Prepare, Quality};
 use crate::render::passes::sample_maps::{sample_lights, SampleMaps, MAX_LIGHTS};
 use crate::render::passes::shadow_map::{BIAS_CONSTANT, BIAS_SLOPE};
 use crate::render::{
@@ -28,7 +28,8 @@ pub static SAMPLED: MethodSpec =
         .knobs(&[&LIGHTS])
         .bench("sampled 16", &[(&LIGHTS, 16)])
         .line_samples(stratum_centres)
-.cost(Cost::counted("sample maps read"));
+.cost(Cost::counted("sample maps read"))
+.sweep(&[Quality::Knob(&LIGHTS)], &[&[4], &[8], &[16], &[32], &[64]]);
 
 const SHADER: &str = "methods/sampled.wgsl";
 

@@ -48,7 +48,8 @@ pub static SHADOW_VOLUME: MethodSpec = MethodSpec::new("shadow-volume", SHADER, 
 .knobs(&[&OPEN.0])
 .hard()
 .overlay_note("shadow-volume: from the light centre; umbra volume = Crow's")
-.cost(super::SCREEN_COST);
+.cost(super::SCREEN_COST)
+.fixed_quality("the exact hard shadow from the light's centre: nothing to trade");
 
 /// What it needs of the adapter: the stencil volumes.
 const NEEDS: AdapterNeeds = AdapterNeeds::formats(&STENCIL_VOLUMES);

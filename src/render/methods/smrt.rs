@@ -10,7 +10,7 @@
 
 use super::Cost;
 use super::on_shadow_map::{Flavor, OnShadowMap};
-use super::{FrameInputs, Knob, MethodSpec, Scaled, Switch};
+use super::{FrameInputs, Knob, MethodSpec, Scaled, Switch, Quality};
 
 pub static RAYS: Knob = Knob::int(
     "smrt-rays",
@@ -56,7 +56,12 @@ pub static SMRT: MethodSpec = MethodSpec::new("smrt", SHADER, |ctx| {
 .knobs(&[&RAYS, &STEPS, &EXTRAPOLATE.0, &ADAPTIVE.0, &RAY_LENGTH.0])
 .lights(super::AREA_LIGHTS)
 .bench("smrt 7x8", &[(&RAYS, 7), (&STEPS, 8)])
-.cost(Cost::counted("ray-march steps (shadow-map reads)").paths(&["not marched: off the map, or dark", "adaptive: its two first rays agreed", "every ray traced"]));
+.cost(Cost::counted("ray-march steps (shadow-map reads)").paths(&["not marched: off the map, or dark", "adaptive: its two first rays agreed", "every ray traced"]))
+// Unreal's default is 7 rays of 8 samples (r.Shadow.Virtual.SMRT.RayCountLocal, SamplesPerRayLocal).
+.sweep(
+    &[Quality::Knob(&RAYS), Quality::Knob(&STEPS)],
+    &[&[2, 4], &[4, 8], &[7, 8], &[16, 16], &[32, 32]],
+);
 
 const SHADER: &str = "methods/smrt.wgsl";
 

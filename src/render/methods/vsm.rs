@@ -10,8 +10,7 @@ use wgpu::TextureFormat as F;
 
 use super::{
     require, AdapterNeeds, CameraGroup, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
-    Prepare, Scaled, SharedMaps, SHADOW_MAP,
-};
+    Prepare, Scaled, SharedMaps, SHADOW_MAP, Quality};
 use crate::render::adapter::{FormatNeed, Usage};
 use crate::render::passes::moments::Moments;
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
@@ -39,7 +38,8 @@ pub static VSM: MethodSpec = MethodSpec::new("vsm", SHADER, |ctx| Box::new(Vsm::
     .about("variance shadow maps (Donnelly & Lauritzen 2006), filtered, with light-bleeding reduction")
     .knobs(&[&RADIUS, &BLEED.0])
     .hard()
-.cost(Cost::counted("moment texels").constant("one filtered moment texel"));
+.cost(Cost::counted("moment texels").constant("one filtered moment texel"))
+    .sweep(&[Quality::Knob(&RADIUS)], &[&[1], &[3], &[6], &[12]]);
 
 const SHADER: &str = "methods/vsm.wgsl";
 

@@ -55,7 +55,8 @@ pub static WEDGES: MethodSpec =
         .about("penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)")
         .knobs(&[&OPEN.0, &HORIZON.0])
         .cost(Cost::counted("wedge fragments"))
-        .lights(super::AREA_LIGHTS); // the coverage of a disk or a convex polygon
+        .lights(super::AREA_LIGHTS)
+.fixed_quality("one wedge per silhouette edge, its coverage computed exactly per pixel: nothing to trade"); // the coverage of a disk or a convex polygon
 
 const SHADER: &str = "methods/wedges.wgsl";
 
