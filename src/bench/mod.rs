@@ -17,12 +17,12 @@ mod run;
 mod targets;
 
 pub use config::{
-    BenchError, Case, Config, FUSION_SCENES, SCALING_TRIANGLES, TABLE1_SCENES, TABLE1_SIZES,
-    TARGET_SIZE,
+    BenchError, Case, Config, FUSION_SCENES, MANY_CASTER_SCENES, SCALING_TRIANGLES, TABLE1_SCENES,
+    TABLE1_SIZES, TARGET_SIZE,
 };
 pub use report::{
     Coherence, Display, DisplayRun, FrameSource, PassTime, Report, Run, ScalingPoint, SceneInfo,
     Stat, Target, Timing,
 };
-pub use run::{load_scenes, run, scaling_scene, scene_for, Progress};
+pub use run::{load_scenes, run, scaling_scene, scene_for, time_frames, Progress};
 pub use targets::targets;

@@ -70,6 +70,9 @@ pub struct Timing {
     /// (`Session::advance_reference`), i.e. the ray casting alone.
     #[serde(default)]
     pub rays_ms: Option<Stat>,
+    /// Frames timed (the figures are their medians); absent in older reports.
+    #[serde(default)]
+    pub frames: usize,
 }
 
 impl Timing {

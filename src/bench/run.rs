@@ -235,11 +235,12 @@ impl Samples {
         self.hit_pixels = (0..frame.len()).filter(|&i| frame.hit(i)).count();
     }
 
-    fn timing(self, case: &Case) -> Timing {
+    fn timing(self, cpu_side: bool) -> Timing {
+        let frames = self.wall.len();
         let wall_ms = Stat::of(&self.wall).unwrap_or_default();
         let gpu_total_ms = Stat::of(&self.totals);
         let (frame_ms, frame_source) = match gpu_total_ms {
-            Some(g) if !case.cpu_side() => (g, FrameSource::GpuTimestamps),
+            Some(g) if !cpu_side => (g, FrameSource::GpuTimestamps),
             _ => (wall_ms, FrameSource::FencedWall),
         };
         Timing {
@@ -265,6 +266,7 @@ impl Samples {
             wall_ms,
             hit_pixels: self.hit_pixels,
             rays_ms: Stat::of(&self.rays),
+            frames,
         }
     }
 }
@@ -292,12 +294,9 @@ pub fn scene_for(case: &Case, scene: &Scene) -> Scene {
     }
 }
 
-/// Every method at one size: warm-up frames, then `config.frames` rounds of one frame per
-/// method, so a machine whose speed drifts (a shared CPU adapter) slows every method alike (the
-/// GPU methods' rounds, then the CPU-side references').
-/// Every timed frame makes its light-space maps again (`Session::invalidate_light_maps`): Table 1
-/// times the whole frame, light pass and camera pass. `sessions[i]` renders `config.cases[i]`; a
-/// method that fails is dropped from the rounds and its row says why.
+/// Every method at one size: [`time_frames`] over one session per case, each row labelled.
+/// `sessions[i]` renders `config.cases[i]`; a method that fails is dropped from the rounds and
+/// its row says why.
 fn time_size(
     ctx: &GpuContext,
     sessions: &mut [Session],
@@ -310,25 +309,77 @@ fn time_size(
         .iter()
         .map(|case| request(config, size, case))
         .collect();
-    // A method the device cannot run is skipped with its reason, before any frame.
-    let mut errors: Vec<Option<String>> = config
+    let timings = time_frames(
+        ctx,
+        sessions,
+        &requests,
+        config.warmup,
+        config.frames,
+        config.slow_frame_ms,
+    );
+    config
         .cases
         .iter()
-        .map(|case| case.method.refuses_on(&ctx.caps))
+        .zip(sessions.iter().zip(converted))
+        .zip(timings)
+        .map(|((case, (session, &converted)), timing)| Run {
+            scene: session.scene().name.clone(),
+            size,
+            label: if converted {
+                format!("{} ({} light)", case.label, session.scene().light.kind())
+            } else {
+                case.label.clone()
+            },
+            method: case.method.name().to_string(),
+            fill: timing
+                .is_ok()
+                .then(|| session.stencil_fill(ctx, case.method)?.ok())
+                .flatten(),
+            error: timing.as_ref().err().cloned(),
+            timing: timing.ok(),
+        })
+        .collect()
+}
+
+/// The bench's protocol, the one `dbuffer study` times its cells by too: `warmup` frames, then
+/// `frames` rounds of one frame per request, so a machine whose speed drifts (a shared CPU
+/// adapter) slows every request alike (the GPU methods' rounds, then the CPU-side references').
+/// Every timed frame makes its light-space maps again (`Session::invalidate_light_maps`): the
+/// whole frame is timed, light pass and camera pass. `sessions[i]` renders `requests[i]`; a
+/// request that fails is dropped from the rounds and its result says why.
+///
+/// `slow_ms`: a request whose first timed frame took longer (wall) is timed on that frame alone
+/// (`dbuffer study`'s guard: a minute-long frame is measured once, its spread small beside it).
+pub fn time_frames(
+    ctx: &GpuContext,
+    sessions: &mut [Session],
+    requests: &[FrameRequest],
+    warmup: usize,
+    frames: usize,
+    slow_ms: Option<f64>,
+) -> Vec<Result<Timing, String>> {
+    // A method the device cannot run is skipped with its reason, before any frame.
+    let mut errors: Vec<Option<String>> = requests
+        .iter()
+        .map(|r| r.method.refuses_on(&ctx.caps))
         .collect();
-    let mut samples: Vec<Samples> = config.cases.iter().map(|_| Samples::default()).collect();
+    let mut samples: Vec<Samples> = requests.iter().map(|_| Samples::default()).collect();
     // The GPU cases' rounds first, then the CPU-side references' own: a frame timed right after a
     // reference's ray casting (seconds of both cores) ran every GPU pass about 1 ms slower on
     // lavapipe, a bias on whichever case came first in a round.
     for cpu_side in [false, true] {
-        for round in 0..config.warmup + config.frames {
+        for round in 0..warmup + frames {
             for (i, session) in sessions.iter_mut().enumerate() {
-                if errors[i].is_some() || config.cases[i].cpu_side() != cpu_side {
+                if errors[i].is_some() || requests[i].method.cpu_side() != cpu_side {
+                    continue;
+                }
+                let slow = slow_ms.is_some_and(|s| samples[i].wall.first().is_some_and(|&w| w > s));
+                if slow {
                     continue;
                 }
                 session.invalidate_light_maps();
                 let t = Instant::now();
-                let frame = if config.cases[i].method.is_reference() {
+                let frame = if requests[i].method.is_reference() {
                     // The reference: one more sample per pixel, then its frame (reference-hard, also
                     // CPU-side, casts its rays again in the frame: its image was invalidated).
                     session
@@ -338,7 +389,7 @@ fn time_size(
                     session.frame(ctx, &requests[i])
                 };
                 match frame {
-                    Ok(frame) if round >= config.warmup => samples[i].add(&frame, ms_since(t)),
+                    Ok(frame) if round >= warmup => samples[i].add(&frame, ms_since(t)),
                     Ok(_) => {}
                     Err(e) => errors[i] = Some(e.to_string()),
                 }
@@ -346,38 +397,25 @@ fn time_size(
         }
     }
     // The reference's ray casting alone: one more sample per pixel without a frame.
-    for (i, case) in config.cases.iter().enumerate() {
-        if !case.method.is_reference() || errors[i].is_some() {
+    for (i, request) in requests.iter().enumerate() {
+        if !request.method.is_reference() || errors[i].is_some() {
             continue;
         }
-        for _ in 0..config.frames {
+        for _ in 0..frames {
             let t = Instant::now();
-            if sessions[i].advance_reference(ctx, &requests[i], 1).is_err() {
+            if sessions[i].advance_reference(ctx, request, 1).is_err() {
                 break;
             }
             samples[i].rays.push(ms_since(t));
         }
     }
-    config
-        .cases
-        .iter()
-        .zip(sessions.iter().zip(converted))
-        .zip(samples.into_iter().zip(errors))
-        .map(|((case, (session, &converted)), (samples, error))| Run {
-            scene: session.scene().name.clone(),
-            size,
-            label: if converted {
-                format!("{} ({} light)", case.label, session.scene().light.kind())
-            } else {
-                case.label.clone()
-            },
-            method: case.method.name().to_string(),
-            timing: error.is_none().then(|| samples.timing(case)),
-            fill: error
-                .is_none()
-                .then(|| session.stencil_fill(ctx, case.method)?.ok())
-                .flatten(),
-            error,
+    samples
+        .into_iter()
+        .zip(errors)
+        .zip(requests)
+        .map(|((samples, error), request)| match error {
+            Some(e) => Err(e),
+            None => Ok(samples.timing(request.method.cpu_side())),
         })
         .collect()
 }

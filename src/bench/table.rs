@@ -660,6 +660,7 @@ mod tests {
             wall_ms: st(wall),
             hit_pixels: 10,
             rays_ms: None,
+            frames: 1,
         }
     }
 
