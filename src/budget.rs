@@ -100,12 +100,19 @@ pub const MAX_ORBIT_FRAMES: usize = 720;
 /// 104 MiB). Checked from the flags before the first frame.
 pub const MAX_ORBIT_HELD_BYTES: u64 = 1 << 30;
 
+/// Cells of one `dbuffer study` (scenes × methods × settings).
+pub const MAX_STUDY_CELLS: u64 = 1 << 16;
+
+/// Pixels a `dbuffer study` renders over its cells, counting each cell's image once (cells ×
+/// `--size`): 4 Gi, about 4,000 cells at 1024² (the default study is 870 at 512², 0.23 Gi).
+pub const MAX_STUDY_PIXELS: u64 = 1 << 32;
+
 /// What `dbuffer inspect` may use on any input within the budget above: 2 GiB.
 pub const MEMORY_BOUND_BYTES: u64 = 2 << 30;
 
 /// The budget as the lines `dbuffer --help` prints after its commands.
 pub fn summary() -> String {
-    let rows: [(&str, String, &str); 19] = [
+    let rows: [(&str, String, &str); 21] = [
         (
             "MAX_SCENE_FILE_BYTES",
             bytes(MAX_SCENE_FILE_BYTES),
@@ -195,6 +202,16 @@ pub fn summary() -> String {
             "MAX_ORBIT_HELD_BYTES",
             bytes(MAX_ORBIT_HELD_BYTES),
             "compare --orbit: pixels × methods × (frames − 1), one byte each",
+        ),
+        (
+            "MAX_STUDY_CELLS",
+            MAX_STUDY_CELLS.to_string(),
+            "cells of dbuffer study (scenes × methods × settings)",
+        ),
+        (
+            "MAX_STUDY_PIXELS",
+            MAX_STUDY_PIXELS.to_string(),
+            "dbuffer study: cells × --size pixels",
         ),
         (
             "MEMORY_BOUND_BYTES",

@@ -11,6 +11,7 @@
 //! - [`app`]: the lab window (eframe), around the same render core;
 //! - [`shader_source`]: WGSL sources from `shaders/` with their `// #include` lines expanded.
 //! - [`bench`]: `dbuffer bench` (Table 1, the competition, coherence, geometry scaling).
+//! - [`study`]: `dbuffer study` (error against cost over every method's quality knobs).
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod animation;
@@ -24,3 +25,4 @@ pub mod output;
 pub mod render;
 pub mod scene;
 pub mod shader_source;
+pub mod study;

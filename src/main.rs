@@ -40,6 +40,10 @@ enum Command {
         /// With --bench: also write the numbers to this JSON file.
         #[arg(long, value_name = "FILE", requires = "bench")]
         bench_out: Option<std::path::PathBuf>,
+        /// Show the plot of a study (a `dbuffer study --out DIR` folder) for the open scene;
+        /// clicking a point shows that method and setting.
+        #[arg(long, value_name = "DIR")]
+        study: Option<std::path::PathBuf>,
     },
     /// Render a scene headless into DIR (image.png, visibility.exr, ...).
     Render {
@@ -171,6 +175,30 @@ enum Command {
         #[arg(long)]
         methods: Option<String>,
     },
+    /// Error against cost for every method over its quality knobs, per scene, in one run:
+    /// study.json, study.md and a plot per scene in DIR (its cache too: the same command resumes
+    /// a stopped run).
+    Study {
+        /// A study file (TOML: scenes, size, dbuffer_size, samples, vt, warmup, frames and the
+        /// settings to sweep per method; docs/guide/study.md); without one, the default study.
+        file: Option<std::path::PathBuf>,
+        /// Folder for study.json, study.md, plots/ and the cache (created if missing).
+        #[arg(long, default_value = "out/study")]
+        out: std::path::PathBuf,
+        /// Four scenes (two with many casters), three settings of every method, 256², K = 256
+        /// (under 10 minutes on 2 CPU cores).
+        #[arg(long)]
+        quick: bool,
+        /// Comma-separated scenes instead of the study's.
+        #[arg(long)]
+        scenes: Option<String>,
+        /// Comma-separated methods instead of the study's (each keeps its sweep).
+        #[arg(long)]
+        methods: Option<String>,
+        /// Image size, WxH, instead of the study's.
+        #[arg(long)]
+        size: Option<String>,
+    },
     /// List the built-in scenes, one a line.
     Scenes,
     /// List every GPU adapter wgpu sees on every backend, and which methods each can run.
@@ -225,6 +253,21 @@ fn main() -> ExitCode {
     cli::set_verbose(args.verbose);
     let verbose = args.verbose;
     let result = match args.command {
+        Some(Command::Study {
+            file,
+            out,
+            quick,
+            scenes,
+            methods,
+            size,
+        }) => cli::study::run(&cli::study::StudyArgs {
+            file: file.as_deref(),
+            out: &out,
+            quick,
+            scenes: scenes.as_deref(),
+            methods: methods.as_deref(),
+            size: size.as_deref(),
+        }),
         Some(Command::Scenes) => cli::scenes(),
         Some(Command::Adapters) => cli::adapters::list(),
         Some(Command::Inspect {
@@ -244,13 +287,14 @@ fn main() -> ExitCode {
             &method,
             out.as_deref(),
         ),
-        None => cli::gui(None, None, None, None, verbose),
+        None => cli::gui(None, None, None, None, None, verbose),
         Some(Command::Gui {
             scene,
             gltf_scene,
             bench,
             bench_out,
-        }) => cli::gui(scene, gltf_scene, bench, bench_out, verbose),
+            study,
+        }) => cli::gui(scene, gltf_scene, bench, bench_out, study, verbose),
         Some(Command::Render {
             scene,
             gltf_scene,

@@ -24,6 +24,7 @@ pub mod record;
 pub mod settings;
 mod smoke;
 mod stats;
+pub mod study_panel;
 mod viewport;
 pub mod window_bench;
 
@@ -63,6 +64,8 @@ pub struct LabOptions {
     pub deterministic: bool,
     /// `-v`: say on stderr which adapter eframe chose, and why.
     pub verbose: bool,
+    /// `--study DIR`: show that study's plot for the open scene.
+    pub study: Option<PathBuf>,
 }
 
 /// What a click picked.
@@ -121,6 +124,8 @@ pub struct LabApp {
     pub record: record::RecordState,
     /// What the overlays could not draw in full, for the legend.
     overlay_notes: Vec<String>,
+    /// `--study DIR`: the study's plot of the open scene.
+    pub study: study_panel::StudyPanel,
     deterministic: bool,
 }
 
@@ -202,6 +207,11 @@ impl LabApp {
             export: None,
             record: record::RecordState::default(),
             overlay_notes: Vec::new(),
+            study: options
+                .study
+                .as_deref()
+                .map(study_panel::StudyPanel::load)
+                .unwrap_or_default(),
             deterministic: options.deterministic,
         };
         let switched = app.suit_methods_to_the_light();
@@ -462,6 +472,46 @@ impl LabApp {
         }
     }
 
+    /// The study's plot of the open scene; a point clicked shows its method and setting.
+    fn study_ui(&mut self, ctx: &egui::Context) {
+        let (method, knobs, map) = (
+            self.settings.method.clone(),
+            self.settings.knobs,
+            self.settings.dbuffer_size,
+        );
+        let current = |cell: &crate::study::Cell| {
+            cell.method == method
+                && cell.values.iter().all(|(name, v)| {
+                    if name == crate::render::methods::MAP_SIZE_NAME {
+                        *v == map
+                    } else {
+                        crate::render::methods::all_knobs()
+                            .iter()
+                            .find(|k| k.name == name)
+                            .is_some_and(|k| knobs.raw(k) == *v)
+                    }
+                })
+        };
+        let name = self.doc.name.clone();
+        if let Some(pick) = self.study.ui(ctx, &name, &current) {
+            self.show_study_cell(&pick);
+        }
+    }
+
+    /// Show `pick`'s method with its setting (its knobs, its map size).
+    pub fn show_study_cell(&mut self, pick: &study_panel::Pick) {
+        self.settings.method = pick.method.name().to_string();
+        for (name, value) in &pick.values {
+            if name == crate::render::methods::MAP_SIZE_NAME {
+                self.settings.dbuffer_size = *value;
+            } else if self.settings.knobs.set(name, *value).is_err() {
+                self.set_status(format!("study: unknown knob {name}"), Level::Warning);
+                return;
+            }
+        }
+        self.set_status(format!("study: showing {}", pick.label), Level::Info);
+    }
+
     /// Point the camera at every caster and the light.
     pub fn frame_all(&mut self) {
         let Some(scene) = self.scene() else { return };
@@ -499,6 +549,7 @@ impl eframe::App for LabApp {
             self.history.close();
         }
         self.finish_export(&ctx);
+        self.study_ui(&ctx);
         self.record_ui(&ctx);
         self.drop_hint(&ctx);
         self.smoke_step(&ctx);

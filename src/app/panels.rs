@@ -65,6 +65,13 @@ impl LabApp {
                     if ui.button("Record orbit…").clicked() {
                         self.record.open = true;
                     }
+                    if ui
+                        .add_enabled(self.study.dir.is_some(), egui::Button::new("Study plot"))
+                        .on_disabled_hover_text("start the lab with --study DIR")
+                        .clicked()
+                    {
+                        self.study.open = true;
+                    }
                     ui.separator();
                     if ui.button("Quit").clicked() {
                         ctx.send_viewport_cmd(egui::ViewportCommand::Close);

@@ -53,6 +53,7 @@ pub mod bench;
 mod compare;
 pub mod print;
 mod progress;
+pub mod study;
 pub use adapters::{chosen, error_lines, set_verbose};
 pub use animate::{animate, AnimateArgs};
 pub use compare::{compare, CompareArgs};
@@ -260,8 +261,19 @@ pub fn gui(
     gltf_scene: Option<usize>,
     bench: Option<u32>,
     bench_out: Option<std::path::PathBuf>,
+    study: Option<std::path::PathBuf>,
     verbose: bool,
 ) -> Result<()> {
+    if let Some(dir) = &study {
+        let json = dir.join("study.json");
+        if !json.is_file() {
+            bail!(
+                "--study {}: no study.json there (write one with `dbuffer study --out {}`)",
+                dir.display(),
+                dir.display()
+            );
+        }
+    }
     if let Some(n) = bench {
         if !(2..=10_000).contains(&n) {
             bail!("--bench expects a frame count from 2 to 10000, found {n}");
@@ -276,6 +288,7 @@ pub fn gui(
         window_bench_out: bench_out,
         smoke_screenshot,
         verbose,
+        study,
         ..Default::default()
     })
 }

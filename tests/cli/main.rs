@@ -11,3 +11,4 @@ mod bad_inputs;
 mod bench_cli;
 mod registry;
 mod render_cli;
+mod study_cli;

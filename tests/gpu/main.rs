@@ -23,6 +23,7 @@ mod render_session;
 mod render_snapshots;
 mod shaders;
 mod snapshot_harness;
+mod study_resume;
 mod temporal;
 mod view_pass;
 mod wedges;

@@ -7,3 +7,4 @@ mod support;
 mod app_area_lights;
 mod app_fused;
 mod app_lab;
+mod app_study;

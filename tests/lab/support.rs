@@ -15,7 +15,18 @@ use egui_kittest::Harness;
 
 /// The lab on `scene` (the default scene for `None`) in a `width`×`height` window.
 pub fn lab_sized(scene: Option<&str>, width: f32, height: f32) -> Harness<'static, LabApp> {
-    let scene = scene.map(str::to_string);
+    lab_with(
+        LabOptions {
+            scene: scene.map(str::to_string),
+            ..LabOptions::default()
+        },
+        width,
+        height,
+    )
+}
+
+/// The lab as `options` say (made deterministic), in a `width`×`height` window.
+pub fn lab_with(options: LabOptions, width: f32, height: f32) -> Harness<'static, LabApp> {
     Harness::builder()
         .with_size(egui::vec2(width, height))
         .with_max_steps(500)
@@ -25,9 +36,8 @@ pub fn lab_sized(scene: Option<&str>, width: f32, height: f32) -> Harness<'stati
             let mut app = LabApp::new(
                 cc,
                 LabOptions {
-                    scene,
                     deterministic: true,
-                    ..LabOptions::default()
+                    ..options.clone()
                 },
             );
             app.settings.dbuffer_size = 256;

@@ -54,9 +54,9 @@ use std::path::Path;
 
 pub use meshes::{resolve_mesh, resolve_mesh_within};
 pub use spec::{CameraSpec, LightSpec, ObjectSpec, Scale, SceneFile};
-pub use text::decode_utf8;
+pub use text::{decode_utf8, line_column};
 
-use text::{line_column, sanitize_toml_message};
+use text::sanitize_toml_message;
 
 /// The byte budget of one scene file.
 pub const SCENE_FILE_BUDGET: ByteBudget = ByteBudget {

@@ -28,7 +28,7 @@ pub fn decode_utf8<'a>(bytes: &'a [u8], label: &str) -> Result<&'a str, SceneErr
 }
 
 /// 1-based line and column (in characters) of byte `offset` of `text`.
-pub(super) fn line_column(text: &str, offset: usize) -> (usize, usize) {
+pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
     let mut offset = offset.min(text.len());
     while !text.is_char_boundary(offset) {
         offset -= 1;
