@@ -13,7 +13,7 @@
 
 use super::{
     AdapterNeeds, CameraGroup, Cost, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
-    Prepare, Scaled, SharedMaps, Switch, SHADOW_MAP, STENCIL_VOLUMES,
+    Prepare, Scaled, SharedMaps, Switch,
 };
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
 use crate::render::passes::stencil_volumes::ScreenPass;
@@ -98,14 +98,7 @@ const SHADER: &str = "methods/smrt.wgsl";
 
 /// The shadow map and the camera's depth prepass (its positions, as the stencil methods make
 /// them).
-const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[
-    SHADOW_MAP[0],
-    SHADOW_MAP[1],
-    STENCIL_VOLUMES[0],
-    STENCIL_VOLUMES[1],
-    STENCIL_VOLUMES[2],
-    STENCIL_VOLUMES[3],
-]);
+const NEEDS: AdapterNeeds = AdapterNeeds::formats(&super::MAP_AND_SCREEN);
 
 /// `SmrtUniforms` of `shaders/methods/smrt.wgsl`: UE's settings for local lights and the
 /// camera's field of view.
