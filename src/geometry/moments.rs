@@ -41,10 +41,10 @@ pub const DECODE: [[f32; 4]; 4] = [
     [0.031_941_756, -0.172_282_32, -0.275_801_48, -0.337_613_17],
 ];
 
-/// The moment bias of 64-bit moment shadow maps (16 bits a moment; Peters & Klein 2015): the
-/// mean moments are pulled this far toward those of a spread distribution, so quantized vectors
-/// stay valid.
-pub const DEFAULT_MOMENT_BIAS: f32 = 6e-5;
+/// The moment bias of 64-bit moment shadow maps (16 bits a moment; Peters & Klein 2015, 3·10⁻⁵):
+/// the mean moments are pulled this far toward those of a spread distribution, so quantized
+/// vectors stay valid.
+pub const DEFAULT_MOMENT_BIAS: f32 = 3e-5;
 
 fn matrix(columns: &[[f32; 4]; 4]) -> Mat4 {
     Mat4::from_cols_array_2d(columns)

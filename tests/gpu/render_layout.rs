@@ -114,6 +114,19 @@ fn uniforms_match_their_wgsl() {
             size
         );
     }
+    use dbuffer::render::methods::smrt::SmrtUniforms;
+    assert_wgsl_layout!(
+        SmrtUniforms,
+        &source("methods/smrt.wgsl"),
+        "SmrtUniforms",
+        extrapolate_slope,
+        cot_max_angle,
+        texel_dither,
+        max_slope_bias,
+        screen_ray,
+        normal_bias,
+        tan_half_fov
+    );
     use dbuffer::render::passes::moment_sat::SatUniforms;
     assert_wgsl_layout!(
         SatUniforms,

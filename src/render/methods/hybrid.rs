@@ -12,8 +12,7 @@
 //! leaks). The reconstructed edges (the walls' tops) are the lab's overlay: this method's
 //! [`MethodState::geometry`] holds them as silhouette edges, a frame after the walls were made.
 
-use wgpu::DownlevelFlags as D;
-use super::{AdapterNeeds, SHADOW_MAP, STENCIL_VOLUMES, Quality};
+use super::{AdapterNeeds, Quality};
 use super::{
     require, v_texture_entries, CameraGroup, Knobs, MethodSpec, MethodState, Prepare, Scaled,
     SharedMaps, Switch,
@@ -24,6 +23,7 @@ use crate::geometry::{CasterGeometry, GeometryStats, SceneGeometry, VolumeParams
 use crate::render::passes::hybrid::{Hybrid, HybridFrame, HybridUniforms};
 use crate::render::passes::stencil_volumes::ScreenPass;
 use crate::render::{view_entry, GpuContext, RenderError};
+use wgpu::DownlevelFlags as D;
 
 /// τ in thousandths.
 pub static THRESHOLD: Scaled = Scaled::new(
@@ -58,20 +58,13 @@ pub static HYBRID: MethodSpec =
         .knobs(&[&THRESHOLD.0, &TEMPLATES.0, &EDGES.0])
         .hard()
         .overlay_note("hybrid: silhouette edges = rebuilt from the depth map")
-.cost(super::SCREEN_COST)
-.sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]);
+        .cost(super::SCREEN_COST)
+        .sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]);
 
 /// What it needs of the adapter: the shadow map, the stencil volumes and its walls found by a compute pass (six
 /// storage buffers in its compute stage).
 const NEEDS: AdapterNeeds = AdapterNeeds {
-    formats: &[
-        SHADOW_MAP[0],
-        SHADOW_MAP[1],
-        STENCIL_VOLUMES[0],
-        STENCIL_VOLUMES[1],
-        STENCIL_VOLUMES[2],
-        STENCIL_VOLUMES[3],
-    ],
+    formats: &super::MAP_AND_SCREEN,
     downlevel: D::COMPUTE_SHADERS,
     storage_buffers_per_stage: 6,
     ..AdapterNeeds::NONE

@@ -335,6 +335,17 @@ pub const STENCIL_VOLUMES: [FormatNeed; 4] = [
     },
 ];
 
+/// The centre's shadow map and the camera's prepass of the stencil methods (its positions):
+/// `hybrid`'s walls read both, `smrt` its screen ray.
+pub const MAP_AND_SCREEN: [FormatNeed; 6] = [
+    SHADOW_MAP[0],
+    SHADOW_MAP[1],
+    STENCIL_VOLUMES[0],
+    STENCIL_VOLUMES[1],
+    STENCIL_VOLUMES[2],
+    STENCIL_VOLUMES[3],
+];
+
 impl AdapterNeeds {
     /// Nothing beyond what every method needs.
     pub const NONE: AdapterNeeds = AdapterNeeds {

@@ -11,8 +11,8 @@ use super::{
     require, AdapterNeeds, CameraGroup, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
     Prepare, Scaled, SharedMaps, SHADOW_MAP, Quality};
 use crate::render::passes::moment_sat::MomentSat;
-use crate::render::storage_entry;
 use crate::render::passes::shadow_map::{lookup_entries, MapFrame, ShadowUniforms};
+use crate::render::storage_entry;
 use crate::render::{buffer_entry, uniform_buffer, view_entry, GpuContext, RenderError};
 
 /// The filter's half-width R in shadow-map texels.
@@ -23,12 +23,13 @@ pub static RADIUS: Knob = Knob::int(
     3,
 );
 
-/// The moment bias, in millionths.
+/// The moment bias α, in millionths: Peters & Klein's 3·10⁻⁵ for moments quantized to 16 bits
+/// each (64 bits a texel), as the table's fixed point holds them.
 pub static BIAS: Scaled = Scaled::new(
     "msm-bias",
-    "msm: moment bias in 1/1,000,000 (Peters & Klein's 60 for 16 bits a moment): larger leaks more, smaller breaks up",
+    "msm: moment bias in 1/1,000,000 (Peters & Klein's 30 for 16 bits a moment): larger leaks more, smaller breaks up",
     1..=5000,
-    60,
+    30,
     1_000_000,
 );
 
@@ -128,5 +129,27 @@ impl MethodState for MomentMapped {
 
     fn invalidate(&mut self) {
         self.made = None;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::moments::DEFAULT_MOMENT_BIAS;
+    use crate::render::Knobs;
+
+    /// Peters & Klein (I3D 2015) give α = 3·10⁻⁵ for moments quantized to 16 bits each (64 bits
+    /// a texel), as the table's fixed point holds them; `msm-soft` reads the same table. Both
+    /// knobs and the CPU twin say so (they said 6·10⁻⁵, twice the paper's, which leaks more).
+    #[test]
+    fn the_moment_bias_is_the_papers_for_16_bit_moments() {
+        let k = Knobs::default();
+        for (name, bias) in [
+            ("msm", k.get(&BIAS)),
+            ("msm-soft", k.get(&super::super::msm_soft::BIAS)),
+            ("geometry::moments", DEFAULT_MOMENT_BIAS),
+        ] {
+            assert!((bias - 3e-5).abs() < 1e-9, "{name}: {bias}");
+        }
     }
 }

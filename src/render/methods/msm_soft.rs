@@ -5,16 +5,16 @@
 //! whose moments give V (`shaders/methods/msm_soft.wgsl`). No per-tap loop. Under a rectangle
 //! or polygon it is sized by the disk of the same area, as `pcss` is.
 
-use super::Cost;
 use super::msm::{MomentMapped, NEEDS};
-use super::{FrameInputs, MethodSpec, Scaled, Quality};
+use super::Cost;
+use super::{FrameInputs, MethodSpec, Quality, Scaled};
 
-/// The moment bias, in millionths.
+/// The moment bias α, in millionths: `msm`'s, on the same table.
 pub static BIAS: Scaled = Scaled::new(
     "msm-soft-bias",
-    "msm-soft: moment bias in 1/1,000,000 (Peters & Klein's 60 for 16 bits a moment)",
+    "msm-soft: moment bias in 1/1,000,000 (Peters & Klein's 30 for 16 bits a moment)",
     1..=5000,
-    60,
+    30,
     1_000_000,
 );
 
@@ -44,6 +44,6 @@ fn msm_soft_knobs(f: &FrameInputs<'_>) -> [f32; 4] {
         super::pcss::lowest_caster(f.scene),
         f.knobs.get(&BIAS),
         f.knobs.get(&LEAST_BLOCKER),
-        std::env::var("MS_DEBUG").ok().and_then(|v| v.parse().ok()).unwrap_or(0.0),
+        0.0,
     ]
 }
