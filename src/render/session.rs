@@ -175,6 +175,17 @@ impl Session {
         }
     }
 
+    /// Let go of what `method` holds on the GPU and the CPU (its targets, maps, geometry;
+    /// for the reference also the V handed in): made again if it draws again. A run through
+    /// every method (`compare`) holds one method's screen-sized textures at a time, not all.
+    pub fn release(&mut self, method: Method) {
+        self.methods.remove(&method);
+        if method == Method::REFERENCE {
+            self.reference = None;
+            self.progressive = None;
+        }
+    }
+
     fn moved(&mut self) {
         self.revision += 1;
         self.light_view = LightView::fit(&self.scene);
