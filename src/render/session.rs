@@ -426,6 +426,7 @@ impl Session {
             ctx.check_lost_after_poll()?;
             return Err(RenderError::Gpu(e));
         }
+        ctx.injected_fault()?;
         result?;
         self.pending_read_bytes = bytes;
         Ok(bytes)
