@@ -9,5 +9,6 @@ mod adapters;
 mod animate_cli;
 mod bad_inputs;
 mod bench_cli;
+mod large_frames;
 mod registry;
 mod render_cli;
