@@ -342,7 +342,7 @@ pub fn run_each<E: From<RenderError>>(
     ));
     let mut session = offline.session(scene.clone());
     let (reference, ref_report) = render(offline, &mut session, &frame_request(Method::REFERENCE))?;
-    session.release(Method::REFERENCE);
+    session.release(&offline.ctx, Method::REFERENCE)?;
     let rays_ms = cpu(&ref_report.cpu_ms, "reference_rays");
     let hit_pixels = ref_report.reference_rays.map_or(0, |(_, n)| n);
     let reference_rays_per_s = hit_pixels as f64 * f64::from(k) / (rays_ms.max(1e-9) * 1e-3);
@@ -391,14 +391,14 @@ pub fn run_each<E: From<RenderError>>(
         progress(&format!("{method}: {}", method.description()));
         let req = frame_request(method);
         // The first frame of a pipeline includes shader compilation on some drivers: time the
-        // second, with its light-space passes made again.
-        render(offline, &mut session, &req)?;
+        // second, with its light-space passes made again (the geometry is the first's).
+        session.draw(&offline.ctx, &req)?;
+        let (builds, geometry_ms) = session.geometry_builds(method);
         session.invalidate_light_maps();
         let t = Instant::now();
-        let (frame, _) = render(offline, &mut session, &req)?;
+        // Read back with the method's own textures already let go of.
+        let frame = session.frame_releasing(&offline.ctx, &req)?;
         let wall_ms = t.elapsed().as_secs_f64() * 1e3;
-        let (builds, geometry_ms) = session.geometry_builds(method);
-        session.release(method);
         if method == Method::REFERENCE_HARD {
             base.exact = Some(frame.visibility.clone());
         }

@@ -400,8 +400,7 @@ pub fn run_in(
                 read_cost: false,
                 colour_only: false,
             };
-            let frame = session.frame(&offline.ctx, &req)?;
-            session.release(method);
+            let frame = session.frame_releasing(&offline.ctx, &req)?;
             if i == 0 {
                 mask = facing
                     .iter()

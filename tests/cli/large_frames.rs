@@ -28,9 +28,12 @@ const BIG: (u32, u32) = (4000, 2100);
 const SMALL: (u32, u32) = (400, 210);
 const F: u32 = 10;
 
+/// The depth's bytes as a staging buffer holds them (rows padded to 256 bytes): 16,128 a row.
+const BIG_DEPTH_BYTES: u64 = (BIG.0 as u64 * 4).div_ceil(256) * 256 * BIG.1 as u64;
+
 const _: () = {
-    // 4000 × 4 bytes padded to 256: 16,128 a row; the whole depth over one staging buffer.
-    assert!(16128 * 2100 > 32 << 20);
+    // The whole depth is more than one staging buffer, and SMALL is BIG a tenth on a side.
+    assert!(BIG_DEPTH_BYTES > dbuffer::render::readback::STAGING_CAP);
     assert!(BIG.0 == F * SMALL.0 && BIG.1 == F * SMALL.1);
 };
 
@@ -57,6 +60,19 @@ fn run_ok(args: &[&str], out: &Path) -> Output {
     o
 }
 
+/// `dbuffer ARGS --size S` at BIG and at SMALL, each into a folder of its own (named after
+/// `name`): the two folders.
+fn at_both_sizes(name: &str, args: &[&str]) -> (PathBuf, PathBuf) {
+    let (big, small) = (
+        temp_dir(&format!("{name}-big")),
+        temp_dir(&format!("{name}-small")),
+    );
+    for (dir, s) in [(&big, BIG), (&small, SMALL)] {
+        run_ok(&[args, &["--size", &size(s)][..]].concat(), dir);
+    }
+    (big, small)
+}
+
 /// A PNG's RGB pixels and size.
 fn png(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
     let img = image::open(path)
@@ -66,26 +82,51 @@ fn png(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
     (w, h, img.pixels().map(|p| p.0).collect())
 }
 
-/// The mean over every pixel and channel of |big box-filtered F×F − small|, in 8-bit steps.
+/// The mean over every pixel and channel of |big box-filtered F×F − small| (BIG and SMALL),
+/// in 8-bit steps.
 fn image_difference(big: &Path, small: &Path) -> f64 {
+    box_difference(big, small, F)
+}
+
+/// The mean over every pixel and channel of |big box-filtered f×f − small|, in 8-bit steps,
+/// for a big image `f` times the small one on a side.
+fn box_difference(big: &Path, small: &Path, f: u32) -> f64 {
     let (bw, bh, b) = png(big);
     let (sw, sh, s) = png(small);
-    assert_eq!((bw, bh), BIG, "{}", big.display());
-    assert_eq!((sw, sh), SMALL, "{}", small.display());
+    assert_eq!((bw, bh), (f * sw, f * sh), "{}", big.display());
     let mut sum = 0.0;
     for (i, px) in s.iter().enumerate() {
         let (sx, sy) = (i as u32 % sw, i as u32 / sw);
         for c in 0..3 {
             let mut block = 0.0;
-            for y in sy * F..(sy + 1) * F {
-                for x in sx * F..(sx + 1) * F {
+            for y in sy * f..(sy + 1) * f {
+                for x in sx * f..(sx + 1) * f {
                     block += f64::from(b[(y * bw + x) as usize][c]);
                 }
             }
-            sum += (block / f64::from(F * F) - f64::from(px[c])).abs();
+            sum += (block / f64::from(f * f) - f64::from(px[c])).abs();
         }
     }
     sum / (3 * s.len()) as f64
+}
+
+/// A comparison's report.json.
+fn report_of(dir: &Path) -> dbuffer::compare::report::Report {
+    let json = std::fs::read_to_string(dir.join("report.json")).unwrap();
+    serde_json::from_str(&json).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// An APNG's size and frame count.
+fn apng_info(path: &Path) -> ((u32, u32), Option<u32>) {
+    let apng = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let reader = png::Decoder::new(std::io::Cursor::new(apng))
+        .read_info()
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let info = reader.info();
+    (
+        (info.width, info.height),
+        info.animation_control.map(|a| a.num_frames),
+    )
 }
 
 /// The mean |V| difference between a big visibility EXR box-filtered F×F and a small one, over
@@ -116,20 +157,7 @@ fn visibility_difference(big: &Path, small: &Path) -> (f64, usize) {
 /// out black without an error.)
 #[test]
 fn render_past_the_banding_threshold_is_the_small_render_resampled() {
-    let (big, small) = (temp_dir("render-big"), temp_dir("render-small"));
-    for (dir, s) in [(&big, BIG), (&small, SMALL)] {
-        run_ok(
-            &[
-                "render",
-                "fig7-concave",
-                "--method",
-                "hard",
-                "--size",
-                &size(s),
-            ],
-            dir,
-        );
-    }
+    let (big, small) = at_both_sizes("render", &["render", "fig7-concave", "--method", "hard"]);
     let d = image_difference(&big.join("image.png"), &small.join("image.png"));
     assert!(d < 2.0, "image.png: {d} steps from the small render");
     let (v, n) = visibility_difference(&big.join("visibility.exr"), &small.join("visibility.exr"));
@@ -189,8 +217,7 @@ fn compare_past_the_banding_threshold_is_the_small_comparison_resampled() {
             dir,
         );
     }
-    let json = std::fs::read_to_string(big.join("report.json")).unwrap();
-    let report: dbuffer::compare::report::Report = serde_json::from_str(&json).unwrap();
+    let report = report_of(&big);
     let methods: Vec<&str> = report.methods.iter().map(|m| m.method.as_str()).collect();
     assert_eq!(methods, ["reference", "hard", "reference-hard"]);
     assert_eq!((report.width, report.height), BIG);
@@ -222,33 +249,22 @@ fn compare_past_the_banding_threshold_is_the_small_comparison_resampled() {
 /// `animate --method hard` past the threshold: its first frame is the small animation's.
 #[test]
 fn animate_past_the_banding_threshold_is_the_small_animation_resampled() {
-    let (big, small) = (temp_dir("animate-big"), temp_dir("animate-small"));
-    for (dir, s) in [(&big, BIG), (&small, SMALL)] {
-        run_ok(
-            &[
-                "animate",
-                "fig7-concave",
-                "--method",
-                "hard",
-                "--frames",
-                "2",
-                "--size",
-                &size(s),
-            ],
-            dir,
-        );
-    }
+    let (big, small) = at_both_sizes(
+        "animate",
+        &[
+            "animate",
+            "fig7-concave",
+            "--method",
+            "hard",
+            "--frames",
+            "2",
+        ],
+    );
     for frame in ["frame-0000.png", "frame-0001.png"] {
         let d = image_difference(&big.join(frame), &small.join(frame));
         assert!(d < 2.0, "{frame}: {d} steps from the small animation");
     }
-    let apng = std::fs::read(big.join("animation.png")).unwrap();
-    let reader = png::Decoder::new(std::io::Cursor::new(apng))
-        .read_info()
-        .unwrap();
-    let info = reader.info();
-    assert_eq!((info.width, info.height), BIG);
-    assert_eq!(info.animation_control.map(|a| a.num_frames), Some(2));
+    assert_eq!(apng_info(&big.join("animation.png")), (BIG, Some(2)));
     for dir in [big, small] {
         let _ = std::fs::remove_dir_all(dir);
     }
@@ -259,28 +275,24 @@ fn animate_past_the_banding_threshold_is_the_small_animation_resampled() {
 /// is the full size.
 #[test]
 fn compare_orbit_past_the_banding_threshold_measures_the_small_orbits_motion() {
-    let (big, small) = (temp_dir("orbit-big"), temp_dir("orbit-small"));
+    let (big, small) = at_both_sizes(
+        "orbit",
+        &[
+            "compare",
+            "fig7-concave",
+            "--orbit",
+            "light",
+            "--frames",
+            "2",
+            "--methods",
+            "hard",
+            "--samples",
+            "1",
+        ],
+    );
     let mut temporal = Vec::new();
-    for (dir, s) in [(&big, BIG), (&small, SMALL)] {
-        run_ok(
-            &[
-                "compare",
-                "fig7-concave",
-                "--orbit",
-                "light",
-                "--frames",
-                "2",
-                "--methods",
-                "hard",
-                "--samples",
-                "1",
-                "--size",
-                &size(s),
-            ],
-            dir,
-        );
-        let json = std::fs::read_to_string(dir.join("report.json")).unwrap();
-        let report: dbuffer::compare::report::Report = serde_json::from_str(&json).unwrap();
+    for dir in [&big, &small] {
+        let report = report_of(dir);
         let hard = report.methods.iter().find(|m| m.method == "hard").unwrap();
         temporal.push(hard.temporal_error.expect("measured in motion"));
         assert_eq!(report.motion.as_ref().map(|m| m.frames), Some(2));
@@ -290,13 +302,10 @@ fn compare_orbit_past_the_banding_threshold_measures_the_small_orbits_motion() {
         b > 0.0 && (b - s).abs() < 0.1 * s,
         "{b} at 4000x2100, {s} at 400x210"
     );
-    let apng = std::fs::read(big.join("motion.png")).unwrap();
-    let reader = png::Decoder::new(std::io::Cursor::new(apng))
-        .read_info()
-        .unwrap();
-    let info = reader.info();
-    assert_eq!((info.width, info.height), (2 * BIG.0 + 4, BIG.1));
-    assert_eq!(info.animation_control.map(|a| a.num_frames), Some(1));
+    assert_eq!(
+        apng_info(&big.join("motion.png")),
+        ((2 * BIG.0 + 4, BIG.1), Some(1))
+    );
     for dir in [big, small] {
         let _ = std::fs::remove_dir_all(dir);
     }
@@ -470,7 +479,7 @@ fn the_largest_allowed_sizes_run_within_the_memory_bound() {
             &["reference.png", "dbuffer.png", "hard.png"]
         };
         for f in files {
-            let d = quarter_difference(&big.join(f), &small.join(f));
+            let d = box_difference(&big.join(f), &small.join(f), 4);
             eprintln!("{name}: {f} {d:.2} steps from the {quarter} run's, resampled");
             assert!(d < 3.0, "{name}: {f}: {d}");
         }
@@ -481,6 +490,8 @@ fn the_largest_allowed_sizes_run_within_the_memory_bound() {
 }
 
 /// Run `dbuffer ARGS --out OUT` to success; its peak resident memory in bytes.
+// The child is reaped by `wait4` below, which also gives its own peak (not `Child::wait`).
+#[allow(clippy::zombie_processes)]
 fn peak_rss_of(args: &[&str], out: &Path) -> u64 {
     let child = dbuffer()
         .args(args)
@@ -502,25 +513,4 @@ fn peak_rss_of(args: &[&str], out: &Path) -> u64 {
     );
     // Linux reports kilobytes.
     usage.ru_maxrss as u64 * 1024
-}
-
-/// [`image_difference`] for a big image four times a small one's side.
-fn quarter_difference(big: &Path, small: &Path) -> f64 {
-    let (bw, bh, b) = png(big);
-    let (sw, sh, s) = png(small);
-    assert_eq!((bw, bh), (4 * sw, 4 * sh));
-    let mut sum = 0.0;
-    for (i, px) in s.iter().enumerate() {
-        let (sx, sy) = (i as u32 % sw, i as u32 / sw);
-        for c in 0..3 {
-            let mut block = 0.0;
-            for y in sy * 4..(sy + 1) * 4 {
-                for x in sx * 4..(sx + 1) * 4 {
-                    block += f64::from(b[(y * bw + x) as usize][c]);
-                }
-            }
-            sum += (block / 16.0 - f64::from(px[c])).abs();
-        }
-    }
-    sum / (3 * s.len()) as f64
 }
