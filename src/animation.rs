@@ -11,15 +11,19 @@
 //! losslessly, browsers (and GitHub's README view) play it, and it is written by the `png`
 //! crate `image` already uses. Frames are staged into a hidden folder as they are rendered and
 //! moved into place together at the end ([`Staged`]): the folder gets the whole animation or
-//! nothing, and frames of an earlier, longer run are removed.
+//! nothing, and frames of an earlier, longer run are removed. The APNG is written to its staged
+//! file as the frames come, never held in memory: a run holds one frame at a time, at most
+//! [`MAX_ANIMATE_PIXELS`] of them.
 //!
 //! A [`Recording`] renders one frame per [`Recording::step`], in its own [`Session`] (the
 //! caller's view is not disturbed), so a window can record between its own frames.
 
-use std::io::Write;
+use std::fs::File;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
+use crate::budget::MAX_ANIMATE_PIXELS;
 use crate::output::{self, OutputError, Staged};
 use crate::render::offline::render_in;
 use crate::render::{FrameRequest, GpuContext, RenderError, Session};
@@ -29,7 +33,7 @@ use crate::scene::Scene;
 /// Most frames one animation may have.
 pub const MAX_FRAMES: usize = 3600;
 
-/// Most pixels over all frames (the APNG is built in memory, compressed).
+/// Most pixels over all frames (what the frames and the APNG take on disk, and the run's time).
 pub const MAX_TOTAL_PIXELS: u64 = 1 << 31;
 
 /// The looping animated image written beside the frames.
@@ -62,7 +66,15 @@ impl AnimationSpec {
             )));
         }
         let (w, h) = (self.request.width, self.request.height);
-        let total = u64::from(w) * u64::from(h) * self.frames as u64;
+        let pixels = u64::from(w) * u64::from(h);
+        if pixels > MAX_ANIMATE_PIXELS {
+            return Err(AnimationError::Invalid(format!(
+                "--size {w}x{h} is {pixels} pixels: animate expects at most \
+                 {MAX_ANIMATE_PIXELS} (MAX_ANIMATE_PIXELS, {} Mpixels a frame)",
+                MAX_ANIMATE_PIXELS >> 20
+            )));
+        }
+        let total = pixels * self.frames as u64;
         if total > MAX_TOTAL_PIXELS {
             return Err(AnimationError::Invalid(format!(
                 "--frames {} at --size {w}x{h} is {total} pixels; the limit is \
@@ -94,21 +106,23 @@ fn encode_err(what: &'static str) -> impl FnOnce(png::EncodingError) -> Animatio
     }
 }
 
-/// The APNG's bytes, shared with the encoder that writes them (it keeps its writer to the end).
-#[derive(Clone, Default)]
-struct Sink(Arc<Mutex<Vec<u8>>>);
+/// The APNG's staged file, shared with the encoder that writes it (the encoder keeps its
+/// writer to the end; the recording flushes and syncs the file after it).
+#[derive(Clone)]
+struct Sink(Arc<Mutex<BufWriter<File>>>);
 
 impl Write for Sink {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let mut bytes = self
-            .0
+        self.0
             .lock()
-            .map_err(|_| std::io::Error::other("APNG buffer poisoned"))?;
-        bytes.extend_from_slice(buf);
-        Ok(buf.len())
+            .map_err(|_| std::io::Error::other("APNG file poisoned"))?
+            .write(buf)
     }
     fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
+        self.0
+            .lock()
+            .map_err(|_| std::io::Error::other("APNG file poisoned"))?
+            .flush()
     }
 }
 
@@ -146,8 +160,12 @@ impl Recording {
             .validate(ctx)
             .map_err(|e| AnimationError::Invalid(e.to_string()))?;
         let poses = Poses::new(&scene, spec.orbit);
-        let staged = Staged::new(out)?;
-        let bytes = Sink::default();
+        let mut staged = Staged::new(out)?;
+        let (file, _) = staged.open(ANIMATION_FILE)?;
+        let bytes = Sink(Arc::new(Mutex::new(BufWriter::with_capacity(
+            1 << 20,
+            file,
+        ))));
         let (w, h) = (spec.request.width, spec.request.height);
         let mut encoder = png::Encoder::new(bytes.clone(), w, h);
         encoder.set_color(png::ColorType::Rgb);
@@ -211,17 +229,18 @@ impl Recording {
             &self.spec.request,
             reference_progress,
         )?;
-        let rgb: Vec<u8> = frame
-            .color
-            .iter()
-            .flat_map(|c| [c[0], c[1], c[2]])
-            .collect();
         let (w, h) = (self.spec.request.width, self.spec.request.height);
-        let png = output::png_rgb8(w, h, &rgb).map_err(|e| AnimationError::Encode {
-            what: "encoding a frame",
-            message: e.to_string(),
+        let width = w as usize;
+        let color = &frame.color;
+        self.staged.write_with(&frame_name(k), |out, target| {
+            output::png_file(out, target, w, h, |y, row| {
+                for (px, c) in row.chunks_exact_mut(3).zip(&color[y * width..]) {
+                    px.copy_from_slice(&c[..3]);
+                }
+            })
         })?;
-        self.staged.add(&frame_name(k), &png)?;
+        let rgb: Vec<u8> = color.iter().flat_map(|c| [c[0], c[1], c[2]]).collect();
+        drop(frame);
         self.apng
             .write_image_data(&rgb)
             .map_err(encode_err("adding a frame to the APNG"))?;
@@ -249,20 +268,34 @@ impl Recording {
             )));
         }
         apng.finish().map_err(encode_err("finishing the APNG"))?;
-        let animation = std::mem::take(
-            &mut *bytes
+        let animation_bytes = {
+            let mut file = bytes
                 .0
                 .lock()
-                .map_err(|_| AnimationError::Invalid("APNG buffer poisoned".into()))?,
-        );
-        staged.add(ANIMATION_FILE, &animation)?;
+                .map_err(|_| AnimationError::Invalid("APNG file poisoned".into()))?;
+            let written = (|| {
+                file.flush()?;
+                file.get_ref().sync_all()?;
+                file.get_ref().metadata()
+            })();
+            written
+                .map_err(|e| AnimationError::Encode {
+                    what: "writing the APNG",
+                    message: e.to_string(),
+                })?
+                .len() as usize
+        };
         for stale in stale_frames(&out, spec.frames) {
             staged.remove_on_commit(&stale);
         }
-        let files = staged.commit()?;
+        let mut files = staged.commit()?;
+        // The frames, then the animated image (staged first, to be written as they came).
+        if !files.is_empty() {
+            files.rotate_left(1);
+        }
         Ok(Written {
             files,
-            animation_bytes: animation.len(),
+            animation_bytes,
         })
     }
 }

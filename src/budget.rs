@@ -95,10 +95,11 @@ pub const MAX_FUSED_EDGES: u64 = 1 << 19;
 /// Frames of `compare --orbit` (`--frames`): 720, a half-degree step round the orbit.
 pub const MAX_ORBIT_FRAMES: usize = 720;
 
-/// What `compare --orbit` keeps of every step to draw the worst method's motion afterwards: one
-/// byte per pixel per method per step, 1 GiB (a 512² orbit of 24 frames and 18 methods keeps
-/// 104 MiB). Checked from the flags before the first frame.
-pub const MAX_ORBIT_HELD_BYTES: u64 = 1 << 30;
+/// Pixels of a `compare` image, still or `--orbit` (`--size WxH`): 16 Mi, 4096×4096. A
+/// comparison holds the reference's V and image, the pixels that count and one method's frame
+/// with its FLIP map at a time (about 60 bytes a pixel), and on a CPU adapter its GPU targets
+/// are host memory too (about 30 more): checked from the flags before any work.
+pub const MAX_COMPARE_PIXELS: u64 = 1 << 24;
 
 /// Cells of one `dbuffer study` (scenes × methods × settings).
 pub const MAX_STUDY_CELLS: u64 = 1 << 16;
@@ -107,12 +108,18 @@ pub const MAX_STUDY_CELLS: u64 = 1 << 16;
 /// `--size`): 4 Gi, about 4,000 cells at 1024² (the default study is 870 at 512², 0.23 Gi).
 pub const MAX_STUDY_PIXELS: u64 = 1 << 32;
 
-/// What `dbuffer inspect` may use on any input within the budget above: 2 GiB.
+/// Pixels of an `animate` frame (`--size WxH`): 16 Mi, 4096×4096. A frame is read back (16
+/// bytes a pixel) and encoded while its GPU targets (24 bytes a pixel, host memory on a CPU
+/// adapter) are held: checked from the flags before any work.
+pub const MAX_ANIMATE_PIXELS: u64 = 1 << 24;
+
+/// What `dbuffer inspect` and `dbuffer compare` may use on any input within the budget above:
+/// 2 GiB.
 pub const MEMORY_BOUND_BYTES: u64 = 2 << 30;
 
 /// The budget as the lines `dbuffer --help` prints after its commands.
 pub fn summary() -> String {
-    let rows: [(&str, String, &str); 21] = [
+    let rows: [(&str, String, &str); 22] = [
         (
             "MAX_SCENE_FILE_BYTES",
             bytes(MAX_SCENE_FILE_BYTES),
@@ -199,9 +206,14 @@ pub fn summary() -> String {
             "--frames of compare --orbit",
         ),
         (
-            "MAX_ORBIT_HELD_BYTES",
-            bytes(MAX_ORBIT_HELD_BYTES),
-            "compare --orbit: pixels × methods × (frames − 1), one byte each",
+            "MAX_COMPARE_PIXELS",
+            MAX_COMPARE_PIXELS.to_string(),
+            "--size of compare (still and --orbit)",
+        ),
+        (
+            "MAX_ANIMATE_PIXELS",
+            MAX_ANIMATE_PIXELS.to_string(),
+            "--size of animate",
         ),
         (
             "MAX_STUDY_CELLS",
@@ -216,7 +228,7 @@ pub fn summary() -> String {
         (
             "MEMORY_BOUND_BYTES",
             bytes(MEMORY_BOUND_BYTES),
-            "what inspect uses at most within the budget",
+            "what inspect and compare use at most within the budget",
         ),
     ];
     let mut text =
@@ -251,6 +263,9 @@ mod tests {
         const { assert!(MAX_SCENE_TRIANGLES / 4 + 2 <= MAX_SCENE_VERTICES) };
         // 8192×8192 is an image the budget allows.
         const { assert!(8192 * 8192 <= MAX_IMAGE_PIXELS && 8192 <= MAX_IMAGE_SIDE) };
+        // The commands with a smaller image of their own still take 3000×3000.
+        const { assert!(3000 * 3000 <= MAX_COMPARE_PIXELS && MAX_COMPARE_PIXELS <= MAX_IMAGE_PIXELS) };
+        const { assert!(3000 * 3000 <= MAX_ANIMATE_PIXELS && MAX_ANIMATE_PIXELS <= MAX_IMAGE_PIXELS) };
     }
 
     #[test]
@@ -265,6 +280,8 @@ mod tests {
             "MAX_DBUFFER_SIZE",
             "MAX_FUSED_LIST_BYTES",
             "MAX_FUSED_EDGES",
+            "MAX_COMPARE_PIXELS",
+            "MAX_ANIMATE_PIXELS",
         ] {
             assert!(s.contains(name), "{name} missing from:\n{s}");
         }

@@ -86,8 +86,8 @@ enum Command {
         /// Folder for the images and reports (created if missing).
         #[arg(long)]
         out: std::path::PathBuf,
-        /// Image size, WxH (at most 64 Mpixels, sides up to 16384); default 512x512, 256x256
-        /// with --orbit.
+        /// Image size, WxH (at most 16 Mpixels, MAX_COMPARE_PIXELS; sides up to 16384); default
+        /// 512x512, 256x256 with --orbit.
         #[arg(long)]
         size: Option<String>,
         /// Also every method in motion: the light (or the camera) round the orbit of
@@ -98,6 +98,10 @@ enum Command {
         /// Frames of the --orbit (2 to 720).
         #[arg(long, default_value_t = 24)]
         frames: usize,
+        /// Comma-separated methods to compare instead of every one, e.g. dbuffer,hard (the
+        /// reference always; reference-hard too with a hard method).
+        #[arg(long)]
+        methods: Option<String>,
         /// V(t) of the D-buffer methods: smoothstep, sqrt, exact or linear.
         #[arg(long, default_value = "exact")]
         vt: String,
@@ -129,7 +133,7 @@ enum Command {
         /// Frames per second of animation.png (1 to 60).
         #[arg(long, default_value_t = 16)]
         fps: u32,
-        /// Image size, WxH.
+        /// Image size, WxH (at most 16 Mpixels, MAX_ANIMATE_PIXELS; sides up to 16384).
         #[arg(long, default_value = "480x360")]
         size: String,
         /// The shadow method (as for render; default: dbuffer for a disk light, linear-ssm for
@@ -322,6 +326,7 @@ fn main() -> ExitCode {
             size,
             orbit,
             frames,
+            methods,
             vt,
             dbuffer_size,
             knobs,
@@ -332,6 +337,7 @@ fn main() -> ExitCode {
             size: size.as_deref(),
             orbit: orbit.as_deref(),
             frames,
+            methods: methods.as_deref(),
             vt: &vt,
             dbuffer_size,
             knobs: &knobs,

@@ -615,7 +615,14 @@ pub fn run(options: LabOptions) -> anyhow::Result<()> {
             Ok(Box::new(app))
         }),
     )
-    .map_err(|e| anyhow::anyhow!("the lab window failed: {e}"))?;
+    .map_err(|e| match e {
+        // wgpu's own words (several lines) go to the error formatter as a GPU's.
+        eframe::Error::Wgpu(e) => {
+            anyhow::Error::new(crate::render::RenderError::Device(e.to_string()))
+                .context("the lab window failed")
+        }
+        e => anyhow::anyhow!("the lab window failed: {e}"),
+    })?;
     if bench {
         let result = bench_outcome.lock().ok().and_then(|mut o| o.take());
         match result {

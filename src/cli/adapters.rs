@@ -58,49 +58,62 @@ pub fn list() -> Result<()> {
 
 /// What `main` prints for an error: `dbuffer: ` and the causes on one line (newlines in a name
 /// escaped, so a path cannot fake a line); a GPU's own message (wgpu's, several lines) with its
-/// cause chain on indented lines under it, and what the user can do.
+/// cause chain on indented lines under it, and what the user can do. Every subcommand's errors
+/// come here: the GPU's is found wherever it sits in the chain, inside an animation's error too.
 pub fn error_lines(e: &anyhow::Error) -> String {
-    let gpu = e
-        .chain()
-        .find_map(|c| c.downcast_ref::<RenderError>())
-        .filter(|r| {
-            matches!(
-                r,
-                RenderError::Gpu(_)
-                    | RenderError::Device(_)
-                    | RenderError::Lost(_)
-                    | RenderError::NoAdapter(_)
-            )
-        });
+    let gpu = e.chain().find_map(gpu_error);
     let Some(gpu) = gpu else {
         return format!("dbuffer: {}\n", format!("{e:#}").replace('\n', "\\n"));
     };
     let mut out = String::from("dbuffer: ");
-    for context in e
-        .chain()
-        .take_while(|c| c.downcast_ref::<RenderError>().is_none())
-    {
+    for context in e.chain().take_while(|c| gpu_error(*c).is_none()) {
         out.push_str(&context.to_string().replace('\n', "\\n"));
         out.push_str(": ");
     }
-    let message = gpu.to_string();
-    let mut lines = message
-        .lines()
-        .map(str::trim_end)
-        .filter(|l| !l.trim().is_empty() && l.trim() != "Caused by:");
-    out.push_str(lines.next().unwrap_or_default());
-    out.push('\n');
-    for line in lines {
-        out.push_str("  ");
-        out.push_str(line);
-        out.push('\n');
-    }
+    out.push_str(&gpu_lines(&gpu.to_string()));
     if matches!(gpu, RenderError::Gpu(_) | RenderError::Device(_)) {
         out.push_str(
             "  what you can do: try another backend or adapter (--backend vulkan|gl|metal|dx12; \
              `dbuffer adapters` lists them and what each method needs), and report this \
              message with that list\n",
         );
+    }
+    out
+}
+
+/// The error the GPU (or wgpu on its behalf) reported, if `e` is one: a [`RenderError`] of a
+/// GPU kind, bare or as an animation's.
+fn gpu_error<'a>(e: &'a (dyn std::error::Error + 'static)) -> Option<&'a RenderError> {
+    let render = e.downcast_ref::<RenderError>().or_else(|| {
+        match e.downcast_ref::<dbuffer::animation::AnimationError>() {
+            Some(dbuffer::animation::AnimationError::Render(r)) => Some(r),
+            _ => None,
+        }
+    })?;
+    matches!(
+        render,
+        RenderError::Gpu(_)
+            | RenderError::Device(_)
+            | RenderError::Lost(_)
+            | RenderError::NoAdapter(_)
+            | RenderError::Readback(_)
+    )
+    .then_some(render)
+}
+
+/// A GPU's message as lines: its first line as it is, each cause under it indented (wgpu's
+/// empty lines and its "Caused by:" left out), every line ended.
+pub fn gpu_lines(message: &str) -> String {
+    let mut lines = message
+        .lines()
+        .map(str::trim_end)
+        .filter(|l| !l.trim().is_empty() && l.trim() != "Caused by:");
+    let mut out = String::from(lines.next().unwrap_or_default());
+    out.push('\n');
+    for line in lines {
+        out.push_str("  ");
+        out.push_str(line);
+        out.push('\n');
     }
     out
 }

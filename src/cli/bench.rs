@@ -118,6 +118,30 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let report = bench::run(&ctx, &config, loaded, &mut progress)?;
     bar.set(steps as u64);
     bar.finish();
+    // A case that failed is "n/a (error)" in the tables: its error here, as lines (the
+    // refusals were said above, as "skipped").
+    let refusals: Vec<String> = config
+        .cases
+        .iter()
+        .filter_map(|c| c.method.refuses_on(&ctx.caps))
+        .collect();
+    let mut said: Vec<&str> = Vec::new();
+    for run in &report.runs {
+        let Some(e) = run.error.as_deref() else {
+            continue;
+        };
+        if refusals.iter().any(|r| r == e) || said.contains(&e) {
+            continue;
+        }
+        said.push(e);
+        errln!(
+            "error     {} on {} at {}²: {}",
+            run.label,
+            run.scene,
+            run.size,
+            super::adapters::gpu_lines(e).trim_end()
+        );
+    }
     let markdown = bench::table::markdown(&report);
 
     std::fs::create_dir_all(args.out)

@@ -26,6 +26,8 @@ pub struct CompareArgs<'a> {
     pub size: Option<&'a str>,
     pub orbit: Option<&'a str>,
     pub frames: usize,
+    /// `--methods a,b`: only these (and the references).
+    pub methods: Option<&'a str>,
     pub vt: &'a str,
     pub dbuffer_size: u32,
     pub knobs: &'a MethodFlags,
@@ -43,27 +45,29 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     };
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
+    let only = args.methods.map(parse_methods).transpose()?;
     let mut knobs = args.knobs.knobs()?;
     if orbit.is_some() && knobs.given(&SAMPLES).is_none() {
         // Every frame casts the reference: a modest K unless asked (one sample still below
         // the class threshold).
         knobs = knobs.with(&SAMPLES, temporal::DEFAULT_SAMPLES);
     }
+    let request = CompareRequest {
+        width,
+        height,
+        dbuffer_size: args.dbuffer_size,
+        vt,
+        knobs,
+    };
+    // Before any work: the image a comparison may hold, and the orbit's frames.
+    request.validate().map_err(anyhow::Error::msg)?;
     let motion_request = orbit.map(|orbit| MotionRequest {
-        compare: CompareRequest {
-            width,
-            height,
-            dbuffer_size: args.dbuffer_size,
-            vt,
-            knobs,
-        },
+        compare: request,
         orbit: Some(orbit),
         frames: args.frames,
     });
     if let Some(m) = &motion_request {
-        // Before any work: the budget of the whole orbit, with every method counted.
-        m.validate(Method::all().len())
-            .map_err(anyhow::Error::msg)?;
+        m.validate().map_err(anyhow::Error::msg)?;
     }
     // Before any work: a comparison that cannot be written is not started.
     output::check_out_dir(args.out, &[]).context("--out")?;
@@ -75,16 +79,26 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     errln!("adapter   {}", offline.ctx.adapter_description());
     super::chosen(&offline.ctx);
     offline.progress = Some(progress::reference_samples());
-    let request = CompareRequest {
-        width,
-        height,
-        dbuffer_size: args.dbuffer_size,
-        vt,
-        knobs,
-    };
-    let comparison = compare::run(&mut offline, &scene.name, &scene, &request, |what| {
-        errln!("rendering {what}")
-    })?;
+    let cannot_write = || format!("cannot write the report into {}", args.out.display());
+    // Each method's files are written (into the folder's hidden staging folder) as it finishes,
+    // and its frame let go of; everything is moved into place at the end, all or nothing.
+    let mut plan = compare::Plan::new(scene.light.kind(), &offline.ctx.caps);
+    if let Some(only) = &only {
+        plan = plan.only(only);
+    }
+    let mut writer =
+        report::Writer::new(args.out, (width, height), &plan.drawn).with_context(cannot_write)?;
+    let drawn = plan.clone();
+    let (outline, baseline) = compare::run_each(
+        &mut offline,
+        &scene.name,
+        &scene,
+        &request,
+        plan,
+        |what| errln!("rendering {what}"),
+        |tile, against, r| writer.method(tile, against, &r).with_context(cannot_write),
+    )?;
+    drop(baseline);
     let motion = match &motion_request {
         Some(m) => {
             let bar = Progress::new("orbit", m.frames as u64, "frames");
@@ -95,13 +109,17 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
                 request.samples()
             ));
             let mut last = 0;
-            let motion = temporal::run(&mut offline, &scene, m, |frame, what| {
-                if frame != last {
-                    bar.set(frame as u64);
-                    last = frame;
-                }
-                let _ = what;
-            })?;
+            let scratch = writer
+                .scratch()
+                .map(Path::to_path_buf)
+                .unwrap_or_else(std::env::temp_dir);
+            let motion =
+                temporal::run_in(&mut offline, &scene, m, &drawn, &scratch, |frame, _| {
+                    if frame != last {
+                        bar.set(frame as u64);
+                        last = frame;
+                    }
+                })?;
             bar.finish();
             if let Some(note) = &motion.note {
                 errln!("note      {note}");
@@ -110,20 +128,9 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         }
         None => None,
     };
-    // The folder is made now, at the end, and taken away again if writing fails.
-    let created = output::NewDirs::create(args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let written = report::write(args.out, &comparison, motion.as_ref()).map_err(|e| {
-        created.remove_if_empty();
-        anyhow::Error::new(e).context(format!(
-            "cannot write the report into {}",
-            args.out.display()
-        ))
-    })?;
-    let r = match &motion {
-        Some(m) => report::Report::with_motion(&comparison, m),
-        None => report::Report::new(&comparison),
-    };
+    let (r, written) = writer
+        .finish(&outline, motion.as_ref())
+        .with_context(cannot_write)?;
     outln!(
         "{} ({}x{}, K = {}, reference {:.1} M rays/s, V(t) {})",
         r.scene,
@@ -155,4 +162,19 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         args.out.display()
     );
     Ok(())
+}
+
+/// `--methods a,b,c`: each a method of the registry (an unknown name lists them).
+fn parse_methods(list: &str) -> Result<Vec<Method>> {
+    let methods = list
+        .split(',')
+        .map(str::trim)
+        .filter(|m| !m.is_empty())
+        .map(|m| m.parse::<Method>().map_err(anyhow::Error::msg))
+        .collect::<Result<Vec<_>>>()
+        .context("--methods")?;
+    if methods.is_empty() {
+        anyhow::bail!("--methods expects a comma-separated list of methods, e.g. dbuffer,hard");
+    }
+    Ok(methods)
 }

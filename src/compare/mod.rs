@@ -16,15 +16,16 @@ pub mod temporal;
 
 use std::time::Instant;
 
+use crate::budget::MAX_COMPARE_PIXELS;
 use crate::geometry::bvh::Bvh;
 use crate::geometry::flip;
 use crate::geometry::metrics::{self, HardMetrics, Metrics};
 use crate::geometry::{view, VtVariant};
-use crate::render::adapter::Verdict;
+use crate::render::adapter::{Capabilities, Verdict};
 use crate::render::methods::reference::SAMPLES;
 use crate::render::offline::Offline;
 use crate::render::{Frame, FrameRequest, Knobs, Method, RenderError};
-use crate::scene::Scene;
+use crate::scene::{LightKind, Scene};
 
 /// What to compare.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,6 +40,23 @@ pub struct CompareRequest {
 }
 
 impl CompareRequest {
+    /// Whether the image is within what a comparison may draw ([`MAX_COMPARE_PIXELS`]; the
+    /// message names `--size`), checked before any frame.
+    pub fn validate(&self) -> Result<(), String> {
+        let (w, h) = (self.width, self.height);
+        let pixels = u64::from(w) * u64::from(h);
+        if pixels > MAX_COMPARE_PIXELS {
+            return Err(format!(
+                "--size {w}x{h} is {pixels} pixels: compare expects at most {MAX_COMPARE_PIXELS} \
+                 (MAX_COMPARE_PIXELS, {} Mpixels: a method's frame, the reference's and their \
+                 GPU targets stay within {} at that size)",
+                MAX_COMPARE_PIXELS >> 20,
+                crate::budget::bytes(crate::budget::MEMORY_BOUND_BYTES)
+            ));
+        }
+        Ok(())
+    }
+
     /// The reference's disk samples per pixel.
     pub fn samples(&self) -> u32 {
         self.knobs.get(&SAMPLES)
@@ -73,7 +91,9 @@ pub fn rgb_of(frame: &Frame) -> Vec<[u8; 3]> {
     frame.color.iter().map(|c| [c[0], c[1], c[2]]).collect()
 }
 
-/// Every method against the reference.
+/// Every method against the reference, every frame held ([`run`]: for a lab, a test, a small
+/// image; `dbuffer compare` hands each method to its files as it finishes instead,
+/// [`run_each`]).
 #[derive(Debug)]
 pub struct Comparison {
     pub scene: String,
@@ -96,6 +116,139 @@ impl Comparison {
     pub fn reference(&self) -> &MethodResult {
         &self.results[0]
     }
+
+    /// What the methods were measured against, as [`run_each`] hands it to each.
+    pub fn against(&self) -> Against<'_> {
+        Against {
+            mask: &self.mask,
+            reference: &self.reference().frame.visibility,
+            exact: self
+                .results
+                .iter()
+                .find(|r| r.method == Method::REFERENCE_HARD)
+                .map(|r| r.frame.visibility.as_slice()),
+        }
+    }
+
+    /// The comparison without its frames.
+    pub fn outline(&self) -> Outline {
+        Outline {
+            scene: self.scene.clone(),
+            adapter: self.adapter.clone(),
+            request: self.request,
+            drawn: self.results.iter().map(|r| r.method).collect(),
+            not_applicable: self.not_applicable.clone(),
+            pixels: self.mask.iter().filter(|&&m| m).count(),
+            reference_rays_per_s: self.reference_rays_per_s,
+        }
+    }
+}
+
+/// A comparison's setup and what it drew, without any frame: what the report needs besides its
+/// rows.
+#[derive(Clone, Debug)]
+pub struct Outline {
+    pub scene: String,
+    pub adapter: String,
+    pub request: CompareRequest,
+    /// The methods drawn, the reference first, then the registry's order (the montage's tiles).
+    pub drawn: Vec<Method>,
+    /// As [`Comparison::not_applicable`].
+    pub not_applicable: Vec<(Method, String, String)>,
+    /// Pixels that count.
+    pub pixels: usize,
+    pub reference_rays_per_s: f64,
+}
+
+/// Which methods a comparison draws, in the report's order, and which it cannot (with what
+/// they need and why), known before any frame.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The reference, then every other method of the registry that takes the light and the
+    /// adapter.
+    pub drawn: Vec<Method>,
+    pub not_applicable: Vec<(Method, String, String)>,
+}
+
+impl Plan {
+    /// The plan for a scene lit by `light` on a device with `caps`.
+    pub fn new(light: LightKind, caps: &Capabilities) -> Plan {
+        let mut drawn = vec![Method::REFERENCE];
+        let mut not_applicable = Vec::new();
+        for &method in Method::all() {
+            if method.is_reference() {
+                continue;
+            }
+            if let Some(why) = method.refuses(light) {
+                let needs = method.needs().map_or(String::new(), |kinds| {
+                    let names: Vec<&str> = kinds.iter().map(|k| k.name()).collect();
+                    names.join(", ")
+                });
+                not_applicable.push((method, needs, why));
+                continue;
+            }
+            // A method the device cannot run is listed with what it lacks, before any work.
+            if let Verdict::Cannot(missing) = method.on(caps) {
+                let why = method.refuses_on(caps).unwrap_or_default();
+                not_applicable.push((method, missing.join(", "), why));
+                continue;
+            }
+            drawn.push(method);
+        }
+        Plan {
+            drawn,
+            not_applicable,
+        }
+    }
+
+    /// Only `methods` of the plan (`compare --methods`), the reference always, and
+    /// `reference-hard` too when a hard method is among them (they are scored against it). The
+    /// others are left out of the report, not listed as not applicable.
+    pub fn only(mut self, methods: &[Method]) -> Plan {
+        let hard = methods.iter().any(|m| m.is_hard());
+        let keep = |m: &Method| {
+            m.is_reference() || methods.contains(m) || (hard && *m == Method::REFERENCE_HARD)
+        };
+        self.drawn.retain(keep);
+        self.not_applicable.retain(|(m, ..)| keep(m));
+        self
+    }
+
+    /// Whether `reference-hard` is drawn (the montage then has a fourth row).
+    pub fn has_hard_reference(&self) -> bool {
+        self.drawn.contains(&Method::REFERENCE_HARD)
+    }
+}
+
+/// What every method is measured against, held through a whole comparison: the pixels that
+/// count, the reference's V and image, and once drawn the exact hard shadow (12 bytes a pixel,
+/// 13 with it).
+#[derive(Debug, Default)]
+pub struct Baseline {
+    pub mask: Vec<bool>,
+    pub reference: Vec<f32>,
+    pub reference_rgb: Vec<[u8; 3]>,
+    /// `reference-hard`'s V, which the hard methods are scored against.
+    pub exact: Option<Vec<f32>>,
+}
+
+impl Baseline {
+    pub fn against(&self) -> Against<'_> {
+        Against {
+            mask: &self.mask,
+            reference: &self.reference,
+            exact: self.exact.as_deref(),
+        }
+    }
+}
+
+/// A method's yardsticks, borrowed: the pixels that count, the reference's V and the exact hard
+/// shadow's (if drawn).
+#[derive(Clone, Copy, Debug)]
+pub struct Against<'a> {
+    pub mask: &'a [bool],
+    pub reference: &'a [f32],
+    pub exact: Option<&'a [f32]>,
 }
 
 /// The pixels every metric counts: the ones where `frame` shows a surface (any frame of the
@@ -109,18 +262,66 @@ pub fn counted_pixels(receivers: &[Option<view::Receiver>], frame: &Frame) -> Ve
         .collect()
 }
 
-/// Render the reference and every method in one session; `progress` hears what is being done.
+/// Render the reference and every method in one session, every frame held; `progress` hears
+/// what is being done.
 pub fn run(
     offline: &mut Offline,
     name: &str,
     scene: &Scene,
     request: &CompareRequest,
-    mut progress: impl FnMut(&str),
+    progress: impl FnMut(&str),
 ) -> Result<Comparison, RenderError> {
+    let mut results = Vec::new();
+    let plan = Plan::new(scene.light.kind(), &offline.ctx.caps);
+    let (outline, baseline) = run_each(
+        offline,
+        name,
+        scene,
+        request,
+        plan,
+        progress,
+        |tile, _, r| -> Result<(), RenderError> {
+            results.push((tile, r));
+            Ok(())
+        },
+    )?;
+    results.sort_by_key(|(tile, _)| *tile);
+    Ok(Comparison {
+        scene: outline.scene,
+        adapter: outline.adapter,
+        request: outline.request,
+        mask: baseline.mask,
+        results: results.into_iter().map(|(_, r)| r).collect(),
+        not_applicable: outline.not_applicable,
+        reference_rays_per_s: outline.reference_rays_per_s,
+    })
+}
+
+/// Render the reference and every method of `plan` ([`Plan::new`] for the scene's light and
+/// the device, or [`Plan::only`] some of them) in one session, handing each measured
+/// method to `each` as it finishes, with its tile (its place in the report's order) and what it
+/// was measured against; a method's frame is let go of (on the CPU, and its textures on the
+/// GPU) before the next one is drawn, so what a run holds is one method's frame and the
+/// [`Baseline`], whatever the number of methods. The reference comes first, then
+/// `reference-hard` (the hard methods' yardstick), then the others in registry order.
+/// Returns the comparison's outline and its baseline.
+pub fn run_each<E: From<RenderError>>(
+    offline: &mut Offline,
+    name: &str,
+    scene: &Scene,
+    request: &CompareRequest,
+    plan: Plan,
+    mut progress: impl FnMut(&str),
+    mut each: impl FnMut(usize, &Against<'_>, MethodResult) -> Result<(), E>,
+) -> Result<(Outline, Baseline), E> {
     request.knobs.validate().map_err(RenderError::Request)?;
+    request.validate().map_err(RenderError::Request)?;
     // Every method is scored against the reference: without it there is nothing to compare.
     if let Some(why) = Method::REFERENCE.refuses_on(&offline.ctx.caps) {
-        return Err(RenderError::Request(why));
+        return Err(RenderError::Request(why).into());
+    }
+    for (method, _, why) in &plan.not_applicable {
+        progress(&format!("{method}: not applicable ({why})"));
     }
     let frame_request = |method| FrameRequest {
         width: request.width,
@@ -140,111 +341,137 @@ pub fn run(
         k, request.width, request.height
     ));
     let mut session = offline.session(scene.clone());
-    let (reference, ref_report) =
-        offline.render_in(&mut session, &frame_request(Method::REFERENCE))?;
+    let (reference, ref_report) = render(offline, &mut session, &frame_request(Method::REFERENCE))?;
+    session.release(&offline.ctx, Method::REFERENCE)?;
     let rays_ms = cpu(&ref_report.cpu_ms, "reference_rays");
     let hit_pixels = ref_report.reference_rays.map_or(0, |(_, n)| n);
     let reference_rays_per_s = hit_pixels as f64 * f64::from(k) / (rays_ms.max(1e-9) * 1e-3);
 
-    let receivers = view::receivers(
+    let facing = view::facing_light(
         scene,
         &Bvh::build(scene.all_triangles()),
         request.width,
         request.height,
     );
-    let mask = counted_pixels(&receivers, &reference);
-
-    let mut results = vec![MethodResult {
-        method: Method::REFERENCE,
-        metrics: metrics::compare(&reference.visibility, &reference.visibility, &mask),
-        gpu_ms: gpu_total(&reference),
-        cpu_ms: rays_ms,
-        wall_ms: cpu(&ref_report.cpu_ms, "frame_and_readback"),
-        frame: reference,
-        hard: None,
-        flip: Vec::new(),
-        flip_mean: 0.0,
-    }];
-    let mut not_applicable = Vec::new();
-    for &method in Method::all() {
-        if method.is_reference() {
-            continue;
-        }
-        if let Some(why) = method.refuses(scene.light.kind()) {
-            progress(&format!("{method}: not applicable ({why})"));
-            let needs = method.needs().map_or(String::new(), |kinds| {
-                let names: Vec<&str> = kinds.iter().map(|k| k.name()).collect();
-                names.join(", ")
-            });
-            not_applicable.push((method, needs, why));
-            continue;
-        }
-        // A method the device cannot run is listed with what it lacks, before any work.
-        if let Verdict::Cannot(missing) = method.on(&offline.ctx.caps) {
-            let why = method.refuses_on(&offline.ctx.caps).unwrap_or_default();
-            progress(&format!("{method}: not applicable ({why})"));
-            not_applicable.push((method, missing.join(", "), why));
-            continue;
-        }
+    let mask: Vec<bool> = facing
+        .iter()
+        .enumerate()
+        .map(|(i, &f)| f && reference.hit(i))
+        .collect();
+    drop(facing);
+    let mut base = Baseline {
+        reference_rgb: rgb_of(&reference),
+        reference: reference.visibility.clone(),
+        mask,
+        exact: None,
+    };
+    let tile = |m: Method| plan.drawn.iter().position(|&d| d == m).unwrap_or(0);
+    let measured = measure(
+        &base,
+        request,
+        Method::REFERENCE,
+        reference,
+        (rays_ms, cpu(&ref_report.cpu_ms, "frame_and_readback")),
+    )?;
+    each(tile(Method::REFERENCE), &base.against(), measured)?;
+    // The exact hard shadow first: every hard method after it is scored against it.
+    let mut order: Vec<Method> = plan
+        .drawn
+        .iter()
+        .copied()
+        .filter(|m| *m == Method::REFERENCE_HARD)
+        .collect();
+    order.extend(
+        plan.drawn
+            .iter()
+            .copied()
+            .filter(|m| !m.is_reference() && *m != Method::REFERENCE_HARD),
+    );
+    for method in order {
         progress(&format!("{method}: {}", method.description()));
         let req = frame_request(method);
         // The first frame of a pipeline includes shader compilation on some drivers: time the
-        // second, with its light-space passes made again.
-        offline.render_in(&mut session, &req)?;
+        // second, with its light-space passes made again (the geometry is the first's).
+        session.draw(&offline.ctx, &req)?;
+        let (builds, geometry_ms) = session.geometry_builds(method);
         session.invalidate_light_maps();
         let t = Instant::now();
-        let (frame, _) = offline.render_in(&mut session, &req)?;
+        // Read back with the method's own textures already let go of.
+        let frame = session.frame_releasing(&offline.ctx, &req)?;
         let wall_ms = t.elapsed().as_secs_f64() * 1e3;
-        let (builds, geometry_ms) = session.geometry_builds(method);
-        results.push(MethodResult {
-            method,
-            metrics: metrics::compare(&results[0].frame.visibility, &frame.visibility, &mask),
-            gpu_ms: gpu_total(&frame),
-            cpu_ms: if builds > 0 { geometry_ms } else { 0.0 },
-            wall_ms,
-            frame,
-            hard: None,
-            flip: Vec::new(),
-            flip_mean: 0.0,
-        });
-    }
-    // FLIP of every shaded image against the reference's (the reference's own: 0).
-    let reference_rgb = rgb_of(&results[0].frame);
-    for r in &mut results {
-        r.flip = flip::ldr_flip(
-            &reference_rgb,
-            &rgb_of(&r.frame),
-            request.width,
-            request.height,
-            flip::DEFAULT_PPD,
-        )
-        .map_err(|e| RenderError::Request(e.to_string()))?;
-        r.flip_mean = flip::mean(&r.flip);
-    }
-    // Every hard method against the exact hard shadow as well.
-    let hard_reference = results
-        .iter()
-        .find(|r| r.method == Method::REFERENCE_HARD)
-        .map(|r| r.frame.visibility.clone());
-    if let Some(exact) = hard_reference {
-        for r in results.iter_mut().filter(|r| r.method.is_hard()) {
-            r.hard = Some(metrics::compare_hard(
-                &exact,
-                &r.frame.visibility,
-                &mask,
-                request.width,
-                request.height,
-            ));
+        if method == Method::REFERENCE_HARD {
+            base.exact = Some(frame.visibility.clone());
         }
+        let cpu_ms = if builds > 0 { geometry_ms } else { 0.0 };
+        let measured = measure(&base, request, method, frame, (cpu_ms, wall_ms))?;
+        each(tile(method), &base.against(), measured)?;
     }
-    Ok(Comparison {
+    let outline = Outline {
         scene: name.to_string(),
         adapter: offline.ctx.adapter_description(),
         request: *request,
-        mask,
-        results,
-        not_applicable,
+        drawn: plan.drawn,
+        not_applicable: plan.not_applicable,
+        pixels: base.mask.iter().filter(|&&m| m).count(),
         reference_rays_per_s,
+    };
+    Ok((outline, base))
+}
+
+/// One frame of `request` read back, without the D-buffer's maps (nothing here writes them).
+fn render(
+    offline: &mut Offline,
+    session: &mut crate::render::Session,
+    request: &FrameRequest,
+) -> Result<(Frame, crate::render::offline::FrameReport), RenderError> {
+    let mut noop = |_: usize, _: usize| {};
+    let progress: &mut dyn FnMut(usize, usize) = match offline.progress.as_mut() {
+        Some(p) => p.as_mut(),
+        None => &mut noop,
+    };
+    crate::render::offline::render_in(&offline.ctx, session, request, progress)
+}
+
+/// `frame` of `method` measured against `base`: its metrics, FLIP against the reference's
+/// image, and for a hard method its score against the exact hard shadow.
+fn measure(
+    base: &Baseline,
+    request: &CompareRequest,
+    method: Method,
+    frame: Frame,
+    (cpu_ms, wall_ms): (f64, f64),
+) -> Result<MethodResult, RenderError> {
+    let flip = flip::ldr_flip(
+        &base.reference_rgb,
+        &rgb_of(&frame),
+        request.width,
+        request.height,
+        flip::DEFAULT_PPD,
+    )
+    .map_err(|e| RenderError::Request(e.to_string()))?;
+    let hard = base
+        .exact
+        .as_ref()
+        .filter(|_| method.is_hard())
+        .map(|exact| {
+            metrics::compare_hard(
+                exact,
+                &frame.visibility,
+                &base.mask,
+                request.width,
+                request.height,
+            )
+        });
+    Ok(MethodResult {
+        method,
+        metrics: metrics::compare(&base.reference, &frame.visibility, &base.mask),
+        gpu_ms: gpu_total(&frame),
+        cpu_ms,
+        wall_ms,
+        hard,
+        flip_mean: flip::mean(&flip),
+        flip,
+        frame,
     })
 }
 

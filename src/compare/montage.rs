@@ -18,7 +18,7 @@
 use ab_glyph::{point, Font, FontRef, PxScale, ScaleFont};
 use image::{Rgb, RgbImage};
 
-use super::{heatmap, Comparison, MethodResult};
+use super::{heatmap, Against, Comparison, MethodResult};
 use crate::render::Method;
 
 pub const MONTAGE_PNG: &str = "montage.png";
@@ -76,13 +76,18 @@ impl Layout {
 
     /// The layout of `c`'s montage.
     pub fn of(c: &Comparison) -> Layout {
-        let cells = if has_hard_reference(c) { 4 } else { 3 };
-        Layout::new(
-            c.request.width,
-            c.request.height,
-            c.results.len() as u32,
-            cells,
-        )
+        Layout::planned(c.request.width, c.request.height, &c.outline().drawn)
+    }
+
+    /// The layout of a montage of `drawn` at `width`×`height`, known before any frame: a fourth
+    /// row when `reference-hard` is among them.
+    pub fn planned(width: u32, height: u32, drawn: &[Method]) -> Layout {
+        let cells = if drawn.contains(&Method::REFERENCE_HARD) {
+            4
+        } else {
+            3
+        };
+        Layout::new(width, height, drawn.len() as u32, cells)
     }
 
     /// Top-left corner of tile `i` (its label).
@@ -100,10 +105,6 @@ impl Layout {
         let (x, y) = self.tile(i);
         (x, y + LABEL_HEIGHT + k * (self.cell.1 + GAP))
     }
-}
-
-fn has_hard_reference(c: &Comparison) -> bool {
-    c.results.iter().any(|r| r.method == Method::REFERENCE_HARD)
 }
 
 /// `img` as a PNG at the encoder's best compression: a page meant to be kept and shared (a
@@ -124,37 +125,57 @@ pub fn encode(img: &RgbImage) -> image::ImageResult<Vec<u8>> {
 
 /// The montage of `c`.
 pub fn render(c: &Comparison) -> RgbImage {
-    let layout = Layout::of(c);
-    let mut img = RgbImage::from_pixel(layout.width, layout.height, Rgb(BACKGROUND));
-    let font = FontRef::try_from_slice(FONT).ok();
-    let (w, h) = (c.request.width, c.request.height);
-    let reference = &c.reference().frame.visibility;
-    let exact = c
-        .results
-        .iter()
-        .find(|r| r.method == Method::REFERENCE_HARD)
-        .map(|r| &r.frame.visibility);
+    let mut page = Page::new(Layout::of(c));
+    let against = c.against();
     for (i, r) in c.results.iter().enumerate() {
-        let i = i as u32;
+        page.tile(i as u32, r, &against);
+    }
+    page.finish()
+}
+
+/// A montage being drawn, a tile as each method arrives (in any order): the page is the
+/// layout's size from the start, whatever the images' size, and each tile is reduced from its
+/// method's frame while that frame is held.
+pub struct Page {
+    img: RgbImage,
+    layout: Layout,
+    font: Option<FontRef<'static>>,
+}
+
+impl Page {
+    pub fn new(layout: Layout) -> Page {
+        Page {
+            img: RgbImage::from_pixel(layout.width, layout.height, Rgb(BACKGROUND)),
+            layout,
+            font: FontRef::try_from_slice(FONT).ok(),
+        }
+    }
+
+    /// Draw tile `i`: `r`'s label and cells, measured `against` its yardsticks.
+    pub fn tile(&mut self, i: u32, r: &MethodResult, against: &Against<'_>) {
+        let Page { img, layout, font } = self;
+        let layout = *layout;
+        let (w, h) = (r.frame.width, r.frame.height);
+        let reference = against.reference;
         let (tx, ty) = layout.tile(i);
         if let Some(font) = &font {
-            label(&mut img, font, r, (tx, ty), layout.cell.0);
+            label(img, font, r, (tx, ty), layout.cell.0);
         }
         let color = &r.frame.color;
         let image = reduce(w, h, layout.factor, |idx| {
             let [r, g, b, _] = color.get(idx).copied().unwrap_or([0, 0, 0, 0]);
             Block::Mean([r, g, b])
         });
-        paste(&mut img, &image, layout.cell(i, 0));
+        paste(img, &image, layout.cell(i, 0));
         let (hx, hy) = layout.cell(i, 1);
         if r.method.is_reference() {
             let cell = RgbImage::from_pixel(layout.cell.0, layout.cell.1, Rgb(heatmap::MASKED_RGB));
-            paste(&mut img, &cell, (hx, hy));
+            paste(img, &cell, (hx, hy));
             if let Some(font) = &font {
                 let x = hx + 6;
                 let y = hy + 6;
                 text(
-                    &mut img,
+                    img,
                     font,
                     "the reference",
                     (x, y),
@@ -166,7 +187,7 @@ pub fn render(c: &Comparison) -> RgbImage {
         } else {
             let v = &r.frame.visibility;
             let heat = reduce(w, h, layout.factor, |idx| {
-                if c.mask.get(idx).copied().unwrap_or(false) {
+                if against.mask.get(idx).copied().unwrap_or(false) {
                     let e = (v.get(idx).copied().unwrap_or(0.0)
                         - reference.get(idx).copied().unwrap_or(0.0))
                     .abs();
@@ -175,7 +196,7 @@ pub fn render(c: &Comparison) -> RgbImage {
                     Block::Masked
                 }
             });
-            paste(&mut img, &heat, (hx, hy));
+            paste(img, &heat, (hx, hy));
         }
         // FLIP: the worst of each block, as the |ΔV| cell.
         let flip = &r.flip;
@@ -183,15 +204,15 @@ pub fn render(c: &Comparison) -> RgbImage {
             let v = flip.get(idx).copied().unwrap_or(0.0);
             Block::Worst(v, heatmap::magma(v))
         });
-        paste(&mut img, &cell, layout.cell(i, 2));
+        paste(img, &cell, layout.cell(i, 2));
         if layout.cells < 4 {
-            continue;
+            return;
         }
         let (ex, ey) = layout.cell(i, 3);
-        match (exact, r.hard.is_some()) {
+        match (against.exact, r.hard.is_some()) {
             (Some(exact), true) => {
                 let mismatch =
-                    heatmap::hard_mismatch(exact, &r.frame.visibility, &c.mask, color, w, h);
+                    heatmap::hard_mismatch(exact, &r.frame.visibility, against.mask, color, w, h);
                 let raw = mismatch.as_raw();
                 let cell = reduce(w, h, layout.factor, |idx| {
                     let p = [raw[3 * idx], raw[3 * idx + 1], raw[3 * idx + 2]];
@@ -203,15 +224,15 @@ pub fn render(c: &Comparison) -> RgbImage {
                         Block::Mean(p)
                     }
                 });
-                paste(&mut img, &cell, (ex, ey));
+                paste(img, &cell, (ex, ey));
             }
             _ => {
                 let cell =
                     RgbImage::from_pixel(layout.cell.0, layout.cell.1, Rgb(heatmap::MASKED_RGB));
-                paste(&mut img, &cell, (ex, ey));
+                paste(img, &cell, (ex, ey));
                 if let Some(font) = &font {
                     text(
-                        &mut img,
+                        img,
                         font,
                         "not a hard method",
                         (ex + 6, ey + 6),
@@ -223,10 +244,14 @@ pub fn render(c: &Comparison) -> RgbImage {
             }
         }
     }
-    if let Some(font) = &font {
-        footer(&mut img, font, &layout);
+
+    /// The page with its footer.
+    pub fn finish(mut self) -> RgbImage {
+        if let Some(font) = &self.font {
+            footer(&mut self.img, font, &self.layout);
+        }
+        self.img
     }
-    img
 }
 
 /// A tile's label: the name, then its numbers against the area reference, then (a hard method)

@@ -8,9 +8,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::temporal::{self, Motion};
-use super::{heatmap, montage, Comparison, MethodResult};
-use crate::fsutil::write_atomic;
-use crate::output;
+use super::{heatmap, montage, Against, Comparison, MethodResult, Outline};
+use crate::output::{self, OutputError, Staged};
 use crate::render::Method;
 use crate::scene::LightKind;
 
@@ -177,18 +176,28 @@ fn files(method: Method) -> (String, String, Option<String>) {
 
 impl Report {
     pub fn new(c: &Comparison) -> Report {
+        let mask = &c.mask;
+        Report::of(
+            &c.outline(),
+            c.results.iter().map(|r| row(r, mask)).collect(),
+        )
+    }
+
+    /// The report of a comparison outlined by `o`, with one row a method drawn (in `o.drawn`'s
+    /// order).
+    pub fn of(o: &Outline, methods: Vec<MethodRow>) -> Report {
         Report {
-            scene: c.scene.clone(),
-            adapter: c.adapter.clone(),
-            width: c.request.width,
-            height: c.request.height,
-            dbuffer_size: c.request.dbuffer_size,
-            vt: c.request.vt.name().to_string(),
-            samples: c.request.samples(),
-            reference_rays_per_s: c.reference_rays_per_s,
-            pixels: c.mask.iter().filter(|&&m| m).count(),
-            methods: c.results.iter().map(|r| row(r, &c.mask)).collect(),
-            not_applicable: c
+            scene: o.scene.clone(),
+            adapter: o.adapter.clone(),
+            width: o.request.width,
+            height: o.request.height,
+            dbuffer_size: o.request.dbuffer_size,
+            vt: o.request.vt.name().to_string(),
+            samples: o.request.samples(),
+            reference_rays_per_s: o.reference_rays_per_s,
+            pixels: o.pixels,
+            methods,
+            not_applicable: o
                 .not_applicable
                 .iter()
                 .map(|(m, needs, why)| NotApplicable {
@@ -204,7 +213,13 @@ impl Report {
     /// The report of a still comparison `c` with its run in motion.
     pub fn with_motion(c: &Comparison, motion: &Motion) -> Report {
         let mut r = Report::new(c);
-        for row in &mut r.methods {
+        r.add_motion(motion);
+        r
+    }
+
+    /// Add the run in motion: each method's temporal numbers, and the motion's summary.
+    pub fn add_motion(&mut self, motion: &Motion) {
+        for row in &mut self.methods {
             let Some(m) = motion
                 .methods
                 .iter()
@@ -218,7 +233,7 @@ impl Report {
             row.temporal_plot = Some(temporal::plot_file(m.method));
         }
         let worst = motion.worst();
-        r.motion = Some(MotionReport {
+        self.motion = Some(MotionReport {
             orbit: motion.orbit.clone(),
             frames: motion.frames,
             samples: motion.samples,
@@ -230,7 +245,6 @@ impl Report {
             apng: worst.map(|_| temporal::MOTION_APNG.to_string()),
             note: motion.note.clone(),
         });
-        r
     }
 
     /// The temporal table (empty without an orbit): one row a method, sorted as the registry.
@@ -447,37 +461,36 @@ impl Report {
     }
 }
 
-/// A method's cost over the pixels that count.
+/// A method's cost over the pixels that count, in one pass (nothing held per pixel).
 fn cost_row(r: &MethodResult, mask: &[bool]) -> Option<CostRow> {
     let spec = r.method.spec().cost;
-    let counted: Vec<[f32; 2]> = r
-        .frame
-        .cost
-        .iter()
-        .zip(mask)
-        .filter(|(_, &m)| m)
-        .map(|(c, _)| *c)
-        .collect();
-    if counted.is_empty() {
+    let (mut n, mut sum, mut max) = (0usize, 0.0f64, 0.0f64);
+    // The work of the first pixel that did any, and whether every other one did the same.
+    let (mut first, mut constant) = (None, true);
+    let mut on_path = vec![0usize; spec.paths.len()];
+    for (c, _) in r.frame.cost.iter().zip(mask).filter(|(_, &m)| m) {
+        n += 1;
+        sum += f64::from(c[0]);
+        max = max.max(f64::from(c[0]));
+        if c[0] > 0.0 {
+            constant &= *first.get_or_insert(c[0]) == c[0];
+        }
+        if let Some(count) = on_path.get_mut(c[1].round() as usize) {
+            *count += 1;
+        }
+    }
+    if n == 0 {
         return None;
     }
-    let n = counted.len() as f64;
-    let mean = counted.iter().map(|c| f64::from(c[0])).sum::<f64>() / n;
-    let max = counted.iter().map(|c| f64::from(c[0])).fold(0.0, f64::max);
-    let working: Vec<f32> = counted.iter().map(|c| c[0]).filter(|w| *w > 0.0).collect();
-    let constant = working.windows(2).all(|w| w[0] == w[1]);
-    let paths = (0..spec.paths.len())
-        .map(|k| {
-            let on = counted
-                .iter()
-                .filter(|c| c[1].round() as usize == k)
-                .count();
-            (spec.path_name(k as f32), 100.0 * on as f64 / n)
-        })
+    let n = n as f64;
+    let paths = on_path
+        .iter()
+        .enumerate()
+        .map(|(k, &on)| (spec.path_name(k as f32), 100.0 * on as f64 / n))
         .collect();
     Some(CostRow {
         unit: spec.unit.to_string(),
-        mean,
+        mean: sum / n,
         max,
         constant,
         paths,
@@ -518,104 +531,152 @@ fn row(r: &MethodResult, mask: &[bool]) -> MethodRow {
     }
 }
 
-/// Write every file into `dir` (created if missing), each atomically, with the run in motion's
-/// (its plots and the APNG) if there is one; returns their paths.
-pub fn write(dir: &Path, c: &Comparison, motion: Option<&Motion>) -> io::Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir)?;
-    let report = match motion {
-        Some(m) => Report::with_motion(c, m),
-        None => Report::new(c),
-    };
-    let (w, h) = (c.request.width, c.request.height);
-    let reference = &c.reference().frame.visibility;
-    let exact = c
-        .results
-        .iter()
-        .find(|r| r.method == Method::REFERENCE_HARD)
-        .map(|r| &r.frame.visibility);
-    let mut written = Vec::new();
-    let mut put = |name: &str, bytes: Vec<u8>| -> io::Result<()> {
-        let path = dir.join(name);
-        write_atomic(&path, &bytes)?;
-        written.push(path);
-        Ok(())
-    };
-    let encode = |e: image::ImageError| io::Error::other(e.to_string());
-    for r in &c.results {
+/// Write every file of `c` into `dir` (created if missing), all or nothing, with the run in
+/// motion's (its plots and the APNG) if there is one; returns their paths.
+pub fn write(
+    dir: &Path,
+    c: &Comparison,
+    motion: Option<&Motion>,
+) -> Result<Vec<PathBuf>, OutputError> {
+    let outline = c.outline();
+    let size = (c.request.width, c.request.height);
+    let mut writer = Writer::new(dir, size, &outline.drawn)?;
+    let against = c.against();
+    for (i, r) in c.results.iter().enumerate() {
+        writer.method(i, &against, r)?;
+    }
+    writer.finish(&outline, motion).map(|(_, files)| files)
+}
+
+/// A comparison's files written as its methods finish ([`super::run_each`]): each method's
+/// image, visibility EXR and heatmaps streamed into the output's hidden folder, its row of the
+/// report and its tile of the montage kept; [`Writer::finish`] adds the montage and the reports
+/// and moves everything into place, all or nothing. What it holds between methods is the
+/// montage page (its size is the layout's, not the images') and the rows.
+pub struct Writer {
+    staged: Staged,
+    page: montage::Page,
+    rows: Vec<(usize, MethodRow)>,
+}
+
+impl Writer {
+    /// Start writing a comparison of `drawn` (its [`Plan`](super::Plan)'s, the report's order)
+    /// at `width`×`height` into `dir`, checked and prepared now.
+    pub fn new(dir: &Path, (w, h): (u32, u32), drawn: &[Method]) -> Result<Writer, OutputError> {
+        Ok(Writer {
+            staged: Staged::new(dir)?,
+            page: montage::Page::new(montage::Layout::planned(w, h, drawn)),
+            rows: Vec::new(),
+        })
+    }
+
+    /// A folder for work kept on disk until the files are committed (`compare --orbit`'s),
+    /// removed with the writer's hidden folder.
+    pub fn scratch(&self) -> Option<&Path> {
+        self.staged.scratch_dir()
+    }
+
+    /// Write `r`'s files, measured `against` its yardsticks, as tile `tile` of the report.
+    pub fn method(
+        &mut self,
+        tile: usize,
+        against: &Against<'_>,
+        r: &MethodResult,
+    ) -> Result<(), OutputError> {
+        let (w, h) = (r.frame.width, r.frame.height);
+        let width = w as usize;
         let (image, visibility, heat) = files(r.method);
-        let rgb: Vec<u8> = r
-            .frame
-            .color
-            .iter()
-            .flat_map(|c| [c[0], c[1], c[2]])
-            .collect();
-        put(&image, output::png_rgb8(w, h, &rgb).map_err(encode)?)?;
-        let exr = output::exr_rgba32f(
-            w,
-            h,
-            r.frame
-                .visibility
-                .iter()
-                .enumerate()
-                .map(|(i, &v)| [v, v, v, if r.frame.hit(i) { 1.0 } else { 0.0 }]),
-        )
-        .map_err(encode)?;
-        put(&visibility, exr)?;
-        if let (Some(exact), Some(_)) = (exact, &r.hard) {
-            let img =
-                heatmap::hard_mismatch(exact, &r.frame.visibility, &c.mask, &r.frame.color, w, h);
-            put(
-                &hard_file(r.method),
-                output::png_rgb8(w, h, img.as_raw()).map_err(encode)?,
-            )?;
+        let color = &r.frame.color;
+        self.staged.write_with(&image, |out, target| {
+            output::png_file(out, target, w, h, |y, row| {
+                for (px, c) in row.chunks_exact_mut(3).zip(&color[y * width..]) {
+                    px.copy_from_slice(&c[..3]);
+                }
+            })
+        })?;
+        let frame = &r.frame;
+        self.staged.write_with(&visibility, |out, target| {
+            output::exr_file(out, target, w, h, |x, y| {
+                let i = y * width + x;
+                let v = frame.visibility.get(i).copied().unwrap_or(0.0);
+                [v, v, v, if frame.hit(i) { 1.0 } else { 0.0 }]
+            })
+        })?;
+        if let (Some(exact), Some(_)) = (against.exact, &r.hard) {
+            let img = heatmap::hard_mismatch(exact, &frame.visibility, against.mask, color, w, h);
+            self.stage_image(&hard_file(r.method), &img)?;
         }
-        let flip = heatmap::flip(&r.flip, w, h);
-        put(
-            &flip_file(r.method),
-            output::png_rgb8(w, flip.height(), flip.as_raw()).map_err(encode)?,
-        )?;
-        if !r.frame.cost.is_empty() {
-            let max = r
-                .frame
+        self.stage_image(&flip_file(r.method), &heatmap::flip(&r.flip, w, h))?;
+        if !frame.cost.is_empty() {
+            let max = frame
                 .cost
                 .iter()
-                .zip(&c.mask)
+                .zip(against.mask)
                 .filter(|(_, &m)| m)
                 .map(|(c, _)| c[0])
                 .fold(0.0f32, f32::max);
-            let img = heatmap::cost(&r.frame.cost, &c.mask, w, h, max);
-            put(
-                &cost_file(r.method),
-                output::png_rgb8(w, img.height(), img.as_raw()).map_err(encode)?,
-            )?;
+            let img = heatmap::cost(&frame.cost, against.mask, w, h, max);
+            self.stage_image(&cost_file(r.method), &img)?;
         }
         if let Some(heat) = heat {
-            let img = heatmap::render(reference, &r.frame.visibility, &c.mask, w, h);
-            let (iw, ih) = img.dimensions();
-            put(
-                &heat,
-                output::png_rgb8(iw, ih, img.as_raw()).map_err(encode)?,
-            )?;
+            let img = heatmap::render(against.reference, &frame.visibility, against.mask, w, h);
+            self.stage_image(&heat, &img)?;
         }
+        self.page.tile(tile as u32, r, against);
+        self.rows.push((tile, row(r, against.mask)));
+        Ok(())
     }
-    if let Some(motion) = motion {
-        for m in &motion.methods {
-            let png = temporal::plot_png(motion, m, 720, 360).map_err(io::Error::other)?;
-            put(&temporal::plot_file(m.method), png)?;
-        }
-        if let Some(worst) = motion.worst() {
-            put(
-                temporal::MOTION_APNG,
-                motion.apng(worst, 8).map_err(io::Error::other)?,
-            )?;
-        }
+
+    fn stage_image(&mut self, name: &str, img: &image::RgbImage) -> Result<(), OutputError> {
+        self.staged
+            .write_with(name, |out, target| output::png_image(out, target, img))
     }
-    put(
-        montage::MONTAGE_PNG,
-        montage::encode(&montage::render(c)).map_err(encode)?,
-    )?;
-    put(REPORT_MD, report.markdown().into_bytes())?;
-    let json = serde_json::to_string_pretty(&report).map_err(io::Error::other)?;
-    put(REPORT_JSON, json.into_bytes())?;
-    Ok(written)
+
+    /// Add the run in motion's files (if any), the montage and the reports, and move every
+    /// file into place; returns the report and the files' paths.
+    pub fn finish(
+        mut self,
+        outline: &Outline,
+        motion: Option<&Motion>,
+    ) -> Result<(Report, Vec<PathBuf>), OutputError> {
+        self.rows.sort_by_key(|(tile, _)| *tile);
+        let mut report = Report::of(outline, self.rows.into_iter().map(|(_, r)| r).collect());
+        let encode = |name: &str, e: String| OutputError::Encode {
+            path: PathBuf::from(name),
+            error: image::ImageError::IoError(io::Error::other(e)),
+        };
+        if let Some(motion) = motion {
+            report.add_motion(motion);
+            for m in &motion.methods {
+                let name = temporal::plot_file(m.method);
+                let png = temporal::plot_png(motion, m, 720, 360).map_err(|e| encode(&name, e))?;
+                self.staged.add(&name, &png)?;
+            }
+            if let Some(worst) = motion.worst() {
+                self.staged
+                    .write_with(temporal::MOTION_APNG, |out, target| {
+                        motion
+                            .write_apng(worst, out)
+                            .map_err(|e| encode_error(target, e))
+                    })?;
+            }
+        }
+        let page = montage::encode(&self.page.finish())
+            .map_err(|e| encode(montage::MONTAGE_PNG, e.to_string()))?;
+        self.staged.add(montage::MONTAGE_PNG, &page)?;
+        self.staged.add(REPORT_MD, report.markdown().as_bytes())?;
+        let json = serde_json::to_string_pretty(&report).map_err(|error| OutputError::Json {
+            path: PathBuf::from(REPORT_JSON),
+            error,
+        })?;
+        self.staged.add(REPORT_JSON, json.as_bytes())?;
+        Ok((report, self.staged.commit()?))
+    }
+}
+
+fn encode_error(target: &Path, message: String) -> OutputError {
+    OutputError::Encode {
+        path: target.to_path_buf(),
+        error: image::ImageError::IoError(io::Error::other(message)),
+    }
 }

@@ -19,25 +19,34 @@
 //! 1/256 < the class threshold 0.004, so one sample more or less visible never moves a pixel
 //! between umbra and penumbra.
 //!
-//! What a run keeps to draw the worst method afterwards — one byte per pixel per method per step
-//! — is checked against [`MAX_ORBIT_HELD_BYTES`] before the first frame.
+//! **What it holds.** Frame by frame, each method is drawn, measured against its own previous
+//! frame and let go of before the next method: its previous V waits on disk, and so does its
+//! APNG (its error beside the reference's motion, a frame per step), written as the steps come;
+//! the worst method's becomes `motion.png`. Memory holds one method's frame and the reference's
+//! last two, whatever the number of methods; the image is bounded as a still comparison's
+//! ([`MAX_COMPARE_PIXELS`](crate::budget::MAX_COMPARE_PIXELS), checked with `--frames` before
+//! the first frame).
 
 use plotters::prelude::*;
 
-use crate::budget::{MAX_ORBIT_FRAMES, MAX_ORBIT_HELD_BYTES};
+use std::fs::File;
+use std::io::{BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::budget::MAX_ORBIT_FRAMES;
 use crate::geometry::bvh::Bvh;
 use crate::geometry::metrics::ShadowClass;
 use crate::geometry::oracle::Oracle;
 use crate::geometry::outline::area_samples;
 use crate::geometry::{oracle, view};
-use crate::render::adapter::Verdict;
 use crate::render::methods::reference::SAMPLES;
 use crate::render::offline::Offline;
 use crate::render::{FrameRequest, Method, RenderError};
 use crate::scene::orbit::{Orbit, Poses};
 use crate::scene::{Light, Scene};
 
-use super::{heatmap, CompareRequest};
+use super::{heatmap, CompareRequest, Plan};
 
 /// Frames of an orbit when `--frames` is not given: a 15° step.
 pub const DEFAULT_FRAMES: usize = 24;
@@ -65,8 +74,8 @@ pub struct MotionRequest {
 
 impl MotionRequest {
     /// Whether the request is within the budget (checked before any frame; the message names
-    /// the flag), for `methods` methods drawn.
-    pub fn validate(&self, methods: usize) -> Result<(), String> {
+    /// the flag).
+    pub fn validate(&self) -> Result<(), String> {
         if !(2..=MAX_ORBIT_FRAMES).contains(&self.frames) {
             return Err(format!(
                 "--frames expects 2 to {MAX_ORBIT_FRAMES} (MAX_ORBIT_FRAMES): the temporal error \
@@ -74,33 +83,22 @@ impl MotionRequest {
                 self.frames
             ));
         }
-        let held = u64::from(self.compare.width)
-            * u64::from(self.compare.height)
-            * methods as u64
-            * (self.frames as u64 - 1);
-        if held > MAX_ORBIT_HELD_BYTES {
-            return Err(format!(
-                "--frames {} at --size {}x{} keeps {held} bytes of motion for {methods} methods; \
-                 the limit is {MAX_ORBIT_HELD_BYTES} (MAX_ORBIT_HELD_BYTES): fewer frames or a \
-                 smaller size",
-                self.frames, self.compare.width, self.compare.height
-            ));
-        }
-        Ok(())
+        self.compare.validate()
     }
 }
 
 /// One method in motion.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct MethodMotion {
     pub method: Method,
     /// Per step, the mean `|ΔV_method − ΔV_reference|` over the pixels counted in both frames.
     pub steps: Vec<f64>,
     /// Per step, the pixels that popped (class changed in the method, not in the reference).
     pub popping: Vec<usize>,
-    /// Per step, `|ΔV_method − ΔV_reference|` per pixel over [`FULL_SCALE`] as a byte (0 where
-    /// the pixel does not count): what the APNG draws of the worst method.
-    errors: Vec<Vec<u8>>,
+    /// Its APNG as the run wrote it in the scratch folder: per step `|ΔV_method −
+    /// ΔV_reference|` beside the reference's own `|ΔV|` ([`Motion::write_apng`] hands on the
+    /// worst's).
+    apng: PathBuf,
 }
 
 impl MethodMotion {
@@ -111,7 +109,7 @@ impl MethodMotion {
 }
 
 /// Every method in motion.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Motion {
     /// "light", "camera" or "still".
     pub orbit: String,
@@ -124,12 +122,12 @@ pub struct Motion {
     pub counted: Vec<usize>,
     /// Per step, the reference's own motion: the mean `|ΔV_reference|` over those pixels.
     pub reference_motion: Vec<f64>,
-    /// The reference's `|ΔV|` per step, as [`MethodMotion`]'s errors.
-    reference_frames: Vec<Vec<u8>>,
     /// Every method drawn, in registry order (the references left out).
     pub methods: Vec<MethodMotion>,
     /// Why the orbit is not the one asked for, if it is not (a light on the axis).
     pub note: Option<String>,
+    /// Where each method's APNG and previous frame wait; removed with the `Motion`.
+    scratch: Scratch,
 }
 
 impl Motion {
@@ -151,42 +149,19 @@ impl Motion {
             .max_by(|a, b| a.temporal_error().total_cmp(&b.temporal_error()))
     }
 
-    /// The APNG of `m`'s error beside the reference's own motion, a frame per step, at `fps`.
-    pub fn apng(&self, m: &MethodMotion, fps: u16) -> Result<Vec<u8>, String> {
-        let (w, h) = (self.width, self.height);
-        let mut bytes = Vec::new();
-        {
-            let mut encoder = png::Encoder::new(&mut bytes, 2 * w + GAP, h);
-            encoder.set_color(png::ColorType::Rgb);
-            encoder.set_depth(png::BitDepth::Eight);
-            encoder.set_compression(png::Compression::High);
-            let steps = m.errors.len().max(1) as u32;
-            encoder
-                .set_animated(steps, 0)
-                .and_then(|()| encoder.set_frame_delay(1, fps.max(1)))
-                .map_err(|e| e.to_string())?;
-            let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-            for (err, moved) in m.errors.iter().zip(&self.reference_frames) {
-                let mut rgb = Vec::with_capacity(((2 * w + GAP) * h * 3) as usize);
-                for y in 0..h as usize {
-                    let row = y * w as usize..(y + 1) * w as usize;
-                    for &e in &err[row.clone()] {
-                        rgb.extend(byte_rgb(e));
-                    }
-                    for _ in 0..GAP {
-                        rgb.extend([255, 255, 255]);
-                    }
-                    for &e in &moved[row] {
-                        rgb.extend(byte_rgb(e));
-                    }
-                }
-                writer.write_image_data(&rgb).map_err(|e| e.to_string())?;
-            }
-            writer.finish().map_err(|e| e.to_string())?;
-        }
-        Ok(bytes)
+    /// Copy `m`'s APNG into `out`: its error beside the reference's own motion, a frame per
+    /// step at [`APNG_FPS`] ([`MOTION_APNG`] of the worst method).
+    pub fn write_apng(&self, m: &MethodMotion, out: &mut impl Write) -> Result<(), String> {
+        let _ = &self.scratch;
+        let mut file =
+            std::fs::File::open(&m.apng).map_err(|e| format!("{}: {e}", m.apng.display()))?;
+        std::io::copy(&mut file, out).map_err(|e| e.to_string())?;
+        Ok(())
     }
 }
+
+/// Frames per second of the motion APNG.
+pub const APNG_FPS: u16 = 8;
 
 /// White columns between the two halves of the APNG.
 const GAP: u32 = 4;
@@ -211,8 +186,88 @@ fn mean(v: &[f64]) -> f64 {
     }
 }
 
-/// A frame as the next step needs it: the reference's V, the pixels counted, each method's V.
-type Previous = (Vec<f32>, Vec<bool>, Vec<Vec<f32>>);
+/// A folder of work kept on disk rather than in memory, removed when dropped.
+#[derive(Debug)]
+struct Scratch {
+    dir: PathBuf,
+}
+
+impl Scratch {
+    fn new(parent: &Path) -> Result<Scratch, RenderError> {
+        static NEXT: AtomicU64 = AtomicU64::new(0);
+        let dir = parent.join(format!(
+            ".dbuffer-motion-{}-{}",
+            std::process::id(),
+            NEXT.fetch_add(1, Ordering::Relaxed)
+        ));
+        std::fs::create_dir_all(&dir).map_err(|e| scratch_error(&dir, e))?;
+        Ok(Scratch { dir })
+    }
+
+    fn file(&self, name: &str) -> PathBuf {
+        self.dir.join(name)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+fn scratch_error(path: &Path, e: impl std::fmt::Display) -> RenderError {
+    RenderError::Request(format!(
+        "{}: cannot keep the orbit's work there: {e}",
+        path.display()
+    ))
+}
+
+/// A method's state between frames: its APNG being written, and where its previous frame's V
+/// waits (on disk: an orbit holds one method's frame in memory, not every method's).
+struct Track {
+    apng: png::Writer<BufWriter<File>>,
+    apng_path: PathBuf,
+    previous: PathBuf,
+}
+
+impl Track {
+    fn new(
+        scratch: &Scratch,
+        method: Method,
+        (w, h): (u32, u32),
+        steps: u32,
+    ) -> Result<Track, RenderError> {
+        let path = scratch.file(&format!("{}.png", method.name()));
+        let file = File::create(&path).map_err(|e| scratch_error(&path, e))?;
+        let mut encoder = png::Encoder::new(BufWriter::new(file), 2 * w + GAP, h);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_compression(png::Compression::High);
+        let encode = |e: png::EncodingError| scratch_error(&path, e);
+        encoder
+            .set_animated(steps.max(1), 0)
+            .and_then(|()| encoder.set_frame_delay(1, APNG_FPS))
+            .map_err(encode)?;
+        let apng = encoder.write_header().map_err(encode)?;
+        Ok(Track {
+            apng,
+            apng_path: path,
+            previous: scratch.file(&format!("{}.v", method.name())),
+        })
+    }
+
+    /// The V this method drew at the previous frame, into `into`.
+    fn load(&self, into: &mut [f32]) -> Result<(), RenderError> {
+        let mut f = File::open(&self.previous).map_err(|e| scratch_error(&self.previous, e))?;
+        f.read_exact(bytemuck::cast_slice_mut(into))
+            .map_err(|e| scratch_error(&self.previous, e))
+    }
+
+    fn store(&self, v: &[f32]) -> Result<(), RenderError> {
+        std::fs::write(&self.previous, bytemuck::cast_slice::<f32, u8>(v))
+            .map_err(|e| scratch_error(&self.previous, e))
+    }
+}
 
 /// The reference's samples on the light of frame `k`: frame 0's, carried with the light.
 fn samples_at(poses: &Poses, frame0: &Light, k: usize, n: usize, count: u32) -> Vec<glam::Vec3> {
@@ -224,26 +279,47 @@ fn samples_at(poses: &Poses, frame0: &Light, k: usize, n: usize, count: u32) -> 
 }
 
 /// Render every method at every frame of the orbit and measure each step against the reference;
-/// `progress` hears (frame, what).
+/// `progress` hears (frame, what). Its work on disk (each method's previous frame and APNG)
+/// goes into a folder in the system's temporary folder ([`run_in`] names another).
 pub fn run(
     offline: &mut Offline,
     scene: &Scene,
     request: &MotionRequest,
+    progress: impl FnMut(usize, &str),
+) -> Result<Motion, RenderError> {
+    let plan = Plan::new(scene.light.kind(), &offline.ctx.caps);
+    run_in(
+        offline,
+        scene,
+        request,
+        &plan,
+        &std::env::temp_dir(),
+        progress,
+    )
+}
+
+/// [`run`] for the methods of `plan` (the references left out: motion is measured against
+/// them), with its work on disk in a folder made in `scratch` (removed with the [`Motion`]).
+/// Frame by frame, each method is drawn, measured against its own previous frame (read back
+/// from disk) and let go of before the next: memory holds one method's frame and the
+/// reference's two, whatever the number of methods.
+pub fn run_in(
+    offline: &mut Offline,
+    scene: &Scene,
+    request: &MotionRequest,
+    plan: &Plan,
+    scratch: &Path,
     mut progress: impl FnMut(usize, &str),
 ) -> Result<Motion, RenderError> {
     let c = &request.compare;
     c.knobs.validate().map_err(RenderError::Request)?;
-    let light_kind = scene.light.kind();
-    let methods: Vec<Method> = Method::all()
+    let methods: Vec<Method> = plan
+        .drawn
         .iter()
         .copied()
         .filter(|m| !m.is_reference() && *m != Method::REFERENCE_HARD)
-        .filter(|m| m.refuses(light_kind).is_none())
-        .filter(|m| !matches!(m.on(&offline.ctx.caps), Verdict::Cannot(_)))
         .collect();
-    request
-        .validate(methods.len())
-        .map_err(RenderError::Request)?;
+    request.validate().map_err(RenderError::Request)?;
     let (w, h) = (c.width, c.height);
     let n = w as usize * h as usize;
     let k_samples = c.knobs.get(&SAMPLES);
@@ -261,20 +337,27 @@ pub fn run(
     let triangles = scene.all_triangles();
     let surfaces = Bvh::build(triangles.clone());
     let mut session = offline.session(scene.clone());
+    let scratch = Scratch::new(scratch)?;
+    let steps = (frames - 1) as u32;
+    let mut tracks = methods
+        .iter()
+        .map(|&m| Track::new(&scratch, m, (w, h), steps))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut out: Vec<MethodMotion> = methods
         .iter()
-        .map(|&method| MethodMotion {
+        .zip(&tracks)
+        .map(|(&method, t)| MethodMotion {
             method,
             steps: Vec::with_capacity(frames - 1),
             popping: Vec::with_capacity(frames - 1),
-            errors: Vec::with_capacity(frames - 1),
+            apng: t.apng_path.clone(),
         })
         .collect();
     let mut counted = Vec::with_capacity(frames - 1);
     let mut reference_motion = Vec::with_capacity(frames - 1);
-    let mut reference_frames = Vec::with_capacity(frames - 1);
-    // The previous frame: the reference's V, the counted pixels, each method's V.
-    let mut previous: Option<Previous> = None;
+    // The previous frame: the reference's V and the counted pixels.
+    let mut previous: Option<(Vec<f32>, Vec<bool>)> = None;
+    let mut before = vec![0.0f32; if frames > 1 { n } else { 0 }];
     for k in 0..frames {
         let (light, camera) = pose(k);
         session.set_light(light);
@@ -287,28 +370,23 @@ pub fn run(
             samples_at(&poses, &frame0_light, 0, frames, k_samples)
         };
         let oracle = Oracle::with_samples(triangles.clone(), light, samples);
-        let receivers = view::receivers(&posed, &surfaces, w, h);
-        let points: Vec<glam::Vec3> = receivers
-            .iter()
-            .map(|r| r.map_or(glam::Vec3::ZERO, |r| r.position))
-            .collect();
-        let reference: Vec<f32> = {
+        let (reference, facing): (Vec<f32>, Vec<bool>) = {
             use rayon::prelude::*;
-            points
-                .par_iter()
-                .zip(&receivers)
+            (0..n as u32)
+                .into_par_iter()
                 .with_min_len(64)
-                .map(|(&x, r)| {
-                    if r.is_some() {
-                        oracle.visibility(x)
-                    } else {
-                        0.0
-                    }
+                .map(|i| match view::receiver_at(&posed, &surfaces, i, w, h) {
+                    Some(r) => (oracle.visibility(r.position), r.faces_light),
+                    None => (0.0, false),
                 })
-                .collect()
+                .unzip()
         };
-        let mut values = Vec::with_capacity(methods.len());
-        let mut hit = vec![false; n];
+        drop(oracle);
+        // The pixels counted at this frame (from the first method's depth), and in both.
+        let mut mask: Vec<bool> = Vec::new();
+        let mut both: Vec<bool> = Vec::new();
+        let mut moved: Vec<u8> = Vec::new();
+        let mut count = 0;
         for (i, &method) in methods.iter().enumerate() {
             progress(k, method.name());
             let req = FrameRequest {
@@ -322,53 +400,62 @@ pub fn run(
                 read_cost: false,
                 colour_only: false,
             };
-            let frame = session.frame(&offline.ctx, &req)?;
+            let frame = session.frame_releasing(&offline.ctx, &req)?;
             if i == 0 {
-                for (j, h) in hit.iter_mut().enumerate() {
-                    *h = frame.hit(j);
+                mask = facing
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &f)| f && frame.hit(j))
+                    .collect();
+                if let Some((ref_prev, mask_prev)) = &previous {
+                    both = mask.iter().zip(mask_prev).map(|(a, b)| *a && *b).collect();
+                    count = both.iter().filter(|b| **b).count();
+                    moved = vec![0u8; n];
+                    let mut motion = 0.0f64;
+                    for j in (0..n).filter(|&j| both[j]) {
+                        let d = (reference[j] - ref_prev[j]).abs();
+                        motion += f64::from(d);
+                        moved[j] = to_byte(d);
+                    }
+                    counted.push(count);
+                    reference_motion.push(motion / count.max(1) as f64);
                 }
             }
-            values.push(frame.visibility);
-        }
-        let mask: Vec<bool> = receivers
-            .iter()
-            .zip(&hit)
-            .map(|(r, &h)| h && r.is_some_and(|r| r.faces_light))
-            .collect();
-        if let Some((ref_prev, mask_prev, values_prev)) = &previous {
-            let both: Vec<bool> = mask.iter().zip(mask_prev).map(|(a, b)| *a && *b).collect();
-            let count = both.iter().filter(|b| **b).count();
-            let mut moved = vec![0u8; n];
-            let mut motion = 0.0f64;
-            for i in (0..n).filter(|&i| both[i]) {
-                let d = (reference[i] - ref_prev[i]).abs();
-                motion += f64::from(d);
-                moved[i] = to_byte(d);
-            }
-            counted.push(count);
-            reference_motion.push(motion / count.max(1) as f64);
-            reference_frames.push(moved);
-            for (m, (now, before)) in out.iter_mut().zip(values.iter().zip(values_prev)) {
+            let now = frame.visibility;
+            let track = &mut tracks[i];
+            if let Some((ref_prev, _)) = &previous {
+                track.load(&mut before)?;
+                let m = &mut out[i];
                 let mut sum = 0.0f64;
                 let mut popped = 0usize;
                 let mut err = vec![0u8; n];
-                for i in (0..n).filter(|&i| both[i]) {
-                    let dm = now[i] - before[i];
-                    let dr = reference[i] - ref_prev[i];
+                for j in (0..n).filter(|&j| both[j]) {
+                    let dm = now[j] - before[j];
+                    let dr = reference[j] - ref_prev[j];
                     let e = if dm.is_finite() { (dm - dr).abs() } else { 1.0 };
                     sum += f64::from(e);
-                    err[i] = to_byte(e);
+                    err[j] = to_byte(e);
                     let class = |v: f32| ShadowClass::of(f64::from(v));
-                    let method_changed = class(now[i]) != class(before[i]);
-                    let reference_changed = class(reference[i]) != class(ref_prev[i]);
+                    let method_changed = class(now[j]) != class(before[j]);
+                    let reference_changed = class(reference[j]) != class(ref_prev[j]);
                     popped += usize::from(method_changed && !reference_changed);
                 }
                 m.steps.push(sum / count.max(1) as f64);
                 m.popping.push(popped);
-                m.errors.push(err);
+                let rgb = apng_frame(&err, &moved, w, h);
+                track
+                    .apng
+                    .write_image_data(&rgb)
+                    .map_err(|e| scratch_error(&m.apng, e))?;
+            }
+            if k + 1 < frames {
+                track.store(&now)?;
             }
         }
-        previous = Some((reference, mask, values));
+        previous = Some((reference, mask));
+    }
+    for (track, m) in tracks.into_iter().zip(&out) {
+        track.apng.finish().map_err(|e| scratch_error(&m.apng, e))?;
     }
     Ok(Motion {
         orbit: match request.orbit {
@@ -383,10 +470,28 @@ pub fn run(
         samples: k_samples,
         counted,
         reference_motion,
-        reference_frames,
         methods: out,
         note: request.orbit.and(poses.note.clone()),
+        scratch,
     })
+}
+
+/// One frame of a method's APNG: its `err` bytes beside the reference's `moved`, row by row.
+fn apng_frame(err: &[u8], moved: &[u8], w: u32, h: u32) -> Vec<u8> {
+    let mut rgb = Vec::with_capacity(((2 * w + GAP) * h * 3) as usize);
+    for y in 0..h as usize {
+        let row = y * w as usize..(y + 1) * w as usize;
+        for &e in &err[row.clone()] {
+            rgb.extend(byte_rgb(e));
+        }
+        for _ in 0..GAP {
+            rgb.extend([255, 255, 255]);
+        }
+        for &e in &moved[row] {
+            rgb.extend(byte_rgb(e));
+        }
+    }
+    rgb
 }
 
 /// The plot of one method's temporal error per step, with the reference's own motion for
@@ -506,14 +611,15 @@ mod tests {
             orbit: Some(Orbit::Light),
             frames,
         };
-        assert!(request(24, 256).validate(17).is_ok());
-        let e = request(1, 64).validate(17).unwrap_err();
+        assert!(request(24, 256).validate().is_ok());
+        assert!(request(MAX_ORBIT_FRAMES, 4096).validate().is_ok());
+        let e = request(1, 64).validate().unwrap_err();
         assert!(e.contains("--frames") && e.contains("found 1"), "{e}");
-        let e = request(MAX_ORBIT_FRAMES + 1, 64).validate(17).unwrap_err();
+        let e = request(MAX_ORBIT_FRAMES + 1, 64).validate().unwrap_err();
         assert!(e.contains("MAX_ORBIT_FRAMES"), "{e}");
-        let e = request(720, 4096).validate(17).unwrap_err();
+        let e = request(24, 4097).validate().unwrap_err();
         assert!(
-            e.contains("MAX_ORBIT_HELD_BYTES") && e.contains("4096x4096"),
+            e.contains("MAX_COMPARE_PIXELS") && e.contains("--size 4097x4097"),
             "{e}"
         );
     }

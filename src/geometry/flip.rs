@@ -296,12 +296,32 @@ pub enum FlipError {
 
 /// The LDR-FLIP map of `test` against `reference` (sRGB, row-major, `width`×`height`), each
 /// value in [0, 1], at `ppd` pixels per degree ([`DEFAULT_PPD`] as NVIDIA's tools).
+///
+/// Computed in bands of [`BAND_PIXELS`] with a margin of the filters' radius above and below
+/// each: every filter is separable with its borders repeated, so a band's rows come out bit
+/// for bit as from the whole image, and the working planes (some 80 bytes a pixel) are a
+/// band's, not the image's.
 pub fn ldr_flip(
     reference: &[[u8; 3]],
     test: &[[u8; 3]],
     width: u32,
     height: u32,
     ppd: f32,
+) -> Result<Vec<f32>, FlipError> {
+    let rows = (BAND_PIXELS / width.max(1) as usize).max(1);
+    ldr_flip_banded(reference, test, width, height, ppd, rows)
+}
+
+/// Pixels of one band of [`ldr_flip`] (its margins aside).
+pub const BAND_PIXELS: usize = 1 << 20;
+
+fn ldr_flip_banded(
+    reference: &[[u8; 3]],
+    test: &[[u8; 3]],
+    width: u32,
+    height: u32,
+    ppd: f32,
+    band_rows: usize,
 ) -> Result<Vec<f32>, FlipError> {
     let (w, h) = (width as usize, height as usize);
     let n = w * h;
@@ -316,16 +336,64 @@ pub fn ldr_flip(
     }
     let pi = std::f32::consts::PI;
     let r = (3.0 * (0.04f32 / (2.0 * pi * pi)).sqrt() * ppd).ceil() as i64;
-    let channels = [
-        csf(ppd, r, (1.0, 0.0047, 0.0, 1e-5)),
-        csf(ppd, r, (1.0, 0.0053, 0.0, 1e-5)),
-        csf(ppd, r, (34.1, 0.04, 13.5, 0.025)),
-    ];
-    let fk = feature_kernels(ppd);
+    let filters = Filters {
+        channels: [
+            csf(ppd, r, (1.0, 0.0047, 0.0, 1e-5)),
+            csf(ppd, r, (1.0, 0.0053, 0.0, 1e-5)),
+            csf(ppd, r, (34.1, 0.04, 13.5, 0.025)),
+        ],
+        features: feature_kernels(ppd),
+    };
+    let margin = filters.radius();
+    let mut out = Vec::with_capacity(n);
+    let band_rows = band_rows.max(1);
+    for y0 in (0..h).step_by(band_rows) {
+        let y1 = (y0 + band_rows).min(h);
+        // The band with its margins, cut at the image's own edges.
+        let (m0, m1) = (y0.saturating_sub(margin), (y1 + margin).min(h));
+        let map = flip_whole(
+            &reference[m0 * w..m1 * w],
+            &test[m0 * w..m1 * w],
+            w,
+            m1 - m0,
+            &filters,
+        );
+        out.extend_from_slice(&map[(y0 - m0) * w..(y1 - m0) * w]);
+    }
+    Ok(out)
+}
+
+/// FLIP's filters at one `ppd`.
+struct Filters {
+    channels: [Csf; 3],
+    features: (Kernel, Kernel, Kernel),
+}
+
+impl Filters {
+    /// Rows of the image one output row depends on, either side.
+    fn radius(&self) -> usize {
+        let csf = self.channels.iter().flat_map(|c| &c.terms);
+        let (edge, point, smooth) = &self.features;
+        csf.map(|(_, k)| k.radius())
+            .chain([edge.radius(), point.radius(), smooth.radius()])
+            .max()
+            .unwrap_or(0) as usize
+    }
+}
+
+/// The FLIP map of a whole `w`×`h` image pair (borders repeated at its edges).
+fn flip_whole(
+    reference: &[[u8; 3]],
+    test: &[[u8; 3]],
+    w: usize,
+    h: usize,
+    filters: &Filters,
+) -> Vec<f32> {
+    let n = w * h;
     let wp = white();
     let prepare = |rgb: &[[u8; 3]]| {
         let o = opponent(rgb);
-        let f = [0, 1, 2].map(|k| filtered(&o.planes[k], w, h, &channels[k]));
+        let f = [0, 1, 2].map(|k| filtered(&o.planes[k], w, h, &filters.channels[k]));
         let lab: Vec<[f32; 3]> = (0..n)
             .into_par_iter()
             .map(|i| {
@@ -334,7 +402,7 @@ pub fn ldr_flip(
             })
             .collect();
         let y: Vec<f32> = o.planes[0].iter().map(|v| (v + 16.0) / 116.0).collect();
-        (lab, features(&y, w, h, &fk))
+        (lab, features(&y, w, h, &filters.features))
     };
     let (ref_lab, (ref_edge, ref_point)) = prepare(reference);
     let (test_lab, (test_edge, test_point)) = prepare(test);
@@ -342,7 +410,7 @@ pub fn ldr_flip(
     let blue = hunt_lab([0.0, 0.0, 1.0], wp);
     let cmax = hyab(green, blue).powf(QC);
     let pccmax = PC * cmax;
-    Ok((0..n)
+    (0..n)
         .into_par_iter()
         .map(|i| {
             let e = hyab(ref_lab[i], test_lab[i]).powf(QC);
@@ -357,7 +425,7 @@ pub fn ldr_flip(
             let feature = (fe / std::f32::consts::SQRT_2).powf(QF);
             color.powf(1.0 - feature).clamp(0.0, 1.0)
         })
-        .collect())
+        .collect()
 }
 
 /// The mean of a FLIP map (NVIDIA's headline number: over every pixel).
@@ -462,6 +530,19 @@ mod tests {
                     "{name}: ({x}, 16) {got} against NVIDIA's {want}"
                 );
             }
+        }
+    }
+
+    /// Bands with their margins give the whole image's map bit for bit, down to one row a band
+    /// (32 rows against margins of 10).
+    #[test]
+    fn bands_are_the_whole_image_bit_for_bit() {
+        let (a, b) = (pattern(0.0, 0), pattern(3.0, 6));
+        let whole = ldr_flip_banded(&a, &b, 48, 32, DEFAULT_PPD, 32).unwrap();
+        assert!(whole.iter().any(|&v| v > 0.1));
+        for rows in [1, 3, 7, 31] {
+            let banded = ldr_flip_banded(&a, &b, 48, 32, DEFAULT_PPD, rows).unwrap();
+            assert!(banded == whole, "bands of {rows} rows");
         }
     }
 

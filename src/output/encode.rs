@@ -204,6 +204,48 @@ fn exr_rows(
     }
 }
 
+/// [`png_rows`] into `out`, its error naming `target`.
+pub fn png_file(
+    out: &mut io::BufWriter<File>,
+    target: &Path,
+    w: u32,
+    h: u32,
+    row: impl FnMut(usize, &mut [u8]),
+) -> Result<(), OutputError> {
+    png_rows(out, w, h, row).map_err(|e| encode_error(target, e.to_string()))
+}
+
+/// An RGB image as a PNG into `out`, its error naming `target`.
+pub fn png_image(
+    out: &mut io::BufWriter<File>,
+    target: &Path,
+    img: &image::RgbImage,
+) -> Result<(), OutputError> {
+    let width = 3 * img.width() as usize;
+    let raw = img.as_raw();
+    png_file(out, target, img.width(), img.height(), |y, row| {
+        row.copy_from_slice(&raw[y * width..(y + 1) * width]);
+    })
+}
+
+/// [`exr_rows`] into `out`, from several threads, its error naming `target`.
+pub fn exr_file(
+    out: &mut io::BufWriter<File>,
+    target: &Path,
+    w: u32,
+    h: u32,
+    pixel: impl Fn(usize, usize) -> [f32; 4] + Sync,
+) -> Result<(), OutputError> {
+    exr_rows(out, w, h, true, pixel).map_err(|e| encode_error(target, e.to_string()))
+}
+
+fn encode_error(target: &Path, message: String) -> OutputError {
+    OutputError::Encode {
+        path: target.to_path_buf(),
+        error: image::ImageError::IoError(io::Error::other(message)),
+    }
+}
+
 pub fn png_rgb8(w: u32, h: u32, bytes: &[u8]) -> image::ImageResult<Vec<u8>> {
     let mut png = Vec::new();
     PngEncoder::new(&mut png).write_image(bytes, w, h, ExtendedColorType::Rgb8)?;

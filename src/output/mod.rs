@@ -52,7 +52,10 @@ use std::fs::{self, File};
 use std::io;
 use std::path::{Path, PathBuf};
 
-pub use encode::{exr_rgba32f, linear_to_srgb8, png_rgb8, read_exr_rgba, srgb8_to_linear};
+pub use encode::{
+    exr_file, exr_rgba32f, linear_to_srgb8, png_file, png_image, png_rgb8, read_exr_rgba,
+    srgb8_to_linear,
+};
 pub use names::{
     class_rgb, render_meta, RenderMeta, CLASSES_PNG, DBUFFER_EXR, DBUFFER_S_EXR, FILE_NAMES,
     IMAGE_PNG, LIT_RGB, META_JSON, NOT_HIT_RGB, PENUMBRA_RGB, POSITION_EXR, TEMP_PREFIX, UMBRA_RGB,

@@ -81,6 +81,41 @@ impl Staged {
 
     /// Stage file `name` (a plain file name, no folders) with `bytes`.
     pub fn add(&mut self, name: &str, bytes: &[u8]) -> Result<(), OutputError> {
+        self.write_with(name, |out, target| {
+            out.write_all(bytes).map_err(io_err(target, "write"))
+        })
+    }
+
+    /// Stage file `name` (a plain file name, no folders) as `write` streams it into a buffered
+    /// file (told where the file will go, for its errors): a large file is encoded straight to
+    /// disk, never held whole.
+    pub fn write_with(
+        &mut self,
+        name: &str,
+        write: impl FnOnce(&mut io::BufWriter<File>, &Path) -> Result<(), OutputError>,
+    ) -> Result<(), OutputError> {
+        let (file, target) = self.create(name)?;
+        let mut out = io::BufWriter::with_capacity(1 << 20, file);
+        write(&mut out, &target)?;
+        let file = out
+            .into_inner()
+            .map_err(|e| io_err(&target, "write")(e.into_error()))?;
+        file.sync_all().map_err(io_err(&target, "write"))?;
+        self.names.push(name.to_string());
+        Ok(())
+    }
+
+    /// Stage file `name` to be written over a long job (an animation's APNG, frame by frame):
+    /// the file in the hidden folder, and where it will go. The caller writes it whole and
+    /// syncs it before [`commit`](Staged::commit), which moves it into place with the others.
+    pub fn open(&mut self, name: &str) -> Result<(File, PathBuf), OutputError> {
+        let opened = self.create(name)?;
+        self.names.push(name.to_string());
+        Ok(opened)
+    }
+
+    /// A new file `name` in the hidden folder (not yet staged), and where it will go.
+    fn create(&self, name: &str) -> Result<(File, PathBuf), OutputError> {
         let target = self.dir.join(name);
         let plain = Path::new(name).file_name().is_some_and(|n| n == name);
         if !plain || name.starts_with(TEMP_PREFIX) || self.names.iter().any(|n| n == name) {
@@ -97,14 +132,15 @@ impl Staged {
                 "already committed",
             )));
         };
-        let result = (|| {
-            let mut f = File::create(temp.join(name))?;
-            f.write_all(bytes)?;
-            f.sync_all()
-        })();
-        result.map_err(io_err(&target, "write"))?;
-        self.names.push(name.to_string());
-        Ok(())
+        let file = File::create(temp.join(name)).map_err(io_err(&target, "write"))?;
+        Ok((file, target))
+    }
+
+    /// The hidden folder, for work a long job keeps on disk rather than in memory: anything
+    /// put there that was not [`add`](Staged::add)ed goes with the folder; `None` once
+    /// committed.
+    pub fn scratch_dir(&self) -> Option<&Path> {
+        self.temp.as_deref()
     }
 
     /// Remove file `name` from `dir` when committing (a previous run's file the new set does

@@ -7,6 +7,7 @@
 
 use std::any::{Any, TypeId};
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use super::adapter::Capabilities;
@@ -32,7 +33,20 @@ pub struct GpuContext {
     lost: Arc<Mutex<Option<String>>>,
     /// Device-lifetime pass objects by type and name ([`GpuContext::shared`]).
     shared: Mutex<HashMap<(TypeId, &'static str), SharedObject>>,
+    /// [`FAULT_ENV`]: the submit that reports an injected error, and the submits so far.
+    fault: Option<u64>,
+    submits: AtomicU64,
 }
+
+/// `DBUFFER_GPU_FAULT=N` (1 when not a number): the N-th frame submitted on a device reports a
+/// validation error as wgpu words one, instead of running. A test hook: how every command
+/// prints a GPU's error (docs/development/testing.md), which no valid input provokes.
+pub const FAULT_ENV: &str = "DBUFFER_GPU_FAULT";
+
+/// The message an injected fault reports: wgpu's layout (a headline, then its causes).
+pub const FAULT_MESSAGE: &str = "Validation Error\n\nCaused by:\n  In a CommandEncoder, label = \
+                                 'Session::encoder'\n    an error injected by DBUFFER_GPU_FAULT \
+                                 (a test of how errors are printed)\n";
 
 /// The limits the render core asks of an adapter: everything the adapter supports where it
 /// matters for size (buffers, textures), so every image, D-buffer and mesh inside the budget that
@@ -149,6 +163,19 @@ impl GpuContext {
             uncaptured,
             lost,
             shared: Mutex::new(HashMap::new()),
+            fault: std::env::var(FAULT_ENV)
+                .ok()
+                .map(|n| n.trim().parse().unwrap_or(1)),
+            submits: AtomicU64::new(0),
+        }
+    }
+
+    /// Count a frame's submit; `Err` for the one [`FAULT_ENV`] names.
+    pub fn injected_fault(&self) -> Result<(), RenderError> {
+        let n = self.submits.fetch_add(1, Ordering::Relaxed) + 1;
+        match self.fault {
+            Some(k) if k == n => Err(RenderError::Gpu(FAULT_MESSAGE.into())),
+            _ => Ok(()),
         }
     }
 

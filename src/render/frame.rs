@@ -454,12 +454,7 @@ pub fn read_frame(
             "the frame was rendered colour-only: render it in full to read its V".into(),
         ));
     }
-    // A device that cannot copy a depth texture into a buffer (GL) reads an exact float copy.
-    let depth_copy = if ctx
-        .caps
-        .downlevel
-        .contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES)
-    {
+    let depth_copy = if reads_depth_whole(ctx, &camera.depth.texture) {
         None
     } else {
         Some(super::passes::depth_copy::copy(ctx, &camera.depth)?)
@@ -539,6 +534,18 @@ pub fn read_frame(
     }
     frame.maps = maps.map(|m| LightMapsData::read(m, 0..m.size, slots, &distinct, map_values));
     Ok(frame)
+}
+
+/// Whether the camera's `depth` is copied into a buffer as it is: the device can copy a depth
+/// texture (GL cannot) and the whole of it fits one staging buffer (WebGPU copies no part of a
+/// depth texture, and [`Readback`] reads larger textures in bands of rows). Otherwise the frame
+/// reads the depth's exact `R32Float` copy ([`depth_copy`](super::passes::depth_copy)), in bands
+/// like any colour target: above 2,896² on a 32 MiB staging cap.
+pub fn reads_depth_whole(ctx: &GpuContext, depth: &wgpu::Texture) -> bool {
+    ctx.caps
+        .downlevel
+        .contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES)
+        && super::readback::fits_whole(ctx, depth, 4)
 }
 
 /// Each distinct texture of `maps` once, and which of them each slot is.

@@ -4,6 +4,13 @@
 //! of rows, so an 8192² image needs no 512 MB buffer (rows padded to wgpu's 256-byte alignment
 //! on the way), and [`Readback::read_rows`] hands each row to the caller as it arrives, so
 //! nothing needs the whole texture in memory as raw bytes.
+//!
+//! A depth texture is copied whole or not at all (WebGPU copies no part of a depth
+//! subresource): a depth read that does not fit one staging buffer ([`fits_whole`]) is refused
+//! here, and [`read_frame`](super::frame::read_frame) reads such a depth through its exact
+//! `R32Float` copy instead, which bands like any colour texture. Every round runs in a
+//! validation error scope: what the device refuses comes back as the read's error, never as
+//! rows of stale bytes.
 
 use std::ops::Range;
 
@@ -51,6 +58,21 @@ impl<'a> TextureRead<'a> {
     fn bytes(&self) -> usize {
         self.texture.width() as usize * self.rows.len() * self.texel as usize
     }
+
+    /// A depth (or stencil) aspect: copied whole only.
+    fn whole_only(&self) -> bool {
+        self.aspect != wgpu::TextureAspect::All
+    }
+}
+
+/// Whether `texture` (`texel` bytes a texel) is copied in one round: its padded rows fit one
+/// staging buffer. A depth texture that does not is read through a colour copy.
+pub fn fits_whole(ctx: &GpuContext, texture: &wgpu::Texture, texel: u32) -> bool {
+    padded_row(texture.width(), texel) * u64::from(texture.height()) <= staging_cap(ctx)
+}
+
+fn staging_cap(ctx: &GpuContext) -> u64 {
+    STAGING_CAP.min(ctx.max_buffer_size())
 }
 
 /// Persistent staging buffers.
@@ -99,7 +121,7 @@ impl Readback {
         sink: &mut dyn FnMut(usize, u32, &[u8]),
     ) -> Result<(), RenderError> {
         let device = &ctx.device;
-        let cap = STAGING_CAP.min(ctx.max_buffer_size());
+        let cap = staging_cap(ctx);
         // Rows per round for each texture, and the staging size that takes.
         let plans: Vec<(u64, u32)> = reads
             .iter()
@@ -109,6 +131,18 @@ impl Readback {
                 (row, rows)
             })
             .collect();
+        for (r, &(_, rows)) in reads.iter().zip(&plans) {
+            let h = r.texture.height();
+            if r.whole_only() && (r.rows != (0..h) || rows < h) {
+                return Err(RenderError::Readback(format!(
+                    "a depth texture is copied whole, and {}x{h} ({} MiB) does not fit a \
+                     {} MiB staging buffer: read its colour copy",
+                    r.texture.width(),
+                    (padded_row(r.texture.width(), r.texel) * u64::from(h)) >> 20,
+                    cap >> 20
+                )));
+            }
+        }
         while self.staging.len() < reads.len() {
             self.staging.push(staging(device, 256));
         }
@@ -122,6 +156,7 @@ impl Readback {
         self.last_bytes = 0;
         // One round reads the next band of every texture that has rows left.
         while reads.iter().zip(&next).any(|(r, &y)| y < r.rows.end) {
+            let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("Readback::encoder"),
             });
@@ -159,6 +194,10 @@ impl Readback {
             }
             encoder.pop_debug_group();
             ctx.queue.submit([encoder.finish()]);
+            // A copy the device refused copied nothing: its error, not the staging's old bytes.
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                return Err(RenderError::Gpu(e.to_string()));
+            }
             for &(k, _, n, row) in &bands {
                 self.staging[k]
                     .slice(..row * u64::from(n))

@@ -41,10 +41,7 @@ pub struct ReferenceKey {
 /// The surface point under each pixel's centre (`None` where the ray hits nothing): the points
 /// the GPU shades there.
 pub fn pixel_points(scene: &Scene, bvh: &Bvh, width: u32, height: u32) -> Vec<Option<Vec3>> {
-    view::receivers(scene, bvh, width, height)
-        .into_iter()
-        .map(|r| r.map(|r| r.position))
-        .collect()
+    view::points(scene, bvh, width, height)
 }
 
 /// A reference of a `width`×`height` view of `scene` with nothing sampled yet.

@@ -175,6 +175,22 @@ impl Session {
         }
     }
 
+    /// Let go of what `method` holds on the GPU and the CPU (its targets, maps, geometry;
+    /// for the reference also the V handed in), and of the camera targets [`Session::frame`]
+    /// renders into, now (the device is polled, so a CPU adapter's host memory is freed before
+    /// this returns): made again if it draws again. A run through every method (`compare`)
+    /// holds one method's screen-sized textures at a time, not all, and none while it works
+    /// on the frame it read.
+    pub fn release(&mut self, ctx: &GpuContext, method: Method) -> Result<(), RenderError> {
+        self.methods.remove(&method);
+        if method == Method::REFERENCE {
+            self.reference = None;
+            self.progressive = None;
+        }
+        self.own = FrameTargets::new();
+        super::readback::map_now(&ctx.device)
+    }
+
     fn moved(&mut self) {
         self.revision += 1;
         self.light_view = LightView::fit(&self.scene);
@@ -415,6 +431,7 @@ impl Session {
             ctx.check_lost_after_poll()?;
             return Err(RenderError::Gpu(e));
         }
+        ctx.injected_fault()?;
         result?;
         self.pending_read_bytes = bytes;
         Ok(bytes)
@@ -578,6 +595,55 @@ impl Session {
         ctx: &GpuContext,
         request: &FrameRequest,
     ) -> Result<Frame, RenderError> {
+        self.frame_with(ctx, request, false)
+    }
+
+    /// [`Session::frame`] for a method drawn for the last time (`compare`, one method after
+    /// another): the method's state is let go of ([`Session::release`]) as soon as the frame is
+    /// submitted, so its screen-sized textures are freed when the GPU is done with them, before
+    /// the frame is read back into memory, and the camera targets after it.
+    pub fn frame_releasing(
+        &mut self,
+        ctx: &GpuContext,
+        request: &FrameRequest,
+    ) -> Result<Frame, RenderError> {
+        let frame = self.frame_with(ctx, request, true);
+        self.release(ctx, request.method)?;
+        frame
+    }
+
+    /// Render `request` into the session's own targets and wait for it, reading nothing back:
+    /// a warm-up (pipelines compiled, geometry and light-space maps made), its timings dropped.
+    pub fn draw(&mut self, ctx: &GpuContext, request: &FrameRequest) -> Result<(), RenderError> {
+        request.validate(ctx)?;
+        let mut own = std::mem::take(&mut self.own);
+        let submitted = self.submit(
+            ctx,
+            &mut [FrameJob {
+                targets: &mut own,
+                request: FrameRequest {
+                    read_dbuffer: false,
+                    ..*request
+                },
+                view: None,
+                render: true,
+                probes: Vec::new(),
+            }],
+        );
+        self.own = own;
+        submitted?;
+        match self.timer.as_mut() {
+            Some(t) => t.wait(ctx).map(drop),
+            None => super::readback::map_now(&ctx.device),
+        }
+    }
+
+    fn frame_with(
+        &mut self,
+        ctx: &GpuContext,
+        request: &FrameRequest,
+        release: bool,
+    ) -> Result<Frame, RenderError> {
         let mut own = std::mem::take(&mut self.own);
         let dbuffer = request
             .read_dbuffer
@@ -597,6 +663,11 @@ impl Session {
                 // The D-buffer of the paper's method, for a method that has none of its own
                 // (after the frame, so the frame's timings are its own).
                 self.prepare_only(ctx, d, request)?;
+            }
+            if release && dbuffer != Some(request.method) {
+                // Nothing of the method is read: its textures go once the GPU is done.
+                self.methods.remove(&request.method);
+                super::readback::map_now(&ctx.device)?;
             }
             Ok::<_, RenderError>(())
         })();

@@ -252,6 +252,42 @@ fn flags_over_the_budget_name_the_limit() {
             &["render", "fig7-concave", "--out", "o", "--samples", "65537"],
             &["--samples", "MAX_REFERENCE_SAMPLES"],
         ),
+        // What compare and animate hold a pixel: their own limits, from the flags.
+        (
+            &[
+                "compare",
+                "fig7-concave",
+                "--out",
+                "o",
+                "--size",
+                "8192x8192",
+            ],
+            &["--size 8192x8192", "16777216", "MAX_COMPARE_PIXELS"],
+        ),
+        (
+            &[
+                "compare",
+                "fig7-concave",
+                "--out",
+                "o",
+                "--orbit",
+                "light",
+                "--size",
+                "4097x4096",
+            ],
+            &["--size 4097x4096", "MAX_COMPARE_PIXELS"],
+        ),
+        (
+            &[
+                "animate",
+                "fig7-concave",
+                "--out",
+                "o",
+                "--size",
+                "5000x4000",
+            ],
+            &["--size 5000x4000", "16777216", "MAX_ANIMATE_PIXELS"],
+        ),
     ];
     for (args, has) in cases {
         let mut c = dbuffer();

@@ -1,7 +1,9 @@
 //! The camera's depth as an `R32Float` colour texture, for a device that cannot copy a depth
-//! texture into a buffer (`DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES`, missing on GL):
-//! a fullscreen triangle loads each texel and writes the same 32-bit float, so what readback
-//! gets is the depth exactly (`shaders/passes/depth_copy.wgsl`).
+//! texture into a buffer (`DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES`, missing on GL) and
+//! for a depth too large to copy whole into one staging buffer (a colour texture is read in
+//! bands of rows, a depth texture only whole: [`read_frame`](crate::render::frame::read_frame)
+//! decides): a fullscreen triangle loads each texel and writes the same 32-bit float, so what
+//! readback gets is the depth exactly (`shaders/passes/depth_copy.wgsl`).
 
 use crate::render::{cleared, fullscreen_pass, texture_entry, GpuContext};
 use crate::render::{RenderError, Texture};
@@ -29,6 +31,7 @@ pub fn copy(ctx: &GpuContext, depth: &Texture) -> Result<Texture, RenderError> {
         DepthCopyPass { pipeline, layout }
     });
     let size = depth.texture.size();
+    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let out = Texture::new(
         &ctx.device,
         "DepthCopy::target",
@@ -63,5 +66,8 @@ pub fn copy(ctx: &GpuContext, depth: &Texture) -> Result<Texture, RenderError> {
         rp.draw(0..3, 0..1);
     }
     ctx.queue.submit([encoder.finish()]);
-    Ok(out)
+    match pollster::block_on(scope.pop()) {
+        Some(e) => Err(RenderError::Gpu(e.to_string())),
+        None => Ok(out),
+    }
 }
