@@ -106,13 +106,16 @@ fn concentric(u: vec2<f32>) -> vec2<f32> {
 }
 
 // A point of the light for u in the unit square, of uniform area density: the disk by the
-// concentric map; a rectangle or polygon by its fan of triangles from the centre, one picked by
-// area (u.x), sqrt(u.y) of the way out.
+// concentric map; a rectangle or polygon by its fan of triangles from the centre, the concentric
+// map's angle picking one by area and its radius the way out, so the same u lands within a few
+// per cent of the same place on a disk and on the regular polygon inscribed in it (corner 0 on
+// the disk's first axis): a polygon's shadow meets its disk's.
 fn light_point(u: vec2<f32>) -> vec3<f32> {
+    let d = concentric(u);
     var p: vec2<f32>;
     if polygon_light() {
         let n = min(camera.light_corner_count, 16u);
-        let target_area = u.x * camera.light_area;
+        let target_area = fract(atan2(d.y, d.x) / 6.2831853 + 1.0) * camera.light_area;
         var before = 0.0;
         var a = light_corner(0u);
         var b = light_corner(min(1u, n - 1u));
@@ -131,9 +134,9 @@ fn light_point(u: vec2<f32>) -> vec3<f32> {
             before += area;
             previous = next;
         }
-        p = sqrt(u.y) * mix(a, b, t);
+        p = length(d) * mix(a, b, t);
     } else {
-        p = camera.light_radius * concentric(u);
+        p = camera.light_radius * d;
     }
     return camera.light_center + p.x * camera.light_u + p.y * camera.light_w;
 }
