@@ -182,6 +182,24 @@ const BOUNDS: &[(&str, f64, f64, &str)] = &[
         0.100,
         "plank over a box fuse under a wide rectangle",
     ),
+    (
+        "pergola",
+        15.0,
+        0.26,
+        "twelve slats under a rectangle: every ground point sees the light through several gaps, one chord per pixel calls it umbra (measured 11.96 %, 0.2080 on 2026-12-07)",
+    ),
+    (
+        "cluster",
+        8.4,
+        0.229,
+        "two dozen casters smaller than the light: overlapping penumbrae one chord cannot split, darker than a hard shadow (measured 6.70 %, 0.1825 on 2026-12-07)",
+    ),
+    (
+        "blinds",
+        11.3,
+        0.171,
+        "fourteen thin slats whose penumbrae overlap into one graded shadow, drawn as one umbra (measured 9.00 %, 0.1361 on 2026-12-07)",
+    ),
 ];
 
 #[test]
