@@ -213,19 +213,42 @@ pub fn markdown(study: &Study) -> String {
             "\n| method | setting | frame ms | penumbra MAE | p99 | class % | FLIP |\n\
              |---|---|---:|---:|---:|---:|---:|"
         );
+        let mut said = None;
         for c in &scene.cells {
             if let Some(why) = &c.not_measured {
-                let _ = writeln!(
-                    md,
-                    "| `{}` | {} | n/a — {why} | | | | |",
-                    c.method, c.setting
-                );
+                // One row for a method the scene rules out (its settings all say the same),
+                // its reason without the list of methods that would do.
+                let why = why.split("; ").next().unwrap_or(why);
+                let of_method = |d: &&super::run::Cell| d.method == c.method;
+                let all = scene.cells.iter().filter(of_method).all(|d| {
+                    d.not_measured
+                        .as_deref()
+                        .is_some_and(|w| w.split("; ").next() == Some(why))
+                });
+                if !all {
+                    let _ = writeln!(
+                        md,
+                        "| `{}` | {} | n/a — {why} | | | | |",
+                        c.method, c.setting
+                    );
+                } else if said != Some(&c.method) {
+                    let _ = writeln!(
+                        md,
+                        "| `{}` | every setting | n/a — {why} | | | | |",
+                        c.method
+                    );
+                    said = Some(&c.method);
+                }
                 continue;
             }
             let cost = c
                 .cost
                 .as_ref()
-                .map_or("—".into(), |c| format!("{:.2}", c.frame_ms));
+                .map_or("—".into(), |c| match c.timing.frames {
+                    // Over the slow-frame guard: timed on its first frame alone.
+                    1 if study.frames > 1 => format!("{:.2} (1 frame)", c.frame_ms),
+                    _ => format!("{:.2}", c.frame_ms),
+                });
             match c.error {
                 Some(e) => {
                     let _ = writeln!(
