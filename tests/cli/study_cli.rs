@@ -156,6 +156,17 @@ fn a_small_study_writes_its_files_repeats_its_errors_and_resumes_from_its_cache(
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `dbuffer ARGS --out OUT`, which must succeed.
+fn run_ok(args: &[&str], out: &Path) {
+    let o = dbuffer()
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .expect("the binary runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 #[test]
 fn a_cell_scores_as_compare_and_is_timed_as_bench() {
     let dir = temp_dir("match");
@@ -173,31 +184,24 @@ fn a_cell_scores_as_compare_and_is_timed_as_bench() {
 
     // compare at the same size, K, map size and knobs.
     let cmp = dir.join("compare");
-    let out = dbuffer()
-        .args([
+    run_ok(
+        &[
             "compare",
             "table1-224",
             "--size",
             "64x64",
             "--samples",
             "64",
-        ])
-        .args([
             "--dbuffer-size",
             "512",
             "--blocker-taps",
             "8",
             "--filter-taps",
             "12",
-            "--out",
-        ])
-        .arg(&cmp)
-        .output()
-        .expect("the binary runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+            "--methods",
+            "pcss",
+        ],
+        &cmp,
     );
     let report: CompareReport =
         serde_json::from_slice(&std::fs::read(cmp.join("report.json")).unwrap()).unwrap();
@@ -215,8 +219,8 @@ fn a_cell_scores_as_compare_and_is_timed_as_bench() {
 
     // bench, the same method and scene at the same size and map size.
     let bench = dir.join("bench");
-    let out = dbuffer()
-        .args([
+    run_ok(
+        &[
             "bench",
             "--scenes",
             "table1-224",
@@ -224,23 +228,14 @@ fn a_cell_scores_as_compare_and_is_timed_as_bench() {
             "64",
             "--methods",
             "pcss",
-        ])
-        .args([
             "--frames",
             "3",
             "--warmup",
             "1",
             "--max-triangles",
             "1024",
-            "--out",
-        ])
-        .arg(&bench)
-        .output()
-        .expect("the binary runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        ],
+        &bench,
     );
     let report: Report =
         serde_json::from_slice(&std::fs::read(bench.join("bench.json")).unwrap()).unwrap();
