@@ -9,15 +9,15 @@
 //! `passes::micro_patches`; the arithmetic's CPU twin is `geometry::bitmask`.
 
 use super::{
-    require, AdapterNeeds, CameraGroup, Cost, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
-    Prepare, Scaled, SharedMaps, Switch, SHADOW_MAP, Quality};
+    require, AdapterNeeds, CameraGroup, Cost, FrameInputs, Knob, LightMaps, MethodSpec,
+    MethodState, Prepare, Quality, Scaled, SharedMaps, Switch, SHADOW_MAP,
+};
 use crate::geometry::fused::{DiskMask, MaskEval};
 use crate::render::adapter::{FormatNeed, Usage};
 use crate::render::passes::micro_patches::{pyramid_shape, MicroPatches};
 use crate::render::passes::shadow_map::{lookup_entries, MapFrame, ShadowUniforms};
 use crate::render::{
-    buffer_entry, storage_entry, texture_entry, uniform_buffer, view_entry, GpuContext,
-    RenderError,
+    buffer_entry, storage_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError,
 };
 use crate::scene::AreaLight;
 
@@ -177,8 +177,14 @@ impl MethodState for Bitmask {
         let light = *inputs.area(BITMASK.name)?;
         if self.made != Some(made) {
             let frame = MapFrame::new(inputs.light_view, &inputs.scene.light);
-            self.patches
-                .record(ctx, rec, &map.distance.view, map.size, made.gap_fill, &frame);
+            self.patches.record(
+                ctx,
+                rec,
+                &map.distance.view,
+                map.size,
+                made.gap_fill,
+                &frame,
+            );
             self.made = Some(made);
         }
         let (_, levels) = pyramid_shape(map.size);
@@ -189,7 +195,10 @@ impl MethodState for Bitmask {
         let samples = inputs.knobs.get(&SAMPLES);
         self.update_lut(&ctx.device, light, samples);
         let patches = require(self.patches.maps(), "the micro-patch maps were not made")?;
-        let lut = require(self.lut.as_ref(), "the bitmask look-up tables were not made")?;
+        let lut = require(
+            self.lut.as_ref(),
+            "the bitmask look-up tables were not made",
+        )?;
         let bound = Bound {
             map: map.generation,
             patches: patches.generation,

@@ -10,17 +10,18 @@
 use std::time::Instant;
 
 use super::{
-    require, CameraGroup, Channel, Cost, Empty, FrameInputs, LightMaps, MethodSpec, MethodState, Prepare,
-    SharedMaps, Switch, Quality};
+    require, CameraGroup, Channel, Cost, Empty, FrameInputs, LightMaps, MethodSpec, MethodState,
+    Prepare, Quality, SharedMaps, Switch,
+};
 use crate::geometry::volume_vertices::{
     drawn_volumes, reach_below, CORNERS_PER_ROW, MAX_CORNERS, TEXELS_PER_CORNER,
 };
 use crate::geometry::{SceneGeometry, VolumeParams};
 use crate::render::frame_tag::FrameTag;
 use crate::render::gpu_scene::VertexChunks;
-use crate::render::timer::Recorder;
 use crate::render::passes::dbuffer_volumes::{CasterVolumes, DBufferVolumes, VolumeLayout};
 use crate::render::passes::shadow_map::{lookup_entries, LightUniforms, ShadowUniforms};
+use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError,
 };
@@ -42,7 +43,7 @@ pub static DBUFFER: MethodSpec =
         .knobs(&[&HORIZON.0, &CORNERS.0])
         .cost(DBUFFER_COST)
         .lights(super::AREA_LIGHTS)
-.sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]); // volumes from a planar light's outline
+        .sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]); // volumes from a planar light's outline
 
 pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER, |ctx| {
     Box::new(DBuffer::new(ctx, true))
@@ -380,8 +381,11 @@ impl MethodState for DBuffer {
         let generation = map.generation ^ v.generation.rotate_left(32);
         let textures = [&map.distance, &v.umbra, &v.penumbra];
         Some(
-            LightMaps::new(v.size, self.view_proj, textures, CHANNELS, generation)
-                .tagged([FrameTag::NONE, v.tag, v.tag]),
+            LightMaps::new(v.size, self.view_proj, textures, CHANNELS, generation).tagged([
+                FrameTag::NONE,
+                v.tag,
+                v.tag,
+            ]),
         )
     }
 

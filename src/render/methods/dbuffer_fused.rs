@@ -24,12 +24,12 @@
 //! paper's V, and its volume pass (2–15 ms of lavapipe's light pass at 1024²) is not drawn.
 
 use super::Cost;
+use super::{AdapterNeeds, Quality, SHADOW_MAP};
+use crate::render::adapter::{FormatNeed, Usage};
+use crate::scene::AreaLight;
+use std::time::Instant;
 use wgpu::DownlevelFlags as D;
 use wgpu::TextureFormat as F;
-use super::{AdapterNeeds, SHADOW_MAP, Quality};
-use crate::render::adapter::{FormatNeed, Usage};
-use std::time::Instant;
-use crate::scene::AreaLight;
 
 use super::dbuffer::DBuffer;
 use super::{
@@ -43,16 +43,16 @@ use crate::geometry::fused::{
 };
 use crate::geometry::volume_vertices::{light_view_rect, union_all};
 use crate::geometry::SceneGeometry;
+use crate::render::frame_tag::FrameTag;
+use crate::render::passes::dbuffer_volumes::VolumeLayout;
 use crate::render::passes::fused_layers::{FusedLayers, FusedSizes, FusedUniforms};
 use crate::render::passes::fused_lists::{
     list_bytes, EdgeBuffers, EdgeRecord, FusedLists, EDGE_BYTES, HULL_BYTES, HULL_CORNERS,
 };
-use crate::render::frame_tag::FrameTag;
-use crate::render::passes::dbuffer_volumes::VolumeLayout;
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
 use crate::render::{
-    buffer_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
-    Texture,
+    buffer_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext,
+    RenderError, Texture,
 };
 
 /// Texels per side of the grid of edge lists.
@@ -351,7 +351,10 @@ fn update_edges(
             .filter(|p| p.is_finite());
         // The proxies' corners (light-view NDC) as points of the image.
         let corners = hulls.iter().flatten().map(|&[x, y]| {
-            let [u, v] = [x.clamp(-1.0, 1.0) * 0.5 + 0.5, 0.5 - y.clamp(-1.0, 1.0) * 0.5];
+            let [u, v] = [
+                x.clamp(-1.0, 1.0) * 0.5 + 0.5,
+                0.5 - y.clamp(-1.0, 1.0) * 0.5,
+            ];
             [u, v, u, v]
         });
         union_all(corners.chain([light_view_rect(inputs.light_view, casters)]))

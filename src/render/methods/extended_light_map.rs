@@ -13,10 +13,10 @@
 //! another surface).
 
 use super::Cost;
-use wgpu::TextureFormat as F;
-use super::{AdapterNeeds, SHADOW_MAP, Quality};
+use super::{AdapterNeeds, Quality, SHADOW_MAP};
 use crate::render::adapter::{FormatNeed, Usage};
 use glam::{Mat4, Vec3, Vec4};
+use wgpu::TextureFormat as F;
 
 use super::{
     require, CameraGroup, Channel, Choice, Empty, FrameInputs, Knob, Knobs, LightMaps, MethodSpec,

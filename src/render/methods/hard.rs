@@ -1,9 +1,9 @@
 //! `hard`: a shadow map from the light centre (Williams 1978), the `|cx_o|` test alone with
 //! slope-scaled bias (`shaders/methods/hard.wgsl`).
 
-use super::{Cost, Quality};
 use super::on_shadow_map::{Flavor, OnShadowMap};
 use super::MethodSpec;
+use super::{Cost, Quality};
 
 pub static HARD: MethodSpec = MethodSpec::new("hard", SHADER, |ctx| {
     Box::new(OnShadowMap::new(ctx, &FLAVOR))

@@ -12,11 +12,11 @@
 //! leaks). The reconstructed edges (the walls' tops) are the lab's overlay: this method's
 //! [`MethodState::geometry`] holds them as silhouette edges, a frame after the walls were made.
 
-use super::{AdapterNeeds, Quality};
 use super::{
     require, v_texture_entries, CameraGroup, Knobs, MethodSpec, MethodState, Prepare, Scaled,
     SharedMaps, Switch,
 };
+use super::{AdapterNeeds, Quality};
 use crate::geometry::hybrid::WallParams;
 use crate::geometry::silhouette::SilhouetteEdge;
 use crate::geometry::{CasterGeometry, GeometryStats, SceneGeometry, VolumeParams};

@@ -15,9 +15,9 @@
 //! (`line-fig3-tilted`).
 
 use super::Cost;
-use wgpu::DownlevelFlags as D;
-use super::{AdapterNeeds, SHADOW_MAP, Quality};
+use super::{AdapterNeeds, Quality, SHADOW_MAP};
 use glam::{Mat4, Vec3};
+use wgpu::DownlevelFlags as D;
 
 use super::{require, CameraGroup, Knob, MethodSpec, MethodState, Prepare};
 use crate::render::passes::sample_maps::{lights_at, SampleMaps};
@@ -44,8 +44,8 @@ pub static LINEAR_SSM: MethodSpec =
         .lights(&[LightKind::Line]) // Heidrich et al.'s maps along a segment
         .bench("linear-ssm 2", &[(&SAMPLES, 2)])
         .line_samples(|line, knobs| sample_points(line, knobs.get(&SAMPLES)))
-.cost(Cost::counted("sample maps read"))
-.sweep(&[Quality::Knob(&SAMPLES)], &[&[2], &[4], &[8], &[16]]);
+        .cost(Cost::counted("sample maps read"))
+        .sweep(&[Quality::Knob(&SAMPLES)], &[&[2], &[4], &[8], &[16]]);
 
 /// What it needs of the adapter: the sample maps and the skins found by compute passes (six storage buffers in
 /// the size-extract pipeline's compute stage).

@@ -9,7 +9,8 @@
 use super::Cost;
 use super::{
     require, AdapterNeeds, CameraGroup, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
-    Prepare, Scaled, SharedMaps, SHADOW_MAP, Quality};
+    Prepare, Quality, Scaled, SharedMaps, SHADOW_MAP,
+};
 use crate::render::passes::moment_sat::MomentSat;
 use crate::render::passes::shadow_map::{lookup_entries, MapFrame, ShadowUniforms};
 use crate::render::storage_entry;

@@ -2,8 +2,8 @@
 //! (2R + 1)² block of hard tests, each against the receiver's plane
 //! (`shaders/methods/pcf.wgsl`).
 
-use super::Cost;
 use super::on_shadow_map::{Flavor, OnShadowMap};
+use super::Cost;
 use super::{Knob, MethodSpec, Quality};
 
 /// The kernel radius R in shadow-map texels.

@@ -3,8 +3,8 @@
 //! the penumbra the blockers' mean distance predicts, both over a rotated Poisson disk
 //! (`shaders/methods/pcss.wgsl`).
 
-use super::Cost;
 use super::on_shadow_map::{Flavor, OnShadowMap};
+use super::Cost;
 use super::{FrameInputs, Knob, MethodSpec, Quality};
 use crate::scene::Scene;
 
@@ -32,7 +32,13 @@ pub static PCSS: MethodSpec = MethodSpec::new("pcss", SHADER, |ctx| {
 // about its centroid (docs/method/README.md#pcss).
 .lights(super::AREA_LIGHTS)
 .bench("pcss 16/32", &[(&BLOCKER_TAPS, 16), (&FILTER_TAPS, 32)])
-.cost(Cost::counted("shadow-map taps (blocker search and filter)").paths(&["not searched: nearer the light than the nearest caster, off the map, or dark", "no blocker found: lit", "blockers found: filtered"]))
+.cost(
+    Cost::counted("shadow-map taps (blocker search and filter)").paths(&[
+        "not searched: nearer the light than the nearest caster, off the map, or dark",
+        "no blocker found: lit",
+        "blockers found: filtered",
+    ]),
+)
 // Engines' presets: PlayCanvas 8/12 and 28/42, Unity HDRP 16/24.
 .sweep(
     &[Quality::Knob(&BLOCKER_TAPS), Quality::Knob(&FILTER_TAPS)],

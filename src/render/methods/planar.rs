@@ -11,10 +11,10 @@
 //! darkens instead of blacking out, which shows the stencil at work: where projected triangles
 //! overlap the pixel is still darkened once.
 
-use wgpu::TextureFormat as F;
 use super::{AdapterNeeds, STENCIL_VOLUMES};
 use crate::render::adapter::{FormatNeed, Usage};
 use std::sync::Arc;
+use wgpu::TextureFormat as F;
 
 use super::{
     require, v_texture_entries, CameraGroup, FrameInputs, MethodSpec, MethodState, Prepare, Scaled,
@@ -42,8 +42,8 @@ pub static PLANAR: MethodSpec =
         .knobs(&[&OPACITY.0])
         .hard()
         .overlay_note("planar: shadows on flat objects only, no volumes")
-.cost(super::SCREEN_COST)
-.fixed_quality("projected hard shadows, exact on their planes: nothing to trade");
+        .cost(super::SCREEN_COST)
+        .fixed_quality("projected hard shadows, exact on their planes: nothing to trade");
 
 /// What it needs of the adapter: the stencil volumes and a half-float shade it blends.
 const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[

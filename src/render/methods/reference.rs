@@ -3,7 +3,9 @@
 //! texture (the session's), and the camera pass shades it like every other method's
 //! (`shaders/methods/reference.wgsl`).
 
-use super::{v_texture_entries, CameraGroup, Cost, Knob, MethodSpec, MethodState, Prepare, Quality};
+use super::{
+    v_texture_entries, CameraGroup, Cost, Knob, MethodSpec, MethodState, Prepare, Quality,
+};
 use crate::render::{
     buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
 };
@@ -25,13 +27,14 @@ pub static REFERENCE: MethodSpec =
         .about("ray-cast ground truth (K disk samples per pixel)")
         .knobs(&[&SAMPLES])
         .cpu_side()
-        .cost(Cost::counted("rays so far").constant(
-            "every pixel in front of the light has cast the samples taken so far",
-        ))
+        .cost(
+            Cost::counted("rays so far")
+                .constant("every pixel in front of the light has cast the samples taken so far"),
+        )
         // Each timed frame takes one more sample per pixel, of a budget that never ends.
         .bench("reference 1 spp", &[(&SAMPLES, MAX_SAMPLES)])
-// Rays on the CPU: the study times its wall clock, as the bench does.
-.sweep(&[Quality::Knob(&SAMPLES)], &[&[1], &[4], &[16], &[64]]);
+        // Rays on the CPU: the study times its wall clock, as the bench does.
+        .sweep(&[Quality::Knob(&SAMPLES)], &[&[1], &[4], &[16], &[64]]);
 
 const SHADER: &str = "methods/reference.wgsl";
 

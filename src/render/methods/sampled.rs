@@ -28,8 +28,11 @@ pub static SAMPLED: MethodSpec =
         .knobs(&[&LIGHTS])
         .bench("sampled 16", &[(&LIGHTS, 16)])
         .line_samples(stratum_centres)
-.cost(Cost::counted("sample maps read"))
-.sweep(&[Quality::Knob(&LIGHTS)], &[&[4], &[8], &[16], &[32], &[64]]);
+        .cost(Cost::counted("sample maps read"))
+        .sweep(
+            &[Quality::Knob(&LIGHTS)],
+            &[&[4], &[8], &[16], &[32], &[64]],
+        );
 
 const SHADER: &str = "methods/sampled.wgsl";
 

@@ -10,11 +10,14 @@ use wgpu::TextureFormat as F;
 
 use super::{
     require, AdapterNeeds, CameraGroup, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
-    Prepare, Scaled, SharedMaps, SHADOW_MAP, Quality};
+    Prepare, Quality, Scaled, SharedMaps, SHADOW_MAP,
+};
 use crate::render::adapter::{FormatNeed, Usage};
 use crate::render::passes::moments::Moments;
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
-use crate::render::{buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError};
+use crate::render::{
+    buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError,
+};
 
 /// The filter radius R in shadow-map texels.
 pub static RADIUS: Knob = Knob::int(
@@ -35,10 +38,12 @@ pub static BLEED: Scaled = Scaled::new(
 
 pub static VSM: MethodSpec = MethodSpec::new("vsm", SHADER, |ctx| Box::new(Vsm::new(ctx)))
     .adapter(NEEDS)
-    .about("variance shadow maps (Donnelly & Lauritzen 2006), filtered, with light-bleeding reduction")
+    .about(
+        "variance shadow maps (Donnelly & Lauritzen 2006), filtered, with light-bleeding reduction",
+    )
     .knobs(&[&RADIUS, &BLEED.0])
     .hard()
-.cost(Cost::counted("moment texels").constant("one filtered moment texel"))
+    .cost(Cost::counted("moment texels").constant("one filtered moment texel"))
     .sweep(&[Quality::Knob(&RADIUS)], &[&[1], &[3], &[6], &[12]]);
 
 const SHADER: &str = "methods/vsm.wgsl";
@@ -111,7 +116,10 @@ impl MethodState for Vsm {
             );
             self.made = Some(made);
         }
-        let moments = require(self.moments.targets(), "the variance shadow map was not made")?;
+        let moments = require(
+            self.moments.targets(),
+            "the variance shadow map was not made",
+        )?;
         let uniforms = ShadowUniforms::new(inputs.light_view, map.size, vsm_knobs(inputs));
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));

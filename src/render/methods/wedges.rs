@@ -17,10 +17,10 @@
 //! `fig8c-complex`, `bunny`); the sum is clamped, which hides some of it.
 
 use super::Cost;
-use wgpu::TextureFormat as F;
 use super::{AdapterNeeds, STENCIL_VOLUMES};
 use crate::render::adapter::{FormatNeed, Usage};
 use std::time::Instant;
+use wgpu::TextureFormat as F;
 
 use glam::Vec3;
 
@@ -49,14 +49,17 @@ pub static HORIZON: Switch = Switch::new(
     true,
 );
 
-pub static WEDGES: MethodSpec =
-    MethodSpec::new("wedges", SHADER, |ctx| Box::new(WedgesMethod::new(ctx)))
-        .adapter(NEEDS)
-        .about("penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)")
-        .knobs(&[&OPEN.0, &HORIZON.0])
-        .cost(Cost::counted("wedge fragments"))
-        .lights(super::AREA_LIGHTS)
-.fixed_quality("one wedge per silhouette edge, its coverage computed exactly per pixel: nothing to trade"); // the coverage of a disk or a convex polygon
+pub static WEDGES: MethodSpec = MethodSpec::new("wedges", SHADER, |ctx| {
+    Box::new(WedgesMethod::new(ctx))
+})
+.adapter(NEEDS)
+.about("penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)")
+.knobs(&[&OPEN.0, &HORIZON.0])
+.cost(Cost::counted("wedge fragments"))
+.lights(super::AREA_LIGHTS)
+.fixed_quality(
+    "one wedge per silhouette edge, its coverage computed exactly per pixel: nothing to trade",
+); // the coverage of a disk or a convex polygon
 
 const SHADER: &str = "methods/wedges.wgsl";
 
