@@ -5,6 +5,7 @@
 
 mod area_lights;
 mod docs;
+mod fmt_check;
 mod fused_vs_oracle;
 mod fuzz_parsers;
 mod gltf_models;
