@@ -20,6 +20,8 @@ bundle="${1:?usage: scripts/gpu-study.sh BUNDLE}"
 mkdir -p "$bundle"
 cargo build --release --locked --bin dbuffer
 cp target/release/dbuffer "$bundle/dbuffer"
+# The release profile keeps debug info (about 160 of its 180 MB); the bundle need not carry it.
+if command -v strip >/dev/null; then strip --strip-debug "$bundle/dbuffer"; fi
 # The loader the binary dlopens; the machine's own is used first when it has one.
 loader=$(ldconfig -p 2>/dev/null | awk '/libvulkan\.so\.1 / {print $NF; exit}')
 if [ -n "${loader:-}" ] && [ -e "$loader" ]; then
