@@ -15,11 +15,10 @@
 //! literal `\n`, and leaves its folder as it was.
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 use dbuffer::output::read_exr_rgba;
 
-use crate::support::{self as cli, dbuffer};
+use crate::support::{self as cli, dbuffer, run_ok};
 
 /// 8.4 Mpx: past the banding threshold in every target (a thin image: the depth of any image
 /// over 8.39 Mpx is more than 32 MiB).
@@ -43,21 +42,6 @@ fn temp_dir(name: &str) -> PathBuf {
 
 fn size((w, h): (u32, u32)) -> String {
     format!("{w}x{h}")
-}
-
-fn run_ok(args: &[&str], out: &Path) -> Output {
-    let o = dbuffer()
-        .args(args)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .expect("the binary runs");
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
 }
 
 /// `dbuffer ARGS --size S` at BIG and at SMALL, each into a folder of its own (named after

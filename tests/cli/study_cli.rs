@@ -11,7 +11,7 @@ use dbuffer::bench::{FrameSource, Report};
 use dbuffer::compare::report::Report as CompareReport;
 use dbuffer::study::Study;
 
-use crate::support::{self as cli, dbuffer};
+use crate::support::{self as cli, dbuffer, run_ok};
 
 fn temp_dir(name: &str) -> PathBuf {
     cli::temp_dir("study-cli", name)
@@ -154,17 +154,6 @@ fn a_small_study_writes_its_files_repeats_its_errors_and_resumes_from_its_cache(
     assert_eq!(resumed.cached, 32);
     assert_eq!(errors(&resumed), errors(&study));
     let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// `dbuffer ARGS --out OUT`, which must succeed.
-fn run_ok(args: &[&str], out: &Path) {
-    let o = dbuffer()
-        .args(args)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .expect("the binary runs");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! Running the `dbuffer` binary from integration tests: on lavapipe unless the caller's
 //! environment names another backend, in a fresh temporary folder per case.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// `dbuffer`, built by cargo for this test run (or the binary `DBUFFER_TEST_BIN` names, to
@@ -23,4 +23,20 @@ pub fn temp_dir(suite: &str, name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("dbuffer-{suite}-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     dir
+}
+
+/// `dbuffer ARGS --out OUT`, which must succeed (its stderr in the failure): its output.
+pub fn run_ok(args: &[&str], out: &Path) -> std::process::Output {
+    let o = dbuffer()
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .expect("the binary runs");
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
 }
