@@ -39,8 +39,11 @@ set -uo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 out="${1:-$here/results-$(hostname)-$(date +%Y%m%d-%H%M%S)}"
 mkdir -p "$out"
-# The machine's loader first; the carried one where it has none.
-export LD_LIBRARY_PATH="${LD_LIBRARY_PATH:+$LD_LIBRARY_PATH:}$here/lib"
+# The machine's loader where it has one (LD_LIBRARY_PATH would come before it); the carried one
+# where it has none.
+if ! ldconfig -p 2>/dev/null | grep -q 'libvulkan\.so\.1 '; then
+  export LD_LIBRARY_PATH="${LD_LIBRARY_PATH:+$LD_LIBRARY_PATH:}$here/lib"
+fi
 export WGPU_BACKEND="${WGPU_BACKEND:-vulkan}"
 export NODEVICE_SELECT=1
 {
