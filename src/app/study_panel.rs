@@ -99,12 +99,36 @@ impl StudyPanel {
                     ))
                     .small(),
                 );
+                legend(ui, scene);
                 (picked, drawn) = plot(ui, scene, current);
             });
         self.open = open;
         self.drawn = drawn;
         picked
     }
+}
+
+/// The plot's methods, each in its line's colour, in the registry's order.
+fn legend(ui: &mut egui::Ui, scene: &SceneStudy) {
+    let measured = |m: &Method| {
+        scene
+            .cells
+            .iter()
+            .any(|c| c.method == m.name() && c.error.is_some() && c.cost.is_some())
+    };
+    ui.horizontal_wrapped(|ui| {
+        ui.spacing_mut().item_spacing.x = 8.0;
+        for (i, m) in Method::all().iter().enumerate() {
+            if measured(m) {
+                let (r, g, b) = colour(i);
+                ui.label(
+                    egui::RichText::new(format!("— {}", m.name()))
+                        .small()
+                        .color(egui::Color32::from_rgb(r, g, b)),
+                );
+            }
+        }
+    });
 }
 
 /// Draw the plot into the rest of `ui`; the cell clicked, and where each point went.
