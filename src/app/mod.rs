@@ -501,6 +501,9 @@ impl LabApp {
     /// Show `pick`'s method with its setting (its knobs, its map size).
     pub fn show_study_cell(&mut self, pick: &study_panel::Pick) {
         self.settings.method = pick.method.name().to_string();
+        // The cell as measured: the knobs it does not sweep at their defaults, its map size.
+        self.settings.knobs = crate::render::Knobs::default();
+        self.settings.dbuffer_size = pick.map_size;
         for (name, value) in &pick.values {
             if name == crate::render::methods::MAP_SIZE_NAME {
                 self.settings.dbuffer_size = *value;

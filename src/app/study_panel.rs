@@ -17,6 +17,8 @@ pub struct Pick {
     pub method: Method,
     /// The axes it sets, as `(flag name, value)` (`dbuffer-size` is the map size).
     pub values: Vec<(String, u32)>,
+    /// The D-buffer / shadow-map size the cell was measured at.
+    pub map_size: u32,
     pub label: String,
 }
 
@@ -276,6 +278,7 @@ fn plot(
                 picked = Some(Pick {
                     method,
                     values: cell.values.clone(),
+                    map_size: cell.map_size,
                     label: format!("{} ({})", cell.method, cell.setting),
                 });
             }

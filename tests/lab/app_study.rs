@@ -70,6 +70,9 @@ fn a_study_plot_shows_the_scene_and_a_click_switches_to_its_cell() {
         "the lab starts on its own method"
     );
 
+    let map_size = cell.map_size;
+    // A knob the cell does not sweep, moved by hand: the cell is shown as measured, at its default.
+    h.state_mut().settings.knobs.set("pcf-radius", 5).unwrap();
     h.drag_at(pos);
     h.drop_at(pos);
     h.run();
@@ -77,6 +80,13 @@ fn a_study_plot_shows_the_scene_and_a_click_switches_to_its_cell() {
     assert_eq!(app.settings.method, "pcss", "{}", app.status().0);
     assert_eq!(app.settings.knobs.get(&BLOCKER_TAPS), 32);
     assert_eq!(app.settings.knobs.get(&FILTER_TAPS), 64);
+    assert_eq!(
+        app.settings
+            .knobs
+            .get(&dbuffer::render::methods::pcf::RADIUS),
+        dbuffer::render::Knobs::default().get(&dbuffer::render::methods::pcf::RADIUS)
+    );
+    assert_eq!(app.settings.dbuffer_size, map_size);
     assert!(
         app.status().0.contains("study: showing pcss"),
         "{}",
