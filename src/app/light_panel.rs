@@ -1,4 +1,4 @@
-//! The inspector's **light as seen from this pixel** panel (issue 12): the light's disk as the
+//! The inspector's **light as seen from this pixel** panel: the light's disk as the
 //! receiver under the cursor sees it, for every method. The reference's disk samples for that
 //! one pixel are cast on the CPU ([`crate::geometry::oracle`], [`PANEL_SAMPLES`] rays, when the
 //! cursor moves to another surface point) and marked blocked or free; for `dbuffer-fused` the

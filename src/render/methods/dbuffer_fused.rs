@@ -1,4 +1,4 @@
-//! `dbuffer-fused` (issue 12; `docs/method/dbuffer-fused.md`): the D-buffer with every silhouette chord a
+//! `dbuffer-fused` (`docs/method/dbuffer-fused.md`): the D-buffer with every silhouette chord a
 //! receiver needs, so that the parts of the disk hidden by different casters, or different parts
 //! of one caster, combine as they do in reality. CPU twin: `geometry::fused::FusedTwin`.
 //!

@@ -460,7 +460,7 @@ impl Method {
     pub const DBUFFER: Method = Method(&dbuffer::DBUFFER);
     /// The D-buffer with silhouettes from the light centre.
     pub const DBUFFER_CENTER: Method = Method(&dbuffer::DBUFFER_CENTER);
-    /// The D-buffer with every silhouette chord (issue 12).
+    /// The D-buffer with every silhouette chord a receiver needs, where occluders fuse.
     pub const DBUFFER_FUSED: Method = Method(&dbuffer_fused::DBUFFER_FUSED);
     /// The hard shadow map, the baseline of the benchmarks.
     pub const HARD: Method = Method(&hard::HARD);
