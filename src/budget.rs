@@ -117,6 +117,31 @@ pub const MAX_ANIMATE_PIXELS: u64 = 1 << 24;
 /// 2 GiB.
 pub const MEMORY_BOUND_BYTES: u64 = 2 << 30;
 
+/// `WxH` (or `WXH`) with both sides positive: the image size of `--size` and of a study file.
+pub fn parse_wxh(text: &str) -> Option<(u32, u32)> {
+    let (w, h) = text.split_once(['x', 'X'])?;
+    let (w, h) = (w.trim().parse().ok()?, h.trim().parse().ok()?);
+    (w > 0 && h > 0).then_some((w, h))
+}
+
+/// Why a `w`×`h` image is over the limits, if it is: sides of at most [`MAX_IMAGE_SIDE`], at
+/// most `max_pixels` pixels (the constant called `name`).
+pub fn check_image_size(w: u32, h: u32, max_pixels: u64, name: &str) -> Result<(), String> {
+    if w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
+        return Err(format!(
+            "{w}x{h}: expected sides of at most {MAX_IMAGE_SIDE} pixels (MAX_IMAGE_SIDE)"
+        ));
+    }
+    let pixels = u64::from(w) * u64::from(h);
+    if pixels > max_pixels {
+        return Err(format!(
+            "{w}x{h} is {pixels} pixels: expected at most {max_pixels} ({name}, {} Mpixels)",
+            max_pixels >> 20
+        ));
+    }
+    Ok(())
+}
+
 /// The budget as the lines `dbuffer --help` prints after its commands.
 pub fn summary() -> String {
     let rows: [(&str, String, &str); 22] = [

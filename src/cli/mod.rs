@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use dbuffer::budget::{
-    MAX_DBUFFER_SIZE, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_INSPECT_PIXELS, MAX_ORACLE_TRIANGLES,
+    MAX_DBUFFER_SIZE, MAX_IMAGE_PIXELS, MAX_INSPECT_PIXELS, MAX_ORACLE_TRIANGLES,
     MAX_REFERENCE_SAMPLES,
 };
 use dbuffer::geometry::fused::{FusedParams, FusedPath, FusedTwin};
@@ -501,22 +501,11 @@ pub fn parse_size(text: &str) -> Result<(u32, u32)> {
 
 /// `WxH` with both from 1 to `MAX_IMAGE_SIDE` and at most `max_pixels` (called `name`).
 fn parse_view_size(text: &str, max_pixels: u64, name: &str) -> Result<(u32, u32)> {
-    let parsed = text
-        .split_once(['x', 'X'])
-        .and_then(|(w, h)| Some((w.trim().parse::<u32>().ok()?, h.trim().parse::<u32>().ok()?)));
-    let Some((w, h)) = parsed.filter(|&(w, h)| w > 0 && h > 0) else {
+    let Some((w, h)) = dbuffer::budget::parse_wxh(text) else {
         bail!("--size expects WxH with positive integers, e.g. 512x512; found '{text}'");
     };
-    if w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
-        bail!("--size {w}x{h}: expected sides of at most {MAX_IMAGE_SIDE} pixels (MAX_IMAGE_SIDE)");
-    }
-    let pixels = u64::from(w) * u64::from(h);
-    if pixels > max_pixels {
-        bail!(
-            "--size {w}x{h} is {pixels} pixels: expected at most {max_pixels} \
-             ({name}, {} Mpixels)",
-            max_pixels >> 20
-        );
+    if let Err(why) = dbuffer::budget::check_image_size(w, h, max_pixels, name) {
+        bail!("--size {why}");
     }
     Ok((w, h))
 }

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use crate::budget::{MAX_STUDY_CELLS, MAX_STUDY_PIXELS};
+use crate::budget::{check_image_size, MAX_COMPARE_PIXELS, MAX_STUDY_CELLS, MAX_STUDY_PIXELS};
 use crate::geometry::VtVariant;
 use crate::render::methods::{Quality, MAP_SIZE_NAME};
 use crate::render::{Knobs, Method};
@@ -299,7 +299,7 @@ impl StudySpec {
                 }
                 "size" => {
                     let (w, h) = match value {
-                        toml::Value::String(s) => parse_size(s),
+                        toml::Value::String(s) => crate::budget::parse_wxh(s),
                         toml::Value::Array(a) if a.len() == 2 => {
                             match (positive(&a[0]), positive(&a[1])) {
                                 (Some(w), Some(h)) => Some((w, h)),
@@ -311,6 +311,9 @@ impl StudySpec {
                     .ok_or_else(|| {
                         key_error(key, "expected \"WxH\" or [W, H], e.g. \"512x512\"".into())
                     })?;
+                    // Each cell is drawn and scored as `compare` does it: its limit.
+                    check_image_size(w, h, MAX_COMPARE_PIXELS, "MAX_COMPARE_PIXELS")
+                        .map_err(|m| key_error(key, m))?;
                     spec.width = w;
                     spec.height = h;
                 }
@@ -425,12 +428,6 @@ impl StudySpec {
         }
         Ok(())
     }
-}
-
-fn parse_size(text: &str) -> Option<(u32, u32)> {
-    let (w, h) = text.split_once(['x', 'X'])?;
-    let (w, h) = (w.trim().parse().ok()?, h.trim().parse().ok()?);
-    (w > 0 && h > 0).then_some((w, h))
 }
 
 fn positive(v: &toml::Value) -> Option<u32> {
@@ -620,6 +617,14 @@ mod tests {
             ),
             ("scenes = []", "scenes: an empty list"),
             ("size = \"0x3\"", "size: expected"),
+            (
+                "size = \"8192x4096\"",
+                "size: 8192x4096 is 33554432 pixels: expected at most 16777216 (MAX_COMPARE_PIXELS",
+            ),
+            (
+                "size = [20000, 2]",
+                "size: 20000x2: expected sides of at most 16384",
+            ),
             ("frames = 0", "frames: expected 1 to 100"),
             ("colour = 1", "colour: unknown key"),
             ("samples = 0", "samples: --samples expects 1"),

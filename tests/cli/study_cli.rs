@@ -273,7 +273,10 @@ fn a_bad_study_file_is_refused_naming_the_key_before_any_work() {
             "methods.pcss.blocker_taps: an empty list sweeps nothing",
         ),
         ("scenes = [\"no-such-scene\"]", "no-such-scene"),
-        ("size = \"16384x16384\"", "MAX_STUDY_PIXELS"),
+        // 910 default cells of 16 Mi pixels each: over the study's pixel budget.
+        ("size = \"4096x4096\"", "MAX_STUDY_PIXELS"),
+        // One image over what a cell may be (a cell is drawn and scored as compare does).
+        ("size = \"16384x16384\"", "MAX_COMPARE_PIXELS"),
     ]
     .iter()
     .enumerate()
