@@ -221,6 +221,14 @@ impl StudySpec {
                 cells / self.scenes.len() as u64
             )));
         }
+        // `--size` as well as a file's size: a cell is drawn and scored as `compare` does it.
+        check_image_size(
+            self.width,
+            self.height,
+            MAX_COMPARE_PIXELS,
+            "MAX_COMPARE_PIXELS",
+        )
+        .map_err(|m| StudyError::Flags(format!("--size {m}")))?;
         let pixels = cells * u64::from(self.width) * u64::from(self.height);
         if pixels > MAX_STUDY_PIXELS {
             return Err(StudyError::Flags(format!(
@@ -642,6 +650,12 @@ mod tests {
         s.check_budget().unwrap();
         s.width = 16384;
         s.height = 16384;
+        let e = s.check_budget().unwrap_err().to_string();
+        assert!(e.contains("MAX_COMPARE_PIXELS"), "{e}");
+        // The default study's cells at 4096²: each within a cell's limit, all over the study's.
+        s = StudySpec::full();
+        s.width = 4096;
+        s.height = 4096;
         let e = s.check_budget().unwrap_err().to_string();
         assert!(e.contains("MAX_STUDY_PIXELS"), "{e}");
         s.scenes.clear();
