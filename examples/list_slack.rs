@@ -1,4 +1,4 @@
-//! How much of `dbuffer-fused`'s lists a pixel needs (issue 22): per listed receiver pixel of
+//! How much of `dbuffer-fused`'s lists a pixel needs: per listed receiver pixel of
 //! each scene (256² camera rays, the CPU twin's lists at the default 1024² D-buffer and 256² list
 //! grid), what each listed edge is as seen from the pixel's point — not a silhouette from it,
 //! a silhouette beyond its height (or degenerate), a silhouette whose chord misses the disk, or

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Time the lab's real window (issue 22): `dbuffer gui SCENE --bench N` under Xvfb where there is no
+# Time the lab's real window: `dbuffer gui SCENE --bench N` under Xvfb where there is no
 # display, release build. Prints the table (window fps against the floor, CPU and GPU per frame)
 # and writes it as JSON.
 #

@@ -82,7 +82,7 @@ pub const MAX_DBUFFER_SIZE: u32 = 8192;
 
 /// GPU storage of `dbuffer-fused`'s edge lists (`--list-size`² texels × (`--list-cap` + 1)
 /// `u32`: the ids and a counter per texel): 128 MiB, WebGPU's default largest storage binding
-/// (and lavapipe's). The defaults (256², 128) take 32 MiB; a combination over it is refused,
+/// (and lavapipe's). The defaults (256², 256) take 64 MiB; a combination over it is refused,
 /// naming both flags.
 pub const MAX_FUSED_LIST_BYTES: u64 = 128 << 20;
 

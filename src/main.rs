@@ -102,6 +102,10 @@ enum Command {
         /// reference always; reference-hard too with a hard method).
         #[arg(long)]
         methods: Option<String>,
+        /// Which engine traces the reference's shadow rays: cpu (the independent oracle) or
+        /// gpu (the same rays on the GPU's tracer); the --orbit frames use the CPU's.
+        #[arg(long, default_value = "cpu")]
+        reference: String,
         /// V(t) of the D-buffer methods: smoothstep, sqrt, exact or linear.
         #[arg(long, default_value = "exact")]
         vt: String,
@@ -327,6 +331,7 @@ fn main() -> ExitCode {
             orbit,
             frames,
             methods,
+            reference,
             vt,
             dbuffer_size,
             knobs,
@@ -338,6 +343,7 @@ fn main() -> ExitCode {
             orbit: orbit.as_deref(),
             frames,
             methods: methods.as_deref(),
+            reference: &reference,
             vt: &vt,
             dbuffer_size,
             knobs: &knobs,

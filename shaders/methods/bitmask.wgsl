@@ -13,25 +13,41 @@
 // skipped whole; a node wholly in front and of one surface (its distances bend by less than
 // CONTINUITY between neighbours) is back-projected as one patch through its outer corners.
 // CPU twin of the arithmetic: geometry::bitmask (back_project, quad_bits, visibility).
-// knobs: x the lowest caster's height above the light's plane, y samples, z the flags
-// (FLAG_COARSE) plus the level of detail as a share of the samples' spacing below 1 (the
-// fraction), w the pyramid's levels.
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 // #include shared/light_bits.wgsl
 
+// BitmaskParams of src/render/methods/bitmask.rs.
+struct BitmaskParams {
+    // The lowest caster's height above the light's plane.
+    lowest_caster: f32,
+    // Light samples, one bit each.
+    samples: u32,
+    // FLAG_COARSE or 0.
+    flags: u32,
+    // The level of detail, a share of the samples' spacing (below 1).
+    detail: f32,
+    // The pyramid's levels.
+    levels: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+};
+
+@group(1) @binding(2) var<uniform> params: BitmaskParams;
+
 // Per texel of the map the distance at its four corners (x: its (0, 0) corner, y: (1, 0), z:
 // (1, 1), w: (0, 1)), gap-filled (passes/micro_patches.wgsl).
-@group(1) @binding(2) var corners: texture_2d<f32>;
+@group(1) @binding(3) var corners: texture_2d<f32>;
 // Level k (a square at x level_offset(k) of the first atlas for even k, of the second for odd
 // k): per 2^(k+1) × 2^(k+1) texels of the map, the lowest height above the light's plane and the
 // nearest distance (x, y),
 // the largest bend of its texels' distances (z: over CONTINUITY, a step from one surface to
 // another) and its farthest distance (w).
-@group(1) @binding(3) var pyramid_even: texture_2d<f32>;
-@group(1) @binding(5) var pyramid_odd: texture_2d<f32>;
+@group(1) @binding(4) var pyramid_even: texture_2d<f32>;
+@group(1) @binding(6) var pyramid_odd: texture_2d<f32>;
 // Half-plane masks of the samples, 256 bits (two vec4) a mask (DiskMask::lut_words_wide).
-@group(1) @binding(4) var<storage, read> lut: array<vec4<u32>>;
+@group(1) @binding(5) var<storage, read> lut: array<vec4<u32>>;
 
 // geometry::bitmask::CONTINUITY: texels whose distances bend less than this share are one
 // surface.
@@ -84,7 +100,7 @@ fn word_bits(k: vec4<i32>) -> vec4<u32> {
 
 // Where pyramid level k starts in its atlas (render::passes::micro_patches::level_offset).
 fn level_offset(k: u32) -> u32 {
-    let base = 1u << (u32(shadow.knobs.w) - 1u);
+    let base = 1u << (params.levels - 1u);
     return 2u * base - 2u * (base >> k);
 }
 
@@ -234,7 +250,7 @@ fn push(stack: ptr<function, array<u32, 64>>, sp: ptr<function, u32>, level: u32
 
 fn bitmask(x: vec3<f32>, n: vec3<f32>, l: LightLookup) -> f32 {
     let size = shadow.size;
-    let samples = u32(shadow.knobs.y);
+    let samples = params.samples;
     var s: Search;
     s.all = bits_all(samples);
     s.x = to_light_frame(x - camera.light_center);
@@ -270,15 +286,15 @@ fn bitmask(x: vec3<f32>, n: vec3<f32>, l: LightLookup) -> f32 {
         horizon = s.all;
     }
     let everything = bits_count(s.all);
-    let near = max(shadow.knobs.x, 1e-4);
+    let near = max(params.lowest_caster, 1e-4);
     if s.x.z <= near || bits_count(horizon) >= everything {
         return 1.0 - f32(bits_count(horizon)) / f32(max(samples, 1u));
     }
-    let coarse = (u32(shadow.knobs.z) & FLAG_COARSE) != 0u;
+    let coarse = (params.flags & FLAG_COARSE) != 0u;
     // The level of detail: a share of the samples' spacing (the side of a sample's share of the
     // unit disk, √(π / N)).
-    s.fine = sqrt(3.14159265 / f32(max(samples, 1u))) * fract(shadow.knobs.z);
-    let levels = u32(shadow.knobs.w);
+    s.fine = sqrt(3.14159265 / f32(max(samples, 1u))) * params.detail;
+    let levels = params.levels;
     let map = vec2<f32>(size);
     // The top level: nodes at least as wide as the search, so at most 3 × 3 of them.
     let r0 = min(radius_at(s, near), vec2<f32>(size));

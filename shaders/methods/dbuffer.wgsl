@@ -8,17 +8,30 @@
 // #include shared/shadow_lookup.wgsl
 // #include shared/frame_tag.wgsl
 
+// DBufferParams of src/render/methods/dbuffer.rs.
+struct DBufferParams {
+    // 1: V at most the part of the light in front of the receiver's plane (--dbuffer-horizon).
+    horizon: u32,
+    // 1: V exact toward a closing fan's corner (--dbuffer-corners).
+    corners: u32,
+    // The frame tag of d_u and d_p.
+    tag: u32,
+    _pad0: u32,
+};
+
+@group(1) @binding(2) var<uniform> params: DBufferParams;
+
 // (|cx_uv|, |cx_s|, lit side) and (|cx_pv|, |cx_s|, lit side): 0 where no umbra exit / penumbra
 // entry. The lit side is the chord's direction V exact needs under a polygon light. Both carry
-// the frame tag shadow.knobs.z (passes/dbuffer_volumes.wgsl): read through frame_untagged.
-@group(1) @binding(2) var d_u: texture_2d<f32>;
-@group(1) @binding(3) var d_p: texture_2d<f32>;
+// the frame tag params.tag (passes/dbuffer_volumes.wgsl): read through frame_untagged.
+@group(1) @binding(3) var d_u: texture_2d<f32>;
+@group(1) @binding(4) var d_p: texture_2d<f32>;
 // The closing fans' silhouette corners, TEXELS_PER_CORNER texels per fan (apex, the two edges'
 // far ends, each edge's two faces' normals, the two extrusion points; geometry::FanCorner),
 // CORNERS_PER_ROW fans to a row.
 // A fan's texel holds -(2 + its index) in .z (geometry::volume_vertices::corner_marker) instead of
 // a lit side, where V exact may be taken from its corner.
-@group(1) @binding(4) var corners: texture_2d<f32>;
+@group(1) @binding(5) var corners: texture_2d<f32>;
 const TEXELS_PER_CORNER: u32 = 9u;
 const CORNERS_PER_ROW: u32 = 224u;
 // geometry::wedges::SILHOUETTE_MARGIN, REACH_MARGIN and SEAM_MARGIN.
@@ -147,7 +160,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     // D > X; no crossing before the point (X = 0 or D <= X) is umbra (hidden) or lit (visible).
     let xs = frame_untagged(
         select(textureLoad(d_p, l.texel, 0), textureLoad(d_u, l.texel, 0), hidden),
-        u32(shadow.knobs.z)
+        params.tag
     );
     // The cost view counts texels read: |cx_o| and both channels (a select reads both).
     count_work(3.0);
@@ -163,8 +176,8 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     out.v = v_of_t_toward(out.t, xs.zw);
     // V exact where a closing fan won: toward the corner's wedge, not a chord's strip (which
     // grows with the depth where the wedge grows with its square), as far as the corner is the
-    // caster there. (shadow.knobs.y = 1, --dbuffer-corners.)
-    if VT_VARIANT == VT_EXACT && crossed && xs.z < -1.5 && shadow.knobs.y > 0.5 {
+    // caster there. (params.corners = 1, --dbuffer-corners.)
+    if VT_VARIANT == VT_EXACT && crossed && xs.z < -1.5 && params.corners != 0u {
         let corner = corner_visibility(x, u32(round(-xs.z - 2.0)));
         if corner.y > 0.0 {
             out.v = mix(out.v, corner.x, corner.y);
@@ -178,11 +191,11 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
         out = plain(1.0);
         took_path(3.0);
     }
-    // shadow.knobs.x = 1 (--dbuffer-horizon): at most the part of the light in front of the
+    // params.horizon = 1 (--dbuffer-horizon): at most the part of the light in front of the
     // receiver's own plane. A caster's face whose plane cuts the light sits on its own
     // silhouette, where no volume darkens it; the light behind that plane never reaches it.
     let horizon = horizon_fraction(x, n);
-    if shadow.knobs.x > 0.5 && horizon < out.v {
+    if params.horizon != 0u && horizon < out.v {
         out = plain(horizon);
         took_path(2.0);
     }

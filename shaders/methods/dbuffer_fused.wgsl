@@ -21,19 +21,30 @@
 // #include shared/light_bits.wgsl
 // #include shared/frame_tag.wgsl
 
-// The paper's D-buffer channels, as methods/dbuffer.wgsl binds them (frame tag shadow.knobs.z).
-@group(1) @binding(2) var d_u: texture_2d<f32>;
-@group(1) @binding(3) var d_p: texture_2d<f32>;
+// DBufferFusedParams of src/render/methods/dbuffer_fused.rs.
+struct DBufferFusedParams {
+    // The frame tag of d_u and d_p.
+    tag: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+};
+
+@group(1) @binding(2) var<uniform> params: DBufferFusedParams;
+
+// The paper's D-buffer channels, as methods/dbuffer.wgsl binds them (frame tag params.tag).
+@group(1) @binding(3) var d_u: texture_2d<f32>;
+@group(1) @binding(4) var d_p: texture_2d<f32>;
 // Per D-buffer texel: caster crossings along its ray, the largest crossing height over the 3×3
 // around it, its list's count, overflow (passes/fused_lists.wgsl, fs_maps).
-@group(1) @binding(4) var fused_maps: texture_2d<f32>;
-@group(1) @binding(5) var<uniform> fused: FusedUniforms;
-@group(1) @binding(6) var<storage, read> edges: array<FusedEdge>;
-@group(1) @binding(7) var<storage, read> counts: array<u32>;
-@group(1) @binding(8) var<storage, read> lists: array<u32>;
+@group(1) @binding(5) var fused_maps: texture_2d<f32>;
+@group(1) @binding(6) var<uniform> fused: FusedUniforms;
+@group(1) @binding(7) var<storage, read> edges: array<FusedEdge>;
+@group(1) @binding(8) var<storage, read> counts: array<u32>;
+@group(1) @binding(9) var<storage, read> lists: array<u32>;
 // Half-plane masks of the samples (DiskMask::lut_words): LUT_ANGLES through the centre, then
 // LUT_ANGLES × LUT_OFFSETS chords.
-@group(1) @binding(9) var<storage, read> lut: array<vec4<u32>>;
+@group(1) @binding(10) var<storage, read> lut: array<vec4<u32>>;
 
 // geometry::fused::{ANCHOR_SAMPLES, ANCHOR_SHARE, CONVEX_SLACK}.
 const ANCHOR_SAMPLES: u32 = 3u;
@@ -49,7 +60,7 @@ fn paper_visibility(l: LightLookup, hidden: bool) -> Visibility {
     let d = l.d;
     let xs = frame_untagged(
         select(textureLoad(d_p, l.texel, 0), textureLoad(d_u, l.texel, 0), hidden),
-        u32(shadow.knobs.z)
+        params.tag
     ).xy;
     let crossed = xs.x > 0.0 && d > xs.x;
     let f = clamp(xs.y * (d - xs.x) / (2.0 * xs.x * (d - xs.y)), 0.0, 0.5);

@@ -6,7 +6,17 @@
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 
-// ShadowUniforms::knobs: x = 1 / far, y = depth levels (2^bits - 1).
+// ExtendedLightMapParams of src/render/methods/extended_light_map.rs.
+struct ExtendedLightMapParams {
+    // 1 / the light view's far distance: A's scale.
+    inv_far: f32,
+    // A's depth levels, 2^bits - 1.
+    levels: u32,
+    _pad0: u32,
+    _pad1: u32,
+};
+
+@group(1) @binding(2) var<uniform> params: ExtendedLightMapParams;
 
 fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
     if !in_front_of_light(x) || !faces_light_center(x, n) {
@@ -21,9 +31,9 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     }
     let texel = textureLoad(d_o, l.texel, 0);
     count_work(1.0);
-    let d = l.d * shadow.knobs.x;
+    let d = l.d * params.inv_far;
     // A depth level (the rounding is half of one), and the slope bias of the hard test.
-    let bias = 1.0 / shadow.knobs.y + d * l.rel_bias;
+    let bias = 1.0 / f32(params.levels) + d * l.rel_bias;
     var out = plain(select(0.0, 1.0, d <= texel.a + bias));
     out.light = vec4<f32>(texel.rgb, 1.0);
     return out;

@@ -5,11 +5,22 @@
 // 4MSM's three-point distribution); the penumbra that mean depth predicts sizes the filter,
 // a second box, whose moments give V. No per-tap loop: six table reads of four corners. Depths
 // are heights above the light's plane (moment_depth), as the table holds them.
-// knobs: x the lowest caster's height above the light's plane, y the moment bias, z the least
-// blocker share.
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 // #include shared/msm.wgsl
+
+// MsmSoftParams of src/render/methods/msm_soft.rs.
+struct MsmSoftParams {
+    // The lowest caster's height above the light's plane.
+    lowest_caster: f32,
+    // The moment bias.
+    bias: f32,
+    // The least blocker share of the search box.
+    least_blocker: f32,
+    _pad0: u32,
+};
+
+@group(1) @binding(2) var<uniform> params: MsmSoftParams;
 
 // Under a rectangle or polygon light, how much to shrink the box of the light's image so that
 // it has the light's own area (the box of a light turned against the map's axes is larger than
@@ -38,7 +49,7 @@ fn box_shrink() -> f32 {
 fn msm_soft(x: vec3<f32>, l: LightLookup) -> f32 {
     // Heights above the light's plane: the table's depths, and the similar triangles' own.
     let d = moment_depth(x, l);
-    let near = max(shadow.knobs.x, 1e-4);
+    let near = max(params.lowest_caster, 1e-4);
     if d <= near {
         return 1.0;
     }
@@ -47,13 +58,13 @@ fn msm_soft(x: vec3<f32>, l: LightLookup) -> f32 {
     let max_r = vec2<f32>(shadow.size);
     let search = clamp(light_footprint(x, near), vec2<f32>(1.0), max_r);
     let z_search = msm_depth(d * (1.0 - box_bias(l, max(search.x, search.y))));
-    let found = hamburger(box_moments(l.texel, vec2<i32>(ceil(search))), z_search, shadow.knobs.y);
-    if found.x < shadow.knobs.z {
+    let found = hamburger(box_moments(l.texel, vec2<i32>(ceil(search))), z_search, params.bias);
+    if found.x < params.least_blocker {
         return 1.0;
     }
     let blocker = max(msm_distance(found.y), near);
     let width = clamp(light_footprint(x, blocker) * box_shrink(), vec2<f32>(0.0), max_r);
-    return msm_lit(l, d, width, shadow.knobs.y, !polygon_light());
+    return msm_lit(l, d, width, params.bias, !polygon_light());
 }
 
 fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {

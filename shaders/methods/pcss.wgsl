@@ -2,16 +2,25 @@
 // the centre's shadow map (src/render/methods/pcss.rs): blockers are searched in the cone from x
 // to the disk down to the nearest caster, and the filter spans the penumbra width their mean
 // distance predicts. Sizes are slopes from c, over the slope one texel spans.
-// knobs: x blocker taps, y filter taps, z the nearest caster's distance from c.
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
+
+// PcssParams of src/render/methods/pcss.rs.
+struct PcssParams {
+    blocker_taps: u32,
+    filter_taps: u32,
+    // The nearest caster's distance from c.
+    nearest_caster: f32,
+    _pad0: u32,
+};
 
 struct PoissonDisk {
     // 64 points in the unit disk, two per entry (xy, zw); every prefix is spread over the disk.
     points: array<vec4<f32>, 32>,
 };
 
-@group(1) @binding(2) var<uniform> disk: PoissonDisk;
+@group(1) @binding(2) var<uniform> params: PcssParams;
+@group(1) @binding(3) var<uniform> disk: PoissonDisk;
 
 fn poisson(i: u32) -> vec2<f32> {
     let e = disk.points[i / 2u];
@@ -29,7 +38,7 @@ fn rotation(pixel: vec2<f32>) -> mat2x2<f32> {
 fn pcss(x: vec3<f32>, n: vec3<f32>, l: LightLookup, pixel: vec2<f32>) -> f32 {
     let r = camera.light_radius;
     let d = l.d;
-    let near = max(shadow.knobs.z, 1e-4);
+    let near = max(params.nearest_caster, 1e-4);
     if d <= near {
         return 1.0;
     }
@@ -39,7 +48,7 @@ fn pcss(x: vec3<f32>, n: vec3<f32>, l: LightLookup, pixel: vec2<f32>) -> f32 {
     let search = clamp(light_width_in_texels(r, d, near), 1.0, size * 0.5);
     var blockers = 0.0;
     var sum = 0.0;
-    let blocker_taps = u32(shadow.knobs.x);
+    let blocker_taps = params.blocker_taps;
     for (var i = 0u; i < blocker_taps; i++) {
         let tap = vec2<i32>(floor(centre + rot * poisson(i) * search));
         let q = clamp(tap, vec2<i32>(0), vec2<i32>(i32(size) - 1));
@@ -59,7 +68,7 @@ fn pcss(x: vec3<f32>, n: vec3<f32>, l: LightLookup, pixel: vec2<f32>) -> f32 {
     let blocker = sum / blockers;
     let width = clamp(light_width_in_texels(r, d, blocker), 1.0, size * 0.5);
     var lit = 0.0;
-    let filter_taps = u32(shadow.knobs.y);
+    let filter_taps = params.filter_taps;
     for (var i = 0u; i < filter_taps; i++) {
         let tap = vec2<i32>(floor(centre + rot * poisson(i) * width));
         count_work(1.0);

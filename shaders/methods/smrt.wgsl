@@ -13,11 +13,11 @@
 // for UE's reversed device depth, so the same tolerances hold. V = the rays that miss over the
 // rays traced; with the adaptive count a 2×2 quad stops after one ray where all of it missed, and
 // after two where all of it was hit (UE votes over a wave).
-// knobs: x rays, y steps per ray, z 1 for the adaptive ray count.
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 
-struct SmrtUniforms {
+// SmrtParams of src/render/methods/smrt.rs.
+struct SmrtParams {
     // r.Shadow.Virtual.SMRT.ExtrapolateMaxSlopeLocal: the extrapolation's slope at most this
     // share of the ray's own change of depth per unit of time (0: held).
     extrapolate_slope: f32,
@@ -35,10 +35,17 @@ struct SmrtUniforms {
     normal_bias: f32,
     // tan of half the camera's field of view, across and up.
     tan_half_fov: vec2<f32>,
+    // r.Shadow.Virtual.SMRT.RayCountLocal: rays per pixel.
+    rays: u32,
+    // r.Shadow.Virtual.SMRT.SamplesPerRayLocal: shadow-map samples per ray.
+    steps: u32,
+    // r.Shadow.Virtual.SMRT.AdaptiveRayCount: 1 for the adaptive ray count.
+    adaptive: u32,
+    _pad0: u32,
 };
 
-@group(1) @binding(2) var screen_position: texture_2d<f32>;
-@group(1) @binding(3) var<uniform> smrt_settings: SmrtUniforms;
+@group(1) @binding(2) var<uniform> params: SmrtParams;
+@group(1) @binding(3) var screen_position: texture_2d<f32>;
 
 // UE's least normal offset and least shadow resolution scale (0.02 and 0.1 of its centimetres),
 // in this project's metres.
@@ -294,7 +301,7 @@ struct SmrtPixel {
 
 fn smrt_pixel(x_in: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>, d: f32) -> SmrtPixel {
     var p: SmrtPixel;
-    let u = smrt_settings;
+    let u = params;
     let view_depth = (camera.view_proj * vec4<f32>(x_in, 1.0)).w;
     let normal_bias = max(MIN_NORMAL_BIAS, u.normal_bias * length(x_in - camera.eye) * u.tan_half_fov.x);
     p.x = x_in + n * normal_bias;
@@ -359,7 +366,7 @@ fn ray_blocked(p: SmrtPixel, i: u32, step_offset: f32) -> bool {
     let origin = p.x + p.frame * vec3<f32>(offset, rise);
     // The ray clipped to the angle the light may see it span (UE's MaxRayAngleFromLight), and at
     // most three quarters of the way to the light.
-    let clamped_end = p.distance * 0.75 * clamp(1.5 / (cos_theta + smrt_settings.cot_max_angle * sin_theta), 0.0, 1.0);
+    let clamped_end = p.distance * 0.75 * clamp(1.5 / (cos_theta + params.cot_max_angle * sin_theta), 0.0, 1.0);
     let start_length = min(p.start_offset, clamped_end - 1e-6);
     var ray: SmrtRay;
     ray.start = origin + dir * start_length;
@@ -367,8 +374,8 @@ fn ray_blocked(p: SmrtPixel, i: u32, step_offset: f32) -> bool {
     ray.clip_start = shadow.light_view_proj * vec4<f32>(ray.start, 1.0);
     ray.clip_end = shadow.light_view_proj * vec4<f32>(ray.end, 1.0);
     ray.bias = min(p.max_depth_bias, optimal_bias(p, ray.start, ray.clip_start));
-    ray.slope_clamp = smrt_settings.extrapolate_slope * abs(inverse_distance(ray.end) - inverse_distance(ray.start));
-    let steps = max(u32(shadow.knobs.y), 1u);
+    ray.slope_clamp = params.extrapolate_slope * abs(inverse_distance(ray.end) - inverse_distance(ray.start));
+    let steps = max(params.steps, 1u);
     return ray_hits(ray, steps, step_offset);
 }
 
@@ -384,8 +391,8 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     // which need every pixel of the quad here.
     let l = light_lookup(x, n);
     let traced = in_front_of_light(x) && faces_light_center(x, n) && l.inside;
-    let rays = max(u32(shadow.knobs.x), 1u);
-    let adaptive = shadow.knobs.z > 0.5;
+    let rays = max(params.rays, 1u);
+    let adaptive = params.adaptive != 0u;
     var p: SmrtPixel;
     var offset = 0.0;
     var misses = 0u;

@@ -4,21 +4,31 @@
 // filter region at least as far as the receiver, the light-bleeding reduction cutting off the
 // bound's low tail. A hard shadow from the centre, filtered: its softness is the filter's, not
 // the light's.
-// knobs: x light-bleeding reduction (0..1), y the least variance, relative to |cx|².
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
 
-@group(1) @binding(2) var moments: texture_2d<f32>;
+// VsmParams of src/render/methods/vsm.rs.
+struct VsmParams {
+    // The light-bleeding reduction (0..1).
+    bleed: f32,
+    // The least variance, relative to |cx|².
+    min_variance: f32,
+    _pad0: u32,
+    _pad1: u32,
+};
+
+@group(1) @binding(2) var<uniform> params: VsmParams;
+@group(1) @binding(3) var moments: texture_2d<f32>;
 
 // The Chebyshev upper bound P(o >= d) for mean mu and variance var, with the bleeding cut.
 fn chebyshev(m: vec2<f32>, d: f32) -> f32 {
     if d <= m.x {
         return 1.0;
     }
-    let variance = max(m.y - m.x * m.x, shadow.knobs.y * d * d);
+    let variance = max(m.y - m.x * m.x, params.min_variance * d * d);
     let gap = d - m.x;
     let p = variance / (variance + gap * gap);
-    let cut = clamp(shadow.knobs.x, 0.0, 0.999);
+    let cut = clamp(params.bleed, 0.0, 0.999);
     return clamp((p - cut) / (1.0 - cut), 0.0, 1.0);
 }
 

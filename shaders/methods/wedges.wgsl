@@ -4,15 +4,24 @@
 // pixel. On a side of a caster turned away from the light's centre, the centre is hidden by that
 // very surface (H = 1, what Crow's volume from the centre gives there; the stencil pass closes
 // closed casters with their dark faces, which leaves their own points out), so V = -S there.
-// A point behind the one-sided light gets nothing. Then (wedge_options.x = 1, --wedges-horizon)
+// A point behind the one-sided light gets nothing. Then (params.horizon = 1, --wedges-horizon)
 // at most the part of the disk in front of the receiver's own plane: a caster's face whose plane
 // cuts the disk is in no wedge when the centre lights it (geometry::wedges, the CPU twin).
 // #include shared/camera.wgsl
 // #include shared/screen_v.wgsl
 
 @group(1) @binding(1) var wedge_sum: texture_2d<f32>;
-// render::methods::wedges::WedgeOptions. x: 1 = clip by the receiver's plane.
-@group(1) @binding(2) var<uniform> wedge_options: vec4<f32>;
+
+// WedgesParams of src/render/methods/wedges.rs.
+struct WedgesParams {
+    // 1: clip by the receiver's plane.
+    horizon: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+};
+
+@group(1) @binding(2) var<uniform> params: WedgesParams;
 
 fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {
     if !in_front_of_light(x) {
@@ -29,7 +38,7 @@ fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility
     } else {
         v = screen_visibility(pixel);
     }
-    if wedge_options.x > 0.5 {
+    if params.horizon != 0u {
         v = min(v, horizon_fraction(x, n));
     }
     return plain(v);

@@ -1,10 +1,10 @@
 // Reading the moment map's summed-area table (render::passes::moment_sat) from the camera pass,
 // for `msm` and `msm-soft`; the arithmetic's CPU twin, with its tests: geometry::moments.
-// Include after shared/camera.wgsl and shared/shadow_lookup.wgsl; group 1 binds the table at 2
-// and the depth range at 3.
+// Include after shared/camera.wgsl and shared/shadow_lookup.wgsl; group 1 binds the table at 3
+// and the depth range at 4 (the method's params at 2).
 
-@group(1) @binding(2) var<storage, read> table: array<vec4<u32>>;
-@group(1) @binding(3) var<storage, read> range: array<u32, 2>;
+@group(1) @binding(3) var<storage, read> table: array<vec4<u32>>;
+@group(1) @binding(4) var<storage, read> range: array<u32, 2>;
 
 // geometry::moments::MAX_RADIUS and SAT_SCALE.
 const MSM_MAX_RADIUS = 128;

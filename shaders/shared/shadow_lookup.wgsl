@@ -1,6 +1,10 @@
 // Looking up the centre's shadow map (|cx_o|, render::passes::shadow_map) from the camera pass:
 // the methods built on it (hard, pcf, pcss, the D-buffer family) include this file after
 // shared/camera.wgsl and bind their ShadowUniforms and the map as group 1, bindings 0 and 1.
+// ShadowUniforms holds the map's own numbers only: a method's parameters are its own struct
+// (`NameParams`, declared in its shader and as a #[repr(C)] struct in its Rust module, u32 for
+// switches, bits and counts, f32 for real numbers), bound as `params` at binding 2
+// (render::passes::shadow_map::PARAMS_BINDING); the method's other bindings follow from 3 on.
 
 struct ShadowUniforms {
     // World to the light view's clip space, and back.
@@ -14,8 +18,6 @@ struct ShadowUniforms {
     // slope one texel spans times the tangent of the incidence angle.
     bias_constant: f32,
     bias_slope: f32,
-    // The method's own numbers (its knobs), as it documents them.
-    knobs: vec4<f32>,
 };
 
 @group(1) @binding(0) var<uniform> shadow: ShadowUniforms;

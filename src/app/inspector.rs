@@ -2,6 +2,7 @@
 //! GPU by the probe — a hundred bytes, a frame later — whatever the display mapping) and the
 //! stats (timings, frame rate, bytes read back, counts).
 
+use crate::render::truth;
 use eframe::egui::{self, Color32, Pos2, Rect, RichText, Sense, Stroke, Vec2};
 
 use super::{light_panel, LabApp};
@@ -87,7 +88,7 @@ impl LabApp {
             return Vec::new();
         };
         let slot = usize::from(hover.split);
-        let Some(shown) = self.viewport.shown[slot].as_ref() else {
+        let Some(shown) = self.shown_at(slot) else {
             return Vec::new();
         };
         let view = self.settings.view;
@@ -138,7 +139,7 @@ impl LabApp {
         rows.push(("branch".into(), branch_name(p.branch).into()));
         rows.push(("t".into(), value(Some(p.t))));
         rows.push(("V".into(), value(Some(p.visibility))));
-        if !shown.method.is_reference() {
+        if !truth::is_soft(shown.method) {
             let samples = shown
                 .reference
                 .map(|(done, total)| format!(" (K {done}/{total})"))
@@ -173,7 +174,7 @@ impl LabApp {
             return;
         };
         let slot = usize::from(hover.split);
-        let found = self.viewport.shown[slot].as_ref().and_then(|shown| {
+        let found = self.shown_at(slot).and_then(|shown| {
             let p = self
                 .inspector
                 .at(slot, hover.x, hover.y, self.settings.view)?;
@@ -214,7 +215,7 @@ impl LabApp {
             }
             rows.push(("adapter".into(), name));
         }
-        if let Some(main) = &self.viewport.shown[0] {
+        if let Some(main) = self.shown_at(0) {
             let r = &main.request;
             rows.push((
                 "frame".into(),

@@ -5,13 +5,13 @@
 //! the few values a person reads (the pixel under the cursor) come back.
 //!
 //! One file per part: [`settings`] (what persists), [`doc`] (the scene being edited, undo),
-//! [`core`] (the render core as the lab holds it: session, targets, reference worker),
-//! [`camera`] (controls and the one projection overlays and picking use), [`viewport`] (render,
-//! show, interact), [`overlays`], [`panels`] (the controls), [`inspector`] (pixel values),
+//! the view session it drives ([`crate::render::view_session`]: the session, the shown targets,
+//! the ground truth's workers, probes, FLIP), [`camera`] (controls and the one projection
+//! overlays and picking use), [`viewport`] (what to show, and showing it), `pointer` (mouse
+//! input), [`overlays`], [`panels`] (the controls), [`inspector`] (pixel values),
 //! [`stats`], [`files`] (open, save, export).
 
 pub mod camera;
-pub mod core;
 pub mod doc;
 mod files;
 mod inspector;
@@ -20,6 +20,7 @@ pub mod light_panel;
 pub mod motion;
 mod overlays;
 mod panels;
+mod pointer;
 pub mod record;
 pub mod settings;
 mod smoke;
@@ -34,13 +35,13 @@ use std::sync::Arc;
 use eframe::egui;
 use eframe::egui_wgpu;
 
-use self::core::Core;
 use self::doc::{Edit, History, SceneDoc};
 pub use self::settings::{Overlays, Settings, DEFAULT_SCENE};
 use self::stats::Stats;
 pub use self::viewport::Shown;
 use crate::geometry::bvh::Bvh;
 pub use crate::render::passes::view::View;
+use crate::render::view_session::ViewSession;
 use crate::render::{GpuContext, Method};
 use crate::scene::Camera;
 
@@ -100,7 +101,7 @@ pub struct LabApp {
     /// The camera the lab looks through (not part of undo; saved with the scene).
     pub camera: Camera,
     pub selection: Selection,
-    core: Option<Core>,
+    core: Option<ViewSession>,
     doc: SceneDoc,
     history: History,
     /// Bumped by every scene edit and scene change: a new frame is needed.
@@ -171,7 +172,7 @@ impl LabApp {
                         crate::render::adapter::info_line(&rs.adapter.get_info())
                     );
                 }
-                Some(Core::new(context_of(rs), scene))
+                Some(ViewSession::new(context_of(rs), scene))
             }
             None => {
                 status = (
@@ -240,7 +241,7 @@ impl LabApp {
 
     /// What the viewport shows (left side of a split).
     pub fn shown(&self) -> Option<&Shown> {
-        self.viewport.shown[0].as_ref()
+        self.shown_at(0)
     }
 
     /// What the inspector's "light as seen from this pixel" panel shows, once computed.
@@ -250,22 +251,27 @@ impl LabApp {
 
     /// The right side of a split view.
     pub fn shown_split(&self) -> Option<&Shown> {
-        self.viewport.shown[1].as_ref()
+        self.shown_at(1)
     }
 
     /// Read the frame the viewport shows (`split`: its right side) back whole, with the shown
     /// method's light-space maps. For tests and exports: the lab itself never reads a frame.
     pub fn read_shown(&mut self, split: bool) -> Option<crate::render::Frame> {
-        let method = self.viewport.shown[usize::from(split)].as_ref()?.method;
+        let method = self.shown_at(usize::from(split))?.method;
         self.core
             .as_mut()?
-            .read_slot(usize::from(split), Some(method))
+            .read(usize::from(split), Some(method))
             .ok()
     }
 
-    /// The render core (tests look at its session and reference worker).
-    pub fn core(&self) -> Option<&core::Core> {
+    /// The view session (tests look at its session and the truths' workers).
+    pub fn core(&self) -> Option<&ViewSession> {
         self.core.as_ref()
+    }
+
+    /// What side `side` of the viewport shows (0 the main one, 1 the right of a split).
+    fn shown_at(&self, side: usize) -> Option<&Shown> {
+        self.core.as_ref()?.shown(side)
     }
 
     /// Where the viewport was last drawn, in points.
@@ -276,6 +282,15 @@ impl LabApp {
     /// How many frames the render core has made for the lab.
     pub fn frames_rendered(&self) -> u64 {
         self.stats.renders_total
+    }
+
+    /// The passes the Stats panel lists GPU times for, in its order.
+    pub fn gpu_passes(&self) -> Vec<String> {
+        self.stats
+            .median_gpu_ms()
+            .into_iter()
+            .map(|(pass, _)| pass)
+            .collect()
     }
 
     /// How many window frames have run.
@@ -422,11 +437,11 @@ impl LabApp {
         }
         if let Some(core) = self.core.as_mut() {
             if light {
-                core.session.set_light(self.doc.light());
+                core.set_light(self.doc.light());
             }
             for &i in &moved {
                 if let Some(mesh) = self.doc.world_mesh(i) {
-                    core.session.set_object_mesh(&core.ctx, i, mesh);
+                    core.set_object_mesh(i, mesh);
                 }
             }
         }

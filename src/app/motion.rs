@@ -14,6 +14,8 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
+use eframe::egui::{self, Color32, Pos2, Rect, Vec2};
+
 use crate::geometry::oracle::Oracle;
 use crate::render::passes::probe::{grid_pixel, MOTION_GRID};
 use crate::scene::Scene;
@@ -182,6 +184,71 @@ fn reference_at_grid(scene: &Scene, width: u32, height: u32) -> Vec<f32> {
             }
         })
         .collect()
+}
+
+impl super::LabApp {
+    /// The motion meter's plot, top right of the viewport, while a drag moves the light or a
+    /// caster (and shortly after).
+    pub(super) fn draw_motion(&self, ui: &egui::Ui, rect: Rect) {
+        if !self.motion.showing() {
+            return;
+        }
+        let (values, measure) = self.motion.series();
+        let Some(measure) = measure else { return };
+        let size = Vec2::new(260.0f32.min(rect.width() - 16.0), 74.0);
+        let area = Rect::from_min_size(
+            Pos2::new(rect.right() - size.x - 8.0, rect.top() + 8.0),
+            size,
+        );
+        if size.x < 120.0 {
+            return;
+        }
+        let painter = ui.painter().with_clip_rect(area);
+        painter.rect_filled(area, 4.0, Color32::from_black_alpha(170));
+        let title = match measure {
+            Measure::AgainstReference => "temporal error",
+            Measure::MethodAlone => "frame-to-frame |ΔV|",
+        };
+        let top = values.iter().copied().fold(0.01f32, f32::max);
+        painter.text(
+            area.left_top() + Vec2::new(6.0, 3.0),
+            egui::Align2::LEFT_TOP,
+            format!(
+                "{title}: {:.4} (max {top:.3})",
+                values.last().copied().unwrap_or(0.0)
+            ),
+            egui::FontId::proportional(11.0),
+            Color32::WHITE,
+        );
+        let plot = Rect::from_min_max(
+            area.left_top() + Vec2::new(6.0, 18.0),
+            area.right_bottom() - Vec2::new(6.0, 14.0),
+        );
+        if values.len() >= 2 {
+            let n = values.len() - 1;
+            let points: Vec<Pos2> = values
+                .iter()
+                .enumerate()
+                .map(|(k, v)| {
+                    Pos2::new(
+                        plot.left() + plot.width() * k as f32 / n as f32,
+                        plot.bottom() - plot.height() * (v / top).clamp(0.0, 1.0),
+                    )
+                })
+                .collect();
+            painter.add(egui::Shape::line(
+                points,
+                egui::Stroke::new(1.5, Color32::from_rgb(250, 170, 60)),
+            ));
+        }
+        painter.text(
+            area.left_bottom() + Vec2::new(6.0, -2.0),
+            egui::Align2::LEFT_BOTTOM,
+            format!("last {} s · {}", WINDOW.as_secs(), measure.short()),
+            egui::FontId::proportional(9.0),
+            Color32::GRAY,
+        );
+    }
 }
 
 #[cfg(test)]

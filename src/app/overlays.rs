@@ -2,6 +2,7 @@
 //! the camera the frame was rendered with: caster faces by class, umbra and penumbra volume
 //! wireframes, silhouette edges, the light disk, the selection; and the legends.
 
+use crate::render::truth;
 use std::collections::HashMap;
 
 use eframe::egui::{self, Color32, Painter, Pos2, Rect, Stroke, Vec2};
@@ -362,8 +363,8 @@ impl LabApp {
                         }
                     }
                     View::Error => {
-                        let reference = self.viewport.shown[0].as_ref().and_then(|s| {
-                            if s.method.is_reference() {
+                        let reference = self.shown_at(0).and_then(|s| {
+                            if truth::is_soft(s.method) {
                                 Some(format!(
                                     "K = {} (the shown reference)",
                                     self.settings.reference_samples

@@ -140,12 +140,9 @@ impl LabApp {
                     .on_hover_text(warnings.join("\n"));
                 }
                 if let Some(core) = self.core.as_ref() {
-                    let current = self
-                        .viewport
-                        .shown
-                        .iter()
-                        .flatten()
-                        .next()
+                    let current = core
+                        .shown(0)
+                        .or_else(|| core.shown(1))
                         .map(|s| core.session.reference_key(&s.request));
                     let progress = core.worker.progress().filter(|(k, _, _)| {
                         Some(*k).map(|k| k.samples) == current.map(|c| c.samples)
@@ -511,7 +508,7 @@ impl LabApp {
             }
         }
         for knob in knobs {
-            if knob.name == crate::render::methods::reference::SAMPLES.name {
+            if knob.name == crate::render::truth::SAMPLES.name {
                 continue;
             }
             let mut value = self.settings.knobs.raw(knob);

@@ -124,7 +124,7 @@ impl LabApp {
 
     /// The viewport's render size (the main view).
     fn record_size(&self) -> Option<(u32, u32)> {
-        let shown = self.viewport.shown[0].as_ref()?;
+        let shown = self.shown_at(0)?;
         Some((shown.request.width, shown.request.height))
     }
 

@@ -2,6 +2,7 @@
 //! mappings, overlays and recent files. The scene itself is not restored: `dbuffer` opens the
 //! default scene, `dbuffer gui SCENE` the one named.
 
+use crate::render::truth;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::VtVariant;
@@ -79,7 +80,7 @@ impl Default for Settings {
     fn default() -> Self {
         Self {
             method: Method::DBUFFER.name().into(),
-            split_method: Method::REFERENCE.name().into(),
+            split_method: truth::SOFT.name().into(),
             split: false,
             split_at: 0.5,
             vt: VtVariant::Smoothstep.name().into(),
@@ -113,12 +114,12 @@ impl Settings {
     }
 
     pub fn split_method(&self) -> Method {
-        self.split_method.parse().unwrap_or(Method::REFERENCE)
+        self.split_method.parse().unwrap_or(truth::SOFT)
     }
 
     /// Whether the reference is one of the methods on screen (either side of a split).
     pub fn shows_reference(&self) -> bool {
-        self.method().is_reference() || (self.split && self.split_method().is_reference())
+        truth::is_soft(self.method()) || (self.split && truth::is_soft(self.split_method()))
     }
 
     /// Whether what is shown needs the reference: it is a shown method, or the error view

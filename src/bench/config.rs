@@ -237,7 +237,7 @@ mod tests {
         for c in &cases {
             assert!(c.knobs.validate().is_ok(), "{}", c.label);
         }
-        let r = Case::for_method(Method::REFERENCE);
+        let r = Case::for_method(crate::render::truth::SOFT);
         assert_eq!(r.knobs.get(&SAMPLES), MAX_SAMPLES);
         assert_eq!(r.label, "reference 1 spp");
         assert!(r.cpu_side());

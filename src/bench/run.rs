@@ -1,6 +1,7 @@
 //! Running the bench: every case's frames through the lab's own calls (a [`Session`] per scene
 //! and method), the display path, frame coherence and the geometry-scaling curve.
 
+use crate::render::truth;
 use std::time::Instant;
 
 use glam::{Affine3A, Vec3};
@@ -379,7 +380,7 @@ pub fn time_frames(
                 }
                 session.invalidate_light_maps();
                 let t = Instant::now();
-                let frame = if requests[i].method.is_reference() {
+                let frame = if truth::is_soft(requests[i].method) {
                     // The reference: one more sample per pixel, then its frame (reference-hard, also
                     // CPU-side, casts its rays again in the frame: its image was invalidated).
                     session
@@ -398,7 +399,7 @@ pub fn time_frames(
     }
     // The reference's ray casting alone: one more sample per pixel without a frame.
     for (i, request) in requests.iter().enumerate() {
-        if !request.method.is_reference() || errors[i].is_some() {
+        if !truth::is_soft(request.method) || errors[i].is_some() {
             continue;
         }
         for _ in 0..frames {
@@ -474,7 +475,7 @@ fn time_display(ctx: &GpuContext, scene: &Scene, config: &Config, size: u32) -> 
             );
         }
         let t = timer.as_mut()?;
-        t.finish(&mut encoder);
+        t.finish(&mut encoder, 0);
         ctx.queue.submit([encoder.finish()]);
         t.request_maps();
         gpu_total(&t.wait(ctx).ok()?)
@@ -631,7 +632,7 @@ fn scaling_point(triangles: u32, runs: usize) -> ScalingPoint {
 fn reference_throughput(runs: &[Run]) -> Option<f64> {
     let rates: Vec<f64> = runs
         .iter()
-        .filter(|r| r.method == Method::REFERENCE.name())
+        .filter(|r| r.method == truth::SOFT.name())
         .filter_map(|r| r.timing.as_ref())
         .filter_map(|t| Some((t.hit_pixels, t.rays_ms?.median)))
         .filter(|&(px, ms)| ms > 0.0 && px > 0)

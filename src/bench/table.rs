@@ -433,7 +433,7 @@ fn hard_methods(out: &mut String, r: &Report) {
 }
 
 /// Every method's frame at the largest size as a ratio to the D-buffer's and to the hard shadow
-/// map's (the yardsticks issues 13 and 14 name), median over the scenes.
+/// map's (the two yardsticks of a soft-shadow method's cost), median over the scenes.
 fn against_dbuffer_and_hard(out: &mut String, r: &Report) {
     let Some(&size) = r.sizes().last() else {
         return;
@@ -752,7 +752,7 @@ mod tests {
         );
         // The reference is measured by wall time, so it is compared with the D-buffer's wall.
         assert_eq!(
-            r.ratio_to_dbuffer("table1-5760", 1024, Method::REFERENCE),
+            r.ratio_to_dbuffer("table1-5760", 1024, crate::render::truth::SOFT),
             Some(2.0)
         );
         assert_eq!(
@@ -770,7 +770,7 @@ mod tests {
                 .find(|t| t.name.starts_with(name))
                 .unwrap_or_else(|| panic!("{name}: {:?}", r.targets))
         };
-        // Reported since issue 22 retired them: measured, neither passed nor missed.
+        // Reported, not targets: measured, neither passed nor missed.
         let lab = get("lab frame (light still)");
         assert_eq!(lab.measured, Some(0.4));
         assert_eq!(lab.pass(), None);

@@ -1,4 +1,4 @@
-//! The targets, judged from a finished [`Report`] (issue 22's since 2026-12-04): `dbuffer-fused`
+//! The targets, judged from a finished [`Report`]: `dbuffer-fused`
 //! against the D-buffer and the wedges, the D-buffer against the hard shadow map (median and
 //! worst scene) and PCSS, the polygon light, and the geometry stage's time; the lab's display
 //! path, the camera pass against the hard shadow's and the floor are reported, no longer targets

@@ -4,6 +4,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::Result;
 use dbuffer::render::adapter::{self, Verdict};
+use dbuffer::render::gpu_reference;
 use dbuffer::render::{GpuContext, Method, RenderError};
 
 static VERBOSE: AtomicBool = AtomicBool::new(false);
@@ -51,6 +52,11 @@ pub fn list() -> Result<()> {
             } else {
                 outln!("  {:<width$}  {word}: {detail}", m.name());
             }
+        }
+        // The shadow-ray tracer: which path `compare --reference gpu` takes here.
+        match gpu_reference::refuses_on(&a.caps) {
+            None => outln!("  GPU reference: the BVH traversed in WGSL (compute)"),
+            Some(why) => outln!("  GPU reference: cannot ({why})"),
         }
     }
     Ok(())
@@ -122,8 +128,8 @@ pub fn gpu_lines(message: &str) -> String {
 mod tests {
     use super::*;
 
-    /// wgpu's validation error as the GL backend printed it before (issue 23): one line with
-    /// literal `\n`s. Now its message, then its causes on indented lines, then what to do.
+    /// wgpu's validation error as the GL backend prints it: its message, then its causes on
+    /// indented lines (never one line with literal `\n`s), then what to do.
     #[test]
     fn a_gpu_error_is_its_message_and_indented_causes() {
         let wgpu = "Validation Error\n\nCaused by:\n  In Device::create_render_pipeline, label = \

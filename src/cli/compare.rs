@@ -8,8 +8,9 @@ use dbuffer::compare::temporal::{self, MotionRequest};
 use dbuffer::compare::{self, report, CompareRequest};
 use dbuffer::geometry::VtVariant;
 use dbuffer::output;
-use dbuffer::render::methods::reference::SAMPLES;
+use dbuffer::render::gpu_reference;
 use dbuffer::render::offline::Offline;
+use dbuffer::render::truth::{self, SAMPLES};
 use dbuffer::render::Method;
 use dbuffer::scene::orbit::Orbit;
 
@@ -28,6 +29,8 @@ pub struct CompareArgs<'a> {
     pub frames: usize,
     /// `--methods a,b`: only these (and the references).
     pub methods: Option<&'a str>,
+    /// `--reference cpu|gpu`: which engine traces the reference's rays.
+    pub reference: &'a str,
     pub vt: &'a str,
     pub dbuffer_size: u32,
     pub knobs: &'a MethodFlags,
@@ -46,6 +49,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
     let only = args.methods.map(parse_methods).transpose()?;
+    let engine: truth::Engine = args.reference.parse().map_err(anyhow::Error::msg)?;
     let mut knobs = args.knobs.knobs()?;
     if orbit.is_some() && knobs.given(&SAMPLES).is_none() {
         // Every frame casts the reference: a modest K unless asked (one sample still below
@@ -78,6 +82,13 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let mut offline = Offline::new()?;
     errln!("adapter   {}", offline.ctx.adapter_description());
     super::chosen(&offline.ctx);
+    if engine == truth::Engine::Gpu {
+        // Before any work: an adapter the GPU reference cannot run on is refused in one line.
+        if let Some(why) = gpu_reference::refuses_on(&offline.ctx.caps) {
+            anyhow::bail!("--reference gpu: {why}");
+        }
+    }
+    offline.reference = engine;
     offline.progress = Some(progress::reference_samples());
     let cannot_write = || format!("cannot write the report into {}", args.out.display());
     // Each method's files are written (into the folder's hidden staging folder) as it finishes,
@@ -132,12 +143,13 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         .finish(&outline, motion.as_ref())
         .with_context(cannot_write)?;
     outln!(
-        "{} ({}x{}, K = {}, reference {:.1} M rays/s, V(t) {})",
+        "{} ({}x{}, K = {}, reference {:.1} M rays/s on the {}, V(t) {})",
         r.scene,
         r.width,
         r.height,
         r.samples,
         r.reference_rays_per_s / 1e6,
+        r.reference.to_uppercase(),
         r.vt
     );
     out!("{}", r.table());

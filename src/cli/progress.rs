@@ -115,7 +115,7 @@ pub fn reference_samples() -> Box<dyn FnMut(usize, usize)> {
     Box::new(move |done, total| {
         let p = job.get_or_insert_with(|| {
             Progress::new(
-                dbuffer::render::Method::REFERENCE.name(),
+                dbuffer::render::truth::SOFT.name(),
                 total as u64,
                 "samples per pixel",
             )

@@ -14,6 +14,7 @@ pub mod montage;
 pub mod report;
 pub mod temporal;
 
+use crate::render::truth;
 use std::time::Instant;
 
 use crate::budget::MAX_COMPARE_PIXELS;
@@ -22,8 +23,8 @@ use crate::geometry::flip;
 use crate::geometry::metrics::{self, HardMetrics, Metrics};
 use crate::geometry::{view, VtVariant};
 use crate::render::adapter::{Capabilities, Verdict};
-use crate::render::methods::reference::SAMPLES;
 use crate::render::offline::Offline;
+use crate::render::truth::SAMPLES;
 use crate::render::{Frame, FrameRequest, Knobs, Method, RenderError};
 use crate::scene::{LightKind, Scene};
 
@@ -110,6 +111,8 @@ pub struct Comparison {
     pub not_applicable: Vec<(Method, String, String)>,
     /// Reference shadow rays per second (all cores).
     pub reference_rays_per_s: f64,
+    /// Which engine traced the reference's shadow rays.
+    pub reference_engine: truth::Engine,
 }
 
 impl Comparison {
@@ -125,7 +128,7 @@ impl Comparison {
             exact: self
                 .results
                 .iter()
-                .find(|r| r.method == Method::REFERENCE_HARD)
+                .find(|r| r.method == truth::HARD)
                 .map(|r| r.frame.visibility.as_slice()),
         }
     }
@@ -140,6 +143,7 @@ impl Comparison {
             not_applicable: self.not_applicable.clone(),
             pixels: self.mask.iter().filter(|&&m| m).count(),
             reference_rays_per_s: self.reference_rays_per_s,
+            reference_engine: self.reference_engine,
         }
     }
 }
@@ -158,6 +162,8 @@ pub struct Outline {
     /// Pixels that count.
     pub pixels: usize,
     pub reference_rays_per_s: f64,
+    /// Which engine traced the reference's shadow rays.
+    pub reference_engine: truth::Engine,
 }
 
 /// Which methods a comparison draws, in the report's order, and which it cannot (with what
@@ -173,10 +179,10 @@ pub struct Plan {
 impl Plan {
     /// The plan for a scene lit by `light` on a device with `caps`.
     pub fn new(light: LightKind, caps: &Capabilities) -> Plan {
-        let mut drawn = vec![Method::REFERENCE];
+        let mut drawn = vec![truth::SOFT];
         let mut not_applicable = Vec::new();
         for &method in Method::all() {
-            if method.is_reference() {
+            if truth::is_soft(method) {
                 continue;
             }
             if let Some(why) = method.refuses(light) {
@@ -206,9 +212,8 @@ impl Plan {
     /// others are left out of the report, not listed as not applicable.
     pub fn only(mut self, methods: &[Method]) -> Plan {
         let hard = methods.iter().any(|m| m.is_hard());
-        let keep = |m: &Method| {
-            m.is_reference() || methods.contains(m) || (hard && *m == Method::REFERENCE_HARD)
-        };
+        let keep =
+            |m: &Method| truth::is_soft(*m) || methods.contains(m) || (hard && truth::is_hard(*m));
         self.drawn.retain(keep);
         self.not_applicable.retain(|(m, ..)| keep(m));
         self
@@ -216,7 +221,7 @@ impl Plan {
 
     /// Whether `reference-hard` is drawn (the montage then has a fourth row).
     pub fn has_hard_reference(&self) -> bool {
-        self.drawn.contains(&Method::REFERENCE_HARD)
+        self.drawn.contains(&truth::HARD)
     }
 }
 
@@ -294,6 +299,7 @@ pub fn run(
         results: results.into_iter().map(|(_, r)| r).collect(),
         not_applicable: outline.not_applicable,
         reference_rays_per_s: outline.reference_rays_per_s,
+        reference_engine: outline.reference_engine,
     })
 }
 
@@ -317,7 +323,7 @@ pub fn run_each<E: From<RenderError>>(
     request.knobs.validate().map_err(RenderError::Request)?;
     request.validate().map_err(RenderError::Request)?;
     // Every method is scored against the reference: without it there is nothing to compare.
-    if let Some(why) = Method::REFERENCE.refuses_on(&offline.ctx.caps) {
+    if let Some(why) = truth::SOFT.refuses_on(&offline.ctx.caps) {
         return Err(RenderError::Request(why).into());
     }
     for (method, _, why) in &plan.not_applicable {
@@ -341,8 +347,8 @@ pub fn run_each<E: From<RenderError>>(
         k, request.width, request.height
     ));
     let mut session = offline.session(scene.clone());
-    let (reference, ref_report) = render(offline, &mut session, &frame_request(Method::REFERENCE))?;
-    session.release(&offline.ctx, Method::REFERENCE)?;
+    let (reference, ref_report) = render(offline, &mut session, &frame_request(truth::SOFT))?;
+    session.release(&offline.ctx, truth::SOFT)?;
     let rays_ms = cpu(&ref_report.cpu_ms, "reference_rays");
     let hit_pixels = ref_report.reference_rays.map_or(0, |(_, n)| n);
     let reference_rays_per_s = hit_pixels as f64 * f64::from(k) / (rays_ms.max(1e-9) * 1e-3);
@@ -369,24 +375,19 @@ pub fn run_each<E: From<RenderError>>(
     let measured = measure(
         &base,
         request,
-        Method::REFERENCE,
+        truth::SOFT,
         reference,
         (rays_ms, cpu(&ref_report.cpu_ms, "frame_and_readback")),
     )?;
-    each(tile(Method::REFERENCE), &base.against(), measured)?;
+    each(tile(truth::SOFT), &base.against(), measured)?;
     // The exact hard shadow first: every hard method after it is scored against it.
     let mut order: Vec<Method> = plan
         .drawn
         .iter()
         .copied()
-        .filter(|m| *m == Method::REFERENCE_HARD)
+        .filter(|m| truth::is_hard(*m))
         .collect();
-    order.extend(
-        plan.drawn
-            .iter()
-            .copied()
-            .filter(|m| !m.is_reference() && *m != Method::REFERENCE_HARD),
-    );
+    order.extend(plan.drawn.iter().copied().filter(|m| !truth::is_truth(*m)));
     for method in order {
         progress(&format!("{method}: {}", method.description()));
         let req = frame_request(method);
@@ -399,7 +400,7 @@ pub fn run_each<E: From<RenderError>>(
         // Read back with the method's own textures already let go of.
         let frame = session.frame_releasing(&offline.ctx, &req)?;
         let wall_ms = t.elapsed().as_secs_f64() * 1e3;
-        if method == Method::REFERENCE_HARD {
+        if truth::is_hard(method) {
             base.exact = Some(frame.visibility.clone());
         }
         let cpu_ms = if builds > 0 { geometry_ms } else { 0.0 };
@@ -414,6 +415,7 @@ pub fn run_each<E: From<RenderError>>(
         not_applicable: plan.not_applicable,
         pixels: base.mask.iter().filter(|&&m| m).count(),
         reference_rays_per_s,
+        reference_engine: offline.reference,
     };
     Ok((outline, base))
 }

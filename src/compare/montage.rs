@@ -15,6 +15,7 @@
 //! Text is DejaVu Sans (`assets/fonts/`, the font the bench plot embeds) rasterised by `ab_glyph`,
 //! the rasteriser already in the build through plotters.
 
+use crate::render::truth;
 use ab_glyph::{point, Font, FontRef, PxScale, ScaleFont};
 use image::{Rgb, RgbImage};
 
@@ -82,11 +83,7 @@ impl Layout {
     /// The layout of a montage of `drawn` at `width`×`height`, known before any frame: a fourth
     /// row when `reference-hard` is among them.
     pub fn planned(width: u32, height: u32, drawn: &[Method]) -> Layout {
-        let cells = if drawn.contains(&Method::REFERENCE_HARD) {
-            4
-        } else {
-            3
-        };
+        let cells = if drawn.contains(&truth::HARD) { 4 } else { 3 };
         Layout::new(width, height, drawn.len() as u32, cells)
     }
 
@@ -168,7 +165,7 @@ impl Page {
         });
         paste(img, &image, layout.cell(i, 0));
         let (hx, hy) = layout.cell(i, 1);
-        if r.method.is_reference() {
+        if truth::is_soft(r.method) {
             let cell = RgbImage::from_pixel(layout.cell.0, layout.cell.1, Rgb(heatmap::MASKED_RGB));
             paste(img, &cell, (hx, hy));
             if let Some(font) = &font {
@@ -259,7 +256,7 @@ impl Page {
 fn label(img: &mut RgbImage, font: &FontRef<'_>, r: &MethodResult, (x, y): (u32, u32), w: u32) {
     let right = x + w;
     text(img, font, r.method.name(), (x, y + 2), NAME_PX, TEXT, right);
-    let numbers = if r.method.is_reference() {
+    let numbers = if truth::is_soft(r.method) {
         format!("{} px counted", r.metrics.pixels)
     } else {
         format!(

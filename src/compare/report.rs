@@ -2,6 +2,7 @@
 //! heatmap, then `montage.png` (every method on one page), `report.md` and `report.json` with the
 //! metrics and timings (the same table is printed to stdout).
 
+use crate::render::truth;
 use std::io;
 use std::path::{Path, PathBuf};
 
@@ -28,6 +29,10 @@ pub struct Report {
     /// The reference's disk samples per pixel (K).
     pub samples: u32,
     pub reference_rays_per_s: f64,
+    /// Which engine traced the reference's shadow rays: "cpu" (the oracle) or "gpu"
+    /// (`--reference gpu`); absent in older reports, which were all the CPU's.
+    #[serde(default = "cpu_engine")]
+    pub reference: String,
     /// Pixels that count (a surface facing the light).
     pub pixels: usize,
     pub methods: Vec<MethodRow>,
@@ -37,6 +42,11 @@ pub struct Report {
     /// `--orbit`: the run in motion (absent without it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motion: Option<MotionReport>,
+}
+
+/// The engine of a report that names none: every report before `--reference` was the CPU's.
+fn cpu_engine() -> String {
+    "cpu".into()
 }
 
 /// `compare --orbit`'s setup and what it found (docs/method/metrics.md, "In motion").
@@ -170,7 +180,7 @@ fn files(method: Method) -> (String, String, Option<String>) {
     (
         format!("{n}.png"),
         format!("{n}-visibility.exr"),
-        (!method.is_reference()).then(|| format!("{n}-error.png")),
+        (!truth::is_soft(method)).then(|| format!("{n}-error.png")),
     )
 }
 
@@ -195,6 +205,7 @@ impl Report {
             vt: o.request.vt.name().to_string(),
             samples: o.request.samples(),
             reference_rays_per_s: o.reference_rays_per_s,
+            reference: o.reference_engine.name().to_string(),
             pixels: o.pixels,
             methods,
             not_applicable: o
@@ -275,13 +286,14 @@ impl Report {
         let mut s = format!(
             "# `{}`: every method against the ray-cast reference\n\n\
              {}×{} pixels ({} facing the light), reference K = {} disk samples per pixel \
-             ({:.1} M rays/s), D-buffer {}², V(t) {}. Adapter: {}.\n\n",
+             ({:.1} M rays/s on the {}), D-buffer {}², V(t) {}. Adapter: {}.\n\n",
             self.scene,
             self.width,
             self.height,
             self.pixels,
             self.samples,
             self.reference_rays_per_s / 1e6,
+            self.reference.to_uppercase(),
             self.dbuffer_size,
             self.vt,
             self.adapter

@@ -27,6 +27,7 @@
 //! ([`MAX_COMPARE_PIXELS`](crate::budget::MAX_COMPARE_PIXELS), checked with `--frames` before
 //! the first frame).
 
+use crate::render::truth;
 use plotters::prelude::*;
 
 use std::fs::File;
@@ -40,8 +41,8 @@ use crate::geometry::metrics::ShadowClass;
 use crate::geometry::oracle::Oracle;
 use crate::geometry::outline::area_samples;
 use crate::geometry::{oracle, view};
-use crate::render::methods::reference::SAMPLES;
 use crate::render::offline::Offline;
+use crate::render::truth::SAMPLES;
 use crate::render::{FrameRequest, Method, RenderError};
 use crate::scene::orbit::{Orbit, Poses};
 use crate::scene::{Light, Scene};
@@ -317,7 +318,7 @@ pub fn run_in(
         .drawn
         .iter()
         .copied()
-        .filter(|m| !m.is_reference() && *m != Method::REFERENCE_HARD)
+        .filter(|m| !truth::is_truth(*m))
         .collect();
     request.validate().map_err(RenderError::Request)?;
     let (w, h) = (c.width, c.height);
@@ -363,7 +364,7 @@ pub fn run_in(
         session.set_light(light);
         session.set_camera(camera);
         let posed = session.scene().clone();
-        progress(k, Method::REFERENCE.name());
+        progress(k, truth::SOFT.name());
         let samples = if request.orbit.is_some() {
             samples_at(&poses, &frame0_light, k, frames, k_samples)
         } else {

@@ -99,6 +99,38 @@ pub struct Bvh {
     triangles: Vec<[Vec3; 3]>,
 }
 
+/// A [`Bvh`] as flat arrays of four floats, for a traversal on the GPU (or any other that reads
+/// plain memory): the same nodes, in the same order, and the same triangles in leaf order with
+/// the same precomputed edges, so a port of [`Bvh::find_any_hit_tolerant`] runs the same tests
+/// on the same numbers.
+///
+/// - `nodes`: two entries per node, `[min.x, min.y, min.z, first]` and `[max.x, max.y, max.z,
+///   count]` (`first` and `count` are `u32`s stored as the floats' bits). An interior node has
+///   `count == 0` and its children at `first` and `first + 1`; a leaf's triangles are
+///   `first .. first + count` of `triangles`. The root is node 0.
+/// - `triangles`: three entries per triangle in leaf order: `[v0, index]`, `[e1, 0]`, `[e2, 0]`,
+///   with `index` the triangle's place in the order given to [`Bvh::build`] (as bits) and
+///   `e1 = tri[1] − v0`, `e2 = tri[2] − v0` exactly as the CPU's test computes them.
+///
+/// A BVH without triangles has one leaf node and no triangle entries.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FlatBvh {
+    pub nodes: Vec<[f32; 4]>,
+    pub triangles: Vec<[f32; 4]>,
+}
+
+impl FlatBvh {
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len() / 2
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len() / 3
+    }
+}
+
 /// A ray with what the box test needs precomputed.
 #[derive(Clone, Copy)]
 struct Ray {
@@ -244,6 +276,28 @@ impl Bvh {
     /// All triangles in the order given to [`Bvh::build`].
     pub fn triangles(&self) -> &[[Vec3; 3]] {
         &self.triangles
+    }
+
+    /// The nodes and triangles as plain arrays ([`FlatBvh`]), for a traversal on the GPU.
+    pub fn flatten(&self) -> FlatBvh {
+        let nodes = self
+            .nodes
+            .iter()
+            .flat_map(|n| [n.min.to_array(), n.max.to_array()])
+            .collect();
+        let triangles = self
+            .pre
+            .iter()
+            .zip(&self.index)
+            .flat_map(|(p, &i)| {
+                [
+                    p.v0.extend(f32::from_bits(i)).to_array(),
+                    p.e1.extend(0.0).to_array(),
+                    p.e2.extend(0.0).to_array(),
+                ]
+            })
+            .collect();
+        FlatBvh { nodes, triangles }
     }
 
     /// Number of nodes (for statistics).
@@ -601,204 +655,4 @@ fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::geometry::ray::intersect_triangle;
-    use proptest::prelude::*;
-
-    fn brute_all(tris: &[[Vec3; 3]], o: Vec3, d: Vec3, t0: f32, t1: f32) -> Vec<(u32, u32)> {
-        let mut v: Vec<(u32, u32)> = tris
-            .iter()
-            .enumerate()
-            .filter_map(|(i, t)| {
-                intersect_triangle(o, d, t)
-                    .filter(|&t| t >= t0 && t <= t1)
-                    .map(|t| (i as u32, t.to_bits()))
-            })
-            .collect();
-        v.sort_unstable();
-        v
-    }
-
-    fn brute_closest(tris: &[[Vec3; 3]], o: Vec3, d: Vec3, t0: f32, t1: f32) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        for (i, t) in tris.iter().enumerate() {
-            if let Some(t) = intersect_triangle(o, d, t).filter(|&t| t >= t0 && t <= t1) {
-                if best.is_none_or(|b| t < b.t) {
-                    best = Some(Hit {
-                        t,
-                        triangle: i as u32,
-                    });
-                }
-            }
-        }
-        best
-    }
-
-    fn check(tris: &[[Vec3; 3]], bvh: &Bvh, o: Vec3, d: Vec3, t0: f32, t1: f32) {
-        let all = brute_all(tris, o, d, t0, t1);
-        let mut got = Vec::new();
-        bvh.for_each_hit(o, d, t0, t1, |h| got.push((h.triangle, h.t.to_bits())));
-        got.sort_unstable();
-        assert_eq!(got, all, "all hits, ray {o} {d} [{t0}, {t1}]");
-        assert_eq!(bvh.any_hit(o, d, t0, t1), !all.is_empty());
-        if let Some(h) = bvh.find_any_hit(o, d, t0, t1) {
-            assert!(all.contains(&(h.triangle, h.t.to_bits())));
-            assert!(bvh.hits_triangle(h.triangle, o, d, t0, t1));
-        }
-        for &(i, _) in &all {
-            assert!(bvh.hits_triangle(i, o, d, t0, t1));
-        }
-        let tolerant_any = tris.iter().any(|t| {
-            crate::geometry::ray::intersect_triangle_tolerant(o, d, t)
-                .is_some_and(|t| t >= t0 && t <= t1)
-        });
-        let found = bvh.find_any_hit_tolerant(o, d, t0, t1);
-        assert_eq!(found.is_some(), tolerant_any);
-        if let Some(h) = found {
-            assert!(bvh.hits_triangle_tolerant(h.triangle, o, d, t0, t1));
-        }
-        let c = bvh.closest_hit(o, d, t0, t1);
-        let b = brute_closest(tris, o, d, t0, t1);
-        assert_eq!(
-            c.map(|h| (h.triangle, h.t.to_bits())),
-            b.map(|h| (h.triangle, h.t.to_bits()))
-        );
-    }
-
-    /// A small deterministic generator for the seeded tests.
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f32 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-        }
-        fn v(&mut self, s: f32) -> Vec3 {
-            Vec3::new(self.next(), self.next(), self.next()) * 2.0 * s - Vec3::splat(s)
-        }
-    }
-
-    #[test]
-    fn random_soups_match_brute_force() {
-        let mut rng = Rng(7);
-        for soup in 0..20 {
-            let n = [0usize, 1, 2, 3, 17, 100, 500, 2000][soup % 8];
-            let size = [0.05f32, 0.3, 1.5][soup % 3];
-            let tris: Vec<[Vec3; 3]> = (0..n)
-                .map(|_| {
-                    let c = rng.v(5.0);
-                    [c + rng.v(size), c + rng.v(size), c + rng.v(size)]
-                })
-                .collect();
-            let bvh = Bvh::build(tris.clone());
-            assert_eq!(bvh.len(), n);
-            for (i, t) in tris.iter().enumerate() {
-                assert_eq!(bvh.triangle(i), t);
-            }
-            for _ in 0..300 {
-                let o = rng.v(7.0);
-                // Aim at a triangle half of the time, so hits are common.
-                let d = if n > 0 && rng.next() < 0.5 {
-                    let t = &tris[(rng.next() * n as f32) as usize % n];
-                    (t[0] + t[1] + t[2]) / 3.0 - o
-                } else {
-                    rng.v(1.0)
-                };
-                let t1 = [f32::INFINITY, 1.0, 0.5][(rng.next() * 3.0) as usize % 3];
-                check(&tris, &bvh, o, d, 0.0, t1);
-                check(&tris, &bvh, o, d, 0.3, t1);
-            }
-        }
-    }
-
-    #[test]
-    fn degenerate_and_axis_aligned_inputs() {
-        // Zero-area triangles, duplicates, a grid of axis-aligned triangles and axis rays.
-        let mut tris = vec![
-            [Vec3::ZERO; 3],
-            [Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
-            [Vec3::ONE, Vec3::ONE, Vec3::new(1.0, 2.0, 1.0)],
-        ];
-        for i in 0..10 {
-            for j in 0..10 {
-                let p = Vec3::new(i as f32, j as f32, 0.0);
-                tris.push([p, p + Vec3::X, p + Vec3::Y]);
-                tris.push([p + Vec3::X, p + Vec3::X + Vec3::Y, p + Vec3::Y]);
-            }
-        }
-        // Many copies of one triangle: centroids coincide, nothing to split.
-        for _ in 0..40 {
-            tris.push([
-                Vec3::splat(3.0),
-                Vec3::new(4.0, 3.0, 3.0),
-                Vec3::new(3.0, 4.0, 3.0),
-            ]);
-        }
-        let bvh = Bvh::build(tris.clone());
-        for i in 0..=20 {
-            for j in 0..=20 {
-                let o = Vec3::new(i as f32 * 0.5, j as f32 * 0.5, -1.0);
-                check(&tris, &bvh, o, Vec3::Z, 0.0, f32::INFINITY);
-                check(&tris, &bvh, o, Vec3::Z * 3.0, 0.0, 1.0);
-                check(&tris, &bvh, o, Vec3::X, 0.0, f32::INFINITY);
-                check(&tris, &bvh, o, Vec3::new(0.3, 0.2, 1.0), 0.0, f32::INFINITY);
-            }
-        }
-        // Odd rays: zero direction, NaN, infinities. No panic, and the same as brute force.
-        for (o, d) in [
-            (Vec3::ZERO, Vec3::ZERO),
-            (Vec3::NAN, Vec3::Z),
-            (Vec3::ZERO, Vec3::NAN),
-            (Vec3::splat(f32::INFINITY), Vec3::Z),
-            (
-                Vec3::new(0.5, 0.5, -1.0),
-                Vec3::new(0.0, 0.0, f32::INFINITY),
-            ),
-        ] {
-            check(&tris, &bvh, o, d, 0.0, f32::INFINITY);
-        }
-    }
-
-    #[test]
-    fn nan_triangles_do_not_panic() {
-        let tris = vec![
-            [Vec3::NAN, Vec3::ZERO, Vec3::ONE],
-            [Vec3::ZERO, Vec3::X, Vec3::Y],
-            [Vec3::splat(f32::INFINITY), Vec3::ZERO, Vec3::Y],
-        ];
-        let bvh = Bvh::build(tris);
-        let _ = bvh.closest_hit(Vec3::new(0.2, 0.2, -1.0), Vec3::Z, 0.0, f32::INFINITY);
-        let _ = bvh.any_hit(Vec3::new(0.2, 0.2, -1.0), Vec3::Z, 0.0, f32::INFINITY);
-    }
-
-    #[test]
-    fn empty_bvh_has_no_hits() {
-        let bvh = Bvh::build(Vec::new());
-        assert!(bvh.is_empty());
-        assert!(!bvh.any_hit(Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY));
-        assert!(bvh
-            .closest_hit(Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY)
-            .is_none());
-    }
-
-    fn vec3() -> impl Strategy<Value = Vec3> {
-        (-4.0f32..4.0, -4.0f32..4.0, -4.0f32..4.0).prop_map(|(x, y, z)| Vec3::new(x, y, z))
-    }
-
-    proptest! {
-        #![proptest_config(ProptestConfig::with_cases(64))]
-        #[test]
-        fn proptest_matches_brute_force(
-            tris in prop::collection::vec((vec3(), vec3(), vec3()).prop_map(|(a, b, c)| [a, b, c]), 0..64),
-            rays in prop::collection::vec((vec3(), vec3(), 0.0f32..2.0), 1..16),
-        ) {
-            let bvh = Bvh::build(tris.clone());
-            for (o, d, t1) in rays {
-                check(&tris, &bvh, o, d, 0.0, t1);
-            }
-        }
-    }
-}
+mod tests;

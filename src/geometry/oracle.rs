@@ -146,11 +146,17 @@ impl Oracle {
         self.count_visible(x, &self.samples) as f32 / self.samples.len().max(1) as f32
     }
 
+    /// Whether `x` gets shadow rays at all: a finite point in front of a finite light (every
+    /// other point has `V = 0`). The GPU's reference asks it to trace the same points.
+    pub fn casts_from(&self, x: Vec3) -> bool {
+        self.light_ok && x.is_finite() && self.light.reaches(x)
+    }
+
     /// How many of `samples` (points on the light) `x` sees; 0 for a point behind the light, a
     /// non-finite point or a non-finite light. The progressive reference calls it with slices of
     /// the sample set.
     pub fn count_visible(&self, x: Vec3, samples: &[Vec3]) -> u32 {
-        if !self.light_ok || !x.is_finite() || !self.light.reaches(x) {
+        if !self.casts_from(x) {
             return 0;
         }
         let (t0, t1) = (SELF_EPS, 1.0 - SELF_EPS);

@@ -29,9 +29,7 @@ pub struct ProgressiveReference {
 impl ProgressiveReference {
     /// A reference for `points` with every sample of `oracle` still to take.
     pub fn new(oracle: Oracle, points: Vec<Option<Vec3>>) -> ProgressiveReference {
-        let samples = oracle.sample_points();
-        let k = samples.len();
-        let order = (0..k).map(|i| samples[spread(i, k)]).collect();
+        let order = progressive_order(oracle.sample_points());
         ProgressiveReference {
             visible: vec![0; points.len()],
             values: vec![0.0; points.len()],
@@ -104,6 +102,14 @@ impl ProgressiveReference {
     pub fn points(&self) -> &[Option<Vec3>] {
         &self.points
     }
+}
+
+/// `samples` in the order the progressive reference takes them (a golden-ratio stride over the
+/// strata, see the module documentation): the GPU's reference takes them in the same order, so
+/// its every prefix holds the same samples as the CPU's.
+pub fn progressive_order(samples: &[Vec3]) -> Vec<Vec3> {
+    let k = samples.len();
+    (0..k).map(|i| samples[spread(i, k)]).collect()
 }
 
 /// The `i`-th index of a permutation of `0..k` by a stride near `k / φ` that is coprime to `k`.

@@ -32,7 +32,7 @@
 //! fraction is `H + Σ c_i`, and `c < 0` exactly when `x` is inside the edge's hard-shadow quad:
 //! the 2003 paper's add-or-subtract rule falls out. A whole chord at signed distance `h` from the
 //! centre covers `(acos h − h √(1 − h²))/π`, the disk–half-plane area of `V(t)`'s exact variant.
-//! (Derived and checked numerically in the design note for issues 13–14, §10.2.)
+//! (Checked numerically against sampled disks by `a_whole_chord_covers_the_disk_half_plane_area`.)
 //!
 //! **The receiver's own plane.** A receiver `x` with normal `n` gets nothing from the part of the
 //! disk behind its tangent plane (`n · (y − x) ≤ 0`): a fact of the light integral, not of the

@@ -259,11 +259,7 @@ pub fn every_adapter() -> (Vec<AdapterReport>, String) {
         .iter()
         .map(|a| AdapterReport {
             info: a.get_info(),
-            caps: Capabilities::of(
-                a,
-                super::context::wanted_features(a.features()),
-                super::context::wanted_limits(&a.limits()),
-            ),
+            caps: Capabilities::of(a, wanted_features(a.features()), wanted_limits(&a.limits())),
         })
         .collect();
     (reports, why)
@@ -314,4 +310,29 @@ pub fn host_description() -> String {
         })
         .unwrap_or_else(|| std::env::consts::ARCH.to_string());
     format!("{model}, {cores} cores")
+}
+
+/// The limits the render core asks of an adapter: everything the adapter supports where it
+/// matters for size (buffers, textures), so every image, D-buffer and mesh inside the budget that
+/// the adapter can hold works, not only what wgpu's portable defaults allow.
+pub fn wanted_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
+    wgpu::Limits {
+        max_texture_dimension_2d: adapter.max_texture_dimension_2d,
+        max_texture_array_layers: adapter.max_texture_array_layers,
+        max_buffer_size: adapter.max_buffer_size,
+        max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
+        max_uniform_buffer_binding_size: adapter.max_uniform_buffer_binding_size,
+        ..wgpu::Limits::default().using_resolution(adapter.clone())
+    }
+}
+
+/// The features the render core uses when the adapter has them: timestamps (pass timings), a
+/// float depth-stencil format (the stencil shadow methods' precision; they fall back on
+/// `Depth24PlusStencil8` without it) and blending into 32-bit float targets (the penumbra
+/// wedges' coverage sum; `R16Float` without it).
+pub fn wanted_features(adapter: wgpu::Features) -> wgpu::Features {
+    adapter
+        & (wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::DEPTH32FLOAT_STENCIL8
+            | wgpu::Features::FLOAT32_BLENDABLE)
 }

@@ -11,6 +11,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use super::adapter::Capabilities;
+pub use super::adapter::{wanted_features, wanted_limits};
 use super::RenderError;
 
 /// A device-lifetime object of some pass.
@@ -47,31 +48,6 @@ pub const FAULT_ENV: &str = "DBUFFER_GPU_FAULT";
 pub const FAULT_MESSAGE: &str = "Validation Error\n\nCaused by:\n  In a CommandEncoder, label = \
                                  'Session::encoder'\n    an error injected by DBUFFER_GPU_FAULT \
                                  (a test of how errors are printed)\n";
-
-/// The limits the render core asks of an adapter: everything the adapter supports where it
-/// matters for size (buffers, textures), so every image, D-buffer and mesh inside the budget that
-/// the adapter can hold works, not only what wgpu's portable defaults allow.
-pub fn wanted_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
-    wgpu::Limits {
-        max_texture_dimension_2d: adapter.max_texture_dimension_2d,
-        max_texture_array_layers: adapter.max_texture_array_layers,
-        max_buffer_size: adapter.max_buffer_size,
-        max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
-        max_uniform_buffer_binding_size: adapter.max_uniform_buffer_binding_size,
-        ..wgpu::Limits::default().using_resolution(adapter.clone())
-    }
-}
-
-/// The features the render core uses when the adapter has them: timestamps (pass timings), a
-/// float depth-stencil format (the stencil shadow methods' precision; they fall back on
-/// `Depth24PlusStencil8` without it) and blending into 32-bit float targets (the penumbra
-/// wedges' coverage sum; `R16Float` without it).
-pub fn wanted_features(adapter: wgpu::Features) -> wgpu::Features {
-    adapter
-        & (wgpu::Features::TIMESTAMP_QUERY
-            | wgpu::Features::DEPTH32FLOAT_STENCIL8
-            | wgpu::Features::FLOAT32_BLENDABLE)
-}
 
 impl GpuContext {
     /// Request an adapter and device without a window: `--backend` ([`super::adapter::set_backend`]),

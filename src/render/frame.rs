@@ -5,13 +5,13 @@
 
 use glam::{Mat4, Vec3};
 
-use super::frame_tag::FrameTag;
+pub use super::frame_data::Frame;
 use super::gpu_scene::GpuScene;
-use super::methods::{
-    Channel, FrameInputs, Knobs, LightMaps, Method, MethodState, Prepare, SharedMaps,
-};
+pub use super::light_maps::LightMapsData;
+use super::light_maps::{components, LightMaps};
+use super::methods::{FrameInputs, Knobs, Method, MethodState, Prepare, SharedMaps};
 use super::passes::camera::{Camera, CameraTargets, CameraUniforms};
-use super::passes::probe::Probe;
+use super::passes::probe::{Probe, ProbeTargets};
 use super::passes::view::{View, ViewInputs, ViewParams, ViewTarget};
 use super::readback::{f32s_of, Readback, TextureRead};
 use super::timer::Recorder;
@@ -150,6 +150,13 @@ impl FrameTargets {
     }
 }
 
+impl ProbeTargets for FrameTargets {
+    fn probe_parts(&mut self) -> (Option<(&CameraTargets, Mat4)>, &mut Option<Probe>) {
+        let drawn = self.camera.as_ref().zip(self.rendered.map(|r| r.view_proj));
+        (drawn, &mut self.probe)
+    }
+}
+
 impl Default for FrameTargets {
     fn default() -> Self {
         Self::new()
@@ -269,171 +276,6 @@ pub fn record_view(
     };
     view.get_or_insert_with(|| ViewTarget::new(ctx))
         .record(ctx, rec, &inputs, params);
-}
-
-/// A rendered frame, read back. Images are row-major, row 0 at the top. Per pixel it keeps what
-/// the camera pass wrote — 16 bytes, 1 GiB at 8192² — and derives the rest when asked: t and
-/// the branch from their packed sum, the world position from the depth.
-#[derive(Clone, Debug, Default)]
-pub struct Frame {
-    pub width: u32,
-    pub height: u32,
-    /// Shaded colour, sRGB 8-bit RGBA.
-    pub color: Vec<[u8; 4]>,
-    /// V per pixel.
-    pub visibility: Vec<f32>,
-    /// t + 2 × branch code per pixel, as the camera pass stores them ([`Frame::t`],
-    /// [`Frame::branch`]).
-    pub t_branch: Vec<f32>,
-    /// Reversed depth per pixel: 0 where no surface was hit ([`Frame::position`]).
-    pub depth: Vec<f32>,
-    /// Per pixel the method's units of work and the path it took (`count_work`, `took_path` of
-    /// `shaders/shared/camera.wgsl`); empty unless the request asked for it
-    /// ([`FrameRequest::read_cost`]).
-    pub cost: Vec<[f32; 2]>,
-    /// The camera's clip → world transform, to place a pixel from its depth.
-    pub inverse_view_proj: glam::Mat4,
-    pub dbuffer_size: u32,
-    /// The light-space maps, when they were asked for.
-    pub maps: Option<LightMapsData>,
-    /// GPU milliseconds per pass from timestamp queries; empty without them.
-    pub gpu_ms: Vec<(String, f64)>,
-}
-
-impl Frame {
-    /// Pixels in the frame.
-    pub fn len(&self) -> usize {
-        self.visibility.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.visibility.is_empty()
-    }
-
-    /// Whether pixel `i` shows a surface.
-    pub fn hit(&self, i: usize) -> bool {
-        self.depth.get(i).is_some_and(|&z| z > 0.0)
-    }
-
-    /// The branch code of pixel `i` ([`crate::geometry::Branch::code`]).
-    pub fn branch(&self, i: usize) -> u8 {
-        // Umbra 0, hidden [2, 2.5], visible [4.5, 5], lit 7: round((x − ½)/2) is the branch
-        // and the rest is t, both exact.
-        let x = self.t_branch.get(i).copied().unwrap_or(0.0);
-        ((x - 0.5) / 2.0).round().clamp(0.0, 3.0) as u8
-    }
-
-    /// t of pixel `i`.
-    pub fn t(&self, i: usize) -> f32 {
-        let x = self.t_branch.get(i).copied().unwrap_or(0.0);
-        x - 2.0 * f32::from(self.branch(i))
-    }
-
-    /// The world position pixel `i` shows, `None` where it shows no surface.
-    pub fn position(&self, i: usize) -> Option<glam::Vec3> {
-        let z = *self.depth.get(i)?;
-        if z <= 0.0 || self.width == 0 {
-            return None;
-        }
-        let (w, h) = (self.width as usize, self.height.max(1) as f32);
-        let (x, y) = ((i % w) as f32, (i / w) as f32);
-        let ndc = glam::Vec4::new(
-            (x + 0.5) / w as f32 * 2.0 - 1.0,
-            1.0 - (y + 0.5) / h * 2.0,
-            z,
-            1.0,
-        );
-        let p = self.inverse_view_proj * ndc;
-        Some(p.truncate() / p.w)
-    }
-}
-
-/// Light-space maps read back: per texture slot its components per texel and its values
-/// (row-major, `size`²); slots that name the same texture share one copy.
-#[derive(Clone, Debug)]
-pub struct LightMapsData {
-    pub size: u32,
-    pub channels: &'static [Channel],
-    /// The rows held: all of them, or a band ([`read_light_map_rows`]).
-    pub rows: std::ops::Range<u32>,
-    slots: [usize; 3],
-    data: Vec<(usize, Vec<f32>)>,
-}
-
-impl LightMapsData {
-    /// The maps' texels as read back (`values` per distinct texture, which `slots` maps the
-    /// three slots to), frame tags taken off: what untagged textures would hold.
-    fn read(
-        maps: &LightMaps<'_>,
-        rows: std::ops::Range<u32>,
-        slots: [usize; 3],
-        distinct: &[&wgpu::Texture],
-        values: Vec<Vec<f32>>,
-    ) -> LightMapsData {
-        let data = distinct
-            .iter()
-            .zip(values)
-            .enumerate()
-            .map(|(k, (t, mut v))| {
-                let n = components(t.format());
-                let tag = slots
-                    .iter()
-                    .zip(maps.tags)
-                    .find_map(|(s, tag)| (*s == k).then_some(tag));
-                tag.unwrap_or(FrameTag::NONE).untag_all(&mut v, n);
-                (n, v)
-            })
-            .collect();
-        LightMapsData {
-            size: maps.size,
-            channels: maps.channels,
-            rows,
-            slots,
-            data,
-        }
-    }
-
-    /// The three textures' RGBA at texel (`x`, `y`) (missing components 0).
-    pub fn texel(&self, x: u32, y: u32) -> Option<[[f32; 4]; 3]> {
-        if x >= self.size || !self.rows.contains(&y) {
-            return None;
-        }
-        let i = ((y - self.rows.start) * self.size + x) as usize;
-        // As textureLoad reads a texture with fewer channels: missing G and B are 0, A is 1.
-        let mut out = [[0.0, 0.0, 0.0, 1.0f32]; 3];
-        for (slot, &d) in out.iter_mut().zip(&self.slots) {
-            let (n, values) = self.data.get(d)?;
-            for (c, v) in slot.iter_mut().take(*n).enumerate() {
-                *v = *values.get(i * n + c)?;
-            }
-        }
-        Some(out)
-    }
-
-    /// Channel `c` at texel (`x`, `y`); `None` where it has no data.
-    pub fn channel(&self, c: usize, x: u32, y: u32) -> Option<f32> {
-        self.channels.get(c)?.value(&self.texel(x, y)?)
-    }
-
-    /// Component `component` of texture slot `slot` over every texel held, as stored.
-    pub fn raw(&self, slot: usize, component: usize) -> Vec<f32> {
-        let Some((n, values)) = self.slots.get(slot).and_then(|&d| self.data.get(d)) else {
-            return Vec::new();
-        };
-        if component >= *n {
-            return vec![0.0; values.len() / (*n).max(1)];
-        }
-        values.iter().skip(component).step_by(*n).copied().collect()
-    }
-}
-
-/// Components per texel of the light-map formats.
-fn components(format: wgpu::TextureFormat) -> usize {
-    match format {
-        wgpu::TextureFormat::Rg32Float => 2,
-        wgpu::TextureFormat::Rgba32Float => 4,
-        _ => 1,
-    }
 }
 
 /// Read the frame in `targets` back, with `maps` if given; one submit and one wait (per band of

@@ -5,6 +5,9 @@
 //!   the [`Frame`] read back from them) and the pass order, in one short function;
 //! - [`methods`]: one module per shadow method and the registry of them;
 //! - [`passes`]: one file per pass, each with its WGSL twin of the same name in `shaders/passes/`;
+//!   below them what passes and methods share: [`light_maps`] (what a method keeps in light
+//!   space) and [`frame_data`] (a frame read back); `docs/development/architecture.md` ranks
+//!   the modules;
 //! - [`session`]: a scene being looked at over many frames (light-space work only when the light
 //!   or a caster moved); [`offline`]: one frame, read back into a render's files;
 //! - [`reference`]: the ray-cast ground truth, on the CPU, in a worker thread for the lab;
@@ -14,8 +17,11 @@
 pub mod adapter;
 pub mod context;
 pub mod frame;
+pub mod frame_data;
 pub mod frame_tag;
+pub mod gpu_reference;
 pub mod gpu_scene;
+pub mod light_maps;
 pub mod methods;
 pub mod offline;
 pub mod passes;
@@ -23,6 +29,8 @@ pub mod readback;
 pub mod reference;
 pub mod session;
 pub mod timer;
+pub mod truth;
+pub mod view_session;
 
 pub use context::GpuContext;
 pub use frame::{Frame, FrameRequest, FrameTargets};
@@ -128,6 +136,20 @@ pub(crate) fn uniform_buffer<T>(device: &wgpu::Device, label: &str) -> wgpu::Buf
         size: std::mem::size_of::<T>() as u64,
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
+    })
+}
+
+/// A read-only storage buffer holding `words` (look-up tables made once on the CPU).
+pub(crate) fn storage_buffer<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    label: &str,
+    words: &[T],
+) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::cast_slice(words),
+        usage: wgpu::BufferUsages::STORAGE,
     })
 }
 
@@ -343,6 +365,24 @@ pub(crate) fn pipeline_layout(
     })
 }
 
+/// The compute pipeline of `module`'s `entry` under `layout`, labelled `label`.
+pub(crate) fn compute_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
 /// What can go wrong on the GPU side. Never a panic: a message for the user.
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -368,6 +408,11 @@ pub enum RenderError {
         max: u32,
         adapter: String,
     },
+}
+
+/// `value`, or the GPU error `missing` (a pass that should have made it did not).
+pub fn require<T>(value: Option<T>, missing: &str) -> Result<T, RenderError> {
+    value.ok_or_else(|| RenderError::Gpu(missing.into()))
 }
 
 /// GPU vertex of a scene surface (every pass that draws the scene). Layout checked against the

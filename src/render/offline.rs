@@ -5,8 +5,8 @@
 use std::time::Instant;
 
 use super::frame::{Frame, FrameRequest};
-use super::reference;
 use super::session::{dbuffer_of, Session};
+use super::truth;
 use super::{GpuContext, RenderError};
 use crate::geometry::GeometryStats;
 use crate::scene::Scene;
@@ -16,6 +16,9 @@ pub struct Offline {
     pub ctx: GpuContext,
     /// Called with (samples done, samples total) while the reference accumulates.
     pub progress: Option<Box<dyn FnMut(usize, usize)>>,
+    /// Which engine traces the soft truth's rays in the sessions made here
+    /// ([`Offline::session`]).
+    pub reference: truth::Engine,
 }
 
 /// What one offline frame cost and built.
@@ -38,12 +41,15 @@ impl Offline {
         Ok(Offline {
             ctx: GpuContext::headless()?,
             progress: None,
+            reference: truth::Engine::Cpu,
         })
     }
 
     /// A session on `scene` for several frames.
     pub fn session(&self, scene: Scene) -> Session {
-        Session::new(&self.ctx, scene)
+        let mut session = Session::new(&self.ctx, scene);
+        session.set_truth_engine(self.reference);
+        session
     }
 
     /// Render `scene` as `request` says and read it back, the D-buffer included
@@ -93,23 +99,10 @@ pub fn render_in(
 ) -> Result<(Frame, FrameReport), RenderError> {
     request.validate(ctx)?;
     let mut report = FrameReport::default();
-    if request.method.is_reference() {
-        let key = session.reference_key(request);
-        let t = Instant::now();
-        let r = reference::compute(
-            session.scene(),
-            key.width,
-            key.height,
-            key.samples,
-            progress,
-        );
-        report.cpu_ms.push((
-            super::Method::REFERENCE.name().into(),
-            t.elapsed().as_secs_f64() * 1e3,
-        ));
-        report.cpu_ms.push(("reference_rays".into(), r.rays_ms));
-        report.reference_rays = Some((key.samples, r.hit_pixels));
-        session.set_reference(ctx, key, &r.visibility, (key.samples, key.samples))?;
+    if let Some(cast) = session.cast_truth(ctx, request, progress)? {
+        report.cpu_ms.push((request.method.name().into(), cast.ms));
+        report.cpu_ms.push(("reference_rays".into(), cast.rays_ms));
+        report.reference_rays = Some((cast.samples, cast.hit_pixels));
     }
     let t = Instant::now();
     let frame = session.frame(ctx, request)?;

@@ -4,8 +4,10 @@
 //! the camera pass runs every frame. Frames stay on the GPU in [`FrameTargets`]; reading one back
 //! is a separate call.
 
+use super::truth;
 use std::cell::OnceCell;
 use std::collections::HashMap;
+use std::time::Instant;
 
 use super::frame::{
     read_frame, read_light_map_rows, record_frame, Frame, FrameParts, FrameRequest, FrameTargets,
@@ -25,6 +27,8 @@ use crate::geometry::light_view::LightView;
 use crate::geometry::progressive::ProgressiveReference;
 use crate::geometry::{PreparedCasters, SceneGeometry};
 use crate::scene::{Camera as SceneCamera, Light, LightKind, Mesh, Scene};
+
+mod truths;
 
 /// One frame to record: into which targets, what, and (for a window) how to show it.
 pub struct FrameJob<'a> {
@@ -68,12 +72,16 @@ pub struct Session {
     /// A FLIP map of a frame against the reference's image, handed in for the view pass's FLIP
     /// view ([`Session::set_flip`]): the key of the reference it was made against.
     flip: Option<ReferenceImage>,
+    /// Which engine [`Session::cast_truth`] traces the soft truth's rays with.
+    truth_engine: truth::Engine,
     /// The synchronous reference ([`Session::advance_reference`]).
     progressive: Option<(ReferenceKey, ProgressiveReference)>,
     /// The targets [`Session::frame`] renders into.
     own: FrameTargets,
     /// Bytes the last submit will read back (timings, probes).
     pending_read_bytes: u64,
+    /// Submits so far: each one's pass timings come back tagged with its number.
+    submits: u64,
 }
 
 impl Session {
@@ -97,9 +105,11 @@ impl Session {
             reference: None,
             reference_hard: None,
             flip: None,
+            truth_engine: truth::Engine::Cpu,
             progressive: None,
             own: FrameTargets::new(),
             pending_read_bytes: 0,
+            submits: 0,
         }
     }
 
@@ -183,7 +193,7 @@ impl Session {
     /// on the frame it read.
     pub fn release(&mut self, ctx: &GpuContext, method: Method) -> Result<(), RenderError> {
         self.methods.remove(&method);
-        if method == Method::REFERENCE {
+        if truth::is_soft(method) {
             self.reference = None;
             self.progressive = None;
         }
@@ -270,120 +280,6 @@ impl Session {
             .and_then(|m| m.light_maps(&self.shared))
     }
 
-    /// What the reference for `request` depends on.
-    pub fn reference_key(&self, request: &FrameRequest) -> ReferenceKey {
-        ReferenceKey {
-            light: self.scene.light,
-            camera: self.scene.camera,
-            width: request.width,
-            height: request.height,
-            samples: request.knobs.get(&super::methods::reference::SAMPLES),
-            meshes: self.meshes,
-        }
-    }
-
-    /// Hand the GPU reference V for `key` (row-major, `key.width`×`key.height`), holding `done`
-    /// of `total` samples per pixel.
-    pub fn set_reference(
-        &mut self,
-        ctx: &GpuContext,
-        key: ReferenceKey,
-        visibility: &[f32],
-        progress: (u32, u32),
-    ) -> Result<(), RenderError> {
-        upload(&mut self.reference, ctx, key, visibility, progress)
-    }
-
-    /// What the exact hard shadow for `request` depends on (the area reference's key with one
-    /// sample: the light's centre).
-    pub fn reference_hard_key(&self, request: &FrameRequest) -> ReferenceKey {
-        ReferenceKey {
-            samples: 1,
-            ..self.reference_key(request)
-        }
-    }
-
-    /// Hand the GPU the exact hard shadow V for `key` (row-major, `key.width`×`key.height`,
-    /// made off this thread: the lab's worker); a frame of `reference-hard` for that key shades
-    /// it instead of casting its rays in the frame.
-    pub fn set_reference_hard(
-        &mut self,
-        ctx: &GpuContext,
-        key: ReferenceKey,
-        visibility: &[f32],
-    ) -> Result<(), RenderError> {
-        upload(&mut self.reference_hard, ctx, key, visibility, (1, 1))
-    }
-
-    /// Hand the GPU a FLIP map (row-major, `key.width`×`key.height`) of a frame against the
-    /// reference of `key`: the view pass's FLIP view shows it while the reference is that one.
-    pub fn set_flip(
-        &mut self,
-        ctx: &GpuContext,
-        key: ReferenceKey,
-        map: &[f32],
-    ) -> Result<(), RenderError> {
-        upload(&mut self.flip, ctx, key, map, (1, 1))
-    }
-
-    /// Whether the GPU holds the exact hard shadow for `request`, handed in by
-    /// [`Session::set_reference_hard`].
-    pub fn has_reference_hard(&self, request: &FrameRequest) -> bool {
-        let key = self.reference_hard_key(request);
-        self.reference_hard.as_ref().is_some_and(|r| r.key == key)
-    }
-
-    /// Whether the GPU holds the reference for `request` (some samples of it).
-    pub fn has_reference(&self, request: &FrameRequest) -> bool {
-        let key = self.reference_key(request);
-        self.reference.as_ref().is_some_and(|r| r.key == key)
-    }
-
-    /// Samples per pixel of the reference on the GPU, and how many it will hold when complete.
-    pub fn reference_progress(&self) -> Option<(u32, u32)> {
-        self.reference.as_ref().map(|r| (r.done, r.total))
-    }
-
-    /// Take `step` more reference samples per pixel for `request` here, on this thread (starting
-    /// over when what it depends on changed), and hand them to the GPU. Returns (done, total).
-    pub fn advance_reference(
-        &mut self,
-        ctx: &GpuContext,
-        request: &FrameRequest,
-        step: u32,
-    ) -> Result<(u32, u32), RenderError> {
-        request.validate(ctx)?;
-        let key = self.reference_key(request);
-        if self.progressive.as_ref().is_none_or(|(k, _)| *k != key) {
-            let r = reference::start(&self.scene, key.width, key.height, key.samples);
-            self.progressive = Some((key, r));
-        }
-        let Some((_, r)) = self.progressive.as_mut() else {
-            return Ok((0, 0));
-        };
-        r.step(step as usize);
-        let progress = (r.samples_done() as u32, r.samples_total() as u32);
-        let v = r.visibility().to_vec();
-        self.set_reference(ctx, key, &v, progress)?;
-        Ok(progress)
-    }
-
-    /// The reference V of the synchronous reference so far, if one was advanced for `request`.
-    pub fn reference_visibility(&self, request: &FrameRequest) -> Option<&[f32]> {
-        let key = self.reference_key(request);
-        self.progressive
-            .as_ref()
-            .filter(|(k, _)| *k == key)
-            .map(|(_, r)| r.visibility())
-    }
-
-    /// Whether the synchronous reference still has samples to take.
-    pub fn converging(&self) -> bool {
-        self.progressive
-            .as_ref()
-            .is_some_and(|(_, r)| !r.is_complete())
-    }
-
     /// Record every job's frame (light-space work only where stale, the camera pass, the view,
     /// the probe) into one encoder and submit it; nothing waits. Returns the bytes the submit
     /// will read back (timings and probes).
@@ -406,8 +302,9 @@ impl Session {
             }
             Ok::<_, RenderError>(())
         })();
+        self.submits += 1;
         if let Some(t) = self.timer.as_mut() {
-            bytes += t.finish(&mut encoder);
+            bytes += t.finish(&mut encoder, self.submits);
         }
         ctx.queue.submit([encoder.finish()]);
         for job in jobs.iter_mut() {
@@ -483,7 +380,7 @@ impl Session {
             camera: self.scene.camera,
             width: request.width,
             height: request.height,
-            samples: request.knobs.get(&super::methods::reference::SAMPLES),
+            samples: request.knobs.get(&super::truth::SAMPLES),
             meshes: self.meshes,
         };
         // The reference method shades only the reference of exactly this view; reference-hard
@@ -492,7 +389,7 @@ impl Session {
             samples: 1,
             ..current
         };
-        let external = if method == Method::REFERENCE_HARD {
+        let external = if truth::is_hard(method) {
             self.reference_hard.as_ref().filter(|r| r.key == hard_key)
         } else {
             reference.filter(|r| r.key == current)
@@ -585,6 +482,17 @@ impl Session {
     /// The newest pass timings that have come back, without waiting (a window, a frame later).
     pub fn poll_timings(&mut self, ctx: &GpuContext) -> Option<Vec<(String, f64)>> {
         self.timer.as_mut().and_then(|t| t.poll(ctx))
+    }
+
+    /// [`Session::poll_timings`], with the number of the submit they timed (see
+    /// [`Session::submits`]).
+    pub fn poll_timings_tagged(&mut self, ctx: &GpuContext) -> Option<(u64, Vec<(String, f64)>)> {
+        self.timer.as_mut().and_then(|t| t.poll_tagged(ctx))
+    }
+
+    /// How many submits the session has made: the next one is numbered one more.
+    pub fn submits(&self) -> u64 {
+        self.submits
     }
 
     /// Render `request` into the session's own targets and read it back (with the D-buffer if

@@ -210,6 +210,8 @@ impl Span {
 struct Slot {
     buffer: wgpu::Buffer,
     names: Vec<&'static str>,
+    /// The tag of the submit whose passes it timed ([`PassTimer::finish`]).
+    tag: u64,
     /// Mapped and ready to read.
     ready: Arc<AtomicBool>,
     /// Waiting for the GPU (copied into, map requested).
@@ -255,6 +257,7 @@ impl PassTimer {
                     mapped_at_creation: false,
                 }),
                 names: Vec::new(),
+                tag: 0,
                 ready: Arc::new(AtomicBool::new(false)),
                 pending: false,
             })
@@ -278,9 +281,10 @@ impl PassTimer {
         })
     }
 
-    /// Resolve this frame's queries into a free staging buffer. Returns the bytes that frame will
+    /// Resolve this frame's queries into a free staging buffer, tagged `tag` (the submit's, which
+    /// [`PassTimer::poll_tagged`] hands back with its timings). Returns the bytes that frame will
     /// read back, 0 when no buffer is free (that frame goes untimed) or nothing was timed.
-    pub fn finish(&mut self, encoder: &mut wgpu::CommandEncoder) -> u64 {
+    pub fn finish(&mut self, encoder: &mut wgpu::CommandEncoder, tag: u64) -> u64 {
         let names = std::mem::take(&mut *self.names.borrow_mut());
         if names.is_empty() {
             return 0;
@@ -299,6 +303,7 @@ impl PassTimer {
         encoder.copy_buffer_to_buffer(&self.resolve, 0, &slot.buffer, 0, bytes);
         encoder.pop_debug_group();
         slot.names = names;
+        slot.tag = tag;
         slot.pending = true;
         slot.ready.store(false, Ordering::Release);
         self.next = (k + 1) % RING;
@@ -324,12 +329,21 @@ impl PassTimer {
 
     /// The newest timings that have arrived, without waiting; `None` if none has.
     pub fn poll(&mut self, ctx: &GpuContext) -> Option<Vec<(String, f64)>> {
+        self.poll_tagged(ctx).map(|(_, timings)| timings)
+    }
+
+    /// [`PassTimer::poll`], with the tag the timed submit was given.
+    pub fn poll_tagged(&mut self, ctx: &GpuContext) -> Option<(u64, Vec<(String, f64)>)> {
         let _ = ctx.device.poll(wgpu::PollType::Poll);
-        let mut newest = None;
+        let mut newest: Option<(u64, Vec<(String, f64)>)> = None;
         for k in 0..RING {
             let slot = &mut self.ring[k];
             if slot.pending && slot.ready.load(Ordering::Acquire) {
-                newest = Some(read_slot(slot, self.period_ms));
+                let tag = slot.tag;
+                let timings = read_slot(slot, self.period_ms);
+                if newest.as_ref().is_none_or(|(t, _)| tag >= *t) {
+                    newest = Some((tag, timings));
+                }
             }
         }
         newest

@@ -2,6 +2,7 @@
 //! error as `compare` measures it, then every cell's cost as `bench` times it — each result
 //! cached as it is made, so a stopped run resumes where it stopped.
 
+use crate::render::truth;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -13,9 +14,9 @@ use crate::compare::{counted_pixels, rgb_of};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::metrics::{self, Metrics};
 use crate::geometry::{flip, view};
-use crate::render::methods::reference::SAMPLES;
 use crate::render::offline::render_in;
 use crate::render::session::Session;
+use crate::render::truth::SAMPLES;
 use crate::render::{FrameRequest, GpuContext, Method, RenderError};
 use crate::scene::Scene;
 
@@ -312,7 +313,7 @@ pub fn run(
                     .refusal(scene.light.kind(), Some(&ctx.caps))
                     .or_else(|| {
                         // The yardstick is not measured against itself.
-                        (sweep.method.is_reference() && req.knobs.get(&SAMPLES) >= spec.samples)
+                        (truth::is_soft(sweep.method) && req.knobs.get(&SAMPLES) >= spec.samples)
                             .then(|| format!("the study's reference is K = {}", spec.samples))
                     });
                 cells.push((
@@ -499,7 +500,7 @@ fn reference(ctx: &GpuContext, spec: &StudySpec, scene: &Scene) -> Result<Refere
         width: spec.width,
         height: spec.height,
         dbuffer_size: spec.dbuffer_size,
-        method: Method::REFERENCE,
+        method: truth::SOFT,
         vt: spec.vt,
         knobs: crate::render::Knobs::default().with(&SAMPLES, k),
         read_dbuffer: false,
@@ -554,7 +555,7 @@ fn cell_error(
 /// A cell's cost from its timing: the bench's frame figure; for the reference, K samples'
 /// ray casting (one sample's, times K) and the frame.
 fn cell_cost(request: &FrameRequest, timing: Timing) -> CellCost {
-    let frame_ms = if request.method.is_reference() {
+    let frame_ms = if truth::is_soft(request.method) {
         let k = f64::from(request.knobs.get(&SAMPLES));
         let rays = timing.rays_ms.map_or(0.0, |s: Stat| s.median);
         k * rays + timing.wall_ms.median

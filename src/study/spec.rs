@@ -330,11 +330,8 @@ impl StudySpec {
                         int_in(value, Quality::MapSize).map_err(|m| key_error(key, m))?;
                 }
                 "samples" => {
-                    spec.samples = int_in(
-                        value,
-                        Quality::Knob(&crate::render::methods::reference::SAMPLES),
-                    )
-                    .map_err(|m| key_error(key, m))?;
+                    spec.samples = int_in(value, Quality::Knob(&crate::render::truth::SAMPLES))
+                        .map_err(|m| key_error(key, m))?;
                 }
                 "vt" => {
                     spec.vt = value

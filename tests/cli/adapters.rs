@@ -1,4 +1,4 @@
-//! Every adapter a user has (issue 23): each method's needs checked before any work, the GL
+//! Every adapter a user has: each method's needs checked before any work, the GL
 //! backend (Mesa's llvmpipe through EGL), the weakest device WebGPU allows, `dbuffer adapters`,
 //! and errors printed as lines with nothing from a window system on stderr.
 //!
@@ -270,6 +270,7 @@ fn gl_renders_every_builtin_with_every_method_it_can_run() {
     let open = |a: &wgpu::Adapter| Offline {
         ctx: GpuContext::from_adapter(a).unwrap_or_else(|e| panic!("{e}")),
         progress: None,
+        reference: Default::default(),
     };
     let (mut gl, mut vk) = (open(&gl), open(&vk));
     let mut ran = 0;
@@ -334,6 +335,7 @@ fn the_weakest_device_renders_or_refuses_every_method() {
         let mut offline = Offline {
             ctx,
             progress: None,
+            reference: Default::default(),
         };
         let mut rendered = Vec::new();
         for &m in Method::all() {
@@ -423,6 +425,7 @@ fn the_half_float_wedge_sum_is_within_an_8_bit_step() {
     let open = |features| Offline {
         ctx: GpuContext::open(&a, features, limits.clone()).unwrap_or_else(|e| panic!("{e}")),
         progress: None,
+        reference: Default::default(),
     };
     let mut full = open(features);
     let mut half = open(features - wgpu::Features::FLOAT32_BLENDABLE);

@@ -1,4 +1,4 @@
-//! Hostile files and extreme sizes (issue 11), through the binary: every case exits with the
+//! Hostile files and extreme sizes, through the binary: every case exits with the
 //! status it should, names what it should in one line on stderr, never panics, and never runs
 //! long (each is killed after a minute: a FIFO that blocked or /dev/zero read to the end of
 //! memory fails here instead of hanging the suite). Library-level cases follow the table.

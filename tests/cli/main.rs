@@ -9,6 +9,7 @@ mod adapters;
 mod animate_cli;
 mod bad_inputs;
 mod bench_cli;
+mod compare_reference;
 mod large_frames;
 mod registry;
 mod render_cli;

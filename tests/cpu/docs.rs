@@ -1,11 +1,12 @@
-//! The documentation holds together (issue 19):
+//! The documentation holds together:
 //! - every relative link and picture in `README.md` and `docs/**/*.md` resolves: the file exists,
 //!   and a `#anchor` names a heading of the target by GitHub's rule;
 //! - no tracked file points outside the repository (the three needles of [`outside_needles`]);
 //! - the README's method table is the registry: the names of `methods::ALL` in order, each with
 //!   the light kinds its `takes` accepts;
 //! - `docs/guide/command-line.md` names every subcommand and every `--flag` the binary's help
-//!   prints.
+//!   prints;
+//! - no code comment, method page or the README names an issue by number or a commit hash.
 //!
 //! Each checker is a function over text and paths, and the `*_catches_*` tests feed it broken
 //! input, so every assertion here is one that can fail.
@@ -529,7 +530,7 @@ fn light_kinds() -> Vec<LightKind> {
 }
 
 /// The cells of a Markdown table row (`\|` is a pipe inside a cell).
-fn cells(row: &str) -> Vec<String> {
+pub(crate) fn cells(row: &str) -> Vec<String> {
     let row = row.trim();
     let row = row.strip_prefix('|').unwrap_or(row);
     let row = row.strip_suffix('|').unwrap_or(row);
@@ -760,4 +761,121 @@ fn the_command_line_check_catches_a_missing_flag() {
             "flag --dbuffer-size"
         ]
     );
+}
+
+/// Where a text names an issue by number (the word, an optional plural `s`, a space, an optional
+/// `#` and a digit; case-insensitive), as `line: excerpt`: a reader of the repository cannot look issues up, so the
+/// code and the method pages say what holds instead.
+fn issue_numbers(text: &str) -> Vec<String> {
+    let word = concat!("iss", "ue");
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let lower = line.to_ascii_lowercase();
+        let mut from = 0;
+        while let Some(at) = lower[from..].find(word) {
+            let start = from + at;
+            from = start + word.len();
+            let rest = lower[from..].strip_prefix('s').unwrap_or(&lower[from..]);
+            let Some(rest) = rest.strip_prefix(' ') else {
+                continue;
+            };
+            let rest = rest.strip_prefix('#').unwrap_or(rest);
+            if rest.starts_with(|c: char| c.is_ascii_digit()) {
+                out.push(format!("{}: {}", n + 1, line.trim()));
+                break;
+            }
+        }
+    }
+    out
+}
+
+/// Words in a text that look like a commit hash: 7 to 40 hex digits with a letter and a digit
+/// among them, standing alone (not part of a longer word, a number or a `0x` literal).
+fn commit_hashes(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for word in text.split(|c: char| !c.is_ascii_alphanumeric() && c != '_') {
+        let hex = (7..=40).contains(&word.len())
+            && word
+                .chars()
+                .all(|c| c.is_ascii_hexdigit() && !c.is_ascii_uppercase());
+        if hex
+            && word.chars().any(|c| c.is_ascii_digit())
+            && word.chars().any(|c| c.is_ascii_alphabetic())
+        {
+            out.push(word.to_string());
+        }
+    }
+    out
+}
+
+/// Whether `name` (a tracked path) is code whose comments the scan reads.
+fn is_code(name: &str) -> bool {
+    let code_dir = [
+        "src/",
+        "shaders/",
+        "tests/",
+        "examples/",
+        "scripts/",
+        ".ci/",
+    ]
+    .iter()
+    .any(|d| name.starts_with(d));
+    code_dir || name == "build.rs"
+}
+
+#[test]
+fn code_and_method_pages_name_no_issue_number_or_commit() {
+    let root = root();
+    let test = "code_and_method_pages_name_no_issue_number_or_commit";
+    let Some(files) = tracked_files(&root, test) else {
+        return;
+    };
+    let mut problems = Vec::new();
+    for name in &files {
+        let reference_doc = name == "README.md" || name.starts_with("docs/method/");
+        if !(reference_doc || is_code(name)) {
+            continue;
+        }
+        let Some(text) = text_of(&root, name) else {
+            continue;
+        };
+        for hit in issue_numbers(&text) {
+            problems.push(format!("{name}:{hit}"));
+        }
+        if reference_doc {
+            for hash in commit_hashes(&text) {
+                problems.push(format!("{name}: {hash} (a commit?)"));
+            }
+        }
+    }
+    assert!(
+        problems.is_empty(),
+        "issue numbers or commit hashes where the text should say what holds (history goes to \
+         docs/results/ under a date):\n{}",
+        problems.join("\n")
+    );
+}
+
+#[test]
+fn the_issue_and_commit_scans_catch_each_form() {
+    let word = concat!("Iss", "ue");
+    for bad in [
+        format!("// see {word} 12 for why"),
+        format!("//! {}s 13–14", word.to_lowercase()),
+        format!("/// ({} #2)", word.to_lowercase()),
+    ] {
+        assert_eq!(issue_numbers(&bad).len(), 1, "{bad}");
+    }
+    for fine in [
+        format!("// the {word}'s bound"),
+        format!("// {word}: none"),
+        "// 12 issues".to_string(),
+    ] {
+        assert!(issue_numbers(&fine).is_empty(), "{fine}");
+    }
+    assert_eq!(
+        commit_hashes("measured at ee55f32 and 43e40ff4"),
+        ["ee55f32", "43e40ff4"]
+    );
+    assert!(commit_hashes("0x1f2e3d4c, 1234567, deadbeefcafe, #ffcc00, a_1b2c3d4e").is_empty());
 }

@@ -5,11 +5,13 @@
 
 mod area_lights;
 mod docs;
+mod docs_knobs;
 mod fmt_check;
 mod fused_vs_oracle;
 mod fuzz_parsers;
 mod gltf_models;
 mod gltf_shipped;
+mod layers;
 mod oracle_analytic;
 mod output_files;
 mod scene_builtins;

@@ -161,7 +161,7 @@ fn volume_surfaces_are_closed() {
     }
 }
 
-/// The scenes built for occluder fusion (issue 12), measured here on 2026-11-30: the paper's
+/// The scenes built for occluder fusion, measured here on 2026-11-30: the paper's
 /// method loses most of its accuracy there (two chords, many casters, interlocked parts), and
 /// these rows pin that: within 25 % of the measured figures, and clearly worse than on the convex
 /// scenes. `[name, class mismatch %, penumbra MAE]`.

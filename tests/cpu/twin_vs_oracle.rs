@@ -1,7 +1,7 @@
 //! The CPU twin of the D-buffer against ray-cast ground truth, over random convex casters
 //! (hulls of random points), random disk lights and random receiver points.
 //!
-//! What must hold (docs/method/dbuffer.md, issue #2):
+//! What must hold (docs/method/dbuffer.md):
 //! - where the whole of a disk 10 % larger is hidden (a margin around the boundary), the twin says
 //!   umbra; where none of the larger disk is hidden, the twin says lit. For a convex caster above
 //!   `x` this is decided exactly: the hidden part of the light plane is the convex hull of the

@@ -1,4 +1,4 @@
-//! The hard-shadow methods of issue 13 against the exact hard shadow: one ray per pixel to the
+//! The hard-shadow methods against the exact hard shadow: one ray per pixel to the
 //! light's centre through the oracle's BVH (`geometry::oracle` with a zero-radius light), over the
 //! pixels the camera sees facing the light. Numbers are printed
 //! (`cargo test --release --test gpu hard_methods -- --nocapture`).
@@ -84,6 +84,7 @@ fn offline_without_float_stencil() -> Offline {
     Offline {
         ctx: dbuffer::render::GpuContext::new(device, queue, adapter.get_info()),
         progress: None,
+        reference: Default::default(),
     }
 }
 

@@ -26,6 +26,8 @@ mod shaders;
 mod snapshot_harness;
 mod study_resume;
 mod temporal;
+mod trace;
 mod view_pass;
+mod view_session;
 mod wedges;
 mod wgsl_layout_helper;

@@ -3,7 +3,7 @@
 //!   inscribed in the disk gives, for every method that takes both, V within 0.01 MAE of the same
 //!   method on the disk;
 //! - on random scenes (a convex caster under a random rectangle or polygon light), the D-buffer,
-//!   `dbuffer-fused` and `wedges` against the ray-cast reference, held to the bounds of issue 20.
+//!   `dbuffer-fused` and `wedges` against the ray-cast reference, held to the bounds below.
 //!
 //! `POLYGON_SCENES=N` runs N random scenes instead of the suite's four (at 128², D-buffer 1024²,
 //! K = 1024);
@@ -282,7 +282,7 @@ fn random_polygon_scenes_hold_the_issue_bounds() {
             "{}: the view must show the shadow",
             scene.name
         );
-        // Boundary-correct: the issue's 0.3 % over every pixel that faces the light, the
+        // Boundary-correct: 0.3 % over every pixel that faces the light, the
         // caster's own faces included (at 128² a pixel is 0.006 % of the picture).
         assert!(
             d.class_mismatch_pct <= 0.3,

@@ -2,7 +2,7 @@
 //! variants, branches, views, colour maps, probe layout) has the same value on both sides
 //! (naga's reflection), so the two cannot drift apart silently.
 
-use crate::support::wgsl_layout::{self, assert_wgsl_layout};
+use crate::support::wgsl_layout::{self, assert_wgsl_layout, assert_wgsl_params};
 
 use dbuffer::geometry::{Branch, VtVariant};
 use dbuffer::render::passes::camera::CameraUniforms;
@@ -62,27 +62,37 @@ fn uniforms_match_their_wgsl() {
             light_corners
         );
     }
-    for shader in [
-        "hard",
-        "pcf",
-        "pcss",
-        "dbuffer",
-        "extended_light_map",
-        "bitmask",
-    ] {
+    // Every method that looks up the centre's map (its shader includes shared/shadow_lookup.wgsl).
+    let mut lookups = 0;
+    for method in dbuffer::render::Method::all() {
+        let shader = source(method.spec().shader);
+        if wgsl_layout::struct_layout(&shader, "ShadowUniforms").is_none() {
+            continue;
+        }
+        lookups += 1;
         assert_wgsl_layout!(
             ShadowUniforms,
-            &source(&format!("methods/{shader}.wgsl")),
+            &shader,
             "ShadowUniforms",
             light_view_proj,
             inv_light_view_proj,
             size,
             texel_slope,
             bias_constant,
-            bias_slope,
-            knobs
+            bias_slope
         );
     }
+    assert!(
+        lookups >= 10,
+        "only {lookups} methods look up the shadow map"
+    );
+    // pcss's Poisson disk: two points a vec4, as the buffer it binds holds them.
+    use dbuffer::render::methods::pcss::POISSON_POINTS;
+    let disk = wgsl_layout::struct_layout(&source("methods/pcss.wgsl"), "PoissonDisk");
+    assert_eq!(
+        disk.map(|(size, _)| size as usize),
+        Some(POISSON_POINTS * 8)
+    );
     for shader in [
         source("methods/sampled.wgsl"),
         source("passes/sample_maps.wgsl"),
@@ -114,19 +124,6 @@ fn uniforms_match_their_wgsl() {
             size
         );
     }
-    use dbuffer::render::methods::smrt::SmrtUniforms;
-    assert_wgsl_layout!(
-        SmrtUniforms,
-        &source("methods/smrt.wgsl"),
-        "SmrtUniforms",
-        extrapolate_slope,
-        cot_max_angle,
-        texel_dither,
-        max_slope_bias,
-        screen_ray,
-        normal_bias,
-        tan_half_fov
-    );
     use dbuffer::render::passes::moment_sat::SatUniforms;
     assert_wgsl_layout!(
         SatUniforms,
@@ -255,6 +252,221 @@ fn uniforms_match_their_wgsl() {
             probe
         );
     }
+}
+
+/// Every method's parameters — the `params` uniform of its shader, declared in its module — have
+/// the layout and the member types (u32 or f32) of their WGSL struct, in group 1 (at
+/// `PARAMS_BINDING` for the methods that look up the shadow map). The test walks the registry:
+/// a method whose shader binds `params` of a struct this table does not check fails it, and so
+/// does an entry no method binds, or a uniform of a method's own that is not its `params` (a
+/// bare `vec4<f32>` of numbers each shader reads its own way).
+#[test]
+fn every_methods_params_match_their_wgsl() {
+    use dbuffer::render::methods::{
+        bitmask::BitmaskParams, dbuffer::DBufferParams, dbuffer_fused::DBufferFusedParams,
+        extended_light_map::ExtendedLightMapParams, msm::MsmParams, msm_soft::MsmSoftParams,
+        pcf::PcfParams, pcss::PcssParams, reference::ReferenceParams, smrt::SmrtParams,
+        vsm::VsmParams, wedges::WedgesParams,
+    };
+    use dbuffer::render::passes::shadow_map::PARAMS_BINDING;
+    /// A WGSL struct's name, and the check of it against its Rust struct in a shader.
+    type Check = (&'static str, fn(&str));
+    let checks: &[Check] = &[
+        ("PcfParams", |w| {
+            assert_wgsl_params!(PcfParams, w, "PcfParams", radius, _pad0, _pad1, _pad2)
+        }),
+        ("PcssParams", |w| {
+            assert_wgsl_params!(
+                PcssParams,
+                w,
+                "PcssParams",
+                blocker_taps,
+                filter_taps,
+                nearest_caster,
+                _pad0
+            )
+        }),
+        ("VsmParams", |w| {
+            assert_wgsl_params!(VsmParams, w, "VsmParams", bleed, min_variance, _pad0, _pad1)
+        }),
+        ("MsmParams", |w| {
+            assert_wgsl_params!(MsmParams, w, "MsmParams", radius, bias, _pad0, _pad1)
+        }),
+        ("MsmSoftParams", |w| {
+            assert_wgsl_params!(
+                MsmSoftParams,
+                w,
+                "MsmSoftParams",
+                lowest_caster,
+                bias,
+                least_blocker,
+                _pad0
+            )
+        }),
+        ("BitmaskParams", |w| {
+            assert_wgsl_params!(
+                BitmaskParams,
+                w,
+                "BitmaskParams",
+                lowest_caster,
+                samples,
+                flags,
+                detail,
+                levels,
+                _pad0,
+                _pad1,
+                _pad2
+            )
+        }),
+        ("SmrtParams", |w| {
+            assert_wgsl_params!(
+                SmrtParams,
+                w,
+                "SmrtParams",
+                extrapolate_slope,
+                cot_max_angle,
+                texel_dither,
+                max_slope_bias,
+                screen_ray,
+                normal_bias,
+                tan_half_fov,
+                rays,
+                steps,
+                adaptive,
+                _pad0
+            )
+        }),
+        ("DBufferParams", |w| {
+            assert_wgsl_params!(
+                DBufferParams,
+                w,
+                "DBufferParams",
+                horizon,
+                corners,
+                tag,
+                _pad0
+            )
+        }),
+        ("DBufferFusedParams", |w| {
+            assert_wgsl_params!(
+                DBufferFusedParams,
+                w,
+                "DBufferFusedParams",
+                tag,
+                _pad0,
+                _pad1,
+                _pad2
+            )
+        }),
+        ("WedgesParams", |w| {
+            assert_wgsl_params!(
+                WedgesParams,
+                w,
+                "WedgesParams",
+                horizon,
+                _pad0,
+                _pad1,
+                _pad2
+            )
+        }),
+        ("ReferenceParams", |w| {
+            assert_wgsl_params!(
+                ReferenceParams,
+                w,
+                "ReferenceParams",
+                rays,
+                _pad0,
+                _pad1,
+                _pad2
+            )
+        }),
+        ("ExtendedLightMapParams", |w| {
+            assert_wgsl_params!(
+                ExtendedLightMapParams,
+                w,
+                "ExtendedLightMapParams",
+                inv_far,
+                levels,
+                _pad0,
+                _pad1
+            )
+        }),
+    ];
+    let mut bound = std::collections::BTreeSet::new();
+    for method in dbuffer::render::Method::all() {
+        let spec = method.spec();
+        let shader = source(spec.shader);
+        let uniforms = wgsl_layout::uniforms(&shader);
+        // The shared uniforms (checked above) and constant tables; anything else is `params`.
+        let shared = ["camera", "shadow", "sampled", "ssm", "fused", "disk"];
+        for u in &uniforms {
+            assert!(
+                u.var == "params" || shared.contains(&u.var.as_str()),
+                "{}: the uniform `{}` is neither its `params` nor a shared one",
+                spec.name,
+                u.var
+            );
+        }
+        let Some(params) = uniforms.iter().find(|u| u.var == "params") else {
+            continue;
+        };
+        let Some(ty) = params.ty.clone() else {
+            panic!("{}: `params` is not a named struct", spec.name);
+        };
+        let lookup = wgsl_layout::struct_layout(&shader, "ShadowUniforms").is_some();
+        assert!(
+            params.group == 1 && (!lookup || params.binding == PARAMS_BINDING),
+            "{}: `params` is bound at group {}, binding {}",
+            spec.name,
+            params.group,
+            params.binding
+        );
+        let Some((_, check)) = checks.iter().find(|(name, _)| *name == ty) else {
+            panic!(
+                "{}: its shader binds `params: {ty}`, which this test does not check",
+                spec.name
+            );
+        };
+        check(&shader);
+        bound.insert(ty);
+    }
+    for (name, _) in checks {
+        assert!(
+            bound.contains(*name),
+            "no method's shader binds `params: {name}`"
+        );
+    }
+}
+
+/// The type check of [`assert_wgsl_params!`] fires on a count declared `f32` on one side and
+/// `u32` on the other, and on two fields swapped.
+#[test]
+fn a_params_type_or_order_mismatch_fires() {
+    #[repr(C)]
+    struct Swapped {
+        taps: u32,
+        near: f32,
+    }
+    let wgsl = "struct P { near: f32, taps: u32, }";
+    let swapped = std::panic::catch_unwind(|| {
+        assert_wgsl_params!(Swapped, wgsl, "P", taps, near);
+    });
+    assert!(swapped.is_err(), "two fields swapped must fail");
+    #[repr(C)]
+    struct FloatCount {
+        near: f32,
+        taps: f32,
+    }
+    let float_count = std::panic::catch_unwind(|| {
+        assert_wgsl_params!(FloatCount, wgsl, "P", near, taps);
+    });
+    assert!(float_count.is_err(), "a count as f32 against u32 must fail");
+    #[repr(C)]
+    struct Right {
+        near: f32,
+        taps: u32,
+    }
+    assert_wgsl_params!(Right, wgsl, "P", near, taps);
 }
 
 #[test]

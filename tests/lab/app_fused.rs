@@ -1,4 +1,4 @@
-//! The lab's "light as seen from this pixel" panel (issue 12) on a fusion scene, driven as a
+//! The lab's "light as seen from this pixel" panel on a fusion scene, driven as a
 //! user does: `dbuffer-fused` picked, the cursor on a pixel where two casters hide the disk
 //! together. The panel's reference rays, its chords and its mask are checked against the
 //! oracle, the fused twin and the GPU's V at that pixel.

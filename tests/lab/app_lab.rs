@@ -211,7 +211,7 @@ fn snapshots() {
     h.snapshot("app-dbuffer-pv");
 }
 
-/// The hard-shadow techniques of issue 13 in the lab: Crow's volume and the centre's silhouettes
+/// The hard-shadow techniques in the lab: Crow's volume and the centre's silhouettes
 /// over `shadow-volume`, the edges `hybrid` rebuilt from its depth map (they come back from the
 /// GPU a frame or more later), and the extended light map's channels.
 #[test]

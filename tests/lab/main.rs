@@ -7,4 +7,5 @@ mod support;
 mod app_area_lights;
 mod app_fused;
 mod app_lab;
+mod app_stats;
 mod app_study;

@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 use dbuffer::app::{LabApp, LabOptions};
 use dbuffer::render::reference::ReferenceWorker;
 use eframe::egui;
+use eframe::egui_wgpu;
 use eframe::wgpu;
 use egui_kittest::Harness;
 
@@ -27,24 +28,59 @@ pub fn lab_sized(scene: Option<&str>, width: f32, height: f32) -> Harness<'stati
 
 /// The lab as `options` say (made deterministic), in a `width`×`height` window.
 pub fn lab_with(options: LabOptions, width: f32, height: f32) -> Harness<'static, LabApp> {
-    Harness::builder()
-        .with_size(egui::vec2(width, height))
-        .with_max_steps(500)
-        .with_render_cursor(false)
-        .wgpu()
-        .build_eframe(move |cc| {
-            let mut app = LabApp::new(
-                cc,
-                LabOptions {
-                    deterministic: true,
-                    ..options.clone()
-                },
-            );
-            app.settings.dbuffer_size = 256;
-            app.settings.render_scale = 0.5;
-            app.settings.reference_samples = 16;
-            app
-        })
+    build(
+        Harness::builder()
+            .with_size(egui::vec2(width, height))
+            .with_max_steps(500)
+            .with_render_cursor(false)
+            .wgpu(),
+        options,
+    )
+}
+
+/// The lab on `scene` on a device with timestamp queries where the adapter has them (as the
+/// lab's own window asks for), so the Stats panel lists GPU time per pass.
+pub fn lab_timed(scene: &str, width: f32, height: f32) -> Harness<'static, LabApp> {
+    let egui_wgpu::WgpuSetup::CreateNew(mut setup) = egui_kittest::wgpu::default_wgpu_setup()
+    else {
+        unreachable!("kittest creates its device")
+    };
+    setup.device_descriptor =
+        std::sync::Arc::new(|adapter: &wgpu::Adapter| wgpu::DeviceDescriptor {
+            label: Some("lab test device with timestamps"),
+            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+            ..Default::default()
+        });
+    build(
+        Harness::builder()
+            .with_size(egui::vec2(width, height))
+            .with_max_steps(500)
+            .with_render_cursor(false)
+            .wgpu_setup(egui_wgpu::WgpuSetup::CreateNew(setup)),
+        LabOptions {
+            scene: Some(scene.to_string()),
+            ..LabOptions::default()
+        },
+    )
+}
+
+fn build(
+    builder: egui_kittest::HarnessBuilder<LabApp>,
+    options: LabOptions,
+) -> Harness<'static, LabApp> {
+    builder.build_eframe(move |cc| {
+        let mut app = LabApp::new(
+            cc,
+            LabOptions {
+                deterministic: true,
+                ..options.clone()
+            },
+        );
+        app.settings.dbuffer_size = 256;
+        app.settings.render_scale = 0.5;
+        app.settings.reference_samples = 16;
+        app
+    })
 }
 
 /// One of the core's two reference workers.

@@ -63,6 +63,7 @@
 //! overlapping casters leave rays inside one caster's umbra volume after the umbra).
 
 mod area;
+mod candidates;
 mod chord;
 mod lists;
 mod mask;
@@ -71,6 +72,9 @@ mod tests;
 mod twin;
 
 pub use area::{region_area, whole_segment};
+pub use candidates::{
+    covered_rect, edge_proxy, max_receiver_height, proxy_pad, scene_candidate_edges,
+};
 pub use chord::{candidate_edges, edge_chord, EdgeChord, FusedEdge};
 pub use lists::{
     edge_in_texel, proxy_hull, wedge_proxy, CasterCrossings, Patch, TexelList, TexelRay,

@@ -321,13 +321,7 @@ fn wedge_proxies_hold_every_accepted_texel() {
         };
         let twin = FusedTwin::new(&scene, &prepared, &geometry, params);
         let l = scene.light.area_or_centre();
-        let h_max = scene
-            .objects
-            .iter()
-            .flat_map(|o| o.mesh.positions.iter())
-            .map(|&p| l.height_of(p))
-            .filter(|h| h.is_finite())
-            .fold(0.0, f32::max);
+        let h_max = max_receiver_height(&scene, &l);
         let half_slope = 0.5 * twin.view_slope.length() / 96.0;
         let vp = twin.vp;
         let project = |p: Vec3| {
@@ -346,7 +340,7 @@ fn wedge_proxies_hold_every_accepted_texel() {
                         continue;
                     }
                     accepted += 1;
-                    let pad = [e.a, e.b].map(|p| 3.0 * p.distance(l.center) * half_slope);
+                    let pad = proxy_pad(e, &l, half_slope);
                     let [o0, o1] = wedge_proxy(e, &l, h_max, pad);
                     let pts: Vec<Vec2> = o0.iter().chain(&o1).map(|&p| project(p)).collect();
                     assert!(

@@ -3,7 +3,8 @@
 
 use glam::{Mat4, Vec2, Vec3};
 
-use super::chord::{candidate_edges, EdgeChord, FusedEdge};
+use super::candidates::scene_candidate_edges;
+use super::chord::{EdgeChord, FusedEdge};
 use super::lists::{edge_in_texel, CasterCrossings, Patch, TexelList, TexelRay};
 use super::mask::{mask_details, mask_visibility, CentreLayers, DiskMask, MaskEval, MaskResult};
 use super::{
@@ -212,13 +213,7 @@ impl FusedTwin {
         geometry: &SceneGeometry,
         params: FusedParams,
     ) -> FusedTwin {
-        let edges: Vec<FusedEdge> = prepared
-            .meshes
-            .iter()
-            .zip(&geometry.casters)
-            .enumerate()
-            .flat_map(|(k, (mesh, g))| candidate_edges(mesh, &g.classes, k as u32))
-            .collect();
+        let edges = scene_candidate_edges(prepared, geometry);
         let view = LightView::fit(scene);
         let vp = view.view_projection();
         let view_slope = Vec2::new(

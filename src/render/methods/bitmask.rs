@@ -8,17 +8,16 @@
 //! mapping revisited", EG 2008). `shaders/methods/bitmask.wgsl`; the corners and the pyramid are
 //! `passes::micro_patches`; the arithmetic's CPU twin is `geometry::bitmask`.
 
+use super::shadow_mapped::{lowest_caster, Bound, MapProducts, ShadowMapped};
 use super::{
-    require, AdapterNeeds, CameraGroup, Cost, FrameInputs, Knob, LightMaps, MethodSpec,
-    MethodState, Prepare, Quality, Scaled, SharedMaps, Switch, SHADOW_MAP,
+    require, AdapterNeeds, Cost, FrameInputs, Knob, MethodSpec, Quality, Scaled, Switch, SHADOW_MAP,
 };
 use crate::geometry::fused::{DiskMask, MaskEval};
 use crate::render::adapter::{FormatNeed, Usage};
 use crate::render::passes::micro_patches::{pyramid_shape, MicroPatches};
-use crate::render::passes::shadow_map::{lookup_entries, MapFrame, ShadowUniforms};
-use crate::render::{
-    buffer_entry, storage_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError,
-};
+use crate::render::passes::shadow_map::{MapFrame, ShadowMapTargets};
+use crate::render::timer::Recorder;
+use crate::render::{buffer_entry, storage_entry, texture_entry, view_entry, RenderError};
 use crate::scene::AreaLight;
 
 pub static SAMPLES: Knob = Knob::int(
@@ -51,7 +50,7 @@ pub static DETAIL: Scaled = Scaled::new(
 );
 
 pub static BITMASK: MethodSpec = MethodSpec::new("bitmask", SHADER, |ctx| {
-    Box::new(Bitmask::new(ctx))
+    Box::new(ShadowMapped::new(ctx, SHADER, Patches::default(), BitmaskParams::new))
 })
 .adapter(NEEDS)
 .about("bitmask soft shadows (Schwarz & Stamminger 2007): micro-patches back-projected onto light samples")
@@ -78,30 +77,37 @@ const NEEDS: AdapterNeeds = AdapterNeeds {
 /// `FLAG_COARSE` of the shader.
 const FLAG_COARSE: u32 = 1;
 
-fn bitmask_knobs(f: &FrameInputs<'_>, levels: u32) -> [f32; 4] {
-    let flags = if f.knobs.get(&COARSE) { FLAG_COARSE } else { 0 };
-    [
-        super::pcss::lowest_caster(f.scene),
-        f.knobs.get(&SAMPLES) as f32,
-        flags as f32 + f.knobs.get(&DETAIL),
-        levels as f32,
-    ]
+/// `BitmaskParams` of `shaders/methods/bitmask.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct BitmaskParams {
+    /// The lowest caster's height above the light's plane ([`lowest_caster`]).
+    pub lowest_caster: f32,
+    /// Light samples, one bit each.
+    pub samples: u32,
+    /// `FLAG_COARSE` or 0.
+    pub flags: u32,
+    /// The level of detail, a share of the samples' spacing (below 1).
+    pub detail: f32,
+    /// The pyramid's levels.
+    pub levels: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
-/// What the corners and the pyramid were made from.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Made {
-    revision: u64,
-    map: u64,
-    gap_fill: bool,
-}
-
-/// What the bind group binds.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Bound {
-    map: u64,
-    patches: u64,
-    lut: u64,
+impl BitmaskParams {
+    pub fn new(f: &FrameInputs<'_>) -> BitmaskParams {
+        let (_, levels) = pyramid_shape(f.map_size);
+        BitmaskParams {
+            lowest_caster: lowest_caster(f.scene),
+            samples: f.knobs.get(&SAMPLES),
+            flags: if f.knobs.get(&COARSE) { FLAG_COARSE } else { 0 },
+            detail: f.knobs.get(&DETAIL),
+            levels,
+            ..BitmaskParams::default()
+        }
+    }
 }
 
 /// The look-up tables and what they were made for.
@@ -112,31 +118,15 @@ struct Lut {
     generation: u64,
 }
 
-pub struct Bitmask {
+/// What the method makes from the map: the micro-patches' corners and the pyramid (made for
+/// the gap filling or not), and the look-up tables of the light's samples.
+#[derive(Default)]
+pub struct Patches {
     patches: MicroPatches,
-    camera: CameraGroup,
-    uniforms: wgpu::Buffer,
     lut: Option<Lut>,
-    made: Option<Made>,
 }
 
-impl Bitmask {
-    fn new(ctx: &GpuContext) -> Bitmask {
-        let mut entries = lookup_entries().to_vec();
-        let texture = wgpu::TextureViewDimension::D2;
-        entries.push(texture_entry(2, wgpu::ShaderStages::FRAGMENT, texture));
-        entries.push(texture_entry(3, wgpu::ShaderStages::FRAGMENT, texture));
-        entries.push(storage_entry(4, wgpu::ShaderStages::FRAGMENT, true));
-        entries.push(texture_entry(5, wgpu::ShaderStages::FRAGMENT, texture));
-        Bitmask {
-            patches: MicroPatches::default(),
-            camera: CameraGroup::new(ctx, SHADER, &entries),
-            uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "Bitmask::uniforms"),
-            lut: None,
-            made: None,
-        }
-    }
-
+impl Patches {
     /// Make the look-up tables of `samples` samples of `light` unless those held are (a disk's
     /// samples are the same for every disk).
     fn update_lut(&mut self, device: &wgpu::Device, light: AreaLight, samples: u32) {
@@ -164,63 +154,59 @@ impl Bitmask {
     }
 }
 
-impl MethodState for Bitmask {
-    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
-        let Prepare(inputs, shared, rec) = p;
-        let ctx = inputs.ctx;
-        let map = shared.shadow_map.update(inputs, rec)?;
-        let made = Made {
-            revision: inputs.revision,
-            map: map.generation,
-            gap_fill: inputs.knobs.get(&GAP_FILL),
-        };
+impl MapProducts for Patches {
+    /// The gap filling.
+    type Key = bool;
+
+    fn layout(&self) -> Vec<wgpu::BindGroupLayoutEntry> {
+        let texture = wgpu::TextureViewDimension::D2;
+        let stage = wgpu::ShaderStages::FRAGMENT;
+        vec![
+            texture_entry(3, stage, texture),
+            texture_entry(4, stage, texture),
+            storage_entry(5, stage, true),
+            texture_entry(6, stage, texture),
+        ]
+    }
+
+    fn key(&self, inputs: &FrameInputs<'_>) -> bool {
+        inputs.knobs.get(&GAP_FILL)
+    }
+
+    fn record(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        rec: &mut Recorder<'_>,
+        map: &ShadowMapTargets,
+        gap_fill: bool,
+    ) {
+        let frame = MapFrame::new(inputs.light_view, &inputs.scene.light);
+        self.patches.record(
+            inputs.ctx,
+            rec,
+            &map.distance.view,
+            map.size,
+            gap_fill,
+            &frame,
+        );
+    }
+
+    fn entries(&mut self, inputs: &FrameInputs<'_>) -> Result<Bound<'_>, RenderError> {
         let light = *inputs.area(BITMASK.name)?;
-        if self.made != Some(made) {
-            let frame = MapFrame::new(inputs.light_view, &inputs.scene.light);
-            self.patches.record(
-                ctx,
-                rec,
-                &map.distance.view,
-                map.size,
-                made.gap_fill,
-                &frame,
-            );
-            self.made = Some(made);
-        }
-        let (_, levels) = pyramid_shape(map.size);
-        let uniforms =
-            ShadowUniforms::new(inputs.light_view, map.size, bitmask_knobs(inputs, levels));
-        ctx.queue
-            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-        let samples = inputs.knobs.get(&SAMPLES);
-        self.update_lut(&ctx.device, light, samples);
+        self.update_lut(&inputs.ctx.device, light, inputs.knobs.get(&SAMPLES));
         let patches = require(self.patches.maps(), "the micro-patch maps were not made")?;
         let lut = require(
             self.lut.as_ref(),
             "the bitmask look-up tables were not made",
         )?;
-        let bound = Bound {
-            map: map.generation,
-            patches: patches.generation,
-            lut: lut.generation,
-        };
-        let entries = [
-            buffer_entry(0, &self.uniforms),
-            view_entry(1, &map.distance.view),
-            view_entry(2, &patches.corners.view),
-            view_entry(3, &patches.pyramid[0].view),
-            buffer_entry(4, &lut.buffer),
-            view_entry(5, &patches.pyramid[1].view),
-        ];
-        self.camera.bind(&ctx.device, bound, &entries);
-        Ok(&self.camera)
-    }
-
-    fn light_maps<'a>(&'a self, shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
-        shared.shadow_map.light_maps()
-    }
-
-    fn invalidate(&mut self) {
-        self.made = None;
+        Ok(Bound {
+            generations: vec![patches.generation, lut.generation],
+            entries: vec![
+                view_entry(3, &patches.corners.view),
+                view_entry(4, &patches.pyramid[0].view),
+                buffer_entry(5, &lut.buffer),
+                view_entry(6, &patches.pyramid[1].view),
+            ],
+        })
     }
 }

@@ -2,7 +2,7 @@
 //! receiver needs, so that the parts of the disk hidden by different casters, or different parts
 //! of one caster, combine as they do in reality. CPU twin: `geometry::fused::FusedTwin`.
 //!
-//! Per light or caster move: the paper's D-buffer (this method keeps a [`DBuffer`] of its own:
+//! Per light or caster move: the paper's D-buffer (this method keeps a [`DBufferLight`] of its own:
 //! its `|cx_o|` is the hidden-from-centre test and its V(t) the fallback of an overflowing list;
 //! its volume channels are drawn only where that fallback can be read, below), the candidate
 //! edges and their proxy hulls (CPU), then the light passes `passes::fused_layers` (caster
@@ -31,17 +31,16 @@ use std::time::Instant;
 use wgpu::DownlevelFlags as D;
 use wgpu::TextureFormat as F;
 
-use super::dbuffer::DBuffer;
+use super::dbuffer_light::DBufferLight;
 use super::{
     require, CameraGroup, Channel, Empty, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
     Prepare, SharedMaps,
 };
 use crate::budget::{bytes, MAX_FUSED_EDGES, MAX_FUSED_LIST_BYTES};
 use crate::geometry::fused::{
-    candidate_edges, proxy_hull, DiskMask, FusedEdge, MaskEval, DEFAULT_CAP, DEFAULT_SAMPLES,
-    WHOLE_WALK_EDGES,
+    covered_rect, edge_proxy, max_receiver_height, scene_candidate_edges, DiskMask, MaskEval,
+    DEFAULT_CAP, DEFAULT_SAMPLES, WHOLE_WALK_EDGES,
 };
-use crate::geometry::volume_vertices::{light_view_rect, union_all};
 use crate::geometry::SceneGeometry;
 use crate::render::frame_tag::FrameTag;
 use crate::render::passes::dbuffer_volumes::VolumeLayout;
@@ -49,10 +48,10 @@ use crate::render::passes::fused_layers::{FusedLayers, FusedSizes, FusedUniforms
 use crate::render::passes::fused_lists::{
     list_bytes, EdgeBuffers, EdgeRecord, FusedLists, EDGE_BYTES, HULL_BYTES, HULL_CORNERS,
 };
-use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
+use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms, PARAMS_BINDING};
 use crate::render::{
-    buffer_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext,
-    RenderError, Texture,
+    buffer_entry, storage_buffer, texture_entry, uniform_buffer, uniform_entry, view_entry,
+    GpuContext, RenderError, Texture,
 };
 
 /// Texels per side of the grid of edge lists.
@@ -103,6 +102,17 @@ pub static DBUFFER_FUSED: MethodSpec = MethodSpec::new("dbuffer-fused", SHADER, 
 
 const SHADER: &str = "methods/dbuffer_fused.wgsl";
 
+/// `DBufferFusedParams` of `shaders/methods/dbuffer_fused.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct DBufferFusedParams {
+    /// The frame tag of the paper's volume channels (`dbuffer`'s, read where its V is).
+    pub tag: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
 /// What it needs of the adapter: the layers (half-float counts, float receivers, the first
 /// layer's depth) and the maps drawn as float colour targets, the edge lists counted and stored by
 /// fragment shaders (atomics into storage buffers) over proxies the vertex stage reads from
@@ -123,34 +133,10 @@ const NEEDS: AdapterNeeds = AdapterNeeds {
 /// The method's light-space channels: textures 0 (`|cx_o|`) and 1 (the maps of
 /// `passes::fused_lists`: crossings, farthest crossing height, list count, overflow).
 pub const CHANNELS: &[Channel] = &[
-    Channel {
-        name: "layers to c",
-        texture: 1,
-        component: 0,
-        empty: Empty::NonPositive,
-        or: None,
-    },
-    Channel {
-        name: "list length",
-        texture: 1,
-        component: 2,
-        empty: Empty::NonPositive,
-        or: None,
-    },
-    Channel {
-        name: "overflow",
-        texture: 1,
-        component: 3,
-        empty: Empty::NonPositive,
-        or: None,
-    },
-    Channel {
-        name: "|cx_o|",
-        texture: 0,
-        component: 0,
-        empty: Empty::Far,
-        or: None,
-    },
+    Channel::new("layers to c", 1, 0, Empty::NonPositive),
+    Channel::new("list length", 1, 2, Empty::NonPositive),
+    Channel::new("overflow", 1, 3, Empty::NonPositive),
+    Channel::new("|cx_o|", 0, 0, Empty::Far),
 ];
 
 /// One edge's proxy hull, light-view NDC corners.
@@ -172,23 +158,31 @@ struct Edges {
 }
 
 pub struct DBufferFused {
-    paper: DBuffer,
+    paper: DBufferLight,
     /// Bound for the paper's volume channels where its V is never read (no crossing).
     no_paper: Texture,
     /// Bound for the generations of what it reads ([`Bound`]).
     camera: CameraGroup,
     shadow_uniforms: wgpu::Buffer,
+    params: wgpu::Buffer,
     uniforms: wgpu::Buffer,
     layers: FusedLayers,
     lists: FusedLists,
     edges: Option<Edges>,
-    /// The look-up tables and the sample count they were made for.
-    /// The look-up tables, for this many samples of this light (masks of a polygon's samples).
-    lut: Option<(wgpu::Buffer, u32, AreaLight)>,
+    /// The mask's look-up tables.
+    lut: Option<Lut>,
     geometry_ms: f64,
     /// What the light passes hold.
     made_for: Option<Made>,
     view_proj: glam::Mat4,
+}
+
+/// The mask's look-up tables, for this many samples of this light (a polygon's samples follow
+/// its shape).
+struct Lut {
+    buffer: wgpu::Buffer,
+    samples: u32,
+    light: AreaLight,
 }
 
 /// What the light passes were recorded for.
@@ -229,18 +223,19 @@ impl DBufferFused {
         };
         let d2 = wgpu::TextureViewDimension::D2;
         entries.extend([
-            texture_entry(2, S::FRAGMENT, d2),
+            uniform_entry(PARAMS_BINDING, S::FRAGMENT),
             texture_entry(3, S::FRAGMENT, d2),
             texture_entry(4, S::FRAGMENT, d2),
-            uniform_entry(5, S::FRAGMENT),
-            storage(6),
+            texture_entry(5, S::FRAGMENT, d2),
+            uniform_entry(6, S::FRAGMENT),
             storage(7),
             storage(8),
             storage(9),
+            storage(10),
         ]);
         let uniforms = uniform_buffer::<FusedUniforms>(&ctx.device, "DBufferFused::uniforms");
         DBufferFused {
-            paper: DBuffer::new(ctx, false),
+            paper: DBufferLight::new(ctx, false),
             no_paper: Texture::new(
                 &ctx.device,
                 "DBufferFused::no_paper",
@@ -253,6 +248,7 @@ impl DBufferFused {
                 &ctx.device,
                 "DBufferFused::shadow_uniforms",
             ),
+            params: uniform_buffer::<DBufferFusedParams>(&ctx.device, "DBufferFused::params"),
             layers: FusedLayers::new(ctx, &uniforms),
             lists: FusedLists::new(ctx, &uniforms),
             uniforms,
@@ -289,23 +285,8 @@ fn update_edges(
     let t = Instant::now();
     // A disk (the session refuses a line light for this method before a frame gets here).
     let light = inputs.scene.light.area_or_centre();
-    let prepared = inputs.prepared();
-    let edges: Vec<FusedEdge> = prepared
-        .meshes
-        .iter()
-        .zip(&geometry.casters)
-        .enumerate()
-        .flat_map(|(k, (mesh, g))| candidate_edges(mesh, &g.classes, k as u32))
-        .collect();
-    // The largest receiver height: the proxies reach down to it.
-    let h_max = inputs
-        .scene
-        .objects
-        .iter()
-        .flat_map(|o| o.mesh.positions.iter())
-        .map(|&p| light.height_of(p))
-        .filter(|h| h.is_finite())
-        .fold(0.0f32, f32::max);
+    let edges = scene_candidate_edges(inputs.prepared(), geometry);
+    let h_max = max_receiver_height(inputs.scene, &light);
     let limit = MAX_FUSED_EDGES
         .min(max_binding / EDGE_BYTES)
         .min(max_binding / HULL_BYTES);
@@ -330,9 +311,7 @@ fn update_edges(
         edges
             .iter()
             .map(|e| {
-                // Three list texels' footprint of margin at each end (the twin's proxy test).
-                let pad = [e.a, e.b].map(|p| 3.0 * p.distance(light.center) * uniforms.half_slope);
-                let hull = proxy_hull(e, &light, h_max, pad, &vp);
+                let hull = edge_proxy(e, &light, h_max, uniforms.half_slope, &vp);
                 let last = hull.last().copied().unwrap_or(glam::Vec2::ZERO);
                 let corners =
                     std::array::from_fn(|i| hull.get(i).copied().unwrap_or(last).to_array());
@@ -344,20 +323,11 @@ fn update_edges(
         // Every texel's overflow flag is set.
         [0.0, 0.0, 1.0, 1.0]
     } else {
-        let casters = inputs
-            .scene
-            .casters()
-            .flat_map(|o| o.mesh.positions.iter().copied())
-            .filter(|p| p.is_finite());
-        // The proxies' corners (light-view NDC) as points of the image.
-        let corners = hulls.iter().flatten().map(|&[x, y]| {
-            let [u, v] = [
-                x.clamp(-1.0, 1.0) * 0.5 + 0.5,
-                0.5 - y.clamp(-1.0, 1.0) * 0.5,
-            ];
-            [u, v, u, v]
-        });
-        union_all(corners.chain([light_view_rect(inputs.light_view, casters)]))
+        covered_rect(
+            inputs.scene,
+            inputs.light_view,
+            hulls.iter().flatten().copied(),
+        )
     };
     *slot = Some(Edges {
         revision: inputs.revision,
@@ -393,7 +363,7 @@ impl MethodState for DBufferFused {
         }
         // The paper's geometry (face classes), then its light pass: |cx_o| always, the volume
         // channels only where the paper's V can be read (below).
-        self.paper.geometry_stage(inputs)?;
+        self.paper.geometry_stage(inputs, DBUFFER_FUSED.name)?;
         let geometry = require(
             self.paper.geometry(),
             "the D-buffer's geometry was not made",
@@ -416,16 +386,14 @@ impl MethodState for DBufferFused {
         if self
             .lut
             .as_ref()
-            .is_none_or(|(_, s, l)| *s != samples || !same_shape(l))
+            .is_none_or(|lut| lut.samples != samples || !same_shape(&lut.light))
         {
-            use wgpu::util::DeviceExt;
             let words = DiskMask::for_light(&light, samples as usize, MaskEval::Lut).lut_words();
-            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("DBufferFused::lut"),
-                contents: bytemuck::cast_slice(&words),
-                usage: wgpu::BufferUsages::STORAGE,
+            self.lut = Some(Lut {
+                buffer: storage_buffer(device, "DBufferFused::lut", &words),
+                samples,
+                light,
             });
-            self.lut = Some((buffer, samples, light));
         }
         let uniforms = FusedUniforms::new(
             &inputs.scene.light.area_or_centre(),
@@ -464,7 +432,9 @@ impl MethodState for DBufferFused {
             self.view_proj = inputs.light_view.view_projection();
         }
         let map = shared.shadow_map.made()?;
-        let (Some(lists), Some((lut, ..))) = (self.lists.targets(), self.lut.as_ref()) else {
+        let (Some(lists), Some(Lut { buffer: lut, .. })) =
+            (self.lists.targets(), self.lut.as_ref())
+        else {
             return Err(RenderError::Gpu(
                 "dbuffer-fused's maps were not made".into(),
             ));
@@ -482,13 +452,14 @@ impl MethodState for DBufferFused {
             let none = &self.no_paper.view;
             (0, none, none, FrameTag::NONE)
         };
-        // knobs.z: the frame tag of the paper's volume channels (methods/dbuffer.wgsl's).
-        let tag = tag.bits() as f32;
-        let shadow = ShadowUniforms::new(inputs.light_view, map.size, [0.0, 0.0, tag, 0.0]);
-        inputs
-            .ctx
-            .queue
-            .write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow));
+        let shadow = ShadowUniforms::new(inputs.light_view, map.size);
+        let params = DBufferFusedParams {
+            tag: tag.bits(),
+            ..DBufferFusedParams::default()
+        };
+        let queue = &inputs.ctx.queue;
+        queue.write_buffer(&self.shadow_uniforms, 0, bytemuck::bytes_of(&shadow));
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let bound = Bound {
             map: map.generation,
             paper,
@@ -502,14 +473,15 @@ impl MethodState for DBufferFused {
             &[
                 buffer_entry(0, &self.shadow_uniforms),
                 view_entry(1, &map.distance.view),
-                view_entry(2, umbra),
-                view_entry(3, penumbra),
-                view_entry(4, &lists.maps.view),
-                buffer_entry(5, &self.uniforms),
-                buffer_entry(6, &edges.buffers.edges),
-                buffer_entry(7, &lists.counts),
-                buffer_entry(8, &lists.lists),
-                buffer_entry(9, lut),
+                buffer_entry(PARAMS_BINDING, &self.params),
+                view_entry(3, umbra),
+                view_entry(4, penumbra),
+                view_entry(5, &lists.maps.view),
+                buffer_entry(6, &self.uniforms),
+                buffer_entry(7, &edges.buffers.edges),
+                buffer_entry(8, &lists.counts),
+                buffer_entry(9, &lists.lists),
+                buffer_entry(10, lut),
             ],
         );
         Ok(&self.camera)

@@ -24,8 +24,10 @@ use super::{
 };
 use crate::geometry::light_view::LightView;
 use crate::render::passes::extended_light_map::{ElmParams, ExtendedLightMap, Pattern};
-use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
-use crate::render::{buffer_entry, uniform_buffer, view_entry, GpuContext, RenderError};
+use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms, PARAMS_BINDING};
+use crate::render::{
+    buffer_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
+};
 
 /// Bits of the distance in the alpha channel.
 pub static DEPTH_BITS: Knob = Knob::int(
@@ -71,34 +73,10 @@ pub const INNER_SHARE: f32 = 0.6;
 
 /// The map's channels: the light's colour and the distance.
 pub const CHANNELS: &[Channel] = &[
-    Channel {
-        name: "light R",
-        texture: 0,
-        component: 0,
-        empty: Empty::NonPositive,
-        or: None,
-    },
-    Channel {
-        name: "light G",
-        texture: 0,
-        component: 1,
-        empty: Empty::NonPositive,
-        or: None,
-    },
-    Channel {
-        name: "light B",
-        texture: 0,
-        component: 2,
-        empty: Empty::NonPositive,
-        or: None,
-    },
-    Channel {
-        name: "distance (A)",
-        texture: 0,
-        component: 3,
-        empty: Empty::Far,
-        or: None,
-    },
+    Channel::new("light R", 0, 0, Empty::NonPositive),
+    Channel::new("light G", 0, 1, Empty::NonPositive),
+    Channel::new("light B", 0, 2, Empty::NonPositive),
+    Channel::new("distance (A)", 0, 3, Empty::Far),
 ];
 
 /// The pattern the knob asks for.
@@ -170,6 +148,29 @@ pub fn light_rgb(p: &ElmParams, y: Vec3, n: Vec3) -> Vec3 {
     Vec3::splat(p.intensity * spot * cos_receiver * cos_emitter)
 }
 
+/// `ExtendedLightMapParams` of `shaders/methods/extended_light_map.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ExtendedLightMapParams {
+    /// 1 / the light view's far distance: the alpha channel's scale.
+    pub inv_far: f32,
+    /// The alpha channel's depth levels, `2^bits − 1`.
+    pub levels: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+impl ExtendedLightMapParams {
+    pub fn new(p: &ElmParams) -> ExtendedLightMapParams {
+        ExtendedLightMapParams {
+            inv_far: 1.0 / p.far,
+            // At most 2^24 − 1: exact in the f32 `levels()` is.
+            levels: p.levels() as u32,
+            ..ExtendedLightMapParams::default()
+        }
+    }
+}
+
 /// What the map was made from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Made {
@@ -184,16 +185,20 @@ pub struct ElmMethod {
     /// Bound for the map's generation.
     camera: CameraGroup,
     uniforms: wgpu::Buffer,
+    params: wgpu::Buffer,
     made: Option<Made>,
     view_proj: Mat4,
 }
 
 impl ElmMethod {
     pub fn new(ctx: &GpuContext) -> ElmMethod {
+        let mut entries = lookup_entries().to_vec();
+        entries.push(uniform_entry(PARAMS_BINDING, wgpu::ShaderStages::FRAGMENT));
         ElmMethod {
             elm: ExtendedLightMap::new(ctx),
-            camera: CameraGroup::new(ctx, SHADER, &lookup_entries()),
+            camera: CameraGroup::new(ctx, SHADER, &entries),
             uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "ElmMethod::uniforms"),
+            params: uniform_buffer::<ExtendedLightMapParams>(&ctx.device, "ElmMethod::params"),
             made: None,
             view_proj: Mat4::IDENTITY,
         }
@@ -217,16 +222,16 @@ impl MethodState for ElmMethod {
             self.made = Some(made);
         }
         let map = require(self.elm.targets(), "the extended light map was not made")?;
-        let uniforms = ShadowUniforms::new(
-            inputs.light_view,
-            map.size,
-            [1.0 / params.far, params.levels(), 0.0, 0.0],
-        );
+        let uniforms = ShadowUniforms::new(inputs.light_view, map.size);
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+        let own = ExtendedLightMapParams::new(&params);
+        ctx.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&own));
         let entries = [
             buffer_entry(0, &self.uniforms),
             view_entry(1, &map.map.view),
+            buffer_entry(PARAMS_BINDING, &self.params),
         ];
         self.camera.bind(&ctx.device, map.generation, &entries);
         Ok(&self.camera)

@@ -1,12 +1,12 @@
 //! `hard`: a shadow map from the light centre (Williams 1978), the `|cx_o|` test alone with
 //! slope-scaled bias (`shaders/methods/hard.wgsl`).
 
-use super::on_shadow_map::{Flavor, OnShadowMap};
+use super::shadow_mapped::ShadowMapped;
 use super::MethodSpec;
 use super::{Cost, Quality};
 
 pub static HARD: MethodSpec = MethodSpec::new("hard", SHADER, |ctx| {
-    Box::new(OnShadowMap::new(ctx, &FLAVOR))
+    Box::new(ShadowMapped::new(ctx, SHADER, (), |_| ()))
 })
 .adapter(super::SHADOW_MAPPED)
 .about("hard shadow map from the light centre")
@@ -15,9 +15,3 @@ pub static HARD: MethodSpec = MethodSpec::new("hard", SHADER, |ctx| {
 .sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048], &[4096]]);
 
 const SHADER: &str = "methods/hard.wgsl";
-
-static FLAVOR: Flavor = Flavor {
-    shader: SHADER,
-    knobs: |_| [0.0; 4],
-    extra: None,
-};

@@ -2,9 +2,9 @@
 //! (2R + 1)² block of hard tests, each against the receiver's plane
 //! (`shaders/methods/pcf.wgsl`).
 
-use super::on_shadow_map::{Flavor, OnShadowMap};
+use super::shadow_mapped::ShadowMapped;
 use super::Cost;
-use super::{Knob, MethodSpec, Quality};
+use super::{FrameInputs, Knob, MethodSpec, Quality};
 
 /// The kernel radius R in shadow-map texels.
 pub static RADIUS: Knob = Knob::int(
@@ -15,7 +15,7 @@ pub static RADIUS: Knob = Knob::int(
 );
 
 pub static PCF: MethodSpec = MethodSpec::new("pcf", SHADER, |ctx| {
-    Box::new(OnShadowMap::new(ctx, &FLAVOR))
+    Box::new(ShadowMapped::new(ctx, SHADER, (), PcfParams::new))
 })
 .adapter(super::SHADOW_MAPPED)
 .about("percentage-closer filtering of the shadow map")
@@ -26,8 +26,22 @@ pub static PCF: MethodSpec = MethodSpec::new("pcf", SHADER, |ctx| {
 
 const SHADER: &str = "methods/pcf.wgsl";
 
-static FLAVOR: Flavor = Flavor {
-    shader: SHADER,
-    knobs: |f| [f.knobs.get(&RADIUS) as f32, 0.0, 0.0, 0.0],
-    extra: None,
-};
+/// `PcfParams` of `shaders/methods/pcf.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PcfParams {
+    /// The kernel radius R in texels.
+    pub radius: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
+impl PcfParams {
+    pub fn new(f: &FrameInputs<'_>) -> PcfParams {
+        PcfParams {
+            radius: f.knobs.get(&RADIUS),
+            ..PcfParams::default()
+        }
+    }
+}

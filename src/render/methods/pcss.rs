@@ -3,9 +3,12 @@
 //! the penumbra the blockers' mean distance predicts, both over a rotated Poisson disk
 //! (`shaders/methods/pcss.wgsl`).
 
-use super::on_shadow_map::{Flavor, OnShadowMap};
+use super::shadow_mapped::{Bound, MapProducts, ShadowMapped};
 use super::Cost;
 use super::{FrameInputs, Knob, MethodSpec, Quality};
+use crate::render::passes::shadow_map::ShadowMapTargets;
+use crate::render::timer::Recorder;
+use crate::render::{buffer_entry, uniform_entry, GpuContext, RenderError};
 use crate::scene::Scene;
 
 pub static BLOCKER_TAPS: Knob = Knob::int(
@@ -23,7 +26,12 @@ pub static FILTER_TAPS: Knob = Knob::int(
 );
 
 pub static PCSS: MethodSpec = MethodSpec::new("pcss", SHADER, |ctx| {
-    Box::new(OnShadowMap::new(ctx, &FLAVOR))
+    Box::new(ShadowMapped::new(
+        ctx,
+        SHADER,
+        PoissonDisk::new(ctx),
+        PcssParams::new,
+    ))
 })
 .adapter(super::SHADOW_MAPPED)
 .about("percentage-closer soft shadows (Fernando 2005)")
@@ -50,32 +58,73 @@ pub const POISSON_POINTS: usize = 64;
 
 const SHADER: &str = "methods/pcss.wgsl";
 
-static FLAVOR: Flavor = Flavor {
-    shader: SHADER,
-    knobs: pcss_knobs,
-    extra: Some(((POISSON_POINTS * 8) as u64, poisson_bytes)),
-};
-
-fn pcss_knobs(f: &FrameInputs<'_>) -> [f32; 4] {
-    [
-        f.knobs.get(&BLOCKER_TAPS) as f32,
-        f.knobs.get(&FILTER_TAPS) as f32,
-        nearest_caster(f.scene),
-        0.0,
-    ]
+/// `PcssParams` of `shaders/methods/pcss.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PcssParams {
+    pub blocker_taps: u32,
+    pub filter_taps: u32,
+    /// The nearest caster's distance from the light centre ([`nearest_caster`]).
+    pub nearest_caster: f32,
+    pub _pad0: u32,
 }
 
-fn poisson_bytes() -> Vec<u8> {
-    let points: Vec<f32> = poisson_disk(POISSON_POINTS)
-        .iter()
-        .flat_map(|p| [p.x, p.y])
-        .collect();
-    bytemuck::cast_slice(&points).to_vec()
+impl PcssParams {
+    pub fn new(f: &FrameInputs<'_>) -> PcssParams {
+        PcssParams {
+            blocker_taps: f.knobs.get(&BLOCKER_TAPS),
+            filter_taps: f.knobs.get(&FILTER_TAPS),
+            nearest_caster: nearest_caster(f.scene),
+            _pad0: 0,
+        }
+    }
+}
+
+/// The Poisson disk's points, bound at 3 (`PoissonDisk` of the shader), made once.
+pub struct PoissonDisk {
+    buffer: wgpu::Buffer,
+}
+
+impl PoissonDisk {
+    fn new(ctx: &GpuContext) -> PoissonDisk {
+        use wgpu::util::DeviceExt;
+        let points: Vec<f32> = poisson_disk(POISSON_POINTS)
+            .iter()
+            .flat_map(|p| [p.x, p.y])
+            .collect();
+        let buffer = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("PoissonDisk"),
+                contents: bytemuck::cast_slice(&points),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        PoissonDisk { buffer }
+    }
+}
+
+impl MapProducts for PoissonDisk {
+    type Key = ();
+
+    fn layout(&self) -> Vec<wgpu::BindGroupLayoutEntry> {
+        vec![uniform_entry(3, wgpu::ShaderStages::FRAGMENT)]
+    }
+
+    fn key(&self, _: &FrameInputs<'_>) {}
+
+    fn record(&mut self, _: &FrameInputs<'_>, _: &mut Recorder<'_>, _: &ShadowMapTargets, _: ()) {}
+
+    fn entries(&mut self, _: &FrameInputs<'_>) -> Result<Bound<'_>, RenderError> {
+        Ok(Bound {
+            generations: Vec::new(),
+            entries: vec![buffer_entry(3, &self.buffer)],
+        })
+    }
 }
 
 /// The distance from the light centre to the nearest caster vertex in front of the light: where
 /// the blocker search stops.
-pub(crate) fn nearest_caster(scene: &Scene) -> f32 {
+fn nearest_caster(scene: &Scene) -> f32 {
     let light = scene.light;
     scene
         .casters()
@@ -83,21 +132,6 @@ pub(crate) fn nearest_caster(scene: &Scene) -> f32 {
         .filter(|v| light.reaches(**v))
         .map(|v| (*v - light.center()).length())
         .filter(|d| d.is_finite() && *d > 0.0)
-        .fold(f32::MAX, f32::min)
-        .min(1e30)
-}
-
-/// The least height above the light's plane of a caster vertex in front of it: where the searches of
-/// `msm-soft` and `bitmask` start (the light's reach in the map is widest there).
-pub(crate) fn lowest_caster(scene: &Scene) -> f32 {
-    let Some(light) = scene.light.as_area() else {
-        return 1e30;
-    };
-    scene
-        .casters()
-        .flat_map(|o| o.mesh.positions.iter())
-        .map(|v| light.normal.dot(*v - light.center))
-        .filter(|h| h.is_finite() && *h > 0.0)
         .fold(f32::MAX, f32::min)
         .min(1e30)
 }

@@ -60,7 +60,18 @@ pub(super) fn camera_entries() -> [wgpu::BindGroupLayoutEntry; 2] {
     [v, uniform_entry(1, wgpu::ShaderStages::FRAGMENT)]
 }
 
-/// `rays` of `methods/reference.wgsl`: the rays each pixel has cast (x), for the cost view.
+/// `ReferenceParams` of `methods/reference.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ReferenceParams {
+    /// The rays each pixel in front of the light has cast, for the cost view.
+    pub rays: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
+/// The buffer of its [`ReferenceParams`] (this method's and `reference-hard`'s).
 pub(super) struct RaysUniform {
     pub buffer: wgpu::Buffer,
 }
@@ -68,14 +79,17 @@ pub(super) struct RaysUniform {
 impl RaysUniform {
     pub fn new(ctx: &GpuContext) -> RaysUniform {
         RaysUniform {
-            buffer: uniform_buffer::<[f32; 4]>(&ctx.device, "reference::rays"),
+            buffer: uniform_buffer::<ReferenceParams>(&ctx.device, "reference::params"),
         }
     }
 
     pub fn write(&self, ctx: &GpuContext, rays: u32) {
-        let value = [rays as f32, 0.0, 0.0, 0.0];
+        let params = ReferenceParams {
+            rays,
+            ..ReferenceParams::default()
+        };
         ctx.queue
-            .write_buffer(&self.buffer, 0, bytemuck::cast_slice(&value));
+            .write_buffer(&self.buffer, 0, bytemuck::bytes_of(&params));
     }
 }
 

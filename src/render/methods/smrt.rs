@@ -15,7 +15,7 @@ use super::{
     AdapterNeeds, CameraGroup, Cost, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
     Prepare, Quality, Scaled, SharedMaps, Switch,
 };
-use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
+use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms, PARAMS_BINDING};
 use crate::render::passes::stencil_volumes::ScreenPass;
 use crate::render::{
     buffer_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
@@ -105,11 +105,11 @@ const SHADER: &str = "methods/smrt.wgsl";
 /// them).
 const NEEDS: AdapterNeeds = AdapterNeeds::formats(&super::MAP_AND_SCREEN);
 
-/// `SmrtUniforms` of `shaders/methods/smrt.wgsl`: UE's settings for local lights and the
-/// camera's field of view.
+/// `SmrtParams` of `shaders/methods/smrt.wgsl`: UE's settings for local lights, the camera's
+/// field of view and the ray counts.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct SmrtUniforms {
+pub struct SmrtParams {
     pub extrapolate_slope: f32,
     pub cot_max_angle: f32,
     pub texel_dither: f32,
@@ -117,16 +117,23 @@ pub struct SmrtUniforms {
     pub screen_ray: f32,
     pub normal_bias: f32,
     pub tan_half_fov: [f32; 2],
+    /// Rays per pixel.
+    pub rays: u32,
+    /// Shadow-map samples per ray.
+    pub steps: u32,
+    /// 1 for the adaptive ray count, 0 for every ray.
+    pub adaptive: u32,
+    pub _pad0: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<SmrtUniforms>() == 32);
+const _: () = assert!(std::mem::size_of::<SmrtParams>() == 48);
 
-impl SmrtUniforms {
-    pub fn new(f: &FrameInputs<'_>) -> SmrtUniforms {
+impl SmrtParams {
+    pub fn new(f: &FrameInputs<'_>) -> SmrtParams {
         let angle = f.knobs.get(&MAX_ANGLE);
         let tan_y = (f.scene.camera.fov_y_deg.to_radians() * 0.5).tan();
         let aspect = f.view.width as f32 / f.view.height.max(1) as f32;
-        SmrtUniforms {
+        SmrtParams {
             extrapolate_slope: f.knobs.get(&EXTRAPOLATE_SLOPE),
             cot_max_angle: 1.0 / angle.tan().max(1e-6),
             texel_dither: TEXEL_DITHER,
@@ -134,18 +141,12 @@ impl SmrtUniforms {
             screen_ray: SCREEN_RAY_LENGTH,
             normal_bias: NORMAL_BIAS,
             tan_half_fov: [tan_y * aspect, tan_y],
+            rays: f.knobs.get(&RAYS),
+            steps: f.knobs.get(&STEPS),
+            adaptive: u32::from(f.knobs.get(&ADAPTIVE)),
+            _pad0: 0,
         }
     }
-}
-
-fn smrt_knobs(f: &FrameInputs<'_>) -> [f32; 4] {
-    let k = f.knobs;
-    [
-        k.get(&RAYS) as f32,
-        k.get(&STEPS) as f32,
-        if k.get(&ADAPTIVE) { 1.0 } else { 0.0 },
-        0.0,
-    ]
 }
 
 /// What the camera group was bound to.
@@ -159,23 +160,23 @@ pub struct Smrt {
     screen: ScreenPass,
     camera: CameraGroup,
     uniforms: wgpu::Buffer,
-    settings: wgpu::Buffer,
+    params: wgpu::Buffer,
 }
 
 impl Smrt {
     pub fn new(ctx: &GpuContext) -> Smrt {
         let mut entries = lookup_entries().to_vec();
+        entries.push(uniform_entry(PARAMS_BINDING, wgpu::ShaderStages::FRAGMENT));
         entries.push(texture_entry(
-            2,
+            3,
             wgpu::ShaderStages::FRAGMENT,
             wgpu::TextureViewDimension::D2,
         ));
-        entries.push(uniform_entry(3, wgpu::ShaderStages::FRAGMENT));
         Smrt {
             screen: ScreenPass::new(ctx),
             camera: CameraGroup::new(ctx, SHADER, &entries),
             uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "Smrt::uniforms"),
-            settings: uniform_buffer::<SmrtUniforms>(&ctx.device, "Smrt::settings"),
+            params: uniform_buffer::<SmrtParams>(&ctx.device, "Smrt::params"),
         }
     }
 }
@@ -185,13 +186,13 @@ impl MethodState for Smrt {
         let Prepare(inputs, shared, rec) = p;
         let ctx = inputs.ctx;
         let map = shared.shadow_map.update(inputs, rec)?;
-        let uniforms = ShadowUniforms::new(inputs.light_view, map.size, smrt_knobs(inputs));
+        let uniforms = ShadowUniforms::new(inputs.light_view, map.size);
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
         ctx.queue.write_buffer(
-            &self.settings,
+            &self.params,
             0,
-            bytemuck::bytes_of(&SmrtUniforms::new(inputs)),
+            bytemuck::bytes_of(&SmrtParams::new(inputs)),
         );
         let targets = self.screen.begin(ctx, &inputs.view);
         let bound = Bound {
@@ -201,8 +202,8 @@ impl MethodState for Smrt {
         let entries = [
             buffer_entry(0, &self.uniforms),
             view_entry(1, &map.distance.view),
-            view_entry(2, &targets.position.view),
-            buffer_entry(3, &self.settings),
+            buffer_entry(PARAMS_BINDING, &self.params),
+            view_entry(3, &targets.position.view),
         ];
         self.camera.bind(&ctx.device, bound, &entries);
         self.screen.record_prepass(rec, inputs.surfaces);

@@ -8,16 +8,13 @@
 use super::Cost;
 use wgpu::TextureFormat as F;
 
-use super::{
-    require, AdapterNeeds, CameraGroup, FrameInputs, Knob, LightMaps, MethodSpec, MethodState,
-    Prepare, Quality, Scaled, SharedMaps, SHADOW_MAP,
-};
+use super::shadow_mapped::{Bound, MapProducts, ShadowMapped};
+use super::{require, AdapterNeeds, FrameInputs, Knob, MethodSpec, Quality, Scaled, SHADOW_MAP};
 use crate::render::adapter::{FormatNeed, Usage};
 use crate::render::passes::moments::Moments;
-use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms};
-use crate::render::{
-    buffer_entry, texture_entry, uniform_buffer, view_entry, GpuContext, RenderError,
-};
+use crate::render::passes::shadow_map::ShadowMapTargets;
+use crate::render::timer::Recorder;
+use crate::render::{texture_entry, view_entry, RenderError};
 
 /// The filter radius R in shadow-map texels.
 pub static RADIUS: Knob = Knob::int(
@@ -36,15 +33,20 @@ pub static BLEED: Scaled = Scaled::new(
     100,
 );
 
-pub static VSM: MethodSpec = MethodSpec::new("vsm", SHADER, |ctx| Box::new(Vsm::new(ctx)))
-    .adapter(NEEDS)
-    .about(
-        "variance shadow maps (Donnelly & Lauritzen 2006), filtered, with light-bleeding reduction",
-    )
-    .knobs(&[&RADIUS, &BLEED.0])
-    .hard()
-    .cost(Cost::counted("moment texels").constant("one filtered moment texel"))
-    .sweep(&[Quality::Knob(&RADIUS)], &[&[1], &[3], &[6], &[12]]);
+pub static VSM: MethodSpec = MethodSpec::new("vsm", SHADER, |ctx| {
+    Box::new(ShadowMapped::new(
+        ctx,
+        SHADER,
+        Moments::new(ctx),
+        VsmParams::new,
+    ))
+})
+.adapter(NEEDS)
+.about("variance shadow maps (Donnelly & Lauritzen 2006), filtered, with light-bleeding reduction")
+.knobs(&[&RADIUS, &BLEED.0])
+.hard()
+.cost(Cost::counted("moment texels").constant("one filtered moment texel"))
+.sweep(&[Quality::Knob(&RADIUS)], &[&[1], &[3], &[6], &[12]]);
 
 const SHADER: &str = "methods/vsm.wgsl";
 
@@ -59,85 +61,67 @@ const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[
 /// flat receiver (its own moments have no spread) without visible softening.
 pub const MIN_VARIANCE: f32 = 1e-6;
 
-/// What the moments were made from.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Made {
-    revision: u64,
-    radius: u32,
-    map: u64,
+/// `VsmParams` of `shaders/methods/vsm.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct VsmParams {
+    /// The light-bleeding reduction (0..1).
+    pub bleed: f32,
+    /// The least variance, relative to `|cx|²` ([`MIN_VARIANCE`]).
+    pub min_variance: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
 }
 
-pub struct Vsm {
-    moments: Moments,
-    camera: CameraGroup,
-    uniforms: wgpu::Buffer,
-    made: Option<Made>,
+impl VsmParams {
+    pub fn new(f: &FrameInputs<'_>) -> VsmParams {
+        VsmParams {
+            bleed: f.knobs.get(&BLEED),
+            min_variance: MIN_VARIANCE,
+            ..VsmParams::default()
+        }
+    }
 }
 
-impl Vsm {
-    pub fn new(ctx: &GpuContext) -> Vsm {
-        let mut entries = lookup_entries().to_vec();
-        entries.push(texture_entry(
-            2,
+/// The moments, made for a filter radius, bound at 3.
+impl MapProducts for Moments {
+    type Key = u32;
+
+    fn layout(&self) -> Vec<wgpu::BindGroupLayoutEntry> {
+        vec![texture_entry(
+            3,
             wgpu::ShaderStages::FRAGMENT,
             wgpu::TextureViewDimension::D2,
-        ));
-        Vsm {
-            moments: Moments::new(ctx),
-            camera: CameraGroup::new(ctx, SHADER, &entries),
-            uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "Vsm::uniforms"),
-            made: None,
-        }
-    }
-}
-
-fn vsm_knobs(f: &FrameInputs<'_>) -> [f32; 4] {
-    [f.knobs.get(&BLEED), MIN_VARIANCE, 0.0, 0.0]
-}
-
-impl MethodState for Vsm {
-    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
-        let Prepare(inputs, shared, rec) = p;
-        let ctx = inputs.ctx;
-        let map = shared.shadow_map.update(inputs, rec)?;
-        let made = Made {
-            revision: inputs.revision,
-            radius: inputs.knobs.get(&RADIUS),
-            map: map.generation,
-        };
-        if self.made != Some(made) {
-            self.moments.record(
-                ctx,
-                rec,
-                &map.distance.view,
-                map.size,
-                made.radius,
-                inputs.light_view.far,
-            );
-            self.made = Some(made);
-        }
-        let moments = require(
-            self.moments.targets(),
-            "the variance shadow map was not made",
-        )?;
-        let uniforms = ShadowUniforms::new(inputs.light_view, map.size, vsm_knobs(inputs));
-        ctx.queue
-            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-        let entries = [
-            buffer_entry(0, &self.uniforms),
-            view_entry(1, &map.distance.view),
-            view_entry(2, &moments.moments.view),
-        ];
-        self.camera
-            .bind(&ctx.device, (map.generation, moments.generation), &entries);
-        Ok(&self.camera)
+        )]
     }
 
-    fn light_maps<'a>(&'a self, shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
-        shared.shadow_map.light_maps()
+    fn key(&self, inputs: &FrameInputs<'_>) -> u32 {
+        inputs.knobs.get(&RADIUS)
     }
 
-    fn invalidate(&mut self) {
-        self.made = None;
+    fn record(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        rec: &mut Recorder<'_>,
+        map: &ShadowMapTargets,
+        radius: u32,
+    ) {
+        Moments::record(
+            self,
+            inputs.ctx,
+            rec,
+            &map.distance.view,
+            map.size,
+            radius,
+            inputs.light_view.far,
+        );
+    }
+
+    fn entries(&mut self, _: &FrameInputs<'_>) -> Result<Bound<'_>, RenderError> {
+        let moments = require(self.targets(), "the variance shadow map was not made")?;
+        Ok(Bound {
+            generations: vec![moments.generation],
+            entries: vec![view_entry(3, &moments.moments.view)],
+        })
     }
 }

@@ -19,19 +19,15 @@
 use super::Cost;
 use super::{AdapterNeeds, STENCIL_VOLUMES};
 use crate::render::adapter::{FormatNeed, Usage};
-use std::time::Instant;
 use wgpu::TextureFormat as F;
 
 use glam::Vec3;
 
-use super::shadow_volume::{build_volumes, open_meshes, OPEN};
-use super::{
-    require, v_texture_entries, CameraGroup, Knobs, MethodSpec, MethodState, Prepare, Switch,
-};
+use super::screen_volumes::{BuiltVolumes, Counted, OnVolumes, ScreenVolumes, OPEN};
+use super::{require, v_texture_entries, CameraGroup, FrameInputs, Knobs, MethodSpec, Switch};
 use crate::geometry::hard_volume::{scene_volumes, OpenMeshes};
 use crate::geometry::volumes::{VolumeKind, VolumeMesh, VolumeVertex};
 use crate::geometry::wedges::{wedge_hull, wedge_reach};
-use crate::geometry::SceneGeometry;
 use crate::render::gpu_scene::VertexChunks;
 use crate::render::passes::stencil_volumes::ScreenPass;
 use crate::render::passes::wedges::{WedgeVertex, Wedges};
@@ -50,7 +46,9 @@ pub static HORIZON: Switch = Switch::new(
 );
 
 pub static WEDGES: MethodSpec = MethodSpec::new("wedges", SHADER, |ctx| {
-    Box::new(WedgesMethod::new(ctx))
+    let screen = ScreenPass::new(ctx);
+    let method = WedgesMethod::new(ctx, &screen);
+    Box::new(ScreenVolumes::new(screen, method))
 })
 .adapter(NEEDS)
 .about("penumbra wedges: soft shadow volumes (Akenine-Möller & Assarsson 2002/2003)")
@@ -78,7 +76,7 @@ const NEEDS: AdapterNeeds = AdapterNeeds::formats(&[
 ]);
 
 /// The camera pass's group 1: the screen visibility (`shared/screen_v.wgsl`), the coverage sum
-/// and the options ([`WedgeOptions`]).
+/// and the parameters ([`WedgesParams`]).
 fn camera_entries() -> [wgpu::BindGroupLayoutEntry; 3] {
     let [v] = v_texture_entries();
     [
@@ -92,11 +90,24 @@ fn camera_entries() -> [wgpu::BindGroupLayoutEntry; 3] {
     ]
 }
 
-/// `wedge_options` of `shaders/methods/wedges.wgsl`: x = 1 clips by the receiver's plane.
-type WedgeOptions = [f32; 4];
+/// `WedgesParams` of `shaders/methods/wedges.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct WedgesParams {
+    /// 1: V at most the part of the light in front of the receiver's plane ([`HORIZON`]).
+    pub horizon: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
 
-fn wedge_options(knobs: &Knobs) -> WedgeOptions {
-    [f32::from(knobs.get(&HORIZON)), 0.0, 0.0, 0.0]
+impl WedgesParams {
+    fn new(knobs: &Knobs) -> WedgesParams {
+        WedgesParams {
+            horizon: u32::from(knobs.get(&HORIZON)),
+            ..WedgesParams::default()
+        }
+    }
 }
 
 /// The wedges of every side edge of `volumes`' hard volumes, as GPU vertices, and the overlay's
@@ -140,93 +151,79 @@ pub fn build_wedges(
     (vertices, overlay)
 }
 
+/// Its part of the screen-space volumes: the wedges beside the hard volumes, their coverage
+/// sum and the resolve.
 pub struct WedgesMethod {
-    screen: ScreenPass,
     wedges: Wedges,
     /// Bound for the generation of the screen targets.
     camera: CameraGroup,
-    volumes: VertexChunks,
     wedge_vertices: VertexChunks,
-    built_for: Option<(u64, OpenMeshes)>,
-    geometry: Option<SceneGeometry>,
-    builds: u64,
-    geometry_ms: f64,
     options: wgpu::Buffer,
 }
 
 impl WedgesMethod {
-    pub fn new(ctx: &GpuContext) -> WedgesMethod {
-        let screen = ScreenPass::new(ctx);
-        let wedges = Wedges::new(ctx, &screen);
+    pub fn new(ctx: &GpuContext, screen: &ScreenPass) -> WedgesMethod {
         WedgesMethod {
-            screen,
-            wedges,
+            wedges: Wedges::new(ctx, screen),
             camera: CameraGroup::new(ctx, SHADER, &camera_entries()),
-            volumes: VertexChunks::empty(),
             wedge_vertices: VertexChunks::empty(),
-            built_for: None,
-            geometry: None,
-            builds: 0,
-            geometry_ms: 0.0,
-            options: uniform_buffer::<WedgeOptions>(&ctx.device, "Wedges::options"),
+            options: uniform_buffer::<WedgesParams>(&ctx.device, "Wedges::params"),
         }
     }
 }
 
-impl MethodState for WedgesMethod {
-    fn prepare(&mut self, p: Prepare<'_, '_>) -> Result<&CameraGroup, RenderError> {
-        let Prepare(inputs, _, rec) = p;
+impl OnVolumes for WedgesMethod {
+    const LABEL: &'static str = "Wedges::volumes";
+
+    fn build(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        built: &mut BuiltVolumes,
+    ) -> Result<(), RenderError> {
+        let light = *inputs.area(WEDGES.name)?;
+        // The hard part is shadow-volume's volumes from the centre, as they are. The wedges: each
+        // silhouette edge once (Crow's one-sided sides; see geometry::wedges::wedge_edges),
+        // whatever `open` closes the stencil count with.
+        let volumes = scene_volumes(inputs.prepared(), light.center, OpenMeshes::OneSided);
+        let reach = wedge_reach(inputs.scene);
+        let mut vertices = Vec::new();
+        for ((_, _, volume), caster) in volumes.iter().zip(&mut built.geometry.casters) {
+            let (v, overlay) = build_wedges(&light, &volume.sides, reach);
+            vertices.extend(v);
+            // Wedges beside the hard volume's sides in the overlay's penumbra volume.
+            let base = caster.volumes.vertices.len() as u32;
+            caster.volumes.vertices.extend(overlay.vertices);
+            caster
+                .volumes
+                .indices
+                .extend(overlay.indices.iter().map(|i| i + base));
+            caster.stats.penumbra_edges = volume.sides.len();
+            caster.stats.penumbra_triangles = overlay.indices.len() / 3;
+        }
+        built.geometry.stats.penumbra_edges = built
+            .geometry
+            .casters
+            .iter()
+            .map(|c| c.stats.penumbra_edges)
+            .sum();
+        built.geometry.stats.penumbra_triangles = vertices.len() / 3;
+        self.wedge_vertices = VertexChunks::new(&inputs.ctx.device, "Wedges::wedges", &vertices);
+        Ok(())
+    }
+
+    fn record(&mut self, c: Counted<'_, '_>) -> Result<&CameraGroup, RenderError> {
+        let Counted(inputs, rec, screen, generation) = c;
         let light = *inputs.area(WEDGES.name)?;
         let ctx = inputs.ctx;
-        let open = open_meshes(inputs.knobs);
-        if self.built_for != Some((inputs.revision, open)) {
-            let t = Instant::now();
-            // The hard part: shadow-volume's volumes from the centre, as they are.
-            let mut built = build_volumes(inputs, light.center, open, self.screen.pass.push());
-            // The wedges: each silhouette edge once (Crow's one-sided sides; see
-            // geometry::wedges::wedge_edges), whatever `open` closes the stencil count with.
-            let volumes = scene_volumes(inputs.prepared(), light.center, OpenMeshes::OneSided);
-            let reach = wedge_reach(inputs.scene);
-            let mut vertices = Vec::new();
-            for ((_, _, volume), caster) in volumes.iter().zip(&mut built.geometry.casters) {
-                let (v, overlay) = build_wedges(&light, &volume.sides, reach);
-                vertices.extend(v);
-                // Wedges beside the hard volume's sides in the overlay's penumbra volume.
-                let base = caster.volumes.vertices.len() as u32;
-                caster.volumes.vertices.extend(overlay.vertices);
-                caster
-                    .volumes
-                    .indices
-                    .extend(overlay.indices.iter().map(|i| i + base));
-                caster.stats.penumbra_edges = volume.sides.len();
-                caster.stats.penumbra_triangles = overlay.indices.len() / 3;
-            }
-            built.geometry.stats.penumbra_edges = built
-                .geometry
-                .casters
-                .iter()
-                .map(|c| c.stats.penumbra_edges)
-                .sum();
-            built.geometry.stats.penumbra_triangles = vertices.len() / 3;
-            self.volumes = VertexChunks::new(&ctx.device, "Wedges::volumes", &built.vertices);
-            self.wedge_vertices = VertexChunks::new(&ctx.device, "Wedges::wedges", &vertices);
-            self.geometry = Some(built.geometry);
-            self.geometry_ms = t.elapsed().as_secs_f64() * 1e3;
-            self.builds += 1;
-            self.built_for = Some((inputs.revision, open));
-        }
         ctx.queue.write_buffer(
             &self.options,
             0,
-            bytemuck::bytes_of(&wedge_options(inputs.knobs)),
+            bytemuck::bytes_of(&WedgesParams::new(inputs.knobs)),
         );
-        let generation = self.screen.begin(ctx, &inputs.view).generation;
-        self.screen.record_prepass(rec, inputs.surfaces);
-        self.screen.record_zfail(rec, &self.volumes);
         self.wedges
-            .record(ctx, rec, &self.screen, &light, &self.wedge_vertices);
+            .record(ctx, rec, WEDGES.name, screen, &light, &self.wedge_vertices);
         let missing = "the wedges' targets were not made";
-        let targets = require(self.screen.targets(), missing)?;
+        let targets = require(screen.targets(), missing)?;
         let sum = require(self.wedges.sum(), missing)?;
         self.camera.bind(
             &ctx.device,
@@ -238,20 +235,5 @@ impl MethodState for WedgesMethod {
             ],
         );
         Ok(&self.camera)
-    }
-
-    fn geometry(&self) -> Option<&SceneGeometry> {
-        self.geometry.as_ref()
-    }
-
-    fn geometry_builds(&self) -> (u64, f64) {
-        (self.builds, self.geometry_ms)
-    }
-
-    fn stencil_fill(&self, ctx: &GpuContext) -> Option<Result<f64, RenderError>> {
-        Some(
-            self.screen
-                .measure_fill(ctx, &|pass| self.volumes.draw(pass)),
-        )
     }
 }

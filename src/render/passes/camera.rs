@@ -17,7 +17,6 @@ use super::next_generation;
 use crate::geometry::outline::Outline2d;
 use crate::geometry::VtVariant;
 use crate::render::gpu_scene::GpuScene;
-use crate::render::methods::CameraBindings;
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, cleared, opaque, pipeline_layout, uniform_buffer, uniform_entry, GpuContext,
@@ -87,6 +86,16 @@ pub fn view_projection(scene: &Scene, bounds: (Vec3, Vec3), width: u32, height: 
     scene.camera.projection(aspect, far, near) * scene.camera.view()
 }
 
+/// The camera pass's view of a method: its pipeline (and a second draw's, for a method drawn in
+/// two: `CameraGroup::two_draws` of the methods) and its bind group (group 1).
+pub struct CameraBindings<'a> {
+    pub pipeline: &'a wgpu::RenderPipeline,
+    pub refine: Option<&'a wgpu::RenderPipeline>,
+    pub bind_group: &'a wgpu::BindGroup,
+    /// The pipelines write the colour target only.
+    pub colour_only: bool,
+}
+
 /// The camera a frame is drawn from, as the methods see it while they record: screen-space
 /// methods (stencil volumes, planar shadows) draw their own passes over the camera's pixels
 /// before the camera pass, so they need its transform and its image size.
@@ -98,7 +107,7 @@ pub struct ScreenView {
     /// distance D (so `1` at the near plane and [`INFINITE_EPSILON`] at infinity): its x, y and w
     /// rows equal `view_proj`'s, so both cover the same pixels. Shadow volumes extruded to
     /// infinity (w = 0) are drawn with it and never clipped (Everitt and Kilgard's infinite
-    /// projection, §1.3 of the design for issue 13, with the depth reversed for float precision).
+    /// projection, with the depth reversed for float precision).
     pub infinite_view_proj: Mat4,
     pub eye: Vec3,
     pub width: u32,

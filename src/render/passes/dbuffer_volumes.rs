@@ -2,7 +2,7 @@
 //! centre after the shadow map: umbra `(|cx_uv|, |cx_s|)` and penumbra `(|cx_pv|, |cx_s|)`,
 //! `size`² texels each, as `Rg32Float` — or `Rgba32Float` with the winning triangle's lit side
 //! in the light's plane, which only `V exact` reads ([`VolumeLayout`]: the narrower texel took a
-//! quarter off the volume pass on Table 1, issue 22).
+//! quarter off the volume pass on Table 1).
 //!
 //! - Penumbra: every caster's entry faces (the pipeline culls the faces turned away from `c`)
 //!   over a copy of the shadow map's depth, nearest wins: an entry behind the nearest surface is

@@ -19,8 +19,9 @@
 //! fitted to the casters' penumbrae).
 //!
 //! **Overflow rule.** Every edge that passes is counted; a list whose count exceeds the cap is
-//! not used at all (the camera pass gives that pixel the paper's `dbuffer` V), whichever ids the
-//! GPU happened to store. Below the cap the set of ids does not depend on the order in which
+//! not used at all, whichever ids the GPU happened to store: the camera pass walks every candidate
+//! edge for that pixel instead (the same V as a list long enough, at more cost), or gives it the
+//! paper's `dbuffer` V where there are more than `geometry::fused::WHOLE_WALK_EDGES` of them. Below the cap the set of ids does not depend on the order in which
 //! fragments ran, and neither does V.
 
 use std::sync::Arc;

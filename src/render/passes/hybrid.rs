@@ -21,8 +21,8 @@ use crate::geometry::hybrid::WallParams;
 use crate::render::readback::map_now;
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, pipeline_layout, shader_module, texture_entry, uniform_buffer, uniform_entry,
-    view_entry, GpuContext, RenderError,
+    buffer_entry, compute_pipeline, pipeline_layout, shader_module, texture_entry, uniform_buffer,
+    uniform_entry, view_entry, GpuContext, RenderError,
 };
 
 /// At most this many cells of the map are looked at closely (as the WGSL's MAX_CANDIDATES);
@@ -174,14 +174,7 @@ impl HybridPass {
                 &[&inputs_layout, &dispatch_layout],
             );
             let compute = |label: &str, entry: &str, layout: &wgpu::PipelineLayout| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(layout),
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
+                compute_pipeline(device, label, layout, &module, entry)
             };
             let render_layout =
                 pipeline_layout(device, "HybridPass::render_layout", &[&inputs_layout]);

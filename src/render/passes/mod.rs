@@ -21,6 +21,7 @@ pub mod sample_maps;
 pub mod shadow_map;
 pub mod ssm;
 pub mod stencil_volumes;
+pub mod trace;
 pub mod view;
 pub mod view_twin;
 pub mod wedges;

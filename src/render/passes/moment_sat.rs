@@ -9,8 +9,8 @@ use crate::geometry::moments;
 use crate::render::storage_entry;
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, pipeline_layout, shader_module, texture_entry, uniform_entry, view_entry,
-    GpuContext,
+    buffer_entry, compute_pipeline, pipeline_layout, shader_module, texture_entry, uniform_entry,
+    view_entry, GpuContext,
 };
 
 use super::next_generation;
@@ -88,16 +88,7 @@ impl MomentSat {
                 ],
             });
             let pl = pipeline_layout(device, "MomentSat", &[&layout]);
-            let compute = |entry: &str| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(&pl),
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-            };
+            let compute = |entry: &str| compute_pipeline(device, entry, &pl, &module, entry);
             SatPipelines {
                 range: compute("cs_range"),
                 rows: compute("cs_rows"),

@@ -10,11 +10,13 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
+use glam::Mat4;
+
+use super::camera::CameraTargets;
 use super::view::{ViewBindings, ViewInputs, ViewParams, ViewUniforms};
-use crate::render::frame::FrameTargets;
-use crate::render::methods::LightMaps;
+use crate::render::light_maps::LightMaps;
 use crate::render::timer::Recorder;
-use crate::render::{buffer_entry, pipeline_layout, shader_module, GpuContext};
+use crate::render::{buffer_entry, compute_pipeline, pipeline_layout, shader_module, GpuContext};
 
 /// Floats of a pixel probe (`PIXEL_FLOATS` of the shader): 0–3 colour (sRGB bytes / 255), 4 V,
 /// 5 t + 2·branch, 6 depth, 7 hit, 8 reference V, 9–11 world position, 12–13 the method's
@@ -99,18 +101,9 @@ impl ProbePass {
                 }],
             });
             let module = shader_module(device, "passes/probe.wgsl");
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("ProbePass::pipeline"),
-                layout: Some(&pipeline_layout(
-                    device,
-                    "ProbePass::layout",
-                    &[&view.layout, &out_layout],
-                )),
-                module: &module,
-                entry_point: Some("cs_main"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
+            let layout = pipeline_layout(device, "ProbePass::layout", &[&view.layout, &out_layout]);
+            let pipeline =
+                compute_pipeline(device, "ProbePass::pipeline", &layout, &module, "cs_main");
             ProbePass {
                 pipeline,
                 out_layout,
@@ -232,23 +225,24 @@ impl Probe {
     }
 }
 
+/// Where a probe reads and keeps its state: a frame's targets (`frame::FrameTargets` gives them).
+pub trait ProbeTargets {
+    /// The camera pass's targets and the world → clip transform they were drawn with (`None`
+    /// before anything was drawn into them), and the probe's own state.
+    fn probe_parts(&mut self) -> (Option<(&CameraTargets, Mat4)>, &mut Option<Probe>);
+}
+
 /// Record `request` over what `targets` hold. Returns the bytes it will read back (0 when the
 /// previous answer of that kind is still in flight: it is skipped).
 pub fn record(
     ctx: &GpuContext,
-    targets: &mut FrameTargets,
+    targets: &mut dyn ProbeTargets,
     request: &ProbeRequest,
     reference: Option<(&wgpu::TextureView, u64)>,
     maps: Option<LightMaps<'_>>,
     rec: &mut Recorder<'_>,
 ) -> u64 {
-    let FrameTargets {
-        camera,
-        rendered,
-        probe,
-        ..
-    } = targets;
-    let (Some(camera), Some(rendered)) = (camera.as_ref(), rendered.as_ref()) else {
+    let (Some((camera, view_proj)), probe) = targets.probe_parts() else {
         return 0;
     };
     let probe = probe.get_or_insert_with(|| Probe::new(ctx));
@@ -262,13 +256,13 @@ pub fn record(
     }
     let inputs = ViewInputs {
         camera,
-        camera_view_proj: rendered.view_proj,
+        camera_view_proj: view_proj,
         reference,
         maps,
     };
     let mut uniforms = ViewUniforms::new(
         request.params(),
-        rendered.view_proj,
+        view_proj,
         inputs.maps.as_ref().map(|m| (m, m.size)),
         reference.is_some(),
     );

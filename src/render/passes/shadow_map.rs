@@ -8,19 +8,34 @@ use std::sync::Arc;
 
 use super::next_generation;
 use crate::geometry::light_view::LightView;
-use crate::render::methods::{require, Channel, Empty, FrameInputs, LightMaps};
+use crate::render::gpu_scene::GpuScene;
+use crate::render::light_maps::{Channel, Empty, LightMaps};
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, cleared, depth_attachment, depth_test, opaque, pipeline_layout, red,
-    render_pipeline, shader_module, uniform_buffer, uniform_entry, GpuContext, PipelineSpec,
-    RenderError, SurfaceVertex, Texture,
+    render_pipeline, require, shader_module, uniform_buffer, uniform_entry, GpuContext,
+    PipelineSpec, RenderError, SurfaceVertex, Texture,
 };
-use crate::scene::Light;
+use crate::scene::{Light, Scene};
 
 pub const DISTANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// `|cx_o|` where no surface is: far beyond any scene (inf is not a clear value everywhere).
 pub const NO_SURFACE: f64 = 3.0e38;
+
+/// What the map is made from: the scene's surfaces seen from the light, at one revision of the
+/// light and casters. A method hands in its frame's inputs (`FrameInputs` converts).
+#[derive(Clone, Copy)]
+pub struct MapInputs<'a> {
+    pub ctx: &'a GpuContext,
+    pub scene: &'a Scene,
+    pub surfaces: &'a GpuScene,
+    pub light_view: &'a LightView,
+    /// Bumped whenever the light or a caster changed: a map made for an older one is stale.
+    pub revision: u64,
+    /// The map is this many texels square.
+    pub size: u32,
+}
 
 /// `LightUniforms` of `shaders/shared/light.wgsl`.
 #[repr(C)]
@@ -120,13 +135,7 @@ pub struct ShadowMap {
 }
 
 /// The map's one channel, for the views and the inspector.
-pub const CHANNELS: &[Channel] = &[Channel {
-    name: "|cx_o|",
-    texture: 0,
-    component: 0,
-    empty: Empty::Far,
-    or: None,
-}];
+pub const CHANNELS: &[Channel] = &[Channel::new("|cx_o|", 0, 0, Empty::Far)];
 
 impl ShadowMap {
     pub fn new(ctx: &GpuContext) -> ShadowMap {
@@ -169,14 +178,14 @@ impl ShadowMap {
         self.made_for = None;
     }
 
-    /// Make the map hold `inputs.revision` at `inputs.map_size`, recording its pass only when it
+    /// Make the map hold `inputs.revision` at `inputs.size`, recording its pass only when it
     /// does not yet; its targets.
-    pub fn update(
+    pub fn update<'a>(
         &mut self,
-        inputs: &FrameInputs<'_>,
+        inputs: impl Into<MapInputs<'a>>,
         rec: &mut Recorder<'_>,
     ) -> Result<&ShadowMapTargets, RenderError> {
-        self.record(inputs, rec);
+        self.record(&inputs.into(), rec);
         self.made()
     }
 
@@ -185,8 +194,8 @@ impl ShadowMap {
         require(self.targets(), "the shadow map was not made")
     }
 
-    fn record(&mut self, inputs: &FrameInputs<'_>, rec: &mut Recorder<'_>) {
-        let size = inputs.map_size;
+    fn record(&mut self, inputs: &MapInputs<'_>, rec: &mut Recorder<'_>) {
+        let size = inputs.size;
         if self.targets.as_ref().is_none_or(|t| t.size != size) {
             use wgpu::TextureUsages as U;
             let device = &inputs.ctx.device;
@@ -243,15 +252,15 @@ impl ShadowMap {
 
     /// The map's depth as the surfaces left it, for a pass that draws into it next (the map is
     /// made again first if an earlier such pass used it up).
-    pub fn depth_for_drawing(
+    pub fn depth_for_drawing<'a>(
         &mut self,
-        inputs: &FrameInputs<'_>,
+        inputs: impl Into<MapInputs<'a>>,
         rec: &mut Recorder<'_>,
     ) -> Result<&Texture, RenderError> {
         if self.depth_used {
             self.made_for = None;
         }
-        self.record(inputs, rec);
+        self.record(&inputs.into(), rec);
         self.depth_used = true;
         Ok(&self.made()?.depth)
     }
@@ -263,7 +272,8 @@ pub const BIAS_CONSTANT: f32 = 2e-4;
 pub const BIAS_SLOPE: f32 = 1.5;
 
 /// `ShadowUniforms` of `shaders/shared/shadow_lookup.wgsl`: how the camera pass of a method
-/// built on the map finds a point's texel and tests it.
+/// built on the map finds a point's texel and tests it. Only the map's own numbers: a method's
+/// parameters are its own uniform struct (`params` of its shader, declared in its module).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadowUniforms {
@@ -273,14 +283,12 @@ pub struct ShadowUniforms {
     pub texel_slope: f32,
     pub bias_constant: f32,
     pub bias_slope: f32,
-    /// The method's own numbers, as its shader documents them.
-    pub knobs: [f32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<ShadowUniforms>() == 160);
+const _: () = assert!(std::mem::size_of::<ShadowUniforms>() == 144);
 
 impl ShadowUniforms {
-    pub fn new(view: &LightView, size: u32, knobs: [f32; 4]) -> ShadowUniforms {
+    pub fn new(view: &LightView, size: u32) -> ShadowUniforms {
         let vp = view.view_projection();
         ShadowUniforms {
             light_view_proj: vp.to_cols_array_2d(),
@@ -289,13 +297,17 @@ impl ShadowUniforms {
             texel_slope: view.texel_slope(size),
             bias_constant: BIAS_CONSTANT,
             bias_slope: BIAS_SLOPE,
-            knobs,
         }
     }
 }
 
+/// Where a method built on the map binds its own parameters in group 1 (`params` of its shader,
+/// a uniform): after the lookup's two. Its other bindings follow from 3 on.
+pub const PARAMS_BINDING: u32 = 2;
+
 /// The first two entries of the group 1 of a method built on the map (its `ShadowUniforms` and
-/// the map): `shared/shadow_lookup.wgsl` declares them; the method adds its own after them.
+/// the map): `shared/shadow_lookup.wgsl` declares them; the method adds its own after them (its
+/// `params` at [`PARAMS_BINDING`]).
 pub fn lookup_entries() -> [wgpu::BindGroupLayoutEntry; 2] {
     [
         uniform_entry(0, wgpu::ShaderStages::FRAGMENT),

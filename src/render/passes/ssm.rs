@@ -18,8 +18,8 @@ use glam::{Mat4, Vec3};
 use super::{next_generation, LayeredTargets};
 use crate::render::timer::Recorder;
 use crate::render::{
-    buffer_entry, pipeline_layout, render_pipeline, shader_module, texture_entry, uniform_entry,
-    view_entry, GpuContext, PipelineSpec, RenderError,
+    buffer_entry, compute_pipeline, pipeline_layout, render_pipeline, shader_module, texture_entry,
+    uniform_entry, view_entry, GpuContext, PipelineSpec, RenderError,
 };
 
 /// The most light samples on the segment (ends included).
@@ -168,14 +168,7 @@ impl SsmPass {
                 &[&compute_layout, &dispatch_layout],
             );
             let compute = |entry: &str, layout: &wgpu::PipelineLayout| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(layout),
-                    module: &skins,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
+                compute_pipeline(device, entry, layout, &skins, entry)
             };
             let (find, size_extract) = (compute("find", &one), compute("size_extract", &two));
             let (extract, finish) = (compute("extract", &one), compute("finish", &one));

@@ -10,7 +10,7 @@ use glam::Mat4;
 use serde::{Deserialize, Serialize};
 
 use super::camera::CameraTargets;
-use crate::render::methods::{Channel, Empty, LightMaps};
+use crate::render::light_maps::{Channel, Empty, LightMaps};
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, cleared, opaque, pipeline_layout, shader_module, texture_entry, uniform_buffer,

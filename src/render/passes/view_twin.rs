@@ -3,7 +3,7 @@
 //! it to, and what a picture of a read-back frame is drawn with.
 
 use super::view::{ColorMap, Mapping, View, ViewParams};
-use crate::render::frame::Frame;
+use crate::render::frame_data::Frame;
 
 /// Background of pixels that hit no surface, and of map texels with no data.
 pub const NO_DATA: [u8; 4] = [20, 24, 48, 255];

@@ -257,13 +257,20 @@ impl WedgePass {
     }
 }
 
+/// The wedge passes' bind groups, made for one generation of the screen targets.
+struct WedgeGroups {
+    coverage: wgpu::BindGroup,
+    resolve: wgpu::BindGroup,
+    generation: u64,
+}
+
 /// One method state's wedge passes: the disk's uniforms, the sum target and the bind groups.
 pub struct Wedges {
     pass: Arc<WedgePass>,
     disk: wgpu::Buffer,
     sum: Option<Texture>,
     /// The bind groups and the screen targets' generation they bind.
-    groups: Option<(wgpu::BindGroup, wgpu::BindGroup, u64)>,
+    groups: Option<WedgeGroups>,
 }
 
 impl Wedges {
@@ -288,11 +295,13 @@ impl Wedges {
     }
 
     /// After `screen`'s prepass and z-fail count: the wedges' coverage into the sum, then V into
-    /// `screen`'s visibility target.
+    /// `screen`'s visibility target, timed under `span` (the method's name: its one pass of its
+    /// own).
     pub fn record(
         &mut self,
         ctx: &GpuContext,
         rec: &mut Recorder<'_>,
+        span: &'static str,
         screen: &ScreenPass,
         light: &AreaLight,
         wedges: &VertexChunks,
@@ -318,7 +327,7 @@ impl Wedges {
         if self
             .groups
             .as_ref()
-            .is_none_or(|(_, _, g)| *g != t.generation)
+            .is_none_or(|g| g.generation != t.generation)
         {
             let coverage = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("Wedges::coverage_group"),
@@ -330,13 +339,19 @@ impl Wedges {
                 layout: &self.pass.resolve_layout,
                 entries: &[view_entry(0, &sum.view)],
             });
-            self.groups = Some((coverage, resolve, t.generation));
+            self.groups = Some(WedgeGroups {
+                coverage,
+                resolve,
+                generation: t.generation,
+            });
         }
-        let Some((coverage, resolve, _)) = &self.groups else {
+        let Some(WedgeGroups {
+            coverage, resolve, ..
+        }) = &self.groups
+        else {
             return;
         };
-        // The method's one pass of its own, timed under the method's name.
-        let span = rec.span(crate::render::methods::wedges::WEDGES.name);
+        let span = rec.span(span);
         {
             let mut pass = rec.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("Wedges::coverage"),

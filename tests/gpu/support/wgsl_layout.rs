@@ -138,3 +138,141 @@ pub fn assert_consts(wgsl: &str, file: &str, pairs: &[(&str, f64)]) {
         }
     }
 }
+
+/// `(member name, type)` of the WGSL struct `name` in `wgsl`, each type as WGSL spells a scalar,
+/// vector or matrix of 32-bit numbers (`u32`, `vec2<f32>`, `mat4x4<f32>`) and `?` for anything
+/// else; `None` when `wgsl` declares no struct of that name.
+pub fn member_types(wgsl: &str, name: &str) -> Option<Vec<(String, String)>> {
+    let module = match naga::front::wgsl::parse_str(wgsl) {
+        Ok(module) => module,
+        Err(e) => panic!("WGSL does not parse:\n{}", e.emit_to_string(wgsl)),
+    };
+    let scalar = |s: &naga::Scalar| match (s.kind, s.width) {
+        (naga::ScalarKind::Float, 4) => "f32",
+        (naga::ScalarKind::Uint, 4) => "u32",
+        (naga::ScalarKind::Sint, 4) => "i32",
+        _ => "?",
+    };
+    let members = module.types.iter().find_map(|(_, ty)| match &ty.inner {
+        TypeInner::Struct { members, .. } if ty.name.as_deref() == Some(name) => Some(members),
+        _ => None,
+    })?;
+    Some(
+        members
+            .iter()
+            .map(|m| {
+                let ty = match &module.types[m.ty].inner {
+                    TypeInner::Scalar(s) => scalar(s).to_owned(),
+                    TypeInner::Vector { size, scalar: s } => {
+                        format!("vec{}<{}>", *size as u8, scalar(s))
+                    }
+                    TypeInner::Matrix {
+                        columns,
+                        rows,
+                        scalar: s,
+                    } => format!("mat{}x{}<{}>", *columns as u8, *rows as u8, scalar(s)),
+                    _ => "?".to_owned(),
+                };
+                (m.name.clone().unwrap_or_default(), ty)
+            })
+            .collect(),
+    )
+}
+
+/// The WGSL type a Rust field of a GPU struct is uploaded as.
+pub trait WgslType {
+    fn wgsl() -> String;
+}
+
+impl WgslType for f32 {
+    fn wgsl() -> String {
+        "f32".to_owned()
+    }
+}
+
+impl WgslType for u32 {
+    fn wgsl() -> String {
+        "u32".to_owned()
+    }
+}
+
+impl WgslType for i32 {
+    fn wgsl() -> String {
+        "i32".to_owned()
+    }
+}
+
+impl<T: WgslType, const N: usize> WgslType for [T; N] {
+    fn wgsl() -> String {
+        format!("vec{N}<{}>", T::wgsl())
+    }
+}
+
+/// The WGSL type of the field `field` picks out of an `S`.
+pub fn wgsl_type_of<S, T: WgslType>(_field: fn(&S) -> &T) -> String {
+    T::wgsl()
+}
+
+/// Assert that the WGSL struct `name` has members `fields` (Rust field name, [`WgslType`]) with
+/// those types, in order: a switch or count must be `u32` on both sides, a real number `f32`.
+pub fn assert_types(wgsl: &str, name: &str, fields: &[(&str, String)]) {
+    let Some(members) = member_types(wgsl, name) else {
+        panic!("the WGSL declares no struct `{name}`");
+    };
+    let rust: Vec<(String, String)> = fields
+        .iter()
+        .map(|(n, t)| ((*n).to_owned(), t.clone()))
+        .collect();
+    assert_eq!(
+        members, rust,
+        "member types of WGSL struct `{name}` (left) and its Rust struct (right)"
+    );
+}
+
+/// `assert_wgsl_params!(RustType, wgsl, "WgslName", field_a, ..)`: [`assert_wgsl_layout!`] with
+/// every field listed (padding too), and [`assert_types`]: a method's parameters, whose fields
+/// are all 32-bit scalars or vectors.
+macro_rules! assert_wgsl_params {
+    ($ty:ty, $wgsl:expr, $name:expr, $($field:ident),+ $(,)?) => {{
+        $crate::support::wgsl_layout::assert_wgsl_layout!($ty, $wgsl, $name, $($field),+);
+        $crate::support::wgsl_layout::assert_types(
+            $wgsl,
+            $name,
+            &[$((
+                stringify!($field),
+                $crate::support::wgsl_layout::wgsl_type_of(|s: &$ty| &s.$field),
+            )),+],
+        );
+    }};
+}
+pub(crate) use assert_wgsl_params;
+
+/// A global `var<uniform>` of a WGSL module: its name, the name of its type (`None` for a type
+/// without one, a bare `vec4<f32>`), and its group and binding.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Uniform {
+    pub var: String,
+    pub ty: Option<String>,
+    pub group: u32,
+    pub binding: u32,
+}
+
+/// Every global `var<uniform>` of `wgsl`.
+pub fn uniforms(wgsl: &str) -> Vec<Uniform> {
+    let module = match naga::front::wgsl::parse_str(wgsl) {
+        Ok(module) => module,
+        Err(e) => panic!("WGSL does not parse:\n{}", e.emit_to_string(wgsl)),
+    };
+    let found = module
+        .global_variables
+        .iter()
+        .filter(|(_, g)| g.space == naga::AddressSpace::Uniform)
+        .map(|(_, g)| Uniform {
+            var: g.name.clone().unwrap_or_default(),
+            ty: module.types[g.ty].name.clone(),
+            group: g.binding.as_ref().map_or(u32::MAX, |b| b.group),
+            binding: g.binding.as_ref().map_or(u32::MAX, |b| b.binding),
+        })
+        .collect();
+    found
+}

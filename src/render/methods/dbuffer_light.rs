@@ -1,0 +1,253 @@
+//! The paper's D-buffer in light space, which `dbuffer`, `dbuffer-center` and `dbuffer-fused`
+//! keep: the geometry stage (`geometry::PreparedCasters::build`: classes, silhouettes,
+//! volumes) and the volumes' upload per light or caster move, then the light pass — the session's
+//! shadow map (`|cx_o|`) and the volume channels (`passes::dbuffer_volumes`) — and its maps.
+
+use std::time::Instant;
+
+use super::{Channel, Empty, FrameInputs, LightMaps, SharedMaps};
+use crate::geometry::volume_vertices::{
+    drawn_volumes, reach_below, CORNERS_PER_ROW, MAX_CORNERS, TEXELS_PER_CORNER,
+};
+use crate::geometry::{SceneGeometry, VolumeParams};
+use crate::render::frame_tag::FrameTag;
+use crate::render::gpu_scene::VertexChunks;
+use crate::render::passes::dbuffer_volumes::{
+    CasterVolumes, DBufferVolumes, VolumeLayout, VolumeTargets,
+};
+use crate::render::passes::shadow_map::LightUniforms;
+use crate::render::timer::Recorder;
+use crate::render::{GpuContext, RenderError};
+use crate::scene::AreaLight;
+
+/// The D-buffer's channels, in `dbuffer.exr` order (R, G, B, A): textures 0 (`|cx_o|`), 1
+/// (umbra: `|cx_uv|`, `|cx_s|`), 2 (penumbra: `|cx_pv|`, `|cx_s|`). `|cx_s|` is the umbra's
+/// where it has one.
+pub const CHANNELS: &[Channel] = &[
+    Channel::new("|cx_o|", 0, 0, Empty::Far),
+    Channel::new("|cx_uv|", 1, 0, Empty::NonPositive),
+    Channel::new("|cx_pv|", 2, 0, Empty::NonPositive),
+    Channel::new("|cx_s|", 1, 1, Empty::NonPositive).or(2, 1),
+];
+
+pub struct DBufferLight {
+    center_silhouettes: bool,
+    /// The geometry, and the revision it was built for.
+    geometry: Option<(SceneGeometry, u64)>,
+    builds: u64,
+    geometry_ms: f64,
+    casters: Vec<CasterVolumes>,
+    penumbra: VertexChunks,
+    volumes: DBufferVolumes,
+    /// The closing fans' corners over all casters, `TEXELS_PER_CORNER` `Rgba32Float` texels
+    /// each (apex, the two edges' far ends, each edge's faces' normals, the two extrusion
+    /// points), `CORNERS_PER_ROW` to a row: `corners` of
+    /// `shaders/methods/dbuffer.wgsl`, named by the fans' markers
+    /// (`volume_vertices::corner_marker`). A texture, not a storage buffer: the weakest devices
+    /// have none in fragment shaders.
+    corners: wgpu::TextureView,
+    /// What the volume channels hold.
+    made_for: Option<Made>,
+    view_proj: glam::Mat4,
+}
+
+/// What the volume channels were drawn for.
+#[derive(Clone, Copy, PartialEq)]
+struct Made {
+    revision: u64,
+    map_size: u32,
+    /// The shadow map's generation (the penumbra channel is drawn over its depth).
+    map: u64,
+    layout: VolumeLayout,
+}
+
+impl DBufferLight {
+    pub fn new(ctx: &GpuContext, center_silhouettes: bool) -> DBufferLight {
+        DBufferLight {
+            center_silhouettes,
+            geometry: None,
+            builds: 0,
+            geometry_ms: 0.0,
+            casters: Vec::new(),
+            penumbra: VertexChunks::empty(),
+            volumes: DBufferVolumes::new(ctx),
+            corners: corner_texture(ctx, &[]),
+            made_for: None,
+            view_proj: glam::Mat4::IDENTITY,
+        }
+    }
+
+    /// The geometry stage and the volumes' upload, when the light or a caster moved.
+    fn update_geometry(&mut self, inputs: &FrameInputs<'_>, light: AreaLight) {
+        if self
+            .geometry
+            .as_ref()
+            .is_some_and(|(_, r)| *r == inputs.revision)
+        {
+            return;
+        }
+        let params = VolumeParams {
+            center_silhouettes: self.center_silhouettes,
+            ..VolumeParams::for_scene(inputs.scene)
+        };
+        let t = Instant::now();
+        let geometry = inputs.prepared().build(&light, &params);
+        self.geometry_ms = t.elapsed().as_secs_f64() * 1e3;
+        self.builds += 1;
+        let device = &inputs.ctx.device;
+        let reach = reach_below(&light, inputs.surfaces.bounds);
+        let drawn = drawn_volumes(&geometry, &light, inputs.light_view, Some(reach));
+        self.casters = drawn
+            .umbrae
+            .iter()
+            .map(|(umbra, rect)| CasterVolumes {
+                rect: *rect,
+                umbra: VertexChunks::new(device, "DBuffer::umbra", umbra),
+            })
+            .collect();
+        let penumbra = drawn.penumbra;
+        self.penumbra = VertexChunks::new(device, "DBuffer::penumbra", &penumbra);
+        let corners: Vec<[f32; 4]> = geometry
+            .casters
+            .iter()
+            .flat_map(|g| &g.volumes.corners)
+            // No fan past MAX_CORNERS carries a marker (it keeps the chord): the texture stops
+            // there, within the smallest texture a device allows.
+            .take(MAX_CORNERS)
+            .flat_map(|c| {
+                let [[n0, n1], [n2, n3]] = c.normals;
+                let [s0, s1] = c.supports;
+                [c.apex, c.ends[0], c.ends[1], n0, n1, n2, n3, s0, s1]
+                    .map(|p| p.extend(0.0).to_array())
+            })
+            .collect();
+        self.corners = corner_texture(inputs.ctx, &corners);
+        self.geometry = Some((geometry, inputs.revision));
+        self.made_for = None;
+    }
+
+    /// The geometry stage (face classes, silhouettes, volumes) for the current light, when the
+    /// light or a caster moved; an error naming `method` for a line light.
+    pub fn geometry_stage(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        method: &str,
+    ) -> Result<(), RenderError> {
+        let light = *inputs.area(method)?;
+        self.update_geometry(inputs, light);
+        Ok(())
+    }
+
+    /// The light pass after [`DBufferLight::geometry_stage`]: the shadow map and the volume
+    /// channels, when something moved since they were made.
+    pub fn light_pass(
+        &mut self,
+        inputs: &FrameInputs<'_>,
+        shared: &mut SharedMaps,
+        rec: &mut Recorder<'_>,
+    ) -> Result<(), RenderError> {
+        let map = shared.shadow_map.update(inputs, rec)?;
+        let key = Made {
+            revision: inputs.revision,
+            map_size: map.size,
+            map: map.generation,
+            layout: VolumeLayout::for_vt(inputs.vt),
+        };
+        if self.made_for != Some(key) {
+            let depth = shared.shadow_map.depth_for_drawing(inputs, rec)?;
+            self.volumes.record(
+                inputs.ctx,
+                rec,
+                &LightUniforms::new(&inputs.scene.light, inputs.light_view),
+                depth,
+                &self.casters,
+                &self.penumbra,
+                key.layout,
+            );
+            self.made_for = Some(key);
+            self.view_proj = inputs.light_view.view_projection();
+        }
+        Ok(())
+    }
+
+    /// Its silhouettes and volumes are taken from the light's centre only (`dbuffer-center`).
+    pub fn center_silhouettes(&self) -> bool {
+        self.center_silhouettes
+    }
+
+    /// The volume channels, once drawn.
+    pub fn targets(&self) -> Option<&VolumeTargets> {
+        self.volumes.targets()
+    }
+
+    /// The closing fans' corners (`corners` of `shaders/methods/dbuffer.wgsl`).
+    pub fn corners(&self) -> &wgpu::TextureView {
+        &self.corners
+    }
+
+    /// Its light-space maps: `|cx_o|` and the volume channels, once drawn.
+    pub fn light_maps<'a>(&'a self, shared: &'a SharedMaps) -> Option<LightMaps<'a>> {
+        self.made_for?;
+        let map = shared.shadow_map.targets()?;
+        let v = self.volumes.targets()?;
+        let generation = map.generation ^ v.generation.rotate_left(32);
+        let textures = [&map.distance, &v.umbra, &v.penumbra];
+        Some(
+            LightMaps::new(v.size, self.view_proj, textures, CHANNELS, generation).tagged([
+                FrameTag::NONE,
+                v.tag,
+                v.tag,
+            ]),
+        )
+    }
+
+    /// The geometry stage's output.
+    pub fn geometry(&self) -> Option<&SceneGeometry> {
+        self.geometry.as_ref().map(|(g, _)| g)
+    }
+
+    /// CPU milliseconds of its last geometry build, and how many builds it has made.
+    pub fn geometry_builds(&self) -> (u64, f64) {
+        (self.builds, self.geometry_ms)
+    }
+
+    /// Forget the volume channels: the next light pass draws them again.
+    pub fn invalidate(&mut self) {
+        self.made_for = None;
+    }
+}
+
+/// The corners' texture: `TEXELS_PER_CORNER × CORNERS_PER_ROW` texels wide (less for fewer corners), a row per
+/// `CORNERS_PER_ROW` corners; one zero corner where there are none (a binding is never empty).
+fn corner_texture(ctx: &GpuContext, corners: &[[f32; 4]]) -> wgpu::TextureView {
+    use wgpu::util::DeviceExt;
+    let texels_per_row = TEXELS_PER_CORNER * CORNERS_PER_ROW;
+    let mut data = corners.to_vec();
+    if data.is_empty() {
+        data.resize(TEXELS_PER_CORNER, [0.0; 4]);
+    }
+    let width = data.len().min(texels_per_row);
+    data.resize(data.len().div_ceil(width) * width, [0.0; 4]);
+    let rows = data.len() / width;
+    ctx.device
+        .create_texture_with_data(
+            &ctx.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("DBuffer::corners"),
+                size: wgpu::Extent3d {
+                    width: width as u32,
+                    height: rows as u32,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(&data),
+        )
+        .create_view(&wgpu::TextureViewDescriptor::default())
+}

@@ -1,0 +1,415 @@
+//! Shadow rays on the GPU (`shaders/passes/trace.wgsl`): the scene's BVH, built on the CPU
+//! ([`crate::geometry::bvh::Bvh`]) and flattened ([`FlatBvh`]) into one storage buffer
+//! ([`GpuBvh`]), traversed in WGSL by a port of the CPU's tolerant any-hit query
+//! (`shaders/shared/bvh_trace.wgsl`). Two uses: [`ReferenceRays`] counts, per pixel, the light
+//! samples its point sees, a batch of samples per dispatch (the reference on the GPU); [`any_hit`]
+//! answers single rays (the tests that hold the GPU's traversal to the CPU's).
+//!
+//! The tracer needs compute shaders and [`STORAGE_BUFFERS`] storage buffers in the compute
+//! stage; its callers check that before any work (`render::gpu_reference::NEEDS`).
+
+use glam::Vec3;
+
+use crate::geometry::bvh::FlatBvh;
+use crate::render::readback::map_now;
+use crate::render::{
+    buffer_entry, compute_pipeline, pipeline_layout, shader_module, storage_buffer, storage_entry,
+    uniform_entry, GpuContext, RenderError,
+};
+
+/// `TraceUniforms` of `shaders/passes/trace.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TraceUniforms {
+    /// Pixels (or rays) to answer.
+    pub count: u32,
+    /// The batch of samples: `first .. first + samples`.
+    pub first: u32,
+    pub samples: u32,
+    /// Invocations per row of the dispatch.
+    pub row: u32,
+    pub node_count: u32,
+    pub triangle_count: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+/// Storage buffers the tracer binds in the compute stage: the BVH, the items (points or rays),
+/// the light's samples and the results.
+pub const STORAGE_BUFFERS: u32 = 4;
+
+/// Invocations per workgroup (`@workgroup_size` of both entry points).
+const WORKGROUP: u32 = 64;
+
+/// The scene's BVH on the GPU: the nodes, then the triangles, in one storage buffer.
+pub struct GpuBvh {
+    buffer: wgpu::Buffer,
+    node_count: u32,
+    triangle_count: u32,
+}
+
+impl GpuBvh {
+    /// Uploads `flat`; an error (before anything is made) when it is larger than one storage
+    /// binding of the device.
+    pub fn new(ctx: &GpuContext, flat: &FlatBvh) -> Result<GpuBvh, RenderError> {
+        let mut words: Vec<[f32; 4]> = Vec::with_capacity(flat.nodes.len() + flat.triangles.len());
+        words.extend_from_slice(&flat.nodes);
+        words.extend_from_slice(&flat.triangles);
+        if words.is_empty() {
+            // A binding is never empty; with no triangles the traversal reads nothing.
+            words.push([0.0; 4]);
+        }
+        fits(ctx, "the scene's BVH", words.len() as u64 * 16)?;
+        let count = |n: usize, what: &str| {
+            u32::try_from(n)
+                .map_err(|_| RenderError::Request(format!("the BVH has {n} {what}: too many")))
+        };
+        Ok(GpuBvh {
+            buffer: storage_buffer(&ctx.device, "GpuBvh", &words),
+            node_count: count(flat.node_count(), "nodes")?,
+            triangle_count: count(flat.triangle_count(), "triangles")?,
+        })
+    }
+
+    pub fn node_count(&self) -> u32 {
+        self.node_count
+    }
+
+    pub fn triangle_count(&self) -> u32 {
+        self.triangle_count
+    }
+}
+
+/// The most points one [`ReferenceRays`] takes on `ctx`'s device: as many as its largest
+/// storage binding holds (16 bytes a point); a larger image is traced in pieces.
+pub fn max_points(ctx: &GpuContext) -> usize {
+    let limits = ctx.device.limits();
+    let max = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    usize::try_from(max / 16).unwrap_or(usize::MAX).max(1)
+}
+
+/// An error when a storage binding of `bytes` is larger than the device takes.
+fn fits(ctx: &GpuContext, what: &str, bytes: u64) -> Result<(), RenderError> {
+    let limits = ctx.device.limits();
+    let max = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    if bytes > max {
+        return Err(RenderError::Request(format!(
+            "{what} needs {bytes} bytes in one storage buffer; this adapter ({}) binds at most {max}",
+            ctx.adapter_description()
+        )));
+    }
+    Ok(())
+}
+
+struct TracePipelines {
+    layout: wgpu::BindGroupLayout,
+    reference: wgpu::ComputePipeline,
+    any_hit: wgpu::ComputePipeline,
+}
+
+impl TracePipelines {
+    /// The bind group of one trace: the uniforms, the BVH, the items (points or rays), the
+    /// light's samples and the results, bindings 0 to 4 as `passes/trace.wgsl` declares them.
+    fn group(&self, ctx: &GpuContext, label: &str, buffers: [&wgpu::Buffer; 5]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = (0u32..)
+            .zip(buffers)
+            .map(|(binding, buffer)| buffer_entry(binding, buffer))
+            .collect();
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+}
+
+fn pipelines(ctx: &GpuContext) -> std::sync::Arc<TracePipelines> {
+    ctx.shared(|device| {
+        use wgpu::ShaderStages as S;
+        let module = shader_module(device, "passes/trace.wgsl");
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("Trace::layout"),
+            entries: &[
+                uniform_entry(0, S::COMPUTE),
+                storage_entry(1, S::COMPUTE, true),
+                storage_entry(2, S::COMPUTE, true),
+                storage_entry(3, S::COMPUTE, true),
+                storage_entry(4, S::COMPUTE, false),
+            ],
+        });
+        let pl = pipeline_layout(device, "Trace", &[&layout]);
+        let compute = |entry: &str| compute_pipeline(device, entry, &pl, &module, entry);
+        TracePipelines {
+            reference: compute("cs_reference"),
+            any_hit: compute("cs_any_hit"),
+            layout,
+        }
+    })
+}
+
+/// The workgroups of a dispatch over `count` items, as (x, y) within the device's limit per
+/// dimension, and the invocations per row (`TraceUniforms::row`).
+fn grid(ctx: &GpuContext, count: u32) -> (u32, u32, u32) {
+    let groups = count.div_ceil(WORKGROUP).max(1);
+    let max = ctx
+        .device
+        .limits()
+        .max_compute_workgroups_per_dimension
+        .max(1);
+    let x = groups.min(max);
+    (x, groups.div_ceil(x), x * WORKGROUP)
+}
+
+/// A buffer the shader writes and the CPU reads back (after a copy into a mappable one).
+fn results_buffer(ctx: &GpuContext, label: &str, words: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: (words * 4).max(4),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// The `u32`s of `buffer`, copied to a staging buffer and read back (waits for the GPU).
+fn read_u32s(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u32>, RenderError> {
+    let size = buffer.size();
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("Trace::staging"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("Trace::read"),
+        });
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    ctx.queue.submit([encoder.finish()]);
+    let slice = staging.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    map_now(&ctx.device)?;
+    let words = {
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        view.chunks_exact(4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect()
+    };
+    staging.unmap();
+    ctx.check_lost()?;
+    Ok(words)
+}
+
+/// Records one dispatch of `pipeline` over `count` items and submits it.
+fn dispatch(
+    ctx: &GpuContext,
+    pipeline: &wgpu::ComputePipeline,
+    group: &wgpu::BindGroup,
+    grid: (u32, u32),
+) {
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("Trace"),
+        });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("Trace"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups(grid.0, grid.1, 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+}
+
+/// Per pixel, how many of the light's samples its point sees, accumulated over batches of
+/// samples: the ray-cast reference traced on the GPU.
+pub struct ReferenceRays {
+    node_count: u32,
+    triangle_count: u32,
+    uniforms: wgpu::Buffer,
+    results: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    pixels: u32,
+    total: u32,
+    done: u32,
+}
+
+/// What the tracer counted for one item: a pixel of [`ReferenceRays`], a ray of [`any_hit`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    /// A pixel's samples seen (not blocked) so far; a ray's 1 where it is blocked, else 0.
+    pub count: u32,
+    /// Boxes tested by its rays so far.
+    pub box_tests: u32,
+    /// Triangles tested by its rays so far.
+    pub triangle_tests: u32,
+}
+
+impl ReferenceRays {
+    /// Rays from each of `points` (`None`: no rays, V = 0) to each of `samples` (taken in this
+    /// order), against `bvh`; nothing is traced yet.
+    pub fn new(
+        ctx: &GpuContext,
+        bvh: &GpuBvh,
+        points: &[Option<Vec3>],
+        samples: &[Vec3],
+    ) -> Result<ReferenceRays, RenderError> {
+        let too_many = |what: &str, n: usize| {
+            RenderError::Request(format!("the GPU reference takes {n} {what}: too many"))
+        };
+        let pixels = u32::try_from(points.len()).map_err(|_| too_many("pixels", points.len()))?;
+        let total = u32::try_from(samples.len()).map_err(|_| too_many("samples", samples.len()))?;
+        fits(ctx, "the reference's points", points.len() as u64 * 16)?;
+        fits(ctx, "the reference's counts", points.len() as u64 * 12)?;
+        fits(ctx, "the light's samples", samples.len() as u64 * 16)?;
+        let mut items: Vec<[f32; 4]> = points
+            .iter()
+            .map(|p| p.map_or([0.0; 4], |x| x.extend(1.0).to_array()))
+            .collect();
+        if items.is_empty() {
+            items.push([0.0; 4]);
+        }
+        let mut light: Vec<[f32; 4]> = samples.iter().map(|s| s.extend(0.0).to_array()).collect();
+        if light.is_empty() {
+            light.push([0.0; 4]);
+        }
+        let items = storage_buffer(&ctx.device, "ReferenceRays::points", &items);
+        let light = storage_buffer(&ctx.device, "ReferenceRays::samples", &light);
+        let results = results_buffer(ctx, "ReferenceRays::results", u64::from(pixels) * 3);
+        let uniforms = crate::render::uniform_buffer::<TraceUniforms>(&ctx.device, "Trace");
+        let pipes = pipelines(ctx);
+        let group = pipes.group(
+            ctx,
+            "ReferenceRays::group",
+            [&uniforms, &bvh.buffer, &items, &light, &results],
+        );
+        Ok(ReferenceRays {
+            node_count: bvh.node_count,
+            triangle_count: bvh.triangle_count,
+            uniforms,
+            results,
+            group,
+            pixels,
+            total: if samples.is_empty() { 0 } else { total },
+            done: 0,
+        })
+    }
+
+    /// Trace up to `n` more samples per pixel (one dispatch, submitted, not waited for);
+    /// returns how many.
+    pub fn step(&mut self, ctx: &GpuContext, n: u32) -> u32 {
+        let take = n.min(self.total - self.done);
+        if take == 0 {
+            return 0;
+        }
+        let (x, y, row) = grid(ctx, self.pixels);
+        let u = TraceUniforms {
+            count: self.pixels,
+            first: self.done,
+            samples: take,
+            row,
+            node_count: self.node_count,
+            triangle_count: self.triangle_count,
+            ..TraceUniforms::default()
+        };
+        ctx.queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
+        let pipes = pipelines(ctx);
+        dispatch(ctx, &pipes.reference, &self.group, (x, y));
+        self.done += take;
+        take
+    }
+
+    /// Samples per pixel traced (submitted) so far.
+    pub fn samples_done(&self) -> u32 {
+        self.done
+    }
+
+    /// Samples per pixel when complete.
+    pub fn samples_total(&self) -> u32 {
+        self.total
+    }
+
+    /// Wait for the GPU and read every pixel's counts back.
+    pub fn read(&self, ctx: &GpuContext) -> Result<Vec<RayCounts>, RenderError> {
+        let words = read_u32s(ctx, &self.results)?;
+        Ok(words
+            .chunks_exact(3)
+            .take(self.pixels as usize)
+            .map(|w| RayCounts {
+                count: w[0],
+                box_tests: w[1],
+                triangle_tests: w[2],
+            })
+            .collect())
+    }
+}
+
+/// One shadow ray: `origin + t·dir` for `t_min <= t <= t_max`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub t_min: f32,
+    pub t_max: f32,
+}
+
+/// Whether each of `rays` is blocked by a triangle of `bvh`, traced on the GPU (waits for it).
+pub fn any_hit(
+    ctx: &GpuContext,
+    bvh: &GpuBvh,
+    rays: &[Ray],
+) -> Result<Vec<RayCounts>, RenderError> {
+    let count = u32::try_from(rays.len())
+        .map_err(|_| RenderError::Request(format!("{} rays: too many", rays.len())))?;
+    fits(ctx, "the rays", rays.len() as u64 * 32)?;
+    let mut items: Vec<[f32; 4]> = rays
+        .iter()
+        .flat_map(|r| [r.origin.extend(r.t_min), r.dir.extend(r.t_max)])
+        .map(|v| v.to_array())
+        .collect();
+    if items.is_empty() {
+        items.push([0.0; 4]);
+    }
+    let items = storage_buffer(&ctx.device, "any_hit::rays", &items);
+    let light = storage_buffer(&ctx.device, "any_hit::samples", &[[0.0f32; 4]]);
+    let results = results_buffer(ctx, "any_hit::results", u64::from(count) * 3);
+    let uniforms = crate::render::uniform_buffer::<TraceUniforms>(&ctx.device, "Trace");
+    let (x, y, row) = grid(ctx, count);
+    let u = TraceUniforms {
+        count,
+        row,
+        node_count: bvh.node_count,
+        triangle_count: bvh.triangle_count,
+        ..TraceUniforms::default()
+    };
+    ctx.queue.write_buffer(&uniforms, 0, bytemuck::bytes_of(&u));
+    let pipes = pipelines(ctx);
+    let group = pipes.group(
+        ctx,
+        "any_hit::group",
+        [&uniforms, &bvh.buffer, &items, &light, &results],
+    );
+    dispatch(ctx, &pipes.any_hit, &group, (x, y));
+    let words = read_u32s(ctx, &results)?;
+    Ok(words
+        .chunks_exact(3)
+        .take(rays.len())
+        .map(|w| RayCounts {
+            count: w[0],
+            box_tests: w[1],
+            triangle_tests: w[2],
+        })
+        .collect())
+}

@@ -1,0 +1,699 @@
+//! A view kept alive over many frames: what a window (the lab) does to show one or two methods
+//! of a scene as it changes, without a window. It holds the [`Session`], the targets each shown
+//! side renders into and keeps on the GPU, the progressive ground truth and its workers, the
+//! probes, and the FLIP map; the caller says what it wants to see ([`Intent`]: which methods,
+//! which view, which pixel to probe, whether something is being dragged) and calls
+//! [`ViewSession::advance`] once per window frame. That records a frame only where what decides
+//! its pixels changed (the [`RenderKey`]), redraws only the view where only the view changed,
+//! feeds the reference workers and hands their samples to the GPU, and computes the FLIP map on a
+//! thread of its own, uploading it when it is ready. What comes back ([`Update`]) is what the
+//! window shows around the image: errors, probe answers, pass timings, and when to look again.
+//!
+//! A frame is colour-only (`FrameRequest::colour_only`: the camera pass writes the colour alone)
+//! when the final image is shown and nothing reads its other targets: no probe under the cursor
+//! and no drag being measured. Its cache key leaves that out, so the cursor leaving the viewport
+//! renders nothing again.
+
+use std::sync::mpsc::{self, Receiver, TryRecvError};
+use std::thread::ThreadId;
+use std::time::{Duration, Instant};
+
+use super::passes::probe::{ProbeRequest, ProbeResult};
+use super::passes::view::{View, ViewParams};
+use super::reference::{ReferenceKey, ReferenceWorker};
+use super::session::{FrameJob, Session};
+use super::truth::{self, Truth};
+use super::{Frame, FrameRequest, FrameTargets, GpuContext, Method, RenderError};
+use crate::geometry::flip;
+use crate::scene::{Camera, Light, Mesh, Scene};
+
+/// Everything that decides a frame's pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct RenderKey {
+    request: FrameRequest,
+    camera: Camera,
+    revision: u64,
+    /// The truth's snapshot the frame shades (a truth method only).
+    reference: u64,
+}
+
+/// Everything that decides how a frame is shown.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct ViewKey {
+    params: ViewParams,
+    /// The reference snapshot (the error view) or FLIP map (the FLIP view) it shows.
+    reference: u64,
+}
+
+/// A pixel probe's circumstances: the pixel, the frame serial it was probed on, the view, and
+/// the reference's serial then (an inspector shows the reference's V there, which grows as it
+/// converges): any of them changed, the pixel is probed again.
+type Probed = (u32, u32, u64, View, u64);
+
+/// What a side of the view shows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shown {
+    pub method: Method,
+    pub request: FrameRequest,
+    /// The light the frame was rendered with.
+    pub light: Light,
+    /// Reference samples (done, total) on the GPU when the frame was shown, if any.
+    pub reference: Option<(u32, u32)>,
+    /// Why the view cannot be drawn as asked (e.g. no reference yet).
+    pub note: Option<String>,
+    /// Bumped for every new frame the side shows.
+    pub serial: u64,
+}
+
+/// A pixel to probe: on which side (0 the main one, 1 the right of a split), where.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelProbe {
+    pub side: usize,
+    pub x: u32,
+    pub y: u32,
+}
+
+/// What the viewer wants to see this frame.
+#[derive(Clone, Copy, Debug)]
+pub struct Intent {
+    /// The main side's frame: its method, size, light-map size, V(t) and knobs (the soft
+    /// truth's samples among them). `colour_only` is the session's to decide.
+    pub request: FrameRequest,
+    /// The method on the right of a split, if the view is split.
+    pub split: Option<Method>,
+    /// The view drawn of each frame.
+    pub params: ViewParams,
+    /// The pixel the inspector reads.
+    pub probe: Option<PixelProbe>,
+    /// The light or a caster is being dragged: each new frame of the main side is measured
+    /// (a motion probe) and keeps every target.
+    pub moving: bool,
+    /// Wait for what this frame asked of the GPU and the FLIP thread (probes, a FLIP map) before
+    /// returning: a scripted window then settles in a known number of frames.
+    pub wait: bool,
+}
+
+/// One window frame's submit, for the window's statistics.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Submitted {
+    /// New frames recorded (views and probes alone not counted).
+    pub renders: usize,
+    /// CPU milliseconds of recording and submitting.
+    pub wall_ms: f64,
+    /// CPU milliseconds of the main method's geometry stage, when this submit rebuilt it.
+    pub rebuilt: Option<f64>,
+    /// Bytes the submit reads back.
+    pub bytes: u64,
+}
+
+/// When the caller should call [`ViewSession::advance`] again although nothing it knows of
+/// changed.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Repaint {
+    /// Now: something arrived that the next frame shows.
+    pub now: bool,
+    /// After this long: a worker or the GPU is still working.
+    pub after: Option<Duration>,
+}
+
+impl Repaint {
+    fn after(&mut self, d: Duration) {
+        self.after = Some(self.after.map_or(d, |a| a.min(d)));
+    }
+}
+
+/// What one [`ViewSession::advance`] did and what arrived.
+#[derive(Debug, Default)]
+pub struct Update {
+    /// What went wrong, one line each (the view shows what it could).
+    pub errors: Vec<String>,
+    /// The submit's figures (zero renders when only nothing changed); `None` when it failed.
+    pub submitted: Option<Submitted>,
+    /// Pass timings that came back, of the methods shown now.
+    pub timings: Option<Vec<(String, f64)>>,
+    /// The methods shown are not those of the last advance: timings kept from before are
+    /// another method's.
+    pub methods_changed: bool,
+    /// Probe answers that arrived, per side.
+    pub probes: [Vec<ProbeResult>; 2],
+    pub repaint: Repaint,
+}
+
+/// A FLIP map, as the thread that computed it hands it over.
+struct FlipMap {
+    map: Vec<f32>,
+    thread: ThreadId,
+}
+
+/// A FLIP map being computed off the caller's thread.
+struct FlipJob {
+    /// The frame and reference snapshot it is of.
+    wanted: (RenderKey, u64),
+    /// The reference it is against (the view shows it while that reference is current).
+    key: ReferenceKey,
+    rx: Receiver<Result<FlipMap, String>>,
+}
+
+#[derive(Default)]
+struct FlipState {
+    /// The reference's shaded image (never shown itself).
+    targets: FrameTargets,
+    /// The frame and reference snapshot the map on the GPU was made for.
+    made: Option<(RenderKey, u64)>,
+    /// Bumped for every map handed to the GPU (the FLIP view draws again).
+    serial: u64,
+    job: Option<FlipJob>,
+    /// The thread the last map was computed on.
+    thread: Option<ThreadId>,
+}
+
+/// One side of the view: its targets on the GPU and what decided them.
+#[derive(Default)]
+struct Side {
+    targets: FrameTargets,
+    shown: Option<Shown>,
+    key: Option<RenderKey>,
+    view: Option<ViewKey>,
+    /// The frame and view the last fit probe was for.
+    fitted: Option<(RenderKey, View, [bool; 4])>,
+    /// The pixel probed last.
+    probed: Option<Probed>,
+}
+
+impl Side {
+    fn clear(&mut self) {
+        self.shown = None;
+        self.key = None;
+        self.view = None;
+    }
+}
+
+/// A scene shown over many frames, one or two methods side by side: see the module's text.
+pub struct ViewSession {
+    pub ctx: GpuContext,
+    pub session: Session,
+    /// The soft truth's rays, cast progressively off the caller's thread.
+    pub worker: ReferenceWorker,
+    /// The hard truth's rays, cast off the caller's thread like the soft truth's.
+    pub hard_worker: ReferenceWorker,
+    sides: [Side; 2],
+    /// Bumped whenever a soft truth snapshot is handed to the GPU.
+    reference_serial: u64,
+    /// Bumped whenever a hard truth is handed to the GPU.
+    hard_serial: u64,
+    flip: FlipState,
+    serial: u64,
+    /// The methods of the last advance, and the first submit after they changed: pass timings
+    /// of earlier submits are another method's.
+    methods: [Option<Method>; 2],
+    timed_from: u64,
+}
+
+impl ViewSession {
+    /// A view of `scene` on `ctx`'s device.
+    pub fn new(ctx: GpuContext, scene: Scene) -> ViewSession {
+        let session = Session::new(&ctx, scene);
+        ViewSession {
+            ctx,
+            session,
+            worker: ReferenceWorker::new(),
+            hard_worker: ReferenceWorker::hard(),
+            sides: Default::default(),
+            reference_serial: 0,
+            hard_serial: 0,
+            flip: FlipState::default(),
+            serial: 0,
+            methods: [None; 2],
+            timed_from: 0,
+        }
+    }
+
+    /// Look at another scene.
+    pub fn replace_scene(&mut self, scene: Scene) {
+        self.session = Session::new(&self.ctx, scene);
+        for side in &mut self.sides {
+            side.targets.rendered = None;
+        }
+    }
+
+    pub fn scene(&self) -> &Scene {
+        self.session.scene()
+    }
+
+    /// Look from `camera`.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.session.set_camera(camera);
+    }
+
+    /// Move or change the light.
+    pub fn set_light(&mut self, light: impl Into<Light>) {
+        self.session.set_light(light);
+    }
+
+    /// Object `index` moved: its world-space mesh is `mesh`.
+    pub fn set_object_mesh(&mut self, index: usize, mesh: Mesh) {
+        self.session.set_object_mesh(&self.ctx, index, mesh);
+    }
+
+    /// What side `side` shows (0 the main one, 1 the right of a split).
+    pub fn shown(&self, side: usize) -> Option<&Shown> {
+        self.sides.get(side)?.shown.as_ref()
+    }
+
+    /// The texture side `side`'s view was drawn into, once there is one.
+    pub fn display(&self, side: usize) -> Option<super::frame::ShownTexture<'_>> {
+        self.sides.get(side)?.targets.shown()
+    }
+
+    /// Whether a probe's answers are still on their way.
+    pub fn probes_pending(&self) -> bool {
+        self.sides
+            .iter()
+            .any(|s| s.targets.probe.as_ref().is_some_and(|p| p.pending()))
+    }
+
+    /// Whether a FLIP map is being computed.
+    pub fn flip_pending(&self) -> bool {
+        self.flip.job.is_some()
+    }
+
+    /// How many FLIP maps have been handed to the GPU.
+    pub fn flips_made(&self) -> u64 {
+        self.flip.serial
+    }
+
+    /// The thread the last FLIP map was computed on.
+    pub fn flip_thread(&self) -> Option<ThreadId> {
+        self.flip.thread
+    }
+
+    /// Read side `side`'s frame back whole, with `maps_of`'s light-space maps: for tests and
+    /// exports, never per frame.
+    pub fn read(&mut self, side: usize, maps_of: Option<Method>) -> Result<Frame, RenderError> {
+        let Some(s) = self.sides.get_mut(side) else {
+            return Err(RenderError::Request(format!("no view {side}")));
+        };
+        self.session.read(&self.ctx, &mut s.targets, maps_of)
+    }
+
+    /// Show what `intent` asks: feed the truths' workers, record what changed (frames, views,
+    /// probes) in one submit, start or pick up the FLIP map, and collect what came back.
+    /// `motion` tags a new frame of the main side while something is dragged (given the scene
+    /// and the frame's size), the tag its motion probe's answer carries.
+    pub fn advance(
+        &mut self,
+        intent: &Intent,
+        motion: &mut dyn FnMut(&Scene, u32, u32) -> u64,
+    ) -> Update {
+        let mut update = Update::default();
+        let params = intent.params;
+        let methods = [Some(intent.request.method), intent.split];
+        if methods != self.methods {
+            self.methods = methods;
+            self.timed_from = self.session.submits() + 1;
+            update.methods_changed = true;
+        }
+        let base = FrameRequest {
+            colour_only: params.view == View::Final && !intent.moving && intent.probe.is_none(),
+            ..intent.request
+        };
+        let soft = self.feed_soft_truth(&base, &methods, params.view, &mut update);
+        let hard = self.feed_hard_truth(&base, &methods, &mut update);
+        self.record(intent, base, methods, soft, hard, motion, &mut update);
+        if let (View::Flip, Some(serial)) = (params.view, soft) {
+            self.want_flip(serial, &mut update);
+        }
+        self.take_flip(intent.wait, &mut update);
+        if let Some((tag, timings)) = self.session.poll_timings_tagged(&self.ctx) {
+            update.timings = (tag >= self.timed_from).then_some(timings);
+        }
+        // Overlay data some methods get back from the GPU a frame later (hybrid's walls): look
+        // again shortly, without spinning.
+        if self.session.poll_geometry(&self.ctx) {
+            update.repaint.after(Duration::from_millis(15));
+        }
+        let ctx = &self.ctx;
+        for (side, out) in self.sides.iter_mut().zip(&mut update.probes) {
+            *out = match side.targets.probe.as_mut() {
+                Some(p) if intent.wait && p.pending() => p.wait(ctx),
+                Some(p) => p.poll(ctx),
+                None => Vec::new(),
+            };
+        }
+        if update.probes.iter().any(|p| !p.is_empty()) || self.probes_pending() {
+            update.repaint.now = true;
+        }
+        // The light-space view of a method that keeps no such maps says so.
+        for side in &mut self.sides {
+            if let Some(shown) = side.shown.as_mut() {
+                if params.view == View::DBuffer && self.session.light_maps(shown.method).is_none() {
+                    shown.note = Some(format!("{} keeps no light-space maps", shown.method));
+                }
+            }
+        }
+        update
+    }
+
+    /// The soft truth: rays on the worker thread while something shown needs it, finished
+    /// samples to the GPU. Returns its snapshot serial once the GPU holds it for this view.
+    fn feed_soft_truth(
+        &mut self,
+        base: &FrameRequest,
+        methods: &[Option<Method>; 2],
+        view: View,
+        update: &mut Update,
+    ) -> Option<u64> {
+        let request = FrameRequest {
+            method: truth::SOFT,
+            ..*base
+        };
+        let needed = methods.iter().flatten().any(|m| truth::is_soft(*m))
+            || view == View::Error
+            || view == View::Flip;
+        if needed {
+            let key = self.session.reference_key(&request);
+            self.worker.want(self.session.scene(), key);
+            if let Some(s) = self.worker.take() {
+                match self
+                    .session
+                    .set_reference(&self.ctx, s.key, &s.visibility, (s.done, s.total))
+                {
+                    Ok(()) => self.reference_serial += 1,
+                    Err(e) => update.errors.push(format!("reference: {e}")),
+                }
+            }
+            if self.worker.busy() {
+                // Keep frames coming while it converges (new samples about every 90 ms).
+                update.repaint.after(Duration::from_millis(30));
+            }
+        } else {
+            self.worker.pause();
+        }
+        self.session
+            .has_reference(&request)
+            .then_some(self.reference_serial)
+    }
+
+    /// The hard truth: its rays on a worker too, V to the GPU when done; meanwhile the side
+    /// keeps its last picture and says what it waits for. Returns its serial once the GPU holds
+    /// it for this view.
+    fn feed_hard_truth(
+        &mut self,
+        base: &FrameRequest,
+        methods: &[Option<Method>; 2],
+        update: &mut Update,
+    ) -> Option<u64> {
+        let request = FrameRequest {
+            method: truth::HARD,
+            ..*base
+        };
+        if methods.iter().flatten().any(|m| truth::is_hard(*m)) {
+            if let Some(s) = self.hard_worker.take() {
+                match self
+                    .session
+                    .set_reference_hard(&self.ctx, s.key, &s.visibility)
+                {
+                    Ok(()) => self.hard_serial += 1,
+                    Err(e) => update.errors.push(format!("reference-hard: {e}")),
+                }
+            }
+            if !self.session.has_reference_hard(&request) {
+                let key = self.session.reference_hard_key(&request);
+                self.hard_worker.want(self.session.scene(), key);
+            }
+            if self.hard_worker.busy() {
+                update.repaint.after(Duration::from_millis(30));
+            }
+        } else {
+            self.hard_worker.pause();
+        }
+        self.session
+            .has_reference_hard(&request)
+            .then_some(self.hard_serial)
+    }
+
+    /// Record each side's frame, view and probes where they changed, in one submit.
+    #[allow(clippy::too_many_arguments)]
+    fn record(
+        &mut self,
+        intent: &Intent,
+        base: FrameRequest,
+        methods: [Option<Method>; 2],
+        soft: Option<u64>,
+        hard: Option<u64>,
+        motion: &mut dyn FnMut(&Scene, u32, u32) -> u64,
+        update: &mut Update,
+    ) {
+        let params = intent.params;
+        let camera = self.session.scene().camera;
+        let revision = self.session.revision();
+        let light = self.session.scene().light;
+        let progress = self.session.reference_progress().filter(|_| soft.is_some());
+        let reference_serial = soft.unwrap_or(0);
+        let mut jobs: Vec<FrameJob<'_>> = Vec::new();
+        for (i, (side, method)) in self.sides.iter_mut().zip(methods).enumerate() {
+            let Some(method) = method else {
+                side.clear();
+                continue;
+            };
+            // A method that cannot take this light draws nothing and says why (never a
+            // picture made with another light).
+            if let Some(why) = method.refusal(light.kind(), Some(&self.ctx.caps)) {
+                side.clear();
+                update.errors.push(why);
+                continue;
+            }
+            let request = FrameRequest { method, ..base };
+            let truth = Truth::of(method);
+            let waiting = match truth {
+                Some(Truth::Soft) if soft.is_none() => {
+                    Some("reference: waiting for its first samples")
+                }
+                Some(Truth::Hard) if hard.is_none() => {
+                    Some("reference-hard: casting its rays (off the UI thread)…")
+                }
+                _ => None,
+            };
+            if let Some(note) = waiting {
+                let shown = side.shown.get_or_insert(Shown {
+                    method,
+                    request,
+                    light,
+                    reference: None,
+                    note: None,
+                    serial: 0,
+                });
+                shown.note = Some(note.into());
+                continue;
+            }
+            // Whether a frame is colour-only is not what it shows: the mouse leaving the
+            // viewport renders nothing again, and a view or probe that needs the V/t target of
+            // a colour-only frame has the render core draw it in full.
+            let key = RenderKey {
+                request: FrameRequest {
+                    colour_only: false,
+                    ..request
+                },
+                camera,
+                revision,
+                reference: match truth {
+                    Some(Truth::Soft) => reference_serial,
+                    Some(Truth::Hard) => hard.unwrap_or(0),
+                    None => 0,
+                },
+            };
+            let view_key = ViewKey {
+                params,
+                reference: match params.view {
+                    View::Error => reference_serial,
+                    View::Flip => self.flip.serial,
+                    _ => 0,
+                },
+            };
+            let render = side.key != Some(key) || side.targets.rendered.is_none();
+            let redraw = render || side.view != Some(view_key);
+            let mut probes = Vec::new();
+            let serial = if render {
+                self.serial + 1
+            } else {
+                side.shown.as_ref().map_or(0, |s| s.serial)
+            };
+            if let Some(p) = intent.probe.filter(|p| p.side == i) {
+                let here = Some((p.x, p.y, serial, params.view, reference_serial));
+                if redraw || side.probed != here {
+                    probes.push(ProbeRequest::Pixel {
+                        x: p.x,
+                        y: p.y,
+                        params,
+                    });
+                    side.probed = here;
+                }
+            }
+            if intent.moving && render && i == 0 {
+                let tag = motion(self.session.scene(), request.width, request.height);
+                probes.push(ProbeRequest::Motion { tag, params });
+            }
+            let fit_key = Some((key, params.view, params.channels));
+            if params.mapping.auto
+                && params.view != View::Final
+                && params.view != View::Classes
+                && (side.fitted != fit_key
+                    || view_key.reference != side.view.map_or(0, |v| v.reference))
+            {
+                probes.push(ProbeRequest::Fit { params });
+                side.fitted = fit_key;
+            }
+            if !redraw && probes.is_empty() {
+                continue;
+            }
+            if render {
+                self.serial += 1;
+            }
+            side.key = Some(key);
+            side.view = Some(view_key);
+            let note = (matches!(params.view, View::Error | View::Flip) && soft.is_none())
+                .then(|| "no reference of this size yet: the error view waits for it".to_string());
+            side.shown = Some(Shown {
+                method,
+                request,
+                light,
+                reference: progress,
+                note,
+                serial: self.serial,
+            });
+            jobs.push(FrameJob {
+                targets: &mut side.targets,
+                request,
+                view: Some(params),
+                render,
+                probes,
+            });
+        }
+        if jobs.is_empty() {
+            update.submitted = Some(Submitted::default());
+            return;
+        }
+        let builds = self.session.geometry_builds(base.method).0;
+        let t = Instant::now();
+        match self.session.submit(&self.ctx, &mut jobs) {
+            Ok(bytes) => {
+                // As submitted: a view that needs a colour-only frame in full renders it.
+                let renders = jobs.iter().filter(|j| j.render).count();
+                drop(jobs);
+                let wall_ms = t.elapsed().as_secs_f64() * 1e3;
+                let (after, geometry_ms) = self.session.geometry_builds(base.method);
+                update.submitted = Some(Submitted {
+                    renders,
+                    wall_ms,
+                    rebuilt: (after != builds).then_some(geometry_ms),
+                    bytes,
+                });
+            }
+            Err(e) => update.errors.push(e.to_string()),
+        }
+    }
+
+    /// Start a FLIP map of the main side's frame against the soft truth's image of the same
+    /// view, once per new frame or reference snapshot: the reference's camera pass into targets
+    /// of its own, both images read back here, FLIP on a thread of its own.
+    fn want_flip(&mut self, reference_serial: u64, update: &mut Update) {
+        let Some(key) = self.sides[0].key else {
+            return;
+        };
+        let wanted = (key, reference_serial);
+        if self.flip.made == Some(wanted)
+            || self.flip.job.as_ref().is_some_and(|j| j.wanted == wanted)
+        {
+            return;
+        }
+        match self.start_flip(&key.request, wanted) {
+            Ok(job) => self.flip.job = Some(job),
+            Err(e) => update.errors.push(format!("FLIP: {e}")),
+        }
+    }
+
+    fn start_flip(
+        &mut self,
+        request: &FrameRequest,
+        wanted: (RenderKey, u64),
+    ) -> Result<FlipJob, RenderError> {
+        let reference = FrameRequest {
+            method: truth::SOFT,
+            ..*request
+        };
+        self.session.submit(
+            &self.ctx,
+            &mut [FrameJob {
+                targets: &mut self.flip.targets,
+                request: reference,
+                view: None,
+                render: true,
+                probes: Vec::new(),
+            }],
+        )?;
+        let truth = self.session.read(&self.ctx, &mut self.flip.targets, None)?;
+        let shown = self.read(0, None)?;
+        let key = self.session.reference_key(&reference);
+        let (tx, rx) = mpsc::channel();
+        std::thread::Builder::new()
+            .name("dbuffer-flip".into())
+            .spawn(move || {
+                let rgb = |f: &Frame| -> Vec<[u8; 3]> {
+                    f.color.iter().map(|c| [c[0], c[1], c[2]]).collect()
+                };
+                let map = flip::ldr_flip(
+                    &rgb(&truth),
+                    &rgb(&shown),
+                    shown.width,
+                    shown.height,
+                    flip::DEFAULT_PPD,
+                )
+                .map(|map| FlipMap {
+                    map,
+                    thread: std::thread::current().id(),
+                })
+                .map_err(|e| e.to_string());
+                let _ = tx.send(map);
+            })
+            .map_err(|e| RenderError::Request(format!("no thread for FLIP: {e}")))?;
+        Ok(FlipJob { wanted, key, rx })
+    }
+
+    /// Hand the GPU the FLIP map computed, if it has arrived (`wait`: once it has).
+    fn take_flip(&mut self, wait: bool, update: &mut Update) {
+        let Some(job) = self.flip.job.as_ref() else {
+            return;
+        };
+        let arrived = if wait {
+            job.rx.recv().map_err(|_| TryRecvError::Disconnected)
+        } else {
+            job.rx.try_recv()
+        };
+        let result = match arrived {
+            Ok(result) => result,
+            Err(TryRecvError::Empty) => {
+                update.repaint.after(Duration::from_millis(15));
+                return;
+            }
+            Err(TryRecvError::Disconnected) => Err("its thread ended without a map".into()),
+        };
+        let Some(job) = self.flip.job.take() else {
+            return;
+        };
+        let uploaded = result.and_then(|m| {
+            self.session
+                .set_flip(&self.ctx, job.key, &m.map)
+                .map_err(|e| e.to_string())
+                .map(|()| m.thread)
+        });
+        match uploaded {
+            Ok(thread) => {
+                self.flip.made = Some(job.wanted);
+                self.flip.serial += 1;
+                self.flip.thread = Some(thread);
+                update.repaint.now = true;
+            }
+            Err(e) => update.errors.push(format!("FLIP: {e}")),
+        }
+    }
+}
