@@ -85,6 +85,9 @@ struct BvhAnyHit {
     // Nodes whose box was tested, and triangles tested.
     nodes: u32,
     triangles: u32,
+    // Where along the ray the hit is (origin + t·dir), where one was: the first found, not
+    // necessarily the nearest.
+    t: f32,
 };
 
 // Whether triangle `k` (leaf order) is hit at origin + t·dir with t_min <= t <= t_max: the
@@ -117,7 +120,7 @@ fn bvh_any_hit(
     node_count: u32,
     triangle_count: u32,
 ) -> BvhAnyHit {
-    var out = BvhAnyHit(false, 0u, 0u, 0u);
+    var out = BvhAnyHit(false, 0u, 0u, 0u, 0.0);
     if triangle_count == 0u || node_count == 0u {
         return out;
     }
@@ -141,6 +144,7 @@ fn bvh_any_hit(
                 if t >= t_min && t <= t_max {
                     out.hit = true;
                     out.triangle = k;
+                    out.t = t;
                     return out;
                 }
             }

@@ -85,6 +85,38 @@ pub struct MethodResult {
     pub flip: Vec<f32>,
     /// The mean of `flip` over every pixel (FLIP's own headline number).
     pub flip_mean: f64,
+    /// A temporal method's frames of history before the frame measured (0: its first frame);
+    /// `None` for a method whose frame depends on nothing before it.
+    pub history: Option<u32>,
+}
+
+impl MethodResult {
+    /// The row's name: the method's, and a temporal method's first frame as `NAME-first-frame`.
+    pub fn label(&self) -> String {
+        label(self.method, self.history == Some(0))
+    }
+}
+
+/// The name of `method`'s row (of its first frame, when `first`).
+pub fn label(method: Method, first: bool) -> String {
+    if first {
+        format!("{}-first-frame", method.name())
+    } else {
+        method.name().to_string()
+    }
+}
+
+/// The report's rows and the montage's tiles of `drawn`, in order: each method once, and a
+/// temporal method twice — its first frame, then the frame after the history a still view has.
+pub fn tiles(drawn: &[Method]) -> Vec<(Method, bool)> {
+    let mut out = Vec::with_capacity(drawn.len());
+    for &m in drawn {
+        if m.spec().history.is_some() {
+            out.push((m, true));
+        }
+        out.push((m, false));
+    }
+    out
 }
 
 /// A frame's shaded colour as FLIP takes it (sRGB, alpha dropped).
@@ -139,7 +171,12 @@ impl Comparison {
             scene: self.scene.clone(),
             adapter: self.adapter.clone(),
             request: self.request,
-            drawn: self.results.iter().map(|r| r.method).collect(),
+            drawn: self
+                .results
+                .iter()
+                .filter(|r| r.history != Some(0))
+                .map(|r| r.method)
+                .collect(),
             not_applicable: self.not_applicable.clone(),
             pixels: self.mask.iter().filter(|&&m| m).count(),
             reference_rays_per_s: self.reference_rays_per_s,
@@ -371,7 +408,9 @@ pub fn run_each<E: From<RenderError>>(
         mask,
         exact: None,
     };
-    let tile = |m: Method| plan.drawn.iter().position(|&d| d == m).unwrap_or(0);
+    let tiles = tiles(&plan.drawn);
+    let tile_of = |m: Method, first: bool| tiles.iter().position(|&t| t == (m, first)).unwrap_or(0);
+    let tile = |m: Method| tile_of(m, false);
     let measured = measure(
         &base,
         request,
@@ -396,6 +435,22 @@ pub fn run_each<E: From<RenderError>>(
         session.draw(&offline.ctx, &req)?;
         let (builds, geometry_ms) = session.geometry_builds(method);
         session.invalidate_light_maps();
+        let cpu_ms = if builds > 0 { geometry_ms } else { 0.0 };
+        // A temporal method: its first frame (no history), then the frame after the history a
+        // user standing still has (its knob's frames), each scored and labelled.
+        let history = method.spec().history.map(|k| req.knobs.get(k));
+        if let Some(frames) = history {
+            session.reset_history(method);
+            let t = Instant::now();
+            let frame = session.frame(&offline.ctx, &req)?;
+            let wall_ms = t.elapsed().as_secs_f64() * 1e3;
+            let mut first = measure(&base, request, method, frame, (cpu_ms, wall_ms))?;
+            first.history = Some(0);
+            each(tile_of(method, true), &base.against(), first)?;
+            for _ in 1..frames {
+                session.draw(&offline.ctx, &req)?;
+            }
+        }
         let t = Instant::now();
         // Read back with the method's own textures already let go of.
         let frame = session.frame_releasing(&offline.ctx, &req)?;
@@ -403,8 +458,8 @@ pub fn run_each<E: From<RenderError>>(
         if truth::is_hard(method) {
             base.exact = Some(frame.visibility.clone());
         }
-        let cpu_ms = if builds > 0 { geometry_ms } else { 0.0 };
-        let measured = measure(&base, request, method, frame, (cpu_ms, wall_ms))?;
+        let mut measured = measure(&base, request, method, frame, (cpu_ms, wall_ms))?;
+        measured.history = history;
         each(tile(method), &base.against(), measured)?;
     }
     let outline = Outline {
@@ -474,6 +529,7 @@ fn measure(
         flip_mean: flip::mean(&flip),
         flip,
         frame,
+        history: None,
     })
 }
 

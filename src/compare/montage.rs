@@ -84,7 +84,7 @@ impl Layout {
     /// row when `reference-hard` is among them.
     pub fn planned(width: u32, height: u32, drawn: &[Method]) -> Layout {
         let cells = if drawn.contains(&truth::HARD) { 4 } else { 3 };
-        Layout::new(width, height, drawn.len() as u32, cells)
+        Layout::new(width, height, super::tiles(drawn).len() as u32, cells)
     }
 
     /// Top-left corner of tile `i` (its label).
@@ -255,7 +255,12 @@ impl Page {
 /// against `reference-hard`.
 fn label(img: &mut RgbImage, font: &FontRef<'_>, r: &MethodResult, (x, y): (u32, u32), w: u32) {
     let right = x + w;
-    text(img, font, r.method.name(), (x, y + 2), NAME_PX, TEXT, right);
+    let name = match r.history {
+        Some(0) => format!("{} (first frame)", r.method.name()),
+        Some(n) => format!("{} ({n} frames)", r.method.name()),
+        None => r.method.name().to_string(),
+    };
+    text(img, font, &name, (x, y + 2), NAME_PX, TEXT, right);
     let numbers = if truth::is_soft(r.method) {
         format!("{} px counted", r.metrics.pixels)
     } else {

@@ -83,7 +83,12 @@ pub struct NotApplicable {
 /// One method's row of the report.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct MethodRow {
+    /// The method's name; a temporal method's first frame is `NAME-first-frame`.
     pub method: String,
+    /// A temporal method's frames of history before the frame scored (0: its first frame);
+    /// null for every other method.
+    #[serde(default)]
+    pub history_frames: Option<u32>,
     pub class_mismatch_pct: f64,
     pub mae: f64,
     pub penumbra_mae: f64,
@@ -162,21 +167,21 @@ pub struct HardRow {
 }
 
 /// A hard method's mismatch against `reference-hard`, as an image.
-fn hard_file(method: Method) -> String {
-    format!("{}-hard-error.png", method.name())
+fn hard_file(label: &str) -> String {
+    format!("{label}-hard-error.png")
 }
 
 /// A method's FLIP map and cost heatmap.
-fn flip_file(method: Method) -> String {
-    format!("{}-flip.png", method.name())
+fn flip_file(label: &str) -> String {
+    format!("{label}-flip.png")
 }
 
-fn cost_file(method: Method) -> String {
-    format!("{}-cost.png", method.name())
+fn cost_file(label: &str) -> String {
+    format!("{label}-cost.png")
 }
 
-fn files(method: Method) -> (String, String, Option<String>) {
-    let n = method.name();
+/// A row's image, visibility EXR and error heatmap (none for the reference), by its label.
+fn files(method: Method, n: &str) -> (String, String, Option<String>) {
     (
         format!("{n}.png"),
         format!("{n}-visibility.exr"),
@@ -506,14 +511,16 @@ fn cost_row(r: &MethodResult, mask: &[bool]) -> Option<CostRow> {
         max,
         constant,
         paths,
-        image: cost_file(r.method),
+        image: cost_file(&r.label()),
     })
 }
 
 fn row(r: &MethodResult, mask: &[bool]) -> MethodRow {
-    let (image, visibility, heatmap) = files(r.method);
+    let label = r.label();
+    let (image, visibility, heatmap) = files(r.method, &label);
     MethodRow {
-        method: r.method.name().to_string(),
+        method: label.clone(),
+        history_frames: r.history,
         class_mismatch_pct: r.metrics.class_mismatch_pct,
         mae: r.metrics.mae,
         penumbra_mae: r.metrics.penumbra_mae,
@@ -531,10 +538,10 @@ fn row(r: &MethodResult, mask: &[bool]) -> MethodRow {
             interior_px: h.interior_px,
             false_shadow_px: h.false_shadow_px,
             missed_shadow_px: h.missed_shadow_px,
-            image: hard_file(r.method),
+            image: hard_file(&label),
         }),
         flip_mean: r.flip_mean,
-        flip: flip_file(r.method),
+        flip: flip_file(&label),
         cost: cost_row(r, mask),
         temporal_error: None,
         popping: None,
@@ -597,7 +604,8 @@ impl Writer {
     ) -> Result<(), OutputError> {
         let (w, h) = (r.frame.width, r.frame.height);
         let width = w as usize;
-        let (image, visibility, heat) = files(r.method);
+        let label = r.label();
+        let (image, visibility, heat) = files(r.method, &label);
         let color = &r.frame.color;
         self.staged.write_with(&image, |out, target| {
             output::png_file(out, target, w, h, |y, row| {
@@ -616,9 +624,9 @@ impl Writer {
         })?;
         if let (Some(exact), Some(_)) = (against.exact, &r.hard) {
             let img = heatmap::hard_mismatch(exact, &frame.visibility, against.mask, color, w, h);
-            self.stage_image(&hard_file(r.method), &img)?;
+            self.stage_image(&hard_file(&label), &img)?;
         }
-        self.stage_image(&flip_file(r.method), &heatmap::flip(&r.flip, w, h))?;
+        self.stage_image(&flip_file(&label), &heatmap::flip(&r.flip, w, h))?;
         if !frame.cost.is_empty() {
             let max = frame
                 .cost
@@ -628,7 +636,7 @@ impl Writer {
                 .map(|(c, _)| c[0])
                 .fold(0.0f32, f32::max);
             let img = heatmap::cost(&frame.cost, against.mask, w, h, max);
-            self.stage_image(&cost_file(r.method), &img)?;
+            self.stage_image(&cost_file(&label), &img)?;
         }
         if let Some(heat) = heat {
             let img = heatmap::render(against.reference, &frame.visibility, against.mask, w, h);

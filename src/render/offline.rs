@@ -104,6 +104,14 @@ pub fn render_in(
         report.cpu_ms.push(("reference_rays".into(), cast.rays_ms));
         report.reference_rays = Some((cast.samples, cast.hit_pixels));
     }
+    // A temporal method is shown as a still view is: after the frames of history its knob
+    // states, drawn first from a history begun afresh.
+    if let Some(frames) = request.method.spec().history {
+        session.reset_history(request.method);
+        for _ in 0..request.knobs.get(frames) {
+            session.draw(ctx, request)?;
+        }
+    }
     let t = Instant::now();
     let frame = session.frame(ctx, request)?;
     report

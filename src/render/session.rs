@@ -201,6 +201,20 @@ impl Session {
         super::readback::map_now(&ctx.device)
     }
 
+    /// Forget `method`'s frames before (a temporal method's history): its next frame is a
+    /// first one.
+    pub fn reset_history(&mut self, method: Method) {
+        if let Some(m) = self.methods.get_mut(&method) {
+            m.reset_history();
+        }
+    }
+
+    /// Whether more frames of a still view would still change `method`'s image (a temporal
+    /// method's history is filling): a window keeps drawing while it is.
+    pub fn settling(&self, method: Method) -> bool {
+        self.methods.get(&method).is_some_and(|m| m.settling())
+    }
+
     fn moved(&mut self) {
         self.revision += 1;
         self.light_view = LightView::fit(&self.scene);
@@ -406,6 +420,7 @@ impl Session {
             prepared: &self.prepared,
             light_view: &self.light_view,
             revision: self.revision,
+            meshes: self.meshes,
             map_size: request.dbuffer_size,
             vt: request.vt,
             knobs: &request.knobs,
@@ -613,6 +628,7 @@ impl Session {
             prepared: &self.prepared,
             light_view: &self.light_view,
             revision: self.revision,
+            meshes: self.meshes,
             map_size: request.dbuffer_size,
             vt: request.vt,
             knobs: &request.knobs,

@@ -332,6 +332,10 @@ impl ViewSession {
         if self.session.poll_geometry(&self.ctx) {
             update.repaint.after(Duration::from_millis(15));
         }
+        // A temporal method's history is still filling: the next frame differs.
+        if methods.iter().flatten().any(|m| self.session.settling(*m)) {
+            update.repaint.now = true;
+        }
         let ctx = &self.ctx;
         for (side, out) in self.sides.iter_mut().zip(&mut update.probes) {
             *out = match side.targets.probe.as_mut() {
@@ -510,7 +514,10 @@ impl ViewSession {
                     _ => 0,
                 },
             };
-            let render = side.key != Some(key) || side.targets.rendered.is_none();
+            // A temporal method draws again while its history fills, the view standing still.
+            let render = side.key != Some(key)
+                || side.targets.rendered.is_none()
+                || self.session.settling(method);
             let redraw = render || side.view != Some(view_key);
             let mut probes = Vec::new();
             let serial = if render {

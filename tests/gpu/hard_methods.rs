@@ -787,6 +787,7 @@ fn extended_light_map_rgb_is_its_cpu_twin_and_its_depth_bits_show() {
             prepared: &prepared,
             light_view: &view,
             revision: 1,
+            meshes: 0,
             map_size: 128,
             vt: dbuffer::geometry::VtVariant::Smoothstep,
             knobs: &knobs,

@@ -24,6 +24,8 @@ pub struct FrameInputs<'a> {
     /// Bumped whenever the light or a caster changed: light-space products made for an older
     /// revision are stale.
     pub revision: u64,
+    /// Bumped whenever an object's mesh changed (what a BVH of the scene is built from).
+    pub meshes: u64,
     /// The D-buffer and shadow maps are this many texels square.
     pub map_size: u32,
     pub vt: VtVariant,

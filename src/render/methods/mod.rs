@@ -73,6 +73,7 @@ registry! {
     hybrid: HYBRID;
     extended_light_map: EXTENDED_LIGHT_MAP;
     wedges: WEDGES;
+    raytraced: RAYTRACED;
     reference: REFERENCE;
     reference_hard: REFERENCE_HARD;
 }

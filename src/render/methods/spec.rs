@@ -43,6 +43,10 @@ pub struct MethodSpec {
     /// What `dbuffer study` sweeps: its quality knobs and the default study's settings, or why
     /// it has none ([`Sweep`]).
     pub sweep: Sweep,
+    /// A temporal method's knob of the frames of history a still view is shown after (`render`
+    /// draws them first; `compare` scores its first frame and the one after them); `None` for a
+    /// method whose frame depends on nothing before it.
+    pub history: Option<&'static Knob>,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
 }
@@ -124,6 +128,7 @@ impl MethodSpec {
             line_samples: None,
             cost: Cost::DEFAULT,
             sweep: Sweep::UNSTATED,
+            history: None,
             new,
         }
     }
@@ -143,6 +148,13 @@ impl MethodSpec {
     /// measures its defaults alone.
     pub const fn fixed_quality(mut self, why: &'static str) -> Self {
         self.sweep = Sweep::fixed(why);
+        self
+    }
+
+    /// A temporal method: its image depends on the frames before it, and a still view is shown
+    /// after `frames` (a knob) of them.
+    pub const fn history(mut self, frames: &'static Knob) -> Self {
+        self.history = Some(frames);
         self
     }
 

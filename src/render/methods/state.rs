@@ -37,6 +37,13 @@ pub trait MethodState: Send {
 
     /// Forget the light-space products: the next frame remakes them (to time them).
     fn invalidate(&mut self) {}
+    /// A temporal method: forget the frames before, so the next frame is a first one.
+    fn reset_history(&mut self) {}
+    /// A temporal method: whether more frames of a still view would still change its image
+    /// (its history is not full yet), so a window keeps drawing.
+    fn settling(&self) -> bool {
+        false
+    }
 
     /// For a method that counts shadow volumes over the screen: the mean number of volume
     /// fragments per pixel of its last frame (the fill it pays), measured with a pass of its

@@ -17,6 +17,7 @@ pub mod moment_sat;
 pub mod moments;
 pub mod planar;
 pub mod probe;
+pub mod raytraced;
 pub mod sample_maps;
 pub mod shadow_map;
 pub mod ssm;

@@ -75,6 +75,11 @@ impl GpuBvh {
         self.node_count
     }
 
+    /// The buffer a shader binds as `bvh` (`shaders/shared/bvh_trace.wgsl`).
+    pub fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
     pub fn triangle_count(&self) -> u32 {
         self.triangle_count
     }
