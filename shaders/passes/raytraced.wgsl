@@ -76,7 +76,7 @@ const LIGHT_POLYGON: u32 = 2u;
 // geometry::oracle::SELF_EPS).
 const SELF_EPS: f32 = 1e-4;
 // While something moves, the history spans at most this many frames.
-const MOTION_HISTORY: f32 = 4.0;
+const MOTION_HISTORY: f32 = 2.0;
 // The previous frame saw the same surface at a tap when its position is within this share of
 // the distance to the camera, and its normal within about 25 degrees.
 const SAME_SURFACE: f32 = 0.01;

@@ -14,6 +14,7 @@ mod hard_methods;
 mod linear_ssm;
 mod methods_accuracy;
 mod polygon_lights;
+mod raytraced;
 mod readback;
 mod reference_analytic;
 mod render_accuracy;

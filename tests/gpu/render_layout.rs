@@ -12,6 +12,7 @@ use dbuffer::render::passes::planar::{PlanarUniforms, ReceiverUniform};
 use dbuffer::render::passes::probe::{
     FIT_GRID, MOTION_GRID, PIXEL_FLOATS, PROBE_FIT, PROBE_MOTION, PROBE_PIXEL,
 };
+use dbuffer::render::passes::raytraced::RtUniforms;
 use dbuffer::render::passes::sample_maps::{SampleLight, SampleLights, MAX_LIGHTS};
 use dbuffer::render::passes::shadow_map::{LightUniforms, ShadowUniforms};
 use dbuffer::render::passes::stencil_volumes::ScreenUniforms;
@@ -202,6 +203,36 @@ fn uniforms_match_their_wgsl() {
         eye,
         receivers
     );
+    assert_wgsl_layout!(
+        RtUniforms,
+        &source("passes/raytraced.wgsl"),
+        "RtUniforms",
+        view_proj,
+        prev_view_proj,
+        eye,
+        frame,
+        light_center,
+        light_kind,
+        light_normal,
+        light_corner_count,
+        light_u,
+        light_area,
+        light_w,
+        light_radius,
+        line_a,
+        rays,
+        line_b,
+        history,
+        width,
+        height,
+        tan_half_fov,
+        radius,
+        node_count,
+        triangle_count,
+        flags,
+        light_size,
+        light_corners
+    );
     for shader in ["passes/ssm_skins.wgsl", "passes/ssm_visibility.wgsl"] {
         assert_wgsl_layout!(
             SsmSample,
@@ -265,8 +296,8 @@ fn every_methods_params_match_their_wgsl() {
     use dbuffer::render::methods::{
         bitmask::BitmaskParams, dbuffer::DBufferParams, dbuffer_fused::DBufferFusedParams,
         extended_light_map::ExtendedLightMapParams, msm::MsmParams, msm_soft::MsmSoftParams,
-        pcf::PcfParams, pcss::PcssParams, reference::ReferenceParams, smrt::SmrtParams,
-        vsm::VsmParams, wedges::WedgesParams,
+        pcf::PcfParams, pcss::PcssParams, raytraced::RaytracedParams, reference::ReferenceParams,
+        smrt::SmrtParams, vsm::VsmParams, wedges::WedgesParams,
     };
     use dbuffer::render::passes::shadow_map::PARAMS_BINDING;
     /// A WGSL struct's name, and the check of it against its Rust struct in a shader.
@@ -378,6 +409,17 @@ fn every_methods_params_match_their_wgsl() {
                 _pad0,
                 _pad1,
                 _pad2
+            )
+        }),
+        ("RaytracedParams", |w| {
+            assert_wgsl_params!(
+                RaytracedParams,
+                w,
+                "RaytracedParams",
+                denoise,
+                width,
+                _pad0,
+                _pad1
             )
         }),
         ("ExtendedLightMapParams", |w| {
