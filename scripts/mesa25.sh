@@ -28,6 +28,7 @@ suite=bookworm-backports
 fail() {
   echo "scripts/mesa25.sh: $*" >&2
   echo "scripts/mesa25.sh: the ray-query tests need Mesa 25's lavapipe; without it they cannot run" >&2
+  echo "scripts/mesa25.sh: (scripts/test.sh leaves that run out with DBUFFER_SKIP_RAY_QUERY_RUN=1, and says so)" >&2
   exit 1
 }
 
@@ -56,7 +57,7 @@ fetch() {
   [ "$(id -u)" = 0 ] && opts+=(-o "APT::Sandbox::User=root")
   mkdir -p "$apt/etc/sources.list.d"
   echo "fetching Mesa 25 (${packages[*]}) from $suite into $dir"
-  apt-get "${opts[@]}" -qq update || fail "apt-get update of $suite failed (no network?)"
+  apt-get "${opts[@]}" -qq --error-on=any update || fail "apt-get update of $suite failed (no network?)"
   (cd "$dir/debs" && apt-get "${opts[@]}" -qq download -t "$suite" "${packages[@]}") ||
     fail "apt-get download of ${packages[*]} from $suite failed (no network?)"
   local deb
