@@ -29,7 +29,9 @@ impl Accel {
     /// later submission); an error, before anything is made, where the device has no ray
     /// queries or takes fewer triangles in one BLAS.
     pub fn new(ctx: &GpuContext, triangles: &[[Vec3; 3]]) -> Result<Accel, RenderError> {
-        if !ctx.caps.ray_queries() {
+        if !ctx.caps.ray_queries()
+            || ctx.caps.limits.max_acceleration_structures_per_shader_stage < 1
+        {
             return Err(RenderError::Request(format!(
                 "hardware ray queries are not available on {}",
                 ctx.adapter_description()
