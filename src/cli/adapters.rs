@@ -5,6 +5,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use anyhow::Result;
 use dbuffer::render::adapter::{self, Verdict};
 use dbuffer::render::gpu_reference;
+use dbuffer::render::passes::trace::Path;
 use dbuffer::render::{GpuContext, Method, RenderError};
 
 static VERBOSE: AtomicBool = AtomicBool::new(false);
@@ -55,7 +56,10 @@ pub fn list() -> Result<()> {
         }
         // The shadow-ray tracer: which path `compare --reference gpu` takes here.
         match gpu_reference::refuses_on(&a.caps) {
-            None => outln!("  GPU reference: the BVH traversed in WGSL (compute)"),
+            None => match Path::best(&a.caps) {
+                Path::RayQuery => outln!("  GPU reference: hardware ray queries (compute)"),
+                Path::WgslBvh => outln!("  GPU reference: the BVH traversed in WGSL (compute)"),
+            },
             Some(why) => outln!("  GPU reference: cannot ({why})"),
         }
     }

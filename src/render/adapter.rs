@@ -155,6 +155,13 @@ impl Capabilities {
         }
     }
 
+    /// Whether shaders may trace rays through acceleration structures (hardware ray queries,
+    /// `Features::EXPERIMENTAL_RAY_QUERY`): the shadow-ray tracer's first path
+    /// (`passes::trace::Path::RayQuery`).
+    pub fn ray_queries(&self) -> bool {
+        self.features.contains(Features::EXPERIMENTAL_RAY_QUERY)
+    }
+
     /// Whether `format` can be used as `usage`.
     pub fn supports(&self, format: TextureFormat, usage: Usage) -> bool {
         let Some((_, ff)) = self.formats.iter().find(|(f, _)| *f == format) else {
@@ -257,9 +264,12 @@ pub fn every_adapter() -> (Vec<AdapterReport>, String) {
     let adapters = pollster::block_on(instance.enumerate_adapters(backends));
     let reports = adapters
         .iter()
-        .map(|a| AdapterReport {
-            info: a.get_info(),
-            caps: Capabilities::of(a, wanted_features(a.features()), wanted_limits(&a.limits())),
+        .map(|a| {
+            let features = headless_features(a.features());
+            AdapterReport {
+                info: a.get_info(),
+                caps: Capabilities::of(a, features, headless_limits(features, &a.limits())),
+            }
         })
         .collect();
     (reports, why)
@@ -335,4 +345,25 @@ pub fn wanted_features(adapter: wgpu::Features) -> wgpu::Features {
         & (wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::DEPTH32FLOAT_STENCIL8
             | wgpu::Features::FLOAT32_BLENDABLE)
+}
+
+/// The features a headless device asks for ([`super::GpuContext::from_adapter`], and what
+/// `dbuffer adapters` reports): [`wanted_features`], and ray queries where the adapter has them
+/// (the shadow-ray tracer's hardware path). Ray queries are an experimental wgpu feature, so a
+/// device that gets them is opened with wgpu's experimental features allowed; the lab's window
+/// asks for [`wanted_features`] alone.
+pub fn headless_features(adapter: wgpu::Features) -> wgpu::Features {
+    wanted_features(adapter) | (adapter & wgpu::Features::EXPERIMENTAL_RAY_QUERY)
+}
+
+/// The limits a device with `features` asks of an adapter with `adapter`: [`wanted_limits`],
+/// with the adapter's acceleration-structure limits where `features` has ray queries (WebGPU's
+/// defaults allow none).
+pub fn headless_limits(features: wgpu::Features, adapter: &wgpu::Limits) -> wgpu::Limits {
+    let limits = wanted_limits(adapter);
+    if features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY) {
+        limits.using_acceleration_structure_values(adapter.clone())
+    } else {
+        limits
+    }
 }

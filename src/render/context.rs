@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use super::adapter::Capabilities;
-pub use super::adapter::{wanted_features, wanted_limits};
+pub use super::adapter::{headless_features, headless_limits, wanted_features, wanted_limits};
 use super::RenderError;
 
 /// A device-lifetime object of some pass.
@@ -68,27 +68,38 @@ impl GpuContext {
         Ok(ctx)
     }
 
-    /// Open a device on `adapter` with the features and limits the render core uses.
+    /// Open a device on `adapter` with the features and limits the render core uses, ray
+    /// queries included where the adapter has them ([`headless_features`]).
     pub fn from_adapter(adapter: &wgpu::Adapter) -> Result<GpuContext, RenderError> {
+        let features = headless_features(adapter.features());
         Self::open(
             adapter,
-            wanted_features(adapter.features()),
-            wanted_limits(&adapter.limits()),
+            features,
+            headless_limits(features, &adapter.limits()),
         )
     }
 
     /// Open a device on `adapter` with exactly `features` and `limits` (the weakest-device
-    /// test opens one with WebGPU's downlevel limits and no optional features).
+    /// test opens one with WebGPU's downlevel limits and no optional features). wgpu's
+    /// experimental features are allowed only where `features` asks for one (ray queries).
     pub fn open(
         adapter: &wgpu::Adapter,
         features: wgpu::Features,
         limits: wgpu::Limits,
     ) -> Result<GpuContext, RenderError> {
+        let experimental = if features.intersects(wgpu::Features::all_experimental_mask()) {
+            // SAFETY: wgpu's token that its experimental features may have bugs it will fix;
+            // only ray queries are asked for, and only the shadow-ray tracer uses them
+            // (`passes::trace`, held to the BVH traversed in WGSL by tests/gpu/trace.rs).
+            unsafe { wgpu::ExperimentalFeatures::enabled() }
+        } else {
+            wgpu::ExperimentalFeatures::disabled()
+        };
         let desc = wgpu::DeviceDescriptor {
             label: Some("dbuffer::device"),
             required_features: features,
             required_limits: limits,
-            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            experimental_features: experimental,
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
         };

@@ -1,11 +1,13 @@
 //! The ray-cast reference traced on the GPU (`compare --reference gpu`): the CPU reference's
 //! points under the pixels (`reference::pixel_points`, primary rays through the CPU's BVH), its
 //! light samples in its progressive order (`geometry::progressive::progressive_order`) and its
-//! conventions (`geometry::oracle`: which points get rays, the segment's `SELF_EPS`, the tolerant
-//! triangle test), with the shadow rays traced by `passes::trace` against the same BVH
-//! flattened into a storage buffer, a batch of samples per dispatch. Only the shadow rays move
-//! to the GPU, so the two references differ only where a ray grazes an edge within rounding
-//! (`tests/gpu/trace.rs` measures how often).
+//! conventions (`geometry::oracle`: which points get rays, the segment's `SELF_EPS`), with the
+//! shadow rays traced by `passes::trace` against the same triangles, a batch of samples per
+//! dispatch, by one of its two paths: hardware ray queries where the device has them, else the
+//! same BVH flattened into a storage buffer and traversed in WGSL with the CPU's tolerant
+//! triangle test ([`Path`]). Only the shadow rays move to the GPU, so the references differ
+//! only where a ray grazes an edge within rounding (`tests/gpu/trace.rs` measures how often,
+//! for both paths).
 
 use std::time::Instant;
 
@@ -13,7 +15,7 @@ use glam::Vec3;
 
 use super::adapter::{Capabilities, Verdict};
 use super::methods::AdapterNeeds;
-use super::passes::trace::{max_points, GpuBvh, ReferenceRays};
+use super::passes::trace::{max_points, GpuScene, Path, ReferenceRays};
 use super::reference::{self, Computed};
 use super::{GpuContext, RenderError};
 use crate::geometry::oracle::Oracle;
@@ -21,7 +23,8 @@ use crate::geometry::progressive::progressive_order;
 use crate::scene::Scene;
 
 /// What the GPU reference needs of the adapter: compute shaders, and the tracer's storage
-/// buffers in the compute stage.
+/// buffers in the compute stage (the BVH path's, which every adapter with these takes; ray
+/// queries are used where there are any, [`Path::best`]).
 pub const NEEDS: AdapterNeeds = AdapterNeeds {
     downlevel: wgpu::DownlevelFlags::COMPUTE_SHADERS,
     storage_buffers_per_stage: super::passes::trace::STORAGE_BUFFERS,
@@ -44,20 +47,22 @@ pub fn refuses_on(caps: &Capabilities) -> Option<String> {
     }
 }
 
-/// What the GPU's shadow rays cost, summed over every ray.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How the GPU's shadow rays were traced and what they cost, summed over every ray.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Cost {
+    /// The tracer's path.
+    pub path: Path,
     /// Shadow rays traced.
     pub rays: u64,
-    /// BVH boxes tested.
+    /// BVH boxes tested (0 on [`Path::RayQuery`]: the driver does not say).
     pub box_tests: u64,
-    /// Triangles tested.
+    /// Triangles tested (0 on [`Path::RayQuery`]).
     pub triangle_tests: u64,
 }
 
 /// The whole reference of a `width`×`height` view of `scene` at `samples` per pixel, its shadow
-/// rays traced on the GPU; `progress` hears (samples done, total) after each batch. V per pixel
-/// is `visible / K` exactly as the CPU reference computes it.
+/// rays traced on the GPU by [`Path::auto`]; `progress` hears (samples done, total) after each
+/// batch. V per pixel is `visible / K` exactly as the CPU reference computes it.
 pub fn compute(
     ctx: &GpuContext,
     scene: &Scene,
@@ -67,17 +72,20 @@ pub fn compute(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Computed, Cost), RenderError> {
     let piece = max_points(ctx);
-    compute_in_pieces(ctx, scene, (width, height), samples, piece, progress)
+    let path = Path::auto(ctx)?;
+    compute_in_pieces(ctx, scene, (width, height), samples, path, piece, progress)
 }
 
-/// [`compute`] with the image traced in pieces of at most `piece` pixels (at least 1), each its
-/// own buffers and dispatches: [`compute`] takes the most one storage binding of the device
-/// holds; a test, fewer, to see that the pieces make the same image.
+/// [`compute`] by `path`, with the image traced in pieces of at most `piece` pixels (at least
+/// 1), each its own buffers and dispatches: [`compute`] takes the most one storage binding of
+/// the device holds; a test, fewer, to see that the pieces make the same image, or names the
+/// path, to hold one to the other on one device.
 pub fn compute_in_pieces(
     ctx: &GpuContext,
     scene: &Scene,
     (width, height): (u32, u32),
     samples: u32,
+    path: Path,
     piece: usize,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Computed, Cost), RenderError> {
@@ -93,11 +101,11 @@ pub fn compute_in_pieces(
         .collect();
     let order = progressive_order(oracle.sample_points());
     let t = Instant::now();
-    let bvh = GpuBvh::new(ctx, &oracle.bvh().flatten())?;
+    let gpu_scene = GpuScene::new(ctx, oracle.bvh(), path)?;
     // An image larger than one storage binding holds is traced in pieces, side by side.
     let mut pieces = traced
         .chunks(piece.clamp(1, max_points(ctx)))
-        .map(|points| ReferenceRays::new(ctx, &bvh, points, &order))
+        .map(|points| ReferenceRays::new(ctx, &gpu_scene, points, &order))
         .collect::<Result<Vec<_>, _>>()?;
     let total = pieces.first().map_or(0, ReferenceRays::samples_total);
     let lit = traced.iter().filter(|p| p.is_some()).count().max(1) as u64;
@@ -122,7 +130,12 @@ pub fn compute_in_pieces(
         .zip(&traced)
         .map(|(c, p)| if p.is_some() { c.count as f32 / k } else { 0.0 })
         .collect();
-    let mut cost = Cost::default();
+    let mut cost = Cost {
+        path,
+        rays: 0,
+        box_tests: 0,
+        triangle_tests: 0,
+    };
     for (c, p) in counts.iter().zip(&traced) {
         if p.is_some() {
             cost.rays += u64::from(total);

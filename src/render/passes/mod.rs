@@ -23,6 +23,7 @@ pub mod shadow_map;
 pub mod ssm;
 pub mod stencil_volumes;
 pub mod trace;
+pub mod trace_rq;
 pub mod view;
 pub mod view_twin;
 pub mod wedges;

@@ -1,21 +1,121 @@
-//! Shadow rays on the GPU (`shaders/passes/trace.wgsl`): the scene's BVH, built on the CPU
-//! ([`crate::geometry::bvh::Bvh`]) and flattened ([`FlatBvh`]) into one storage buffer
-//! ([`GpuBvh`]), traversed in WGSL by a port of the CPU's tolerant any-hit query
-//! (`shaders/shared/bvh_trace.wgsl`). Two uses: [`ReferenceRays`] counts, per pixel, the light
-//! samples its point sees, a batch of samples per dispatch (the reference on the GPU); [`any_hit`]
-//! answers single rays (the tests that hold the GPU's traversal to the CPU's).
+//! Shadow rays on the GPU, by one of two paths ([`Path`]) with one result:
+//!
+//! - [`Path::RayQuery`]: hardware ray queries (`shaders/passes/trace_rq.wgsl`) through an
+//!   acceleration structure the driver builds from the scene's triangles
+//!   ([`super::trace_rq::Accel`]), where the device has them (`Features::EXPERIMENTAL_RAY_QUERY`);
+//! - [`Path::WgslBvh`]: the scene's BVH, built on the CPU ([`crate::geometry::bvh::Bvh`]) and
+//!   flattened ([`FlatBvh`]) into one storage buffer, traversed in WGSL by a port of the CPU's
+//!   tolerant any-hit query (`shaders/passes/trace.wgsl`, `shaders/shared/bvh_trace.wgsl`),
+//!   on any device with compute shaders.
+//!
+//! [`Path::auto`] takes ray queries where the device has them; a caller may name either
+//! ([`GpuScene::new`]), so a test can run both on one device. Both answer the same questions on
+//! the same rays: [`ReferenceRays`] counts, per pixel, the light samples its point sees, a batch
+//! of samples per dispatch (the reference on the GPU); [`any_hit`] answers single rays (the
+//! tests that hold the GPU's tracing to the CPU's). The ray-query path cannot count the boxes and
+//! triangles the driver tests: its [`RayCounts`] leave them at 0.
 //!
 //! The tracer needs compute shaders and [`STORAGE_BUFFERS`] storage buffers in the compute
 //! stage; its callers check that before any work (`render::gpu_reference::NEEDS`).
 
 use glam::Vec3;
 
-use crate::geometry::bvh::FlatBvh;
+use super::trace_rq::Accel;
+use crate::geometry::bvh::{Bvh, FlatBvh};
+use crate::render::adapter::Capabilities;
 use crate::render::readback::map_now;
 use crate::render::{
-    buffer_entry, compute_pipeline, pipeline_layout, shader_module, storage_buffer, storage_entry,
-    uniform_entry, GpuContext, RenderError,
+    compute_pipeline, pipeline_layout, shader_module, storage_buffer, storage_entry, uniform_entry,
+    GpuContext, RenderError,
 };
+
+/// How the shadow rays are traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Path {
+    /// Hardware ray queries through the driver's acceleration structure.
+    RayQuery,
+    /// The CPU's BVH traversed in a WGSL compute shader.
+    WgslBvh,
+}
+
+/// `DBUFFER_TRACE_PATH=wgsl|rayquery`: the path [`Path::auto`] takes instead of the best one
+/// (to time both on one device; `rayquery` where the device has none is an error).
+pub const PATH_ENV: &str = "DBUFFER_TRACE_PATH";
+
+impl Path {
+    /// Both paths, the preferred first.
+    pub const ALL: [Path; 2] = [Path::RayQuery, Path::WgslBvh];
+
+    /// The best path on a device with `caps`: ray queries where it has them.
+    pub fn best(caps: &Capabilities) -> Path {
+        if Path::RayQuery.runs_on(caps) {
+            Path::RayQuery
+        } else {
+            Path::WgslBvh
+        }
+    }
+
+    /// The path on `ctx`'s device: [`PATH_ENV`] where set, else [`Path::best`].
+    pub fn auto(ctx: &GpuContext) -> Result<Path, RenderError> {
+        match std::env::var(PATH_ENV) {
+            Ok(v) => {
+                let path = Path::parse(&v).ok_or_else(|| {
+                    RenderError::Request(format!("{PATH_ENV}={v}: expected 'rayquery' or 'wgsl'"))
+                })?;
+                if !path.runs_on(&ctx.caps) {
+                    return Err(RenderError::Request(format!(
+                        "{PATH_ENV}={v}: {} has no hardware ray queries",
+                        ctx.adapter_description()
+                    )));
+                }
+                Ok(path)
+            }
+            Err(_) => Ok(Path::best(&ctx.caps)),
+        }
+    }
+
+    /// `rayquery` or `wgsl` (as [`PATH_ENV`] takes them).
+    pub fn parse(text: &str) -> Option<Path> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "rayquery" | "ray-query" | "rq" => Some(Path::RayQuery),
+            "wgsl" | "bvh" | "wgsl-bvh" => Some(Path::WgslBvh),
+            _ => None,
+        }
+    }
+
+    /// Whether a device with `caps` can trace this way (the BVH path's own needs, compute and
+    /// storage buffers, are `gpu_reference::NEEDS`).
+    pub fn runs_on(self, caps: &Capabilities) -> bool {
+        match self {
+            Path::RayQuery => {
+                caps.ray_queries() && caps.limits.max_acceleration_structures_per_shader_stage >= 1
+            }
+            Path::WgslBvh => true,
+        }
+    }
+
+    /// "hardware ray queries", "the BVH traversed in WGSL".
+    pub fn describe(self) -> &'static str {
+        match self {
+            Path::RayQuery => "hardware ray queries",
+            Path::WgslBvh => "the BVH traversed in WGSL",
+        }
+    }
+
+    /// The name [`PATH_ENV`] takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Path::RayQuery => "rayquery",
+            Path::WgslBvh => "wgsl",
+        }
+    }
+}
+
+impl std::fmt::Display for Path {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.describe())
+    }
+}
 
 /// `TraceUniforms` of `shaders/passes/trace.wgsl`.
 #[repr(C)]
@@ -41,17 +141,38 @@ pub const STORAGE_BUFFERS: u32 = 4;
 /// Invocations per workgroup (`@workgroup_size` of both entry points).
 const WORKGROUP: u32 = 64;
 
-/// The scene's BVH on the GPU: the nodes, then the triangles, in one storage buffer.
-pub struct GpuBvh {
-    buffer: wgpu::Buffer,
+/// The scene on the GPU, as one [`Path`] traces it: the flattened BVH (nodes, then triangles)
+/// in one storage buffer, or the driver's acceleration structure of its triangles.
+pub struct GpuScene {
+    shape: Shape,
     node_count: u32,
     triangle_count: u32,
 }
 
-impl GpuBvh {
-    /// Uploads `flat`; an error (before anything is made) when it is larger than one storage
-    /// binding of the device.
-    pub fn new(ctx: &GpuContext, flat: &FlatBvh) -> Result<GpuBvh, RenderError> {
+enum Shape {
+    Bvh(wgpu::Buffer),
+    Accel(Accel),
+}
+
+impl GpuScene {
+    /// `bvh`'s triangles on the GPU for `path`: its flattened nodes and triangles
+    /// ([`Path::WgslBvh`]), or an acceleration structure of the same triangles
+    /// ([`Path::RayQuery`]). An error (before anything is made) when the device cannot hold them
+    /// or has no ray queries for [`Path::RayQuery`].
+    pub fn new(ctx: &GpuContext, bvh: &Bvh, path: Path) -> Result<GpuScene, RenderError> {
+        match path {
+            Path::WgslBvh => GpuScene::from_flat(ctx, &bvh.flatten()),
+            Path::RayQuery => Ok(GpuScene {
+                shape: Shape::Accel(Accel::new(ctx, bvh.triangles())?),
+                node_count: 0,
+                triangle_count: count(bvh.len(), "triangles")?,
+            }),
+        }
+    }
+
+    /// The flattened BVH `flat` for [`Path::WgslBvh`]; an error (before anything is made) when
+    /// it is larger than one storage binding of the device.
+    pub fn from_flat(ctx: &GpuContext, flat: &FlatBvh) -> Result<GpuScene, RenderError> {
         let mut words: Vec<[f32; 4]> = Vec::with_capacity(flat.nodes.len() + flat.triangles.len());
         words.extend_from_slice(&flat.nodes);
         words.extend_from_slice(&flat.triangles);
@@ -60,17 +181,22 @@ impl GpuBvh {
             words.push([0.0; 4]);
         }
         fits(ctx, "the scene's BVH", words.len() as u64 * 16)?;
-        let count = |n: usize, what: &str| {
-            u32::try_from(n)
-                .map_err(|_| RenderError::Request(format!("the BVH has {n} {what}: too many")))
-        };
-        Ok(GpuBvh {
-            buffer: storage_buffer(&ctx.device, "GpuBvh", &words),
+        Ok(GpuScene {
+            shape: Shape::Bvh(storage_buffer(&ctx.device, "GpuScene::bvh", &words)),
             node_count: count(flat.node_count(), "nodes")?,
             triangle_count: count(flat.triangle_count(), "triangles")?,
         })
     }
 
+    /// How this scene is traced.
+    pub fn path(&self) -> Path {
+        match self.shape {
+            Shape::Bvh(_) => Path::WgslBvh,
+            Shape::Accel(_) => Path::RayQuery,
+        }
+    }
+
+    /// The BVH's nodes ([`Path::WgslBvh`]; 0 for [`Path::RayQuery`]).
     pub fn node_count(&self) -> u32 {
         self.node_count
     }
@@ -83,6 +209,20 @@ impl GpuBvh {
     pub fn triangle_count(&self) -> u32 {
         self.triangle_count
     }
+
+    /// Binding 1 of both trace shaders: the BVH's buffer or the TLAS.
+    fn resource(&self) -> wgpu::BindingResource<'_> {
+        match &self.shape {
+            Shape::Bvh(buffer) => buffer.as_entire_binding(),
+            Shape::Accel(accel) => wgpu::BindingResource::AccelerationStructure(&accel.tlas),
+        }
+    }
+}
+
+/// `n` as a `u32` count of `what`, or an error.
+fn count(n: usize, what: &str) -> Result<u32, RenderError> {
+    u32::try_from(n)
+        .map_err(|_| RenderError::Request(format!("the scene has {n} {what}: too many")))
 }
 
 /// The most points one [`ReferenceRays`] takes on `ctx`'s device: as many as its largest
@@ -117,30 +257,54 @@ struct TracePipelines {
 }
 
 impl TracePipelines {
-    /// The bind group of one trace: the uniforms, the BVH, the items (points or rays), the
-    /// light's samples and the results, bindings 0 to 4 as `passes/trace.wgsl` declares them.
-    fn group(&self, ctx: &GpuContext, label: &str, buffers: [&wgpu::Buffer; 5]) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry<'_>> = (0u32..)
-            .zip(buffers)
-            .map(|(binding, buffer)| buffer_entry(binding, buffer))
-            .collect();
+    /// The bind group of one trace: the uniforms, the scene, the items (points or rays), the
+    /// light's samples and the results, bindings 0 to 4 as both trace shaders declare them.
+    fn group(
+        &self,
+        ctx: &GpuContext,
+        label: &str,
+        scene: &GpuScene,
+        [uniforms, items, light, results]: [&wgpu::Buffer; 4],
+    ) -> wgpu::BindGroup {
+        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(label),
             layout: &self.layout,
-            entries: &entries,
+            entries: &[
+                entry(0, uniforms.as_entire_binding()),
+                entry(1, scene.resource()),
+                entry(2, items.as_entire_binding()),
+                entry(3, light.as_entire_binding()),
+                entry(4, results.as_entire_binding()),
+            ],
         })
     }
 }
 
-fn pipelines(ctx: &GpuContext) -> std::sync::Arc<TracePipelines> {
-    ctx.shared(|device| {
+/// The pipelines of `path` on `ctx`'s device, made once.
+fn pipelines(ctx: &GpuContext, path: Path) -> std::sync::Arc<TracePipelines> {
+    ctx.shared_named(path.name(), |device| {
         use wgpu::ShaderStages as S;
-        let module = shader_module(device, "passes/trace.wgsl");
+        let (shader, scene) = match path {
+            Path::WgslBvh => ("passes/trace.wgsl", storage_entry(1, S::COMPUTE, true)),
+            Path::RayQuery => (
+                "passes/trace_rq.wgsl",
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: S::COMPUTE,
+                    ty: wgpu::BindingType::AccelerationStructure {
+                        vertex_return: false,
+                    },
+                    count: None,
+                },
+            ),
+        };
+        let module = shader_module(device, shader);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("Trace::layout"),
             entries: &[
                 uniform_entry(0, S::COMPUTE),
-                storage_entry(1, S::COMPUTE, true),
+                scene,
                 storage_entry(2, S::COMPUTE, true),
                 storage_entry(3, S::COMPUTE, true),
                 storage_entry(4, S::COMPUTE, false),
@@ -240,6 +404,7 @@ fn dispatch(
 /// Per pixel, how many of the light's samples its point sees, accumulated over batches of
 /// samples: the ray-cast reference traced on the GPU.
 pub struct ReferenceRays {
+    path: Path,
     node_count: u32,
     triangle_count: u32,
     uniforms: wgpu::Buffer,
@@ -255,18 +420,19 @@ pub struct ReferenceRays {
 pub struct RayCounts {
     /// A pixel's samples seen (not blocked) so far; a ray's 1 where it is blocked, else 0.
     pub count: u32,
-    /// Boxes tested by its rays so far.
+    /// Boxes tested by its rays so far ([`Path::WgslBvh`]; 0 on [`Path::RayQuery`], where the
+    /// driver does not say).
     pub box_tests: u32,
-    /// Triangles tested by its rays so far.
+    /// Triangles tested by its rays so far ([`Path::WgslBvh`]; 0 on [`Path::RayQuery`]).
     pub triangle_tests: u32,
 }
 
 impl ReferenceRays {
     /// Rays from each of `points` (`None`: no rays, V = 0) to each of `samples` (taken in this
-    /// order), against `bvh`; nothing is traced yet.
+    /// order), against `scene`, by its path; nothing is traced yet.
     pub fn new(
         ctx: &GpuContext,
-        bvh: &GpuBvh,
+        scene: &GpuScene,
         points: &[Option<Vec3>],
         samples: &[Vec3],
     ) -> Result<ReferenceRays, RenderError> {
@@ -293,15 +459,17 @@ impl ReferenceRays {
         let light = storage_buffer(&ctx.device, "ReferenceRays::samples", &light);
         let results = results_buffer(ctx, "ReferenceRays::results", u64::from(pixels) * 3);
         let uniforms = crate::render::uniform_buffer::<TraceUniforms>(&ctx.device, "Trace");
-        let pipes = pipelines(ctx);
+        let pipes = pipelines(ctx, scene.path());
         let group = pipes.group(
             ctx,
             "ReferenceRays::group",
-            [&uniforms, &bvh.buffer, &items, &light, &results],
+            scene,
+            [&uniforms, &items, &light, &results],
         );
         Ok(ReferenceRays {
-            node_count: bvh.node_count,
-            triangle_count: bvh.triangle_count,
+            path: scene.path(),
+            node_count: scene.node_count,
+            triangle_count: scene.triangle_count,
             uniforms,
             results,
             group,
@@ -330,7 +498,7 @@ impl ReferenceRays {
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
-        let pipes = pipelines(ctx);
+        let pipes = pipelines(ctx, self.path);
         dispatch(ctx, &pipes.reference, &self.group, (x, y));
         self.done += take;
         take
@@ -370,10 +538,11 @@ pub struct Ray {
     pub t_max: f32,
 }
 
-/// Whether each of `rays` is blocked by a triangle of `bvh`, traced on the GPU (waits for it).
+/// Whether each of `rays` is blocked by a triangle of `scene`, traced on the GPU by its path
+/// (waits for it).
 pub fn any_hit(
     ctx: &GpuContext,
-    bvh: &GpuBvh,
+    scene: &GpuScene,
     rays: &[Ray],
 ) -> Result<Vec<RayCounts>, RenderError> {
     let count = u32::try_from(rays.len())
@@ -395,16 +564,17 @@ pub fn any_hit(
     let u = TraceUniforms {
         count,
         row,
-        node_count: bvh.node_count,
-        triangle_count: bvh.triangle_count,
+        node_count: scene.node_count,
+        triangle_count: scene.triangle_count,
         ..TraceUniforms::default()
     };
     ctx.queue.write_buffer(&uniforms, 0, bytemuck::bytes_of(&u));
-    let pipes = pipelines(ctx);
+    let pipes = pipelines(ctx, scene.path());
     let group = pipes.group(
         ctx,
         "any_hit::group",
-        [&uniforms, &bvh.buffer, &items, &light, &results],
+        scene,
+        [&uniforms, &items, &light, &results],
     );
     dispatch(ctx, &pipes.any_hit, &group, (x, y));
     let words = read_u32s(ctx, &results)?;
