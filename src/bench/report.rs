@@ -104,6 +104,10 @@ pub struct Run {
     /// frame (`Session::stencil_fill`), the fill rate it pays.
     #[serde(default)]
     pub fill: Option<f64>,
+    /// What its cost view counted per pixel that shows a surface, the mean (its `Cost` unit:
+    /// shadow-map taps, listed edges, the BVH nodes its rays visited…), from one untimed frame.
+    #[serde(default)]
+    pub work: Option<f64>,
 }
 
 /// A Table 1 scene and its geometry stage.

@@ -321,9 +321,10 @@ fn time_size(
     config
         .cases
         .iter()
-        .zip(sessions.iter().zip(converted))
+        .zip(sessions.iter_mut().zip(converted))
         .zip(timings)
-        .map(|((case, (session, &converted)), timing)| Run {
+        .zip(&requests)
+        .map(|(((case, (session, &converted)), timing), req)| Run {
             scene: session.scene().name.clone(),
             size,
             label: if converted {
@@ -336,10 +337,34 @@ fn time_size(
                 .is_ok()
                 .then(|| session.stencil_fill(ctx, case.method)?.ok())
                 .flatten(),
+            work: timing
+                .is_ok()
+                .then(|| work_per_pixel(ctx, session, req))
+                .flatten(),
             error: timing.as_ref().err().cloned(),
             timing: timing.ok(),
         })
         .collect()
+}
+
+/// The mean of what `request`'s method counted per pixel in its cost view (its `Cost` unit:
+/// taps, listed edges, BVH nodes…), over the pixels that show a surface, from one more frame
+/// with the cost target read back (untimed); `None` if it fails.
+fn work_per_pixel(ctx: &GpuContext, session: &mut Session, request: &FrameRequest) -> Option<f64> {
+    let frame = session
+        .frame(
+            ctx,
+            &FrameRequest {
+                read_cost: true,
+                ..*request
+            },
+        )
+        .ok()?;
+    let (sum, n) = (0..frame.len())
+        .filter(|&i| frame.hit(i))
+        .filter_map(|i| frame.cost.get(i))
+        .fold((0.0f64, 0usize), |(s, n), c| (s + f64::from(c[0]), n + 1));
+    (n > 0).then(|| sum / n as f64)
 }
 
 /// The bench's protocol, the one `dbuffer study` times its cells by too: `warmup` frames, then

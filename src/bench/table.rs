@@ -133,6 +133,7 @@ pub fn markdown(r: &Report) -> String {
     competition(&mut out, r);
     hard_methods(&mut out, r);
     against_dbuffer_and_hard(&mut out, r);
+    work_per_pixel(&mut out, r);
     coherence(&mut out, r);
     scaling(&mut out, r);
     targets(&mut out, r);
@@ -432,6 +433,41 @@ fn hard_methods(out: &mut String, r: &Report) {
     let _ = writeln!(out);
 }
 
+/// What each method's cost view counted per pixel at the largest size (its own unit: taps,
+/// listed edges, the BVH nodes its rays visited…), the median over the scenes.
+fn work_per_pixel(out: &mut String, r: &Report) {
+    let Some(&size) = r.sizes().last() else {
+        return;
+    };
+    let rows: Vec<(String, String, f64)> = r
+        .labels()
+        .into_iter()
+        .filter_map(|(label, method)| {
+            let cells: Vec<f64> = r
+                .runs
+                .iter()
+                .filter(|x| x.label == label && x.size == size)
+                .filter_map(|x| x.work)
+                .collect();
+            let unit = method.parse::<Method>().ok()?.spec().cost.unit.to_string();
+            (!cells.is_empty()).then(|| (label, unit, median(cells)))
+        })
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "### Work per pixel at {size}²: what each method's cost view counts, median over the scenes
+"
+    );
+    let mut t = Table::new(out, &[left("method"), right("per pixel"), left("unit")]);
+    for (label, unit, work) in rows {
+        t.row(vec![label, format!("{work:.1}"), unit]);
+    }
+    let _ = writeln!(out);
+}
+
 /// Every method's frame at the largest size as a ratio to the D-buffer's and to the hard shadow
 /// map's (the two yardsticks of a soft-shadow method's cost), median over the scenes.
 fn against_dbuffer_and_hard(out: &mut String, r: &Report) {
@@ -676,6 +712,7 @@ mod tests {
                 .then(|| "the pcf method is not available yet".into()),
             timing,
             fill: (method == "shadow-volume").then_some(2.5),
+            work: Some(12.0),
         }
     }
 

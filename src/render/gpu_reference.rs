@@ -15,7 +15,7 @@ use glam::Vec3;
 
 use super::adapter::{Capabilities, Verdict};
 use super::methods::AdapterNeeds;
-use super::passes::trace::{max_points, GpuScene, Path, ReferenceRays};
+use super::passes::trace::{max_points, Path, ReferenceRays, TraceScene};
 use super::reference::{self, Computed};
 use super::{GpuContext, RenderError};
 use crate::geometry::oracle::Oracle;
@@ -101,11 +101,11 @@ pub fn compute_in_pieces(
         .collect();
     let order = progressive_order(oracle.sample_points());
     let t = Instant::now();
-    let gpu_scene = GpuScene::new(ctx, oracle.bvh(), path)?;
+    let trace_scene = TraceScene::new(ctx, oracle.bvh(), path)?;
     // An image larger than one storage binding holds is traced in pieces, side by side.
     let mut pieces = traced
         .chunks(piece.clamp(1, max_points(ctx)))
-        .map(|points| ReferenceRays::new(ctx, &gpu_scene, points, &order))
+        .map(|points| ReferenceRays::new(ctx, &trace_scene, points, &order))
         .collect::<Result<Vec<_>, _>>()?;
     let total = pieces.first().map_or(0, ReferenceRays::samples_total);
     let lit = traced.iter().filter(|p| p.is_some()).count().max(1) as u64;

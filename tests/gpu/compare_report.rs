@@ -46,7 +46,18 @@ fn the_report_matches_the_written_files() {
         .iter()
         .filter(|r| r.method.is_hard())
         .count();
-    assert_eq!(drawn + comparison.not_applicable.len(), Method::all().len());
+    // A temporal method is drawn twice: its first frame, then after its history.
+    let first_frames: Vec<String> = comparison
+        .results
+        .iter()
+        .filter(|r| r.history == Some(0))
+        .map(|r| r.label())
+        .collect();
+    assert_eq!(first_frames, ["raytraced-first-frame"]);
+    assert_eq!(
+        drawn - first_frames.len() + comparison.not_applicable.len(),
+        Method::all().len()
+    );
     assert_eq!(written.len(), 5 * drawn - 1 + hard + 3);
     assert!(hard > 0 && hard < drawn);
 
@@ -141,6 +152,13 @@ fn the_report_matches_the_written_files() {
     assert!(r.reference_rays_per_s > 0.0);
     let methods: Vec<&str> = r.methods.iter().map(|m| m.method.as_str()).collect();
     assert_eq!(methods[0], "reference");
+    // The temporal method's two rows, labelled by their history, its first frame just before.
+    let at = |name: &str| methods.iter().position(|&m| m == name);
+    let first = at("raytraced-first-frame").expect("the first frame's row");
+    assert_eq!(at("raytraced"), Some(first + 1));
+    assert_eq!(r.methods[first].history_frames, Some(0));
+    assert_eq!(r.methods[first + 1].history_frames, Some(15));
+    assert!(dir.join("raytraced-first-frame.png").is_file());
     for m in Method::all() {
         let skipped = r.not_applicable.iter().any(|n| n.method == m.name());
         assert!(

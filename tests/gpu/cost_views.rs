@@ -121,6 +121,7 @@ const CASES: &[&str] = &[
     "hybrid",
     "extended-light-map",
     "wedges",
+    "raytraced",
     "reference",
     "reference-hard",
 ];
@@ -279,6 +280,32 @@ fn the_dbuffers_count_their_reads_and_fused_its_listed_edges() {
         (&one, d),
         (&both, d),
         "a second caster's edges listed",
+    );
+}
+
+/// `raytraced` counts the BVH nodes its rays visit: four rays a pixel visit about four times
+/// the nodes of one, and a caster of more triangles (a deeper tree) more than a simple one.
+#[test]
+fn the_traced_rays_count_the_nodes_they_visit() {
+    use dbuffer::render::methods::raytraced::RAYS;
+    let mut o = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let rt: Method = "raytraced".parse().unwrap();
+    let s = load("fig7-concave");
+    let d = Knobs::default();
+    let (lo, hi) = grows(
+        &mut o,
+        rt,
+        (&s, d.with(&RAYS, 1)),
+        (&s, d.with(&RAYS, 4)),
+        "4 rays a pixel against 1",
+    );
+    assert!(hi > 3.0 * lo && hi < 5.0 * lo, "{lo} {hi}");
+    grows(
+        &mut o,
+        rt,
+        (&load("table1-224"), d),
+        (&load("table1-5760"), d),
+        "a caster of 5,760 triangles against 224",
     );
 }
 

@@ -22,7 +22,7 @@ use dbuffer::geometry::oracle::{Oracle, SELF_EPS};
 use dbuffer::geometry::view;
 use dbuffer::render::gpu_reference;
 use dbuffer::render::offline::Offline;
-use dbuffer::render::passes::trace::{self, GpuScene, Path, Ray, RayCounts};
+use dbuffer::render::passes::trace::{self, Path, Ray, RayCounts, TraceScene};
 use dbuffer::render::truth::{self, Engine};
 use dbuffer::render::{reference, FrameRequest, GpuContext, Knobs};
 use dbuffer::scene::{self, builtin, Scene};
@@ -245,9 +245,10 @@ fn any_hit_agrees(ctx: &GpuContext, path: Path, other: Option<Path>) {
         let bvh = oracle.bvh();
         let rays = test_rays(&scene, &oracle, &mut rng);
         let trace_by = |path: Path| -> Vec<RayCounts> {
-            let gpu_scene = GpuScene::new(ctx, bvh, path).unwrap_or_else(|e| panic!("{e}"));
-            assert_eq!(gpu_scene.path(), path);
-            let answers = trace::any_hit(ctx, &gpu_scene, &rays).unwrap_or_else(|e| panic!("{e}"));
+            let trace_scene = TraceScene::new(ctx, bvh, path).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(trace_scene.path(), path);
+            let answers =
+                trace::any_hit(ctx, &trace_scene, &rays).unwrap_or_else(|e| panic!("{e}"));
             assert_eq!(answers.len(), rays.len());
             answers
         };
@@ -390,7 +391,7 @@ fn a_ray_query_scene_needs_ray_queries() {
     let ctx = ctx();
     let scene = scene::load("rect-fig7").unwrap_or_else(|e| panic!("{e}"));
     let oracle = Oracle::from_scene(&scene, 4);
-    let made = GpuScene::new(&ctx, oracle.bvh(), Path::RayQuery);
+    let made = TraceScene::new(&ctx, oracle.bvh(), Path::RayQuery);
     if has_ray_queries(&ctx, "ray-query scene") {
         assert!(made.is_ok_and(|s| s.path() == Path::RayQuery));
     } else {
@@ -651,10 +652,10 @@ fn time_both_paths() {
     for round in 0..3 {
         for &path in paths {
             let t = std::time::Instant::now();
-            let gpu_scene =
-                GpuScene::new(&ctx, oracle.bvh(), path).unwrap_or_else(|e| panic!("{e}"));
+            let trace_scene =
+                TraceScene::new(&ctx, oracle.bvh(), path).unwrap_or_else(|e| panic!("{e}"));
             // Wait for the upload or the build.
-            let _ = trace::any_hit(&ctx, &gpu_scene, &[]).unwrap_or_else(|e| panic!("{e}"));
+            let _ = trace::any_hit(&ctx, &trace_scene, &[]).unwrap_or_else(|e| panic!("{e}"));
             let build_ms = t.elapsed().as_secs_f64() * 1e3;
             let piece = trace::max_points(&ctx);
             let (r, cost) = gpu_reference::compute_in_pieces(

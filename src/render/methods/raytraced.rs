@@ -23,7 +23,7 @@ use crate::geometry::bvh::Bvh;
 use crate::render::adapter::FormatNeed;
 use crate::render::passes::raytraced::{RtPasses, RtSettings, RtTargets, RtUniforms};
 use crate::render::passes::stencil_volumes::ScreenPass;
-use crate::render::passes::trace::GpuBvh;
+use crate::render::passes::trace::{Path, TraceScene};
 use crate::render::{
     buffer_entry, storage_entry, uniform_buffer, uniform_entry, GpuContext, RenderError,
 };
@@ -118,7 +118,7 @@ pub struct RaytracedParams {
 
 /// The scene's BVH on the GPU and the mesh revision it was built for.
 struct SceneBvh {
-    gpu: GpuBvh,
+    gpu: TraceScene,
     meshes: u64,
 }
 
@@ -174,9 +174,11 @@ impl MethodState for Raytraced {
         let ctx = inputs.ctx;
         let view = inputs.view;
         if self.bvh.as_ref().is_none_or(|b| b.meshes != inputs.meshes) {
-            let flat = Bvh::build(inputs.scene.all_triangles()).flatten();
+            // Through the BVH in WGSL on every adapter: it counts the nodes a ray visits (the
+            // cost view) and finds a hit's distance (the penumbra's estimate).
+            let bvh = Bvh::build(inputs.scene.all_triangles());
             self.bvh = Some(SceneBvh {
-                gpu: GpuBvh::new(ctx, &flat)?,
+                gpu: TraceScene::new(ctx, &bvh, Path::WgslBvh)?,
                 meshes: inputs.meshes,
             });
         }

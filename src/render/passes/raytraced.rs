@@ -9,7 +9,7 @@
 use glam::Mat4;
 
 use super::camera::ScreenView;
-use super::trace::GpuBvh;
+use super::trace::TraceScene;
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, compute_pipeline, pipeline_layout, shader_module, storage_entry, texture_entry,
@@ -89,7 +89,7 @@ impl RtUniforms {
         view: &ScreenView,
         fov_y_deg: f32,
         prev_view_proj: Option<Mat4>,
-        bvh: &GpuBvh,
+        bvh: &TraceScene,
         s: &RtSettings,
     ) -> RtUniforms {
         let mut u = RtUniforms {
@@ -106,8 +106,8 @@ impl RtUniforms {
             radius: s.radius.max(0.0),
             node_count: bvh.node_count(),
             triangle_count: bvh.triangle_count(),
-            flags: u32::from(prev_view_proj.is_some()) * RT_HISTORY
-                | u32::from(s.motion) * RT_MOTION,
+            flags: (u32::from(prev_view_proj.is_some()) * RT_HISTORY)
+                | (u32::from(s.motion) * RT_MOTION),
             ..RtUniforms::default()
         };
         match light {
@@ -246,7 +246,7 @@ impl RtPasses {
         ctx: &GpuContext,
         rec: &mut Recorder<'_>,
         uniforms: &RtUniforms,
-        bvh: (&GpuBvh, u64),
+        bvh: (&TraceScene, u64),
         positions: (&wgpu::TextureView, u64),
         targets: &RtTargets,
         parity: usize,
@@ -263,7 +263,10 @@ impl RtPasses {
                     layout: &self.pipes.layout,
                     entries: &[
                         buffer_entry(0, &self.uniforms),
-                        buffer_entry(1, bvh.0.buffer()),
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: bvh.0.resource(),
+                        },
                         view_entry(2, positions.0),
                         buffer_entry(3, &targets.raw),
                         buffer_entry(4, &targets.geo[w]),

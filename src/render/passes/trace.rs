@@ -9,7 +9,7 @@
 //!   on any device with compute shaders.
 //!
 //! [`Path::auto`] takes ray queries where the device has them; a caller may name either
-//! ([`GpuScene::new`]), so a test can run both on one device. Both answer the same questions on
+//! ([`TraceScene::new`]), so a test can run both on one device. Both answer the same questions on
 //! the same rays: [`ReferenceRays`] counts, per pixel, the light samples its point sees, a batch
 //! of samples per dispatch (the reference on the GPU); [`any_hit`] answers single rays (the
 //! tests that hold the GPU's tracing to the CPU's). The ray-query path cannot count the boxes and
@@ -143,7 +143,7 @@ const WORKGROUP: u32 = 64;
 
 /// The scene on the GPU, as one [`Path`] traces it: the flattened BVH (nodes, then triangles)
 /// in one storage buffer, or the driver's acceleration structure of its triangles.
-pub struct GpuScene {
+pub struct TraceScene {
     shape: Shape,
     node_count: u32,
     triangle_count: u32,
@@ -154,15 +154,15 @@ enum Shape {
     Accel(Accel),
 }
 
-impl GpuScene {
+impl TraceScene {
     /// `bvh`'s triangles on the GPU for `path`: its flattened nodes and triangles
     /// ([`Path::WgslBvh`]), or an acceleration structure of the same triangles
     /// ([`Path::RayQuery`]). An error (before anything is made) when the device cannot hold them
     /// or has no ray queries for [`Path::RayQuery`].
-    pub fn new(ctx: &GpuContext, bvh: &Bvh, path: Path) -> Result<GpuScene, RenderError> {
+    pub fn new(ctx: &GpuContext, bvh: &Bvh, path: Path) -> Result<TraceScene, RenderError> {
         match path {
-            Path::WgslBvh => GpuScene::from_flat(ctx, &bvh.flatten()),
-            Path::RayQuery => Ok(GpuScene {
+            Path::WgslBvh => TraceScene::from_flat(ctx, &bvh.flatten()),
+            Path::RayQuery => Ok(TraceScene {
                 shape: Shape::Accel(Accel::new(ctx, bvh.triangles())?),
                 node_count: 0,
                 triangle_count: count(bvh.len(), "triangles")?,
@@ -172,7 +172,7 @@ impl GpuScene {
 
     /// The flattened BVH `flat` for [`Path::WgslBvh`]; an error (before anything is made) when
     /// it is larger than one storage binding of the device.
-    pub fn from_flat(ctx: &GpuContext, flat: &FlatBvh) -> Result<GpuScene, RenderError> {
+    pub fn from_flat(ctx: &GpuContext, flat: &FlatBvh) -> Result<TraceScene, RenderError> {
         let mut words: Vec<[f32; 4]> = Vec::with_capacity(flat.nodes.len() + flat.triangles.len());
         words.extend_from_slice(&flat.nodes);
         words.extend_from_slice(&flat.triangles);
@@ -181,8 +181,8 @@ impl GpuScene {
             words.push([0.0; 4]);
         }
         fits(ctx, "the scene's BVH", words.len() as u64 * 16)?;
-        Ok(GpuScene {
-            shape: Shape::Bvh(storage_buffer(&ctx.device, "GpuScene::bvh", &words)),
+        Ok(TraceScene {
+            shape: Shape::Bvh(storage_buffer(&ctx.device, "TraceScene::bvh", &words)),
             node_count: count(flat.node_count(), "nodes")?,
             triangle_count: count(flat.triangle_count(), "triangles")?,
         })
@@ -201,17 +201,13 @@ impl GpuScene {
         self.node_count
     }
 
-    /// The buffer a shader binds as `bvh` (`shaders/shared/bvh_trace.wgsl`).
-    pub fn buffer(&self) -> &wgpu::Buffer {
-        &self.buffer
-    }
-
     pub fn triangle_count(&self) -> u32 {
         self.triangle_count
     }
 
-    /// Binding 1 of both trace shaders: the BVH's buffer or the TLAS.
-    fn resource(&self) -> wgpu::BindingResource<'_> {
+    /// What a shader binds to trace it: the BVH's buffer (`bvh` of
+    /// `shaders/shared/bvh_trace.wgsl`) or the TLAS.
+    pub fn resource(&self) -> wgpu::BindingResource<'_> {
         match &self.shape {
             Shape::Bvh(buffer) => buffer.as_entire_binding(),
             Shape::Accel(accel) => wgpu::BindingResource::AccelerationStructure(&accel.tlas),
@@ -263,7 +259,7 @@ impl TracePipelines {
         &self,
         ctx: &GpuContext,
         label: &str,
-        scene: &GpuScene,
+        scene: &TraceScene,
         [uniforms, items, light, results]: [&wgpu::Buffer; 4],
     ) -> wgpu::BindGroup {
         let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
@@ -432,7 +428,7 @@ impl ReferenceRays {
     /// order), against `scene`, by its path; nothing is traced yet.
     pub fn new(
         ctx: &GpuContext,
-        scene: &GpuScene,
+        scene: &TraceScene,
         points: &[Option<Vec3>],
         samples: &[Vec3],
     ) -> Result<ReferenceRays, RenderError> {
@@ -542,7 +538,7 @@ pub struct Ray {
 /// (waits for it).
 pub fn any_hit(
     ctx: &GpuContext,
-    scene: &GpuScene,
+    scene: &TraceScene,
     rays: &[Ray],
 ) -> Result<Vec<RayCounts>, RenderError> {
     let count = u32::try_from(rays.len())
