@@ -16,6 +16,7 @@ mod methods_accuracy;
 mod polygon_lights;
 mod readback;
 mod reference_analytic;
+mod reference_gpu_view;
 mod render_accuracy;
 mod render_fused;
 mod render_gpu;
