@@ -491,9 +491,13 @@ impl LabApp {
             _ => "auto",
         };
         let choice = self.settings.reference_engine.clone();
+        // The choice, and where it differs from it the engine tracing now (auto's pick, or the
+        // CPU standing in for a GPU that cannot).
         let selected = match now {
-            Some(engine) => format!("{} ({})", label(&choice), label(engine.name())),
-            None => label(&choice).to_string(),
+            Some(engine) if engine.name() != choice => {
+                format!("{} ({})", label(&choice), label(engine.name()))
+            }
+            _ => label(&choice).to_string(),
         };
         let combo = egui::ComboBox::from_label("Reference engine")
             .selected_text(selected)
