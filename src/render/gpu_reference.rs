@@ -14,6 +14,7 @@
 //! waiting for the GPU.
 
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -221,43 +222,62 @@ impl Drop for Preparer {
     }
 }
 
-/// A batch of samples submitted and its counts on their way back.
+/// What is under way on the GPU: a dispatch (a slice of pixels of a batch), or the batch's
+/// counts being read back after its last.
 struct InFlight {
+    /// When the GPU was seen to have run everything submitted up to the dispatch.
+    finished: Arc<Mutex<Option<Instant>>>,
+    /// Every piece's counts asked for (a read; empty for a dispatch), and those arrived.
     reads: Vec<PendingCounts>,
-    /// Each piece's counts, as they arrive.
     arrived: Vec<Option<Vec<RayCounts>>>,
-    /// Samples per pixel the counts hold.
-    done: u32,
+    /// Rays the dispatch traces (about: the pixels' share of lit ones).
+    rays: f64,
+    /// The dispatch ends its batch: its counts are read once it has run.
+    last: bool,
     submitted: Instant,
 }
 
-/// A reference being traced: its buffers on the GPU and the batch under way.
+/// A reference being traced: its buffers on the GPU and the batch under way. A batch is
+/// `batch` samples per pixel over every pixel, in one dispatch or in slices of pixels (one a
+/// frame) where one would run longer than [`BATCH_MS`]; its counts are read back after its last
+/// slice, and V = visible / samples then.
 struct Run {
     key: ReferenceKey,
     /// Which pixels cast rays.
     lit: Vec<bool>,
+    /// The share of pixels that cast rays (at least one pixel's worth).
+    lit_share: f64,
     /// Kept alive with the traces that read it.
     _bvh: GpuBvh,
     pieces: Vec<ReferenceRays>,
-    /// Samples per pixel of the next batch.
+    /// Rays to aim a dispatch at: adapted to take about [`BATCH_MS`].
+    rays: f64,
+    /// The most rays a dispatch takes.
+    max_rays: f64,
+    /// The batch under way: its first sample, its samples per pixel, and the next pixel (over
+    /// all pieces) to trace.
+    first: u32,
     batch: u32,
-    /// The most samples per pixel a batch takes (about [`RAYS_PER_DISPATCH`] rays).
-    max_batch: u32,
+    next_pixel: u64,
     in_flight: Option<InFlight>,
     /// Samples per pixel of the last snapshot handed over.
     shown: u32,
     total: u32,
 }
 
-/// About this long per batch on the GPU: long batches would hold up the window's frames
-/// queued behind them, short ones cost a readback each.
-const BATCH_MS: f64 = 60.0;
+/// About this long per dispatch: a long one would hold up the window's frames queued behind
+/// it (and, on a CPU's Vulkan, the window's thread that submits it), short ones cost a submit
+/// each and a readback per batch.
+const BATCH_MS: f64 = 40.0;
 
-/// Rays of the first batch, before there is a time to aim by.
-const FIRST_RAYS: u64 = 1 << 18;
+/// Rays of the first dispatch, before there is a time to aim by.
+const FIRST_RAYS: u64 = 1 << 16;
+
+/// The fewest pixels in a slice.
+const MIN_SLICE: u64 = 256;
 
 impl Run {
-    /// `limit`: at most this many rays a batch (at least one sample per pixel).
+    /// `limit`: at most this many rays a dispatch.
     fn new(ctx: &GpuContext, p: Prepared, limit: u64) -> Result<Run, RenderError> {
         let bvh = GpuBvh::new(ctx, &p.flat)?;
         let pieces = p
@@ -266,15 +286,19 @@ impl Run {
             .map(|points| ReferenceRays::new(ctx, &bvh, points, &p.order))
             .collect::<Result<Vec<_>, _>>()?;
         let lit: Vec<bool> = p.traced.iter().map(Option::is_some).collect();
-        let rays = lit.iter().filter(|l| **l).count().max(1) as u64;
+        let lit_pixels = lit.iter().filter(|l| **l).count().max(1);
         let total = pieces.first().map_or(0, ReferenceRays::samples_total);
-        let per_batch = |r: u64| (r / rays).clamp(1, u64::from(total.max(1))) as u32;
+        let max_rays = RAYS_PER_DISPATCH.min(limit).max(1) as f64;
         Ok(Run {
             key: p.key,
+            lit_share: lit_pixels as f64 / lit.len().max(1) as f64,
             lit,
             _bvh: bvh,
-            batch: per_batch(FIRST_RAYS.min(limit)),
-            max_batch: per_batch(RAYS_PER_DISPATCH.min(limit)),
+            rays: (FIRST_RAYS as f64).min(max_rays),
+            max_rays,
+            first: 0,
+            batch: 0,
+            next_pixel: 0,
             pieces,
             in_flight: None,
             shown: 0,
@@ -286,30 +310,76 @@ impl Run {
         self.shown >= self.total
     }
 
-    /// Submit the next batch and ask for its counts back.
+    /// Submit the next dispatch: a new batch's first slice, or the next slice of the batch
+    /// under way.
     fn submit(&mut self, ctx: &GpuContext) {
-        for piece in &mut self.pieces {
-            piece.step(ctx, self.batch);
+        // Set before the submit: where submitting waits for the GPU, that time is the dispatch's.
+        let submitted = Instant::now();
+        let pixels = self.lit.len() as u64;
+        let lit = (pixels as f64 * self.lit_share).max(1.0);
+        if self.next_pixel == 0 {
+            let left = self.total.saturating_sub(self.shown);
+            self.first = self.shown;
+            self.batch = ((self.rays / lit) as u32).clamp(1, left.max(1));
         }
-        let done = self
-            .pieces
-            .first()
-            .map_or(self.total, ReferenceRays::samples_done);
-        let reads: Vec<PendingCounts> = self.pieces.iter().map(|p| p.start_read(ctx)).collect();
+        // Pixels this dispatch takes: all that are left where the batch fits, else a slice.
+        let want = (self.rays / (f64::from(self.batch) * self.lit_share)) as u64;
+        let mut end = (self.next_pixel + want.max(MIN_SLICE)).min(pixels);
+        // Within one piece (a piece holds at most one storage binding's points).
+        let mut base = 0u64;
+        for piece in &self.pieces {
+            let n = u64::from(piece.pixels());
+            if self.next_pixel < base + n {
+                end = end.min(base + n);
+                let local = |p: u64| (p - base) as u32;
+                piece.trace(
+                    ctx,
+                    self.first..self.first + self.batch,
+                    local(self.next_pixel)..local(end),
+                );
+                break;
+            }
+            base += n;
+        }
+        let rays = (end - self.next_pixel) as f64 * f64::from(self.batch) * self.lit_share;
+        let last = end >= pixels;
+        self.next_pixel = if last { 0 } else { end };
         self.in_flight = Some(InFlight {
-            arrived: reads.iter().map(|_| None).collect(),
-            reads,
-            done,
-            submitted: Instant::now(),
+            finished: when_done(ctx),
+            reads: Vec::new(),
+            arrived: Vec::new(),
+            rays,
+            last,
+            submitted,
         });
     }
 
-    /// The batch's snapshot, once every piece's counts have arrived (checks, never waits).
+    /// Pick up what finished (checks, never waits): a dispatch run (the next one aimed by its
+    /// time; after a batch's last, its counts asked for), or the batch's snapshot once its
+    /// counts have arrived.
     fn poll(&mut self, ctx: &GpuContext) -> Result<Option<Snapshot>, RenderError> {
         let Some(f) = self.in_flight.as_mut() else {
             return Ok(None);
         };
         let _ = ctx.device.poll(wgpu::PollType::Poll);
+        if f.reads.is_empty() {
+            let Some(finished) = f.finished.lock().ok().and_then(|t| *t) else {
+                return Ok(None);
+            };
+            // Aim the next dispatch at BATCH_MS, growing at most fourfold at a time.
+            let ms = finished.duration_since(f.submitted).as_secs_f64() * 1e3;
+            let aim = f.rays * BATCH_MS / ms.max(0.5);
+            self.rays = aim.clamp(64.0, (self.rays * 4.0).min(self.max_rays));
+            if !f.last {
+                self.in_flight = None;
+                return Ok(None);
+            }
+            // The batch is done on the GPU: read its counts back now that nothing waits
+            // before the copy on the queue.
+            f.reads = self.pieces.iter().map(|p| p.start_read(ctx)).collect();
+            f.arrived = f.reads.iter().map(|_| None).collect();
+            let _ = ctx.device.poll(wgpu::PollType::Poll);
+        }
         for (read, slot) in f.reads.iter().zip(&mut f.arrived) {
             if slot.is_none() {
                 *slot = read.take().transpose()?;
@@ -318,8 +388,10 @@ impl Run {
         if f.arrived.iter().any(Option::is_none) {
             return Ok(None);
         }
-        let ms = f.submitted.elapsed().as_secs_f64() * 1e3;
-        let done = f.done;
+        let Some(f) = self.in_flight.take() else {
+            return Ok(None);
+        };
+        let done = self.first + self.batch;
         let n = done.max(1) as f32;
         let visibility = f
             .arrived
@@ -329,11 +401,7 @@ impl Run {
             .zip(&self.lit)
             .map(|(c, &lit)| if lit { c.count as f32 / n } else { 0.0 })
             .collect();
-        self.in_flight = None;
         self.shown = done;
-        // Aim for BATCH_MS a batch, growing at most fourfold at a time.
-        let aim = (f64::from(self.batch) * BATCH_MS / ms.max(1.0)).round() as u32;
-        self.batch = aim.clamp(1, self.batch.saturating_mul(4).min(self.max_batch));
         Ok(Some(Snapshot {
             key: self.key,
             visibility,
@@ -341,6 +409,18 @@ impl Run {
             total: self.total,
         }))
     }
+}
+
+/// A time set when the GPU has run everything submitted so far (seen on a later device poll).
+fn when_done(ctx: &GpuContext) -> Arc<Mutex<Option<Instant>>> {
+    let finished = Arc::new(Mutex::new(None));
+    let flag = finished.clone();
+    ctx.queue.on_submitted_work_done(move || {
+        if let Ok(mut f) = flag.lock() {
+            *f = Some(Instant::now());
+        }
+    });
+    finished
 }
 
 /// The lab's reference traced on the GPU progressively, driven from the window's thread: see
@@ -352,7 +432,7 @@ pub struct Progressive {
     run: Option<Run>,
     /// Points prepared that the next advance takes.
     ready: Option<Prepared>,
-    /// The most rays a batch takes ([`Progressive::limit_batch`]).
+    /// The most rays a dispatch takes ([`Progressive::limit_batch`]).
     batch_rays: u64,
     /// Snapshots handed over: what [`Progressive::news`] counts.
     news: u64,
@@ -390,8 +470,8 @@ impl Progressive {
         }
     }
 
-    /// At most `rays` rays a batch from the next reference on (at least one sample per pixel):
-    /// a test sees a small image converge over many batches.
+    /// At most `rays` rays a dispatch from the next reference on (a batch of one sample per
+    /// pixel in slices where it is more): a test sees a small image converge over many batches.
     pub fn limit_batch(&mut self, rays: u64) {
         self.batch_rays = rays.max(1);
     }
@@ -452,6 +532,9 @@ impl Progressive {
         if let Some(run) = self.run.as_mut() {
             if run.in_flight.is_none() && !run.complete() {
                 run.submit(ctx);
+                // Where the submit ran the dispatch (a CPU's Vulkan), it is done now: noticed
+                // here, its time is the dispatch's and not the wait for the next frame.
+                let _ = ctx.device.poll(wgpu::PollType::Poll);
             }
         }
     }

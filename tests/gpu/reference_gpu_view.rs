@@ -268,3 +268,39 @@ fn where_the_adapter_cannot_trace_the_cpu_worker_does() {
     let cpu = reference::compute(&scene, W, H, K, &mut |_, _| {});
     assert_eq!(shown_v(&mut v), cpu.visibility);
 }
+
+/// Dispatches bounded below one sample per pixel of the image (as a slow device's are): each
+/// batch is traced in slices of pixels, one dispatch a frame, and read back after its last; the
+/// finished image is the CPU's reference all the same.
+#[test]
+fn a_batch_traced_in_slices_of_pixels_is_the_whole_batch() {
+    let scene = scene::load("fig7-concave").unwrap_or_else(|e| panic!("{e}"));
+    let mut v = view_session(scene.clone(), Engine::Gpu);
+    v.gpu_worker.limit_batch(u64::from(W * H) / 4);
+    let ask = intent();
+    let start = Instant::now();
+    let mut frames = 0u32;
+    let mut shown = Vec::new();
+    loop {
+        let s = frame(&mut v, &ask);
+        frames += 1;
+        shown.extend(s);
+        if s.is_some_and(|(d, t)| d == t) {
+            break;
+        }
+        assert!(start.elapsed() < LIMIT, "not converged: {shown:?}");
+    }
+    // One sample per pixel a batch, each in several dispatches (frames).
+    assert!(
+        shown.contains(&(1, K)) && shown.contains(&(2, K)),
+        "one sample per batch: {shown:?}"
+    );
+    assert!(frames > 2 * K, "{frames} frames for {K} batches in slices");
+    let cpu = reference::compute(&scene, W, H, K, &mut |_, _| {});
+    let (mean, differ) = difference(&cpu.visibility, &shown_v(&mut v));
+    assert!(mean < 1e-3, "mean |ΔV| {mean}");
+    assert!(
+        differ * 100 <= cpu.visibility.len(),
+        "{differ} pixels differ"
+    );
+}

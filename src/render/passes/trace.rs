@@ -8,6 +8,7 @@
 //! The tracer needs compute shaders and [`STORAGE_BUFFERS`] storage buffers in the compute
 //! stage; its callers check that before any work (`render::gpu_reference::NEEDS`).
 
+use std::ops::Range;
 use std::sync::{Arc, Mutex};
 
 use glam::Vec3;
@@ -32,7 +33,8 @@ pub struct TraceUniforms {
     pub row: u32,
     pub node_count: u32,
     pub triangle_count: u32,
-    pub _pad0: u32,
+    /// The first pixel of a reference dispatch: it answers pixels `offset .. count`.
+    pub offset: u32,
     pub _pad1: u32,
 }
 
@@ -315,22 +317,43 @@ impl ReferenceRays {
         if take == 0 {
             return 0;
         }
-        let (x, y, row) = grid(ctx, self.pixels);
+        self.trace(ctx, self.done..self.done + take, 0..self.pixels);
+        self.done += take;
+        take
+    }
+
+    /// Trace the samples `samples` (positions in the order given to [`ReferenceRays::new`])
+    /// from the pixels `pixels` alone: one dispatch, submitted, not waited for, its counts added
+    /// to theirs. [`ReferenceRays::step`] is this over every pixel; the lab traces a batch in
+    /// slices of pixels where one dispatch over all of them would run long (on a CPU's Vulkan the
+    /// submit itself runs the dispatch). Leaves [`ReferenceRays::samples_done`] alone.
+    pub fn trace(&self, ctx: &GpuContext, samples: Range<u32>, pixels: Range<u32>) {
+        let end = pixels.end.min(self.pixels);
+        let start = pixels.start.min(end);
+        let take = samples.end.min(self.total).saturating_sub(samples.start);
+        if take == 0 || start == end {
+            return;
+        }
+        let (x, y, row) = grid(ctx, end - start);
         let u = TraceUniforms {
-            count: self.pixels,
-            first: self.done,
+            count: end,
+            first: samples.start,
             samples: take,
             row,
             node_count: self.node_count,
             triangle_count: self.triangle_count,
+            offset: start,
             ..TraceUniforms::default()
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
         let pipes = pipelines(ctx);
         dispatch(ctx, &pipes.reference, &self.group, (x, y));
-        self.done += take;
-        take
+    }
+
+    /// Pixels (points) it traces from.
+    pub fn pixels(&self) -> u32 {
+        self.pixels
     }
 
     /// Samples per pixel traced (submitted) so far.
