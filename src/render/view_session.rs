@@ -9,9 +9,10 @@
 //! thread of its own, uploading it when it is ready. What comes back ([`Update`]) is what the
 //! window shows around the image: errors, probe answers, pass timings, and when to look again.
 //!
-//! The soft truth is traced on the GPU where the adapter can (`gpu_reference::Progressive`: a
-//! batch of samples per pixel submitted after each advance's frame, its counts picked up by a
-//! later advance without waiting), else on the CPU's worker threads; either can be forced
+//! The soft truth is traced on the GPU where the adapter can (`gpu_reference::Progressive`: one
+//! short dispatch of a batch of samples per pixel submitted after each advance's frame, the
+//! batch's counts picked up by a later advance without waiting), else on the CPU's worker
+//! threads; either can be forced
 //! ([`ViewSession::set_reference_engine`]). Either way a new key (scene, light, camera, size,
 //! K) drops the work on the old one and starts over.
 //!
@@ -477,7 +478,7 @@ impl ViewSession {
             }
             if self.reference_busy() {
                 // Keep frames coming while it converges (new samples about every 90 ms on
-                // the CPU's worker, every batch of about 60 ms on the GPU).
+                // the CPU's worker; on the GPU a dispatch of about 40 ms a frame).
                 update.repaint.after(Duration::from_millis(match engine {
                     truth::Engine::Cpu => 30,
                     truth::Engine::Gpu => 10,
