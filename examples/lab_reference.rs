@@ -3,7 +3,8 @@
 //! it (one advance a frame; between frames a wait of at most 16 ms that ends as soon as the
 //! engine has new samples), timed from the first advance to the first frame shown with every
 //! sample. Also the slowest advance (what the window's thread spent in one frame, shading the
-//! new samples included) and how many snapshots were shown on the way.
+//! new samples included) and how many snapshots were shown on the way; then, for scale, the same
+//! reference traced in one go on each engine (as `compare --reference gpu|cpu` does).
 //!
 //! `cargo run --release --example lab_reference -- fig7-concave 695x750 256`
 //! (scene, size, K; these are the defaults: 695×750 is the viewport of the lab's 1280×800
@@ -15,7 +16,7 @@ use dbuffer::geometry::VtVariant;
 use dbuffer::render::passes::view::{Mapping, View, ViewParams};
 use dbuffer::render::truth::{self, Engine};
 use dbuffer::render::view_session::{Intent, ViewSession};
-use dbuffer::render::{FrameRequest, GpuContext, Knobs};
+use dbuffer::render::{gpu_reference, reference, FrameRequest, GpuContext, Knobs};
 use dbuffer::scene::{self, Scene};
 
 fn main() -> anyhow::Result<()> {
@@ -51,6 +52,28 @@ fn main() -> anyhow::Result<()> {
             r.seconds, r.frames, r.snapshots, r.slowest_ms
         );
     }
+    // For scale: the same rays traced in one go on each engine, the window's thread waiting
+    // (`compare --reference gpu|cpu`).
+    let scene = v.scene().clone();
+    let t = Instant::now();
+    match gpu_reference::compute(&v.ctx, &scene, width, height, samples, &mut |_, _| {}) {
+        Ok((c, cost)) => println!(
+            "gpu in one go: {:.1} s ({:.1} s of shadow rays, {:.1} M rays/s)",
+            t.elapsed().as_secs_f64(),
+            c.rays_ms / 1e3,
+            cost.rays as f64 / c.rays_ms / 1e3
+        ),
+        Err(e) => println!("gpu in one go: {e}"),
+    }
+    let t = Instant::now();
+    let c = reference::compute(&scene, width, height, samples, &mut |_, _| {});
+    let rays = c.hit_pixels as f64 * f64::from(samples);
+    println!(
+        "cpu in one go: {:.1} s ({:.1} s of shadow rays, about {:.1} M rays/s)",
+        t.elapsed().as_secs_f64(),
+        c.rays_ms / 1e3,
+        rays / c.rays_ms / 1e3
+    );
     Ok(())
 }
 

@@ -238,9 +238,9 @@ struct InFlight {
 }
 
 /// A reference being traced: its buffers on the GPU and the batch under way. A batch is
-/// `batch` samples per pixel over every pixel, in one dispatch or in slices of pixels (one a
-/// frame) where one would run longer than [`BATCH_MS`]; its counts are read back after its last
-/// slice, and V = visible / samples then.
+/// `batch` samples per pixel over every pixel (about [`SNAPSHOT_MS`] of work), in one dispatch
+/// or in slices of pixels (one a frame) where one would run longer than [`BATCH_MS`]; its
+/// counts are read back after its last slice, and V = visible / samples then.
 struct Run {
     key: ReferenceKey,
     /// Which pixels cast rays.
@@ -269,6 +269,11 @@ struct Run {
 /// it (and, on a CPU's Vulkan, the window's thread that submits it), short ones cost a submit
 /// each and a readback per batch.
 const BATCH_MS: f64 = 40.0;
+
+/// About this long of dispatches per batch, a snapshot each (the CPU's worker hands one over
+/// every 90 ms): a batch's readback and the frame shading it cost about a dispatch's time on a
+/// CPU's Vulkan at the lab's size.
+const SNAPSHOT_MS: f64 = 160.0;
 
 /// Rays of the first dispatch, before there is a time to aim by.
 const FIRST_RAYS: u64 = 1 << 16;
@@ -318,9 +323,11 @@ impl Run {
         let pixels = self.lit.len() as u64;
         let lit = (pixels as f64 * self.lit_share).max(1.0);
         if self.next_pixel == 0 {
+            // Samples for about SNAPSHOT_MS of dispatches: each batch is read back and shaded.
             let left = self.total.saturating_sub(self.shown);
             self.first = self.shown;
-            self.batch = ((self.rays / lit) as u32).clamp(1, left.max(1));
+            let rays = self.rays * SNAPSHOT_MS / BATCH_MS;
+            self.batch = ((rays / lit) as u32).clamp(1, left.max(1));
         }
         // Pixels this dispatch takes: all that are left where the batch fits, else a slice.
         let want = (self.rays / (f64::from(self.batch) * self.lit_share)) as u64;
