@@ -17,7 +17,9 @@ struct TraceUniforms {
     row: u32,
     node_count: u32,
     triangle_count: u32,
-    _pad0: u32,
+    // cs_reference: the first pixel of this dispatch (it answers pixels offset .. count), so a
+    // batch of samples can be traced over the image in slices of pixels.
+    offset: u32,
     _pad1: u32,
 };
 
@@ -43,7 +45,7 @@ fn item_of(id: vec3<u32>) -> u32 {
 
 @compute @workgroup_size(64)
 fn cs_reference(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = item_of(id);
+    let i = trace_in.offset + item_of(id);
     if i >= trace_in.count {
         return;
     }

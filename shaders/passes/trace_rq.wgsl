@@ -24,7 +24,9 @@ struct TraceUniforms {
     row: u32,
     node_count: u32,
     triangle_count: u32,
-    _pad0: u32,
+    // cs_reference: the first pixel of this dispatch (it answers pixels offset .. count), so a
+    // batch of samples can be traced over the image in slices of pixels.
+    offset: u32,
     _pad1: u32,
 };
 
@@ -65,7 +67,7 @@ fn rq_blocked(origin: vec3<f32>, dir: vec3<f32>, t_min: f32, t_max: f32) -> bool
 
 @compute @workgroup_size(64)
 fn cs_reference(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = item_of(id);
+    let i = trace_in.offset + item_of(id);
     if i >= trace_in.count {
         return;
     }

@@ -144,7 +144,7 @@ impl LabApp {
                         .shown(0)
                         .or_else(|| core.shown(1))
                         .map(|s| core.session.reference_key(&s.request));
-                    let progress = core.worker.progress().filter(|(k, _, _)| {
+                    let progress = core.tracing_progress().filter(|(k, _, _)| {
                         Some(*k).map(|k| k.samples) == current.map(|c| c.samples)
                     });
                     if let Some((_, done, total)) = progress {
@@ -152,7 +152,10 @@ impl LabApp {
                             ui.add(
                                 egui::ProgressBar::new(done as f32 / total.max(1) as f32)
                                     .desired_width(160.0)
-                                    .text(format!("reference {done}/{total} samples")),
+                                    .text(format!(
+                                        "reference {done}/{total} samples ({})",
+                                        core.reference_engine().name().to_uppercase()
+                                    )),
                             );
                         }
                     }
@@ -474,6 +477,48 @@ impl LabApp {
         }
     }
 
+    /// Where the reference's rays are traced: auto (the GPU where the adapter can), GPU or
+    /// CPU, with the engine tracing now and why the GPU cannot, where it cannot.
+    fn reference_engine_ui(&mut self, ui: &mut egui::Ui) {
+        let refusal = self
+            .core
+            .as_ref()
+            .and_then(|c| crate::render::gpu_reference::refuses_on(&c.ctx.caps));
+        let now = self.core.as_ref().map(|c| c.reference_engine());
+        let label = |e: &str| match e {
+            "gpu" => "GPU",
+            "cpu" => "CPU",
+            _ => "auto",
+        };
+        let choice = self.settings.reference_engine.clone();
+        // The choice, and where it differs from it the engine tracing now (auto's pick, or the
+        // CPU standing in for a GPU that cannot).
+        let selected = match now {
+            Some(engine) if engine.name() != choice => {
+                format!("{} ({})", label(&choice), label(engine.name()))
+            }
+            _ => label(&choice).to_string(),
+        };
+        let combo = egui::ComboBox::from_label("Reference engine")
+            .selected_text(selected)
+            .show_ui(ui, |ui| {
+                for e in [super::settings::AUTO_ENGINE, "gpu", "cpu"] {
+                    ui.selectable_value(
+                        &mut self.settings.reference_engine,
+                        e.to_string(),
+                        label(e),
+                    );
+                }
+            });
+        let hover = match refusal {
+            Some(why) => format!("where the reference's rays are traced; {why}"),
+            None => "where the reference's rays are traced: the GPU (progressively, a batch of \
+                     samples a frame) or the CPU's threads; auto takes the GPU where it can"
+                .to_string(),
+        };
+        combo.response.on_hover_text(hover);
+    }
+
     fn render_section(&mut self, ui: &mut egui::Ui) {
         ui.heading("Render");
         egui::ComboBox::from_label("D-buffer size")
@@ -495,6 +540,7 @@ impl LabApp {
                 .labelled_by(l.id)
                 .on_hover_text("disk samples per pixel of the reference");
         });
+        self.reference_engine_ui(ui);
         // The knobs of the shown methods, from their modules.
         let mut shown = vec![self.settings.method()];
         if self.settings.split {

@@ -12,6 +12,9 @@ use crate::render::{Knobs, Method};
 /// The scene `dbuffer` opens with no arguments.
 pub const DEFAULT_SCENE: &str = "fig7-concave";
 
+/// [`Settings::reference_engine`] leaving the choice to the adapter.
+pub const AUTO_ENGINE: &str = "auto";
+
 /// How many recent files the File menu keeps.
 pub const MAX_RECENT: usize = 8;
 
@@ -44,6 +47,9 @@ pub struct Settings {
     pub render_scale: f32,
     /// Reference samples per pixel (K).
     pub reference_samples: u32,
+    /// Where the reference's rays are traced: `auto` (the GPU where the adapter can, else the
+    /// CPU's threads), `gpu` or `cpu`; anything else reads as `auto`.
+    pub reference_engine: String,
     /// The methods' knobs the user set (the others keep their defaults), saved as the
     /// `(name, value)` pairs they always were.
     pub knobs: Knobs,
@@ -101,6 +107,7 @@ impl Default for Settings {
             dbuffer_size: 1024,
             render_scale: 1.0,
             reference_samples: 256,
+            reference_engine: AUTO_ENGINE.into(),
             knobs: Knobs::default(),
             recent: Vec::new(),
         }
@@ -115,6 +122,11 @@ impl Settings {
 
     pub fn split_method(&self) -> Method {
         self.split_method.parse().unwrap_or(truth::SOFT)
+    }
+
+    /// The reference engine asked for (`None`: the GPU where the adapter can, else the CPU).
+    pub fn reference_engine(&self) -> Option<truth::Engine> {
+        self.reference_engine.parse().ok()
     }
 
     /// Whether the reference is one of the methods on screen (either side of a split).
@@ -212,6 +224,21 @@ mod tests {
         assert_eq!(s.vt(), VtVariant::Smoothstep);
         assert_eq!(s.render_scale, 1.0);
         assert_eq!(s.dbuffer_size, 64);
+    }
+
+    #[test]
+    fn the_reference_engine_is_auto_unless_named() {
+        assert_eq!(Settings::default().reference_engine(), None);
+        let named = |e: &str| Settings {
+            reference_engine: e.into(),
+            ..Settings::default()
+        };
+        assert_eq!(named("gpu").reference_engine(), Some(truth::Engine::Gpu));
+        assert_eq!(named("cpu").reference_engine(), Some(truth::Engine::Cpu));
+        assert_eq!(named("rtx").reference_engine(), None);
+        // Settings saved before the choice existed load with it on auto.
+        let s: Settings = serde_json::from_str(r#"{"reference_samples": 64}"#).unwrap();
+        assert_eq!(s.reference_engine, AUTO_ENGINE);
     }
 
     #[test]

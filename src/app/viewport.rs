@@ -231,6 +231,7 @@ impl LabApp {
             return;
         };
         core.set_camera(camera);
+        core.set_reference_engine(self.settings.reference_engine());
         let motion = &mut self.motion;
         let update = core.advance(&intent, &mut |scene, w, h| motion.frame(scene, w, h));
         if let Some(rs) = frame.wgpu_render_state() {

@@ -386,7 +386,7 @@ fn on<R: Send>(pool: &Option<rayon::ThreadPool>, f: impl FnOnce() -> R + Send) -
 
 /// Run the calling thread at a lower scheduling priority (Linux: nice 10), so a window on the
 /// same cores keeps its frame rate.
-fn lower_priority() {
+pub(crate) fn lower_priority() {
     #[cfg(target_os = "linux")]
     {
         // SAFETY: setpriority only reads its integer arguments; on Linux PRIO_PROCESS with a

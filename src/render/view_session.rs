@@ -9,6 +9,13 @@
 //! thread of its own, uploading it when it is ready. What comes back ([`Update`]) is what the
 //! window shows around the image: errors, probe answers, pass timings, and when to look again.
 //!
+//! The soft truth is traced on the GPU where the adapter can (`gpu_reference::Progressive`: one
+//! short dispatch of a batch of samples per pixel submitted after each advance's frame, the
+//! batch's counts picked up by a later advance without waiting), else on the CPU's worker
+//! threads; either can be forced
+//! ([`ViewSession::set_reference_engine`]). Either way a new key (scene, light, camera, size,
+//! K) drops the work on the old one and starts over.
+//!
 //! A frame is colour-only (`FrameRequest::colour_only`: the camera pass writes the colour alone)
 //! when the final image is shown and nothing reads its other targets: no probe under the cursor
 //! and no drag being measured. Its cache key leaves that out, so the cursor leaving the viewport
@@ -18,9 +25,10 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::thread::ThreadId;
 use std::time::{Duration, Instant};
 
+use super::gpu_reference;
 use super::passes::probe::{ProbeRequest, ProbeResult};
 use super::passes::view::{View, ViewParams};
-use super::reference::{ReferenceKey, ReferenceWorker};
+use super::reference::{ReferenceKey, ReferenceWorker, Snapshot};
 use super::session::{FrameJob, Session};
 use super::truth::{self, Truth};
 use super::{Frame, FrameRequest, FrameTargets, GpuContext, Method, RenderError};
@@ -192,8 +200,15 @@ impl Side {
 pub struct ViewSession {
     pub ctx: GpuContext,
     pub session: Session,
-    /// The soft truth's rays, cast progressively off the caller's thread.
+    /// The soft truth's rays, cast progressively off the caller's thread (the CPU engine).
     pub worker: ReferenceWorker,
+    /// The soft truth's rays traced progressively on the GPU (the GPU engine), a batch of
+    /// samples submitted per advance and picked up when done.
+    pub gpu_worker: gpu_reference::Progressive,
+    /// The engine asked for (`None`: the GPU where the adapter can trace, else the CPU).
+    engine: Option<truth::Engine>,
+    /// Why the GPU engine failed on this device, if it did: the CPU traces from then on.
+    gpu_failed: Option<String>,
     /// The hard truth's rays, cast off the caller's thread like the soft truth's.
     pub hard_worker: ReferenceWorker,
     sides: [Side; 2],
@@ -217,6 +232,9 @@ impl ViewSession {
             ctx,
             session,
             worker: ReferenceWorker::new(),
+            gpu_worker: gpu_reference::Progressive::new(),
+            engine: None,
+            gpu_failed: None,
             hard_worker: ReferenceWorker::hard(),
             sides: Default::default(),
             reference_serial: 0,
@@ -253,6 +271,70 @@ impl ViewSession {
     /// Object `index` moved: its world-space mesh is `mesh`.
     pub fn set_object_mesh(&mut self, index: usize, mesh: Mesh) {
         self.session.set_object_mesh(&self.ctx, index, mesh);
+    }
+
+    /// Trace the soft truth with `engine` (`None`: on the GPU where the adapter can, else on
+    /// the CPU's threads). The one no longer used is stopped; the other starts over.
+    pub fn set_reference_engine(&mut self, engine: Option<truth::Engine>) {
+        if engine != self.engine {
+            self.engine = engine;
+            self.gpu_failed = None;
+        }
+    }
+
+    /// The engine that traces the soft truth now: the one asked for where it can run here, the
+    /// CPU where the GPU cannot (the adapter refuses, or the GPU's tracing failed). Asked for
+    /// none, the GPU — except on an adapter that is itself the CPU (lavapipe), whose traced rays
+    /// are several times slower than the CPU's own (docs/results/performance.md).
+    pub fn reference_engine(&self) -> truth::Engine {
+        let gpu_can =
+            self.gpu_failed.is_none() && gpu_reference::refuses_on(&self.ctx.caps).is_none();
+        let auto = if self.ctx.adapter.device_type == wgpu::DeviceType::Cpu {
+            truth::Engine::Cpu
+        } else {
+            truth::Engine::Gpu
+        };
+        match self.engine.unwrap_or(auto) {
+            truth::Engine::Gpu if gpu_can => truth::Engine::Gpu,
+            _ => truth::Engine::Cpu,
+        }
+    }
+
+    /// (key, samples per pixel done, total) of the soft truth being traced, by either engine.
+    pub fn tracing_progress(&self) -> Option<(ReferenceKey, u32, u32)> {
+        match self.reference_engine() {
+            truth::Engine::Cpu => self.worker.progress(),
+            truth::Engine::Gpu => self.gpu_worker.progress(),
+        }
+    }
+
+    /// Whether the soft truth's engine is still adding samples.
+    pub fn reference_busy(&self) -> bool {
+        match self.reference_engine() {
+            truth::Engine::Cpu => self.worker.busy(),
+            truth::Engine::Gpu => self.gpu_worker.busy(),
+        }
+    }
+
+    /// How much news the soft truth's engine has had (snapshots handed over): what
+    /// [`ViewSession::wait_for_reference`] waits to see grow.
+    pub fn reference_news(&self) -> u64 {
+        match self.reference_engine() {
+            truth::Engine::Cpu => self.worker.news(),
+            truth::Engine::Gpu => self.gpu_worker.news(),
+        }
+    }
+
+    /// Wait at most `timeout` for the soft truth's engine to have something new for the next
+    /// advance (the CPU's worker: news after `seen`; the GPU: its batch done). For tests and
+    /// measurements; the lab never waits (its frames ask for a repaint while it works).
+    pub fn wait_for_reference(&mut self, seen: u64, timeout: Duration) {
+        match self.reference_engine() {
+            truth::Engine::Cpu => {
+                self.worker.wait_for_news(seen, timeout);
+            }
+            truth::Engine::Gpu => self.gpu_worker.wait(&self.ctx, timeout),
+        }
     }
 
     /// What side `side` shows (0 the main one, 1 the right of a split).
@@ -320,6 +402,8 @@ impl ViewSession {
         let soft = self.feed_soft_truth(&base, &methods, params.view, &mut update);
         let hard = self.feed_hard_truth(&base, &methods, &mut update);
         self.record(intent, base, methods, soft, hard, motion, &mut update);
+        // The GPU engine's next batch goes after this frame's work on the queue.
+        self.gpu_worker.submit_next(&self.ctx);
         if let (View::Flip, Some(serial)) = (params.view, soft) {
             self.want_flip(serial, &mut update);
         }
@@ -374,28 +458,61 @@ impl ViewSession {
         let needed = methods.iter().flatten().any(|m| truth::is_soft(*m))
             || view == View::Error
             || view == View::Flip;
+        let engine = self.reference_engine();
         if needed {
             let key = self.session.reference_key(&request);
-            self.worker.want(self.session.scene(), key);
-            if let Some(s) = self.worker.take() {
-                match self
-                    .session
-                    .set_reference(&self.ctx, s.key, &s.visibility, (s.done, s.total))
-                {
-                    Ok(()) => self.reference_serial += 1,
-                    Err(e) => update.errors.push(format!("reference: {e}")),
+            let snapshot = match engine {
+                truth::Engine::Cpu => {
+                    self.gpu_worker.pause();
+                    self.worker.want(self.session.scene(), key);
+                    self.worker.take()
                 }
+                truth::Engine::Gpu => {
+                    self.worker.pause();
+                    // Samples the CPU cast before it was stopped are not shown.
+                    let _ = self.worker.take();
+                    self.gpu_worker.want(self.session.scene(), key);
+                    self.gpu_worker.advance(&self.ctx).unwrap_or_else(|e| {
+                        // The CPU takes over (from its first sample) on the next advance.
+                        update.errors.push(format!(
+                            "reference on the GPU: {e}; the CPU traces it instead"
+                        ));
+                        self.gpu_failed = Some(e.to_string());
+                        self.gpu_worker.pause();
+                        update.repaint.now = true;
+                        None
+                    })
+                }
+            };
+            if let Some(s) = snapshot {
+                self.hand_over(s, update);
             }
-            if self.worker.busy() {
-                // Keep frames coming while it converges (new samples about every 90 ms).
-                update.repaint.after(Duration::from_millis(30));
+            if self.reference_busy() {
+                // Keep frames coming while it converges (new samples about every 90 ms on
+                // the CPU's worker; on the GPU a dispatch of about 40 ms a frame).
+                update.repaint.after(Duration::from_millis(match engine {
+                    truth::Engine::Cpu => 30,
+                    truth::Engine::Gpu => 10,
+                }));
             }
         } else {
             self.worker.pause();
+            self.gpu_worker.pause();
         }
         self.session
             .has_reference(&request)
             .then_some(self.reference_serial)
+    }
+
+    /// Hand the GPU a snapshot of the soft truth.
+    fn hand_over(&mut self, s: Snapshot, update: &mut Update) {
+        match self
+            .session
+            .set_reference(&self.ctx, s.key, &s.visibility, (s.done, s.total))
+        {
+            Ok(()) => self.reference_serial += 1,
+            Err(e) => update.errors.push(format!("reference: {e}")),
+        }
     }
 
     /// The hard truth: its rays on a worker too, V to the GPU when done; meanwhile the side

@@ -17,6 +17,7 @@ mod polygon_lights;
 mod raytraced;
 mod readback;
 mod reference_analytic;
+mod reference_gpu_view;
 mod render_accuracy;
 mod render_fused;
 mod render_gpu;

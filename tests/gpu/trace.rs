@@ -623,7 +623,7 @@ fn trace_uniforms_match_their_wgsl() {
             row,
             node_count,
             triangle_count,
-            _pad0,
+            offset,
             _pad1
         );
     }

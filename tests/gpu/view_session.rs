@@ -1,5 +1,6 @@
 //! The lab's view logic without a window: a [`ViewSession`] driven through its intents as the
-//! lab drives it once per window frame. The soft truth converges on its worker and is shaded;
+//! lab drives it once per window frame. The soft truth converges on its CPU worker (the engine
+//! forced here; `reference_gpu_view` drives the GPU's) and is shaded;
 //! a probe under the cursor is answered with the shown frame's values; the FLIP view's map is
 //! computed on a thread other than the caller's and uploaded when it arrives; pass timings of a
 //! method no longer shown never come back as the shown method's.
@@ -23,7 +24,9 @@ const H: u32 = 48;
 fn view_session() -> ViewSession {
     let ctx = GpuContext::headless().unwrap_or_else(|e| panic!("{e}"));
     let scene = scene::load("fig7-concave").unwrap_or_else(|e| panic!("{e}"));
-    ViewSession::new(ctx, scene)
+    let mut v = ViewSession::new(ctx, scene);
+    v.set_reference_engine(Some(truth::Engine::Cpu));
+    v
 }
 
 fn intent(method: Method, view: View) -> Intent {
@@ -63,7 +66,7 @@ fn advance_until(
 ) {
     let start = Instant::now();
     loop {
-        let seen = v.worker.news();
+        let seen = v.reference_news();
         let update = v.advance(intent, &mut no_motion);
         assert!(update.errors.is_empty(), "{:?}", update.errors);
         each(v, &update);
@@ -71,7 +74,7 @@ fn advance_until(
             return;
         }
         assert!(start.elapsed() < LIMIT, "not done in {LIMIT:?}");
-        v.worker.wait_for_news(seen, Duration::from_millis(5));
+        v.wait_for_reference(seen, Duration::from_millis(5));
     }
 }
 

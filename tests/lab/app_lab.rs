@@ -178,6 +178,45 @@ fn every_view_and_overlay_changes_the_viewport() {
     assert!(!h.state().settings.overlays.light_outline);
 }
 
+/// The reference engine set to the GPU: the split view's reference is traced there (batches
+/// picked up frame by frame, the CPU's worker idle) and converges to the CPU's reference of the
+/// view, but for grazing rays.
+#[test]
+fn the_split_views_reference_converges_on_the_gpu() {
+    let mut h = lab(None);
+    h.state_mut().settings.reference_engine = "gpu".into();
+    h.run();
+    click(&mut h, "Split view");
+    let done = step_until_gpu(&mut h, 2000, |h| {
+        h.state().core().is_some_and(|c| {
+            !c.reference_busy()
+                && c.tracing_progress().is_some_and(|(_, d, t)| d == t)
+                && h.state()
+                    .shown_split()
+                    .and_then(|s| s.reference)
+                    .is_some_and(|(d, t)| d == t)
+        })
+    });
+    assert!(done, "the GPU's reference did not finish");
+    let core = h.state().core().expect("a core");
+    assert_eq!(core.reference_engine(), dbuffer::render::truth::Engine::Gpu);
+    assert!(core.gpu_worker.news() > 0, "batches came back from the GPU");
+    assert_eq!(core.worker.steps(), 0, "the CPU's worker cast nothing");
+    let scene = h.state().scene().expect("scene").clone();
+    let right = shown_frame(&mut h, true);
+    let k = h.state().settings.reference_samples;
+    let cpu =
+        dbuffer::render::reference::compute(&scene, right.width, right.height, k, &mut |_, _| {});
+    let mean = cpu
+        .visibility
+        .iter()
+        .zip(&right.visibility)
+        .map(|(a, b)| f64::from((a - b).abs()))
+        .sum::<f64>()
+        / cpu.visibility.len().max(1) as f64;
+    assert!(mean < 1e-3, "mean |ΔV| {mean} against the CPU's reference");
+}
+
 #[test]
 fn split_view_shows_two_methods() {
     let mut h = lab(None);

@@ -78,6 +78,8 @@ fn build(
         );
         app.settings.dbuffer_size = 256;
         app.settings.render_scale = 0.5;
+        // The tests watch the CPU's reference worker (its thread, its news).
+        app.settings.reference_engine = "cpu".into();
         app.settings.reference_samples = 16;
         app
     })

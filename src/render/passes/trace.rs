@@ -18,6 +18,9 @@
 //! The tracer needs compute shaders and [`STORAGE_BUFFERS`] storage buffers in the compute
 //! stage; its callers check that before any work (`render::gpu_reference::NEEDS`).
 
+use std::ops::Range;
+use std::sync::{Arc, Mutex};
+
 use glam::Vec3;
 
 use super::trace_rq::Accel;
@@ -130,7 +133,8 @@ pub struct TraceUniforms {
     pub row: u32,
     pub node_count: u32,
     pub triangle_count: u32,
-    pub _pad0: u32,
+    /// The first pixel of a reference dispatch: it answers pixels `offset .. count`.
+    pub offset: u32,
     pub _pad1: u32,
 }
 
@@ -482,22 +486,43 @@ impl ReferenceRays {
         if take == 0 {
             return 0;
         }
-        let (x, y, row) = grid(ctx, self.pixels);
+        self.trace(ctx, self.done..self.done + take, 0..self.pixels);
+        self.done += take;
+        take
+    }
+
+    /// Trace the samples `samples` (positions in the order given to [`ReferenceRays::new`])
+    /// from the pixels `pixels` alone: one dispatch, submitted, not waited for, its counts added
+    /// to theirs. [`ReferenceRays::step`] is this over every pixel; the lab traces a batch in
+    /// slices of pixels where one dispatch over all of them would run long (on a CPU's Vulkan the
+    /// submit itself runs the dispatch). Leaves [`ReferenceRays::samples_done`] alone.
+    pub fn trace(&self, ctx: &GpuContext, samples: Range<u32>, pixels: Range<u32>) {
+        let end = pixels.end.min(self.pixels);
+        let start = pixels.start.min(end);
+        let take = samples.end.min(self.total).saturating_sub(samples.start);
+        if take == 0 || start == end {
+            return;
+        }
+        let (x, y, row) = grid(ctx, end - start);
         let u = TraceUniforms {
-            count: self.pixels,
-            first: self.done,
+            count: end,
+            first: samples.start,
             samples: take,
             row,
             node_count: self.node_count,
             triangle_count: self.triangle_count,
+            offset: start,
             ..TraceUniforms::default()
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
         let pipes = pipelines(ctx, self.path);
         dispatch(ctx, &pipes.reference, &self.group, (x, y));
-        self.done += take;
-        take
+    }
+
+    /// Pixels (points) it traces from.
+    pub fn pixels(&self) -> u32 {
+        self.pixels
     }
 
     /// Samples per pixel traced (submitted) so far.
@@ -513,16 +538,90 @@ impl ReferenceRays {
     /// Wait for the GPU and read every pixel's counts back.
     pub fn read(&self, ctx: &GpuContext) -> Result<Vec<RayCounts>, RenderError> {
         let words = read_u32s(ctx, &self.results)?;
-        Ok(words
-            .chunks_exact(3)
-            .take(self.pixels as usize)
-            .map(|w| RayCounts {
-                count: w[0],
-                box_tests: w[1],
-                triangle_tests: w[2],
-            })
-            .collect())
+        Ok(counts_of(&words, self.pixels as usize))
     }
+
+    /// Ask for every pixel's counts as they stand after what was submitted so far (a copy into
+    /// a staging buffer, submitted, its mapping requested) without waiting: the answer comes
+    /// through [`PendingCounts::poll`] once the GPU has got there.
+    pub fn start_read(&self, ctx: &GpuContext) -> PendingCounts {
+        let size = self.results.size();
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ReferenceRays::staging"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("ReferenceRays::read"),
+            });
+        encoder.copy_buffer_to_buffer(&self.results, 0, &staging, 0, size);
+        ctx.queue.submit([encoder.finish()]);
+        let mapped = Arc::new(Mutex::new(None));
+        let sink = mapped.clone();
+        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            if let Ok(mut m) = sink.lock() {
+                *m = Some(r.map_err(|e| e.to_string()));
+            }
+        });
+        PendingCounts {
+            staging,
+            mapped,
+            pixels: self.pixels as usize,
+        }
+    }
+}
+
+/// Counts asked for by [`ReferenceRays::start_read`], on their way back.
+pub struct PendingCounts {
+    staging: wgpu::Buffer,
+    /// Set by the mapping's callback: whether the staging buffer could be mapped.
+    mapped: Arc<Mutex<Option<Result<(), String>>>>,
+    pixels: usize,
+}
+
+impl PendingCounts {
+    /// The counts, if they have arrived: checks the device once, never waits.
+    pub fn poll(&self, ctx: &GpuContext) -> Option<Result<Vec<RayCounts>, RenderError>> {
+        let _ = ctx.device.poll(wgpu::PollType::Poll);
+        self.take()
+    }
+
+    /// The counts, if the mapping has completed (the device polled by someone else).
+    pub fn take(&self) -> Option<Result<Vec<RayCounts>, RenderError>> {
+        let outcome = self.mapped.lock().ok()?.take()?;
+        Some(outcome.map_err(RenderError::Readback).and_then(|()| {
+            let counts = {
+                let view = self
+                    .staging
+                    .slice(..)
+                    .get_mapped_range()
+                    .map_err(|e| RenderError::Readback(e.to_string()))?;
+                let words: Vec<u32> = view
+                    .chunks_exact(4)
+                    .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                    .collect();
+                counts_of(&words, self.pixels)
+            };
+            self.staging.unmap();
+            Ok(counts)
+        }))
+    }
+}
+
+/// The first `pixels` triples of `words` as counts.
+fn counts_of(words: &[u32], pixels: usize) -> Vec<RayCounts> {
+    words
+        .chunks_exact(3)
+        .take(pixels)
+        .map(|w| RayCounts {
+            count: w[0],
+            box_tests: w[1],
+            triangle_tests: w[2],
+        })
+        .collect()
 }
 
 /// One shadow ray: `origin + t·dir` for `t_min <= t <= t_max`.
@@ -574,13 +673,5 @@ pub fn any_hit(
     );
     dispatch(ctx, &pipes.any_hit, &group, (x, y));
     let words = read_u32s(ctx, &results)?;
-    Ok(words
-        .chunks_exact(3)
-        .take(rays.len())
-        .map(|w| RayCounts {
-            count: w[0],
-            box_tests: w[1],
-            triangle_tests: w[2],
-        })
-        .collect())
+    Ok(counts_of(&words, rays.len()))
 }
