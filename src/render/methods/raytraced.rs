@@ -194,7 +194,7 @@ impl MethodState for Raytraced {
                 view.width,
                 view.height,
                 self.generations,
-            ));
+            )?);
             self.prev = None;
         }
         let targets = require(self.targets.as_ref(), "the raytraced buffers")?;

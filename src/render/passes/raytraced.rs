@@ -13,7 +13,7 @@ use super::trace::TraceScene;
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, compute_pipeline, pipeline_layout, shader_module, storage_entry, texture_entry,
-    uniform_buffer, uniform_entry, view_entry, GpuContext,
+    uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
 };
 use crate::scene::{Light, MAX_POLYGON_VERTICES};
 
@@ -206,10 +206,18 @@ pub struct RtTargets {
 }
 
 impl RtTargets {
-    pub fn new(ctx: &GpuContext, width: u32, height: u32, generation: u64) -> RtTargets {
+    /// The buffers of a `width`×`height` image; an error (before anything is made) when one of
+    /// them is larger than a storage binding of the device.
+    pub fn new(
+        ctx: &GpuContext,
+        width: u32,
+        height: u32,
+        generation: u64,
+    ) -> Result<RtTargets, RenderError> {
         let n = u64::from(width) * u64::from(height);
+        super::trace::fits(ctx, "raytraced's per-pixel buffers (16 bytes a pixel)", n * 16)?;
         let b = |label: &str| pixel_buffer(ctx, label, n);
-        RtTargets {
+        Ok(RtTargets {
             width,
             height,
             raw: b("Raytraced::raw"),
@@ -217,7 +225,7 @@ impl RtTargets {
             geo: [b("Raytraced::geo0"), b("Raytraced::geo1")],
             history: [b("Raytraced::history0"), b("Raytraced::history1")],
             generation,
-        }
+        })
     }
 }
 

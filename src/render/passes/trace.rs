@@ -236,7 +236,7 @@ pub fn max_points(ctx: &GpuContext) -> usize {
 }
 
 /// An error when a storage binding of `bytes` is larger than the device takes.
-fn fits(ctx: &GpuContext, what: &str, bytes: u64) -> Result<(), RenderError> {
+pub fn fits(ctx: &GpuContext, what: &str, bytes: u64) -> Result<(), RenderError> {
     let limits = ctx.device.limits();
     let max = limits
         .max_storage_buffer_binding_size
