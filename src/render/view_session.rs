@@ -540,10 +540,16 @@ impl ViewSession {
                 let tag = motion(self.session.scene(), request.width, request.height);
                 probes.push(ProbeRequest::Motion { tag, params });
             }
+            // The range view's count of the pixels it marks, for the lab's stats, with every
+            // picture of it.
+            if params.view == View::Range && redraw {
+                probes.push(ProbeRequest::Range { params });
+            }
             let fit_key = Some((key, params.view, params.channels));
             if params.mapping.auto
                 && params.view != View::Final
                 && params.view != View::Classes
+                && params.view != View::Range
                 && (side.fitted != fit_key
                     || view_key.reference != side.view.map_or(0, |v| v.reference))
             {
