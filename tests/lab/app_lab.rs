@@ -140,6 +140,7 @@ fn every_view_and_overlay_changes_the_viewport() {
         ("classes", View::Classes),
         ("error", View::Error),
         ("cost", View::Cost),
+        ("NaN / range", View::Range),
         ("|cx_o|", View::DBuffer),
         ("|cx_uv|", View::DBuffer),
         ("|cx_pv|", View::DBuffer),
