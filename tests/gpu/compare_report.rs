@@ -245,6 +245,19 @@ fn the_report_matches_the_written_files() {
     }
     assert!(row("hard").flip_mean > row("dbuffer").flip_mean, "{md}");
     assert!(row("dbuffer").flip_mean > 0.0);
+    // Every method's V and t in range at every pixel (invalid_px the frame's own count), so the
+    // report has no out-of-range line.
+    let invalid: Vec<(String, usize)> = r
+        .methods
+        .iter()
+        .map(|m| (m.method.clone(), m.invalid_px))
+        .filter(|(_, n)| *n > 0)
+        .collect();
+    assert!(invalid.is_empty(), "V or t out of range: {invalid:?}");
+    for (row, result) in r.methods.iter().zip(&comparison.results) {
+        assert_eq!(row.invalid_px, result.frame.out_of_range_pixels());
+    }
+    assert!(!md.contains("V or t out of range"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
