@@ -178,6 +178,8 @@ struct Side {
     fitted: Option<(RenderKey, View, [bool; 4])>,
     /// The pixel probed last.
     probed: Option<Probed>,
+    /// The serial of the frame whose range count (the NaN / range view's) came back last.
+    range_counted: Option<u64>,
 }
 
 impl Side {
@@ -343,6 +345,11 @@ impl ViewSession {
                 Some(p) => p.poll(ctx),
                 None => Vec::new(),
             };
+            for r in out.iter() {
+                if let ProbeRequest::Range { serial, .. } = r.request {
+                    side.range_counted = Some(serial);
+                }
+            }
         }
         if update.probes.iter().any(|p| !p.is_empty()) || self.probes_pending() {
             update.repaint.now = true;
@@ -540,10 +547,16 @@ impl ViewSession {
                 let tag = motion(self.session.scene(), request.width, request.height);
                 probes.push(ProbeRequest::Motion { tag, params });
             }
-            // The range view's count of the pixels it marks, for the lab's stats, with every
-            // picture of it.
-            if params.view == View::Range && redraw {
-                probes.push(ProbeRequest::Range { params });
+            // The range view's count of the pixels it marks, for the lab's stats: once a frame,
+            // asked again while the answer for the frame shown has not come back (a request
+            // made while one is in flight is skipped).
+            let counting = side
+                .targets
+                .probe
+                .as_ref()
+                .is_some_and(|p| p.range_pending());
+            if params.view == View::Range && !counting && side.range_counted != Some(serial) {
+                probes.push(ProbeRequest::Range { params, serial });
             }
             let fit_key = Some((key, params.view, params.channels));
             if params.mapping.auto

@@ -125,7 +125,7 @@ fn invalid_v_is_marked_and_counted_where_it_was_handed_in() {
                 request,
                 view: Some(params),
                 render: false,
-                probes: vec![ProbeRequest::Range { params }],
+                probes: vec![ProbeRequest::Range { params, serial: 7 }],
             }],
         )
         .unwrap_or_else(|e| panic!("{e}"));
@@ -166,10 +166,16 @@ fn invalid_v_is_marked_and_counted_where_it_was_handed_in() {
     );
     let probe = targets.probe.as_mut().expect("a probe");
     let answers = probe.wait(&ctx);
-    let counted: Vec<u64> = answers
+    let counted: Vec<(u64, u64)> = answers
         .iter()
-        .filter(|r| matches!(r.request, ProbeRequest::Range { .. }))
-        .map(|r| range_count(&r.values))
+        .filter_map(|r| match r.request {
+            ProbeRequest::Range { serial, .. } => Some((serial, range_count(&r.values))),
+            _ => None,
+        })
         .collect();
-    assert_eq!(counted, [bad.len() as u64], "the GPU's count");
+    assert_eq!(
+        counted,
+        [(7, bad.len() as u64)],
+        "the GPU's count, with its serial"
+    );
 }

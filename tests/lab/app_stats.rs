@@ -67,3 +67,25 @@ fn the_range_view_counts_its_marks_in_the_stats_panel() {
     h.get_by_label("V/t out of range");
     h.get_by_label("0 px");
 }
+
+#[test]
+fn the_range_count_is_the_shown_frames() {
+    // wedges on fusion-cross: a few V a rounding step below 0 (docs/method/metrics.md).
+    let mut h = support_lab::lab_sized(Some("fusion-cross"), 900.0, 720.0);
+    h.run();
+    h.get_by_label("wedges").click();
+    h.run();
+    h.get_by_label("NaN / range").click();
+    h.run();
+    let counted = step_until_gpu(&mut h, 100, |h| {
+        h.state()
+            .shown()
+            .is_some_and(|s| s.method.name() == "wedges")
+            && h.state().out_of_range_px(false).is_some()
+    });
+    assert!(counted, "the probe's count came back");
+    let frame = h.state_mut().read_shown(false).expect("a frame");
+    let gpu = h.state().out_of_range_px(false);
+    println!("wedges on fusion-cross: {gpu:?} px out of range");
+    assert_eq!(gpu, Some(frame.out_of_range_pixels() as u64));
+}

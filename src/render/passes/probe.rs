@@ -56,8 +56,9 @@ pub enum ProbeRequest {
     /// V over a grid of [`MOTION_GRID`]² pixels (NaN where no surface), whatever the view;
     /// `tag` comes back with the answer.
     Motion { tag: u64, params: ViewParams },
-    /// The pixels the range view marks, counted ([`range_count`] of the answer).
-    Range { params: ViewParams },
+    /// The pixels the range view marks, counted ([`range_count`] of the answer); `serial`
+    /// (the frame's, as the caller numbers them) comes back with the answer.
+    Range { params: ViewParams, serial: u64 },
 }
 
 /// The count a [`ProbeRequest::Range`] answer holds: its workgroups' counts added up.
@@ -75,7 +76,7 @@ impl ProbeRequest {
             ProbeRequest::Pixel { params, .. }
             | ProbeRequest::Fit { params }
             | ProbeRequest::Motion { params, .. }
-            | ProbeRequest::Range { params } => params,
+            | ProbeRequest::Range { params, .. } => params,
         }
     }
 
@@ -203,6 +204,11 @@ impl Probe {
         [&self.pixel, &self.fit, &self.motion, &self.range]
             .iter()
             .any(|s| s.pending.is_some())
+    }
+
+    /// Whether a range count is on its way (another asked for meanwhile would be skipped).
+    pub fn range_pending(&self) -> bool {
+        self.range.pending.is_some()
     }
 
     /// Ask for the staging buffers copied into by the last submit to be mapped.
