@@ -60,12 +60,14 @@ fn the_range_view_counts_its_marks_in_the_stats_panel() {
     assert_eq!(h.state().settings.view, View::Range);
     let counted = step_until_gpu(&mut h, 100, |h| h.state().out_of_range_px(false).is_some());
     assert!(counted, "the probe's count came back");
-    // The built-in D-buffer's V and t are in range everywhere (the GPU test of the range view
-    // spoils some pixels and counts them).
-    assert_eq!(h.state().out_of_range_px(false), Some(0));
+    // On lavapipe the built-in D-buffer's V and t are in range everywhere here (the GPU test of
+    // the range view spoils some pixels and counts them; the next test holds a count that is
+    // not 0 to the frame's).
+    let n = h.state().out_of_range_px(false).unwrap_or(u64::MAX);
+    assert_eq!(n, 0);
     h.run();
     h.get_by_label("V/t out of range");
-    h.get_by_label("0 px");
+    h.get_by_label(&format!("{n} px"));
 }
 
 #[test]
