@@ -4,11 +4,14 @@
 // under that position (or under the cursor in the light-maps view) — PIXEL_FLOATS floats. PROBE_FIT: the shown scalar at samples on
 // a grid, for the display range's auto-fit (NaN where there is none). PROBE_MOTION: V at the
 // same grid's pixels whatever the view (NaN where no surface), for the lab's motion meter.
+// PROBE_COUNT: the pixels whose V or t is out of range (range_flag), counted by each of the
+// dispatch's workgroups over every COUNT_GROUPS·64-th pixel, one count a workgroup.
 // #include shared/view_inputs.wgsl
 
 const PROBE_PIXEL: u32 = 0u;
 const PROBE_FIT: u32 = 1u;
 const PROBE_MOTION: u32 = 2u;
+const PROBE_COUNT: u32 = 3u;
 const PIXEL_FLOATS: u32 = 28u;
 const NAN_BITS: u32 = 0x7fc00000u;
 
@@ -152,8 +155,42 @@ fn fit_value(i: u32, grid: u32) -> f32 {
     }
 }
 
+// The workgroup's count of out-of-range pixels (PROBE_COUNT).
+var<workgroup> range_count: atomic<u32>;
+
+// Workgroup `group` of `groups` counts the out-of-range pixels among every (groups · 64)-th,
+// starting at its own, and writes its count to out[group].
+fn count_out_of_range(local: u32, group: u32, groups: u32) {
+    if local == 0u {
+        atomicStore(&range_count, 0u);
+    }
+    workgroupBarrier();
+    let size = textureDimensions(data);
+    let n = size.x * size.y;
+    var mine = 0u;
+    for (var i = group * 64u + local; i < n; i += groups * 64u) {
+        if range_flag(vec2<i32>(vec2<u32>(i % size.x, i / size.x))) {
+            mine += 1u;
+        }
+    }
+    atomicAdd(&range_count, mine);
+    workgroupBarrier();
+    if local == 0u {
+        out[group] = f32(atomicLoad(&range_count));
+    }
+}
+
 @compute @workgroup_size(64)
-fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn cs_main(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    if view.probe.z == PROBE_COUNT {
+        count_out_of_range(local, group.x, groups.x);
+        return;
+    }
     if view.probe.z == PROBE_PIXEL {
         if id.x == 0u {
             probe_pixel();

@@ -1,7 +1,8 @@
 // The view pass: what the lab's viewport shows of a frame, drawn on the GPU into the texture the
 // viewport samples (src/render/passes/view.rs). Views: the final image, V, t, the classes, |ΔV|
-// against the reference, and the shown method's light-space maps with channel isolation, each
-// scalar through a black/white range and a colour map. Its CPU twin is
+// against the reference, the pixels whose V or t is NaN, infinite or outside [0, 1], and the
+// shown method's light-space maps with channel isolation, each scalar through a black/white range
+// and a colour map. Its CPU twin is
 // src/render/passes/view_twin.rs; a test holds the two to agree on every view.
 // #include shared/fullscreen_vs.wgsl
 // #include shared/view_inputs.wgsl
@@ -65,9 +66,24 @@ fn mapped(v: f32) -> vec3<f32> {
     return colormap(normalise(v));
 }
 
+// The range view's marks, and its dimmed grey of the image under them (view_twin::RANGE_MARK,
+// view_twin::range_grey).
+const RANGE_MARK: vec3<f32> = vec3<f32>(1.0, 0.0, 1.0);
+
+fn range_view(p: vec2<i32>) -> vec3<f32> {
+    if range_flag(p) {
+        return RANGE_MARK;
+    }
+    let c = textureLoad(color_bytes, p, 0).rgb;
+    return vec3<f32>((c.r + c.g + c.b) * (0.4 / 3.0));
+}
+
 fn camera_view(p: vec2<i32>) -> vec3<f32> {
     if VIEW_KIND == VIEW_FINAL {
         return textureLoad(color_bytes, p, 0).rgb;
+    }
+    if VIEW_KIND == VIEW_RANGE {
+        return range_view(p);
     }
     if !is_hit(p) {
         return NO_DATA;

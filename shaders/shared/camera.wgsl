@@ -325,6 +325,24 @@ fn surface_normal(f: SurfaceOut) -> vec3<f32> {
     return n;
 }
 
+// t + 2 × branch code, as the data target holds it. A t the method returned outside [0, 1] must
+// read back outside it, for the range view and compare's count (render::frame_data::
+// out_of_range): the sum reads back the branch as round((sum - ½) / 2) and t as the rest, which
+// gives back t only within about half a unit of [0, 1], and rounds away an excess below one f32
+// step of the sum. Where the sum would read back a t in [0, 1], 1.25 (t above 1) or -0.25 (below
+// 0) is written in its place, the branch kept. A NaN or infinite t stays as it is. Every t in
+// [0, 1] is written as it was: no valid method's targets change.
+fn encode_t(t: f32, branch: f32) -> f32 {
+    let sum = t + 2.0 * branch;
+    let back = sum - 2.0 * clamp(round((sum - 0.5) / 2.0), 0.0, 3.0);
+    let reads_valid = back >= 0.0 && back <= 1.0;
+    let is_valid = t >= 0.0 && t <= 1.0;
+    if !is_valid && reads_valid {
+        return select(-0.25, 1.25, t > 1.0) + 2.0 * branch;
+    }
+    return sum;
+}
+
 // The targets of a surface point with normal n and the method's visibility there.
 fn shade(f: SurfaceOut, n: vec3<f32>, vis: Visibility) -> Targets {
     let l = normalize(camera.light_center - f.world);
@@ -335,7 +353,7 @@ fn shade(f: SurfaceOut, n: vec3<f32>, vis: Visibility) -> Targets {
     let shade = f.albedo * (camera.ambient + (1.0 - camera.ambient) * min(direct, vec3<f32>(1.0)));
     var out: Targets;
     out.color = vec4<f32>(shade, 1.0);
-    out.data = vec2<f32>(vis.v, vis.t + 2.0 * vis.branch);
+    out.data = vec2<f32>(vis.v, encode_t(vis.t, vis.branch));
     out.cost = method_cost;
     return out;
 }

@@ -42,6 +42,7 @@ const VIEW_ERROR: u32 = 4u;
 const VIEW_LIGHT_MAPS: u32 = 5u;
 const VIEW_COST: u32 = 6u;
 const VIEW_FLIP: u32 = 7u;
+const VIEW_RANGE: u32 = 8u;
 
 const COLORMAP_GRAY: u32 = 0u;
 const COLORMAP_HEAT: u32 = 1u;
@@ -70,6 +71,22 @@ fn is_hit(p: vec2<i32>) -> bool {
 
 fn branch_of(td: f32) -> f32 {
     return clamp(round((td - 0.5) / 2.0), 0.0, 3.0);
+}
+
+// Whether v is NaN, infinite, below 0 or above 1 (every comparison with a NaN is false).
+fn out_of_range(v: f32) -> bool {
+    return !(v >= 0.0 && v <= 1.0);
+}
+
+// Whether the surface at pixel p has a V or a t (decoded from t + 2·branch, which the camera
+// pass writes so that a t out of range reads back out of range) that is out of range: the range
+// view's mark, and what the probe's count counts (twin: render::frame_data::Frame::out_of_range).
+fn range_flag(p: vec2<i32>) -> bool {
+    if !is_hit(p) {
+        return false;
+    }
+    let d = textureLoad(data, p, 0).xy;
+    return out_of_range(d.x) || out_of_range(d.y - 2.0 * branch_of(d.y));
 }
 
 fn map_texel(t: u32, q: vec2<i32>) -> vec4<f32> {

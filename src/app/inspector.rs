@@ -14,6 +14,9 @@ use crate::render::passes::view_twin::branch_name;
 #[derive(Default)]
 pub struct Inspector {
     values: [Option<Probed>; 2],
+    /// Per slot, the pixels the range view marks (V or t out of range), as the probe counted
+    /// them on the GPU.
+    range_px: [Option<u64>; 2],
 }
 
 struct Probed {
@@ -29,6 +32,18 @@ impl Inspector {
         if let Some(v) = self.values.get_mut(slot) {
             *v = Some(Probed { x, y, view, values });
         }
+    }
+
+    /// A range count for `slot` arrived.
+    pub fn range_counted(&mut self, slot: usize, count: u64) {
+        if let Some(c) = self.range_px.get_mut(slot) {
+            *c = Some(count);
+        }
+    }
+
+    /// The last range count of `slot`.
+    pub fn range_px(&self, slot: usize) -> Option<u64> {
+        self.range_px.get(slot).copied().flatten()
     }
 
     /// The decoded values at (`x`, `y`) of `slot` in `view`, if they have arrived.
@@ -262,6 +277,23 @@ impl LabApp {
             },
         ));
         rows.push(("renders".into(), s.renders_total.to_string()));
+        if self.settings.view == View::Range {
+            // The range view's marks, counted on the GPU (the probe): NaN, infinite or out of
+            // [0, 1] V or t, per side shown.
+            let sides = if self.settings.split { 2 } else { 1 };
+            for slot in 0..sides {
+                let label = match (sides, slot) {
+                    (1, _) => "V/t out of range".to_string(),
+                    (_, 0) => "out of range, left".to_string(),
+                    _ => "out of range, right".to_string(),
+                };
+                let count = self
+                    .inspector
+                    .range_px(slot)
+                    .map_or_else(|| "counting…".to_string(), |n| format!("{n} px"));
+                rows.push((label, count));
+            }
+        }
         if let Some(core) = self.core.as_ref() {
             let scene = core.scene();
             let method = self.settings.method();

@@ -315,6 +315,12 @@ impl LabApp {
         self.window_bench.as_ref()?.outcome.as_ref()
     }
 
+    /// The pixels the NaN / range view marks on the main side (`split`: the right), as the GPU
+    /// last counted them; `None` before a count arrived.
+    pub fn out_of_range_px(&self, split: bool) -> Option<u64> {
+        self.inspector.range_px(usize::from(split))
+    }
+
     pub fn read_bytes(&self) -> Option<(u64, u64)> {
         self.stats.read_bytes()
     }

@@ -13,7 +13,7 @@ use super::viewport::HIGHLIGHT;
 use super::{LabApp, Selection};
 use crate::geometry::{FaceClass, VolumeMesh};
 use crate::render::passes::view::View;
-use crate::render::passes::view_twin::BRANCH_COLORS;
+use crate::render::passes::view_twin::{BRANCH_COLORS, RANGE_MARK};
 use crate::render::Method;
 use crate::scene::Light;
 
@@ -342,6 +342,17 @@ impl LabApp {
                 for ([r, g, b, _], name) in BRANCH_COLORS {
                     rows.push((Some(Color32::from_rgb(r, g, b)), name.to_string()));
                 }
+            }
+            View::Range => {
+                let [r, g, b, _] = RANGE_MARK;
+                let count = self
+                    .inspector
+                    .range_px(0)
+                    .map_or_else(String::new, |n| format!(": {n} px"));
+                rows.push((
+                    Some(Color32::from_rgb(r, g, b)),
+                    format!("V or t NaN, infinite or outside [0, 1]{count}"),
+                ));
             }
             View::Visibility | View::T | View::Error | View::Flip | View::DBuffer | View::Cost => {
                 if let Some(m) = self.settings.mapping(view) {

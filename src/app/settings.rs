@@ -153,7 +153,7 @@ impl Settings {
             View::DBuffer => Some(&self.dbuffer_map),
             View::Cost => Some(&self.cost_map),
             View::Flip => Some(&self.flip_map),
-            View::Final | View::Classes => None,
+            View::Final | View::Classes | View::Range => None,
         }
     }
 
@@ -165,7 +165,7 @@ impl Settings {
             View::DBuffer => Some(&mut self.dbuffer_map),
             View::Cost => Some(&mut self.cost_map),
             View::Flip => Some(&mut self.flip_map),
-            View::Final | View::Classes => None,
+            View::Final | View::Classes | View::Range => None,
         }
     }
 

@@ -10,7 +10,7 @@ use glam::Vec3;
 
 use super::camera::{self, Projector};
 use super::{LabApp, Level, Selection};
-use crate::render::passes::probe::ProbeRequest;
+use crate::render::passes::probe::{range_count, ProbeRequest};
 use crate::render::passes::view::{Mapping, View, ViewParams};
 use crate::render::passes::view_twin::NO_DATA;
 use crate::render::truth;
@@ -271,6 +271,13 @@ impl LabApp {
                         self.motion.arrived(tag, r.values);
                     }
                     ProbeRequest::Motion { .. } => {}
+                    ProbeRequest::Range { .. } => {
+                        let count = range_count(&r.values);
+                        if self.inspector.range_px(i) != Some(count) {
+                            ctx.request_repaint();
+                        }
+                        self.inspector.range_counted(i, count);
+                    }
                     ProbeRequest::Fit { params } => {
                         if let Some(m) = self.settings.mapping_mut(params.view) {
                             let before = *m;

@@ -131,6 +131,11 @@ pub struct MethodRow {
     /// `--orbit`: the plot of its temporal error per frame (`METHOD-temporal.png`).
     #[serde(default)]
     pub temporal_plot: Option<String>,
+    /// Pixels showing a surface whose V or t is NaN, infinite, below 0 or above 1 (what the
+    /// lab's range view marks; [`crate::render::Frame::out_of_range`]): 0 for a sound method,
+    /// and in reports older than the count.
+    #[serde(default)]
+    pub invalid_px: usize,
 }
 
 /// What a method's camera pass did per pixel that counts (its cost view: the unit its
@@ -407,7 +412,28 @@ impl Report {
                 n.method
             ));
         }
+        s.push_str(&self.invalid_line());
         s
+    }
+
+    /// Under the table, only when some method returned them: the pixels whose V or t is NaN,
+    /// infinite or outside [0, 1], per method (the scores count a non-finite V as the worst
+    /// error, |ΔV| = 1 and the wrong class; a finite V out of range as it is).
+    pub fn invalid_line(&self) -> String {
+        let bad: Vec<String> = self
+            .methods
+            .iter()
+            .filter(|m| m.invalid_px > 0)
+            .map(|m| format!("{} {} px", m.method, m.invalid_px))
+            .collect();
+        if bad.is_empty() {
+            return String::new();
+        }
+        format!(
+            "\n**V or t out of range** (NaN, infinite, below 0 or above 1; the lab's NaN / range \
+             view shows where): {}.\n",
+            bad.join(", ")
+        )
     }
 }
 
@@ -547,6 +573,7 @@ fn row(r: &MethodResult, mask: &[bool]) -> MethodRow {
         popping: None,
         popping_px: None,
         temporal_plot: None,
+        invalid_px: r.frame.out_of_range_pixels(),
     }
 }
 
@@ -698,5 +725,46 @@ fn encode_error(target: &Path, message: String) -> OutputError {
     OutputError::Encode {
         path: target.to_path_buf(),
         error: image::ImageError::IoError(io::Error::other(message)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A report as written before `invalid_px`: two method rows without it.
+    const OLDER: &str = r#"{
+        "scene": "s", "adapter": "a", "width": 4, "height": 4, "dbuffer_size": 64,
+        "vt": "exact", "samples": 8, "reference_rays_per_s": 1.0, "pixels": 16,
+        "methods": [
+            {"method": "reference", "class_mismatch_pct": 0.0, "mae": 0.0,
+             "penumbra_mae": 0.0, "p99": 0.0, "penumbra_pixels": 2, "gpu_ms": null,
+             "cpu_ms": 1.0, "wall_ms": 1.0, "image": "reference.png",
+             "visibility": "reference.exr", "heatmap": null},
+            {"method": "pcss", "class_mismatch_pct": 1.0, "mae": 0.1,
+             "penumbra_mae": 0.2, "p99": 0.3, "penumbra_pixels": 2, "gpu_ms": 0.5,
+             "cpu_ms": 0.0, "wall_ms": 1.0, "image": "pcss.png",
+             "visibility": "pcss.exr", "heatmap": "pcss-error.png"}
+        ]
+    }"#;
+
+    #[test]
+    fn older_reports_read_no_invalid_pixels_and_the_table_names_only_methods_with_some() {
+        let mut r: Report = serde_json::from_str(OLDER).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            r.methods.iter().map(|m| m.invalid_px).collect::<Vec<_>>(),
+            [0, 0]
+        );
+        assert!(r.invalid_line().is_empty());
+        assert!(!r.table().contains("out of range"));
+        r.methods[1].invalid_px = 3;
+        let line = r.invalid_line();
+        assert!(
+            line.contains("pcss 3 px") && !line.contains("reference"),
+            "{line}"
+        );
+        assert!(r.table().ends_with(&line) && r.markdown().contains(&line));
+        let json = serde_json::to_string(&r).unwrap_or_else(|e| panic!("{e}"));
+        assert!(json.contains("\"invalid_px\":3"), "{json}");
     }
 }

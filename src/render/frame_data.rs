@@ -79,4 +79,70 @@ impl Frame {
         let p = self.inverse_view_proj * ndc;
         Some(p.truncate() / p.w)
     }
+
+    /// Whether pixel `i` shows a surface whose V or t is out of range ([`out_of_range`]): what
+    /// the range view marks (`range_flag` of `shaders/shared/view_inputs.wgsl`). The camera pass
+    /// writes a t out of [0, 1] so that it reads back out of it (`encode_t` of
+    /// `shaders/shared/camera.wgsl`).
+    pub fn out_of_range(&self, i: usize) -> bool {
+        self.hit(i)
+            && (self.visibility.get(i).is_none_or(|&v| out_of_range(v)) || out_of_range(self.t(i)))
+    }
+
+    /// How many pixels [`Frame::out_of_range`] holds: `compare`'s `invalid_px`, the lab's count
+    /// under the range view.
+    pub fn out_of_range_pixels(&self) -> usize {
+        (0..self.len()).filter(|&i| self.out_of_range(i)).count()
+    }
+}
+
+/// Whether a V or a t is NaN, infinite, below 0 or above 1: no method may return one.
+pub fn out_of_range(v: f32) -> bool {
+    !(0.0..=1.0).contains(&v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4×1 frame of surfaces with V and t + 2 × branch as given.
+    fn frame(visibility: [f32; 4], t_branch: [f32; 4]) -> Frame {
+        Frame {
+            width: 4,
+            height: 1,
+            visibility: visibility.to_vec(),
+            t_branch: t_branch.to_vec(),
+            depth: vec![0.5; 4],
+            ..Frame::default()
+        }
+    }
+
+    #[test]
+    fn nan_infinite_and_out_of_range_values_are_counted() {
+        assert!(out_of_range(f32::NAN) && out_of_range(f32::INFINITY));
+        assert!(out_of_range(-1e-7) && out_of_range(1.0 + 1e-6));
+        assert!(!out_of_range(0.0) && !out_of_range(1.0));
+        // V: valid, NaN, 1.5, −∞; t valid everywhere (branch lit: 7 = t 1 + 2 × 3).
+        let f = frame([0.5, f32::NAN, 1.5, f32::NEG_INFINITY], [7.0; 4]);
+        let marked: Vec<bool> = (0..4).map(|i| f.out_of_range(i)).collect();
+        assert_eq!(marked, [false, true, true, true]);
+        assert_eq!(f.out_of_range_pixels(), 3);
+    }
+
+    #[test]
+    fn t_is_checked_after_taking_the_branch_off() {
+        // t 0.25 on the visible penumbra (4.25), t 1 lit (7): valid although above 1 as sums;
+        // t 1.25 on the hidden penumbra (3.25, camera.wgsl's stand-in for a t above 1), t NaN.
+        let f = frame([0.5; 4], [4.25, 7.0, 3.25, f32::NAN]);
+        assert_eq!(f.t(2), 1.25);
+        let marked: Vec<bool> = (0..4).map(|i| f.out_of_range(i)).collect();
+        assert_eq!(marked, [false, false, true, true]);
+    }
+
+    #[test]
+    fn pixels_without_a_surface_are_not_counted() {
+        let mut f = frame([f32::NAN; 4], [f32::NAN; 4]);
+        f.depth = vec![0.0, 0.0, 0.5, 0.0];
+        assert_eq!(f.out_of_range_pixels(), 1);
+    }
 }

@@ -186,6 +186,8 @@ struct Side {
     fitted: Option<(RenderKey, View, [bool; 4])>,
     /// The pixel probed last.
     probed: Option<Probed>,
+    /// The serial of the frame whose range count (the NaN / range view's) came back last.
+    range_counted: Option<u64>,
 }
 
 impl Side {
@@ -427,6 +429,11 @@ impl ViewSession {
                 Some(p) => p.poll(ctx),
                 None => Vec::new(),
             };
+            for r in out.iter() {
+                if let ProbeRequest::Range { serial, .. } = r.request {
+                    side.range_counted = Some(serial);
+                }
+            }
         }
         if update.probes.iter().any(|p| !p.is_empty()) || self.probes_pending() {
             update.repaint.now = true;
@@ -657,10 +664,22 @@ impl ViewSession {
                 let tag = motion(self.session.scene(), request.width, request.height);
                 probes.push(ProbeRequest::Motion { tag, params });
             }
+            // The range view's count of the pixels it marks, for the lab's stats: once a frame,
+            // asked again while the answer for the frame shown has not come back (a request
+            // made while one is in flight is skipped).
+            let counting = side
+                .targets
+                .probe
+                .as_ref()
+                .is_some_and(|p| p.range_pending());
+            if params.view == View::Range && !counting && side.range_counted != Some(serial) {
+                probes.push(ProbeRequest::Range { params, serial });
+            }
             let fit_key = Some((key, params.view, params.channels));
             if params.mapping.auto
                 && params.view != View::Final
                 && params.view != View::Classes
+                && params.view != View::Range
                 && (side.fitted != fit_key
                     || view_key.reference != side.view.map_or(0, |v| v.reference))
             {

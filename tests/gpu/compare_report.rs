@@ -245,6 +245,19 @@ fn the_report_matches_the_written_files() {
     }
     assert!(row("hard").flip_mean > row("dbuffer").flip_mean, "{md}");
     assert!(row("dbuffer").flip_mean > 0.0);
+    // invalid_px is the frame's own count, and no method returns a NaN or infinite V or t (a V a
+    // rounding step outside [0, 1] counts too, but depends on the device's arithmetic); the
+    // report has its out-of-range line exactly when some method has such pixels.
+    for (row, result) in r.methods.iter().zip(&comparison.results) {
+        let f = &result.frame;
+        assert_eq!(row.invalid_px, f.out_of_range_pixels(), "{}", row.method);
+        let non_finite = (0..f.len())
+            .filter(|&i| f.hit(i) && !(f.visibility[i].is_finite() && f.t(i).is_finite()))
+            .count();
+        assert_eq!(non_finite, 0, "{}: NaN or infinite V or t", row.method);
+    }
+    let any = r.methods.iter().any(|m| m.invalid_px > 0);
+    assert_eq!(md.contains("V or t out of range"), any);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

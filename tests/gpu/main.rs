@@ -14,6 +14,7 @@ mod hard_methods;
 mod linear_ssm;
 mod methods_accuracy;
 mod polygon_lights;
+mod range_view;
 mod raytraced;
 mod readback;
 mod reference_analytic;

@@ -10,7 +10,8 @@ use dbuffer::render::passes::extended_light_map::ElmUniforms;
 use dbuffer::render::passes::hybrid::HybridUniforms;
 use dbuffer::render::passes::planar::{PlanarUniforms, ReceiverUniform};
 use dbuffer::render::passes::probe::{
-    FIT_GRID, MOTION_GRID, PIXEL_FLOATS, PROBE_FIT, PROBE_MOTION, PROBE_PIXEL,
+    COUNT_GROUPS, FIT_GRID, MOTION_GRID, PIXEL_FLOATS, PROBE_COUNT, PROBE_FIT, PROBE_MOTION,
+    PROBE_PIXEL,
 };
 use dbuffer::render::passes::raytraced::RtUniforms;
 use dbuffer::render::passes::sample_maps::{SampleLight, SampleLights, MAX_LIGHTS};
@@ -605,6 +606,7 @@ fn codes_match_their_wgsl() {
                 View::DBuffer => "VIEW_LIGHT_MAPS",
                 View::Cost => "VIEW_COST",
                 View::Flip => "VIEW_FLIP",
+                View::Range => "VIEW_RANGE",
             };
             (name, f64::from(v.code()))
         })
@@ -627,6 +629,7 @@ fn codes_match_their_wgsl() {
     // The fit's samples come back in a few KiB (the lab reads back at most 4 KiB a frame).
     const { assert!(FIT_GRID * FIT_GRID * 4 <= 3 * 1024) };
     const { assert!(MOTION_GRID * MOTION_GRID * 4 <= 3 * 1024) };
+    const { assert!(COUNT_GROUPS * 4 <= 3 * 1024) };
     wgsl_layout::assert_consts(
         &source("passes/probe.wgsl"),
         "passes/probe.wgsl",
@@ -634,6 +637,7 @@ fn codes_match_their_wgsl() {
             ("PROBE_FIT", f64::from(PROBE_FIT)),
             ("PROBE_PIXEL", f64::from(PROBE_PIXEL)),
             ("PROBE_MOTION", f64::from(PROBE_MOTION)),
+            ("PROBE_COUNT", f64::from(PROBE_COUNT)),
         ],
     );
     assert_eq!(MAX_LIGHTS, 64, "SampleLights holds array<SampleLight, 64>");

@@ -181,6 +181,7 @@ fn every_view_agrees_with_its_twin() {
         ("classes", params(View::Classes, one, Mapping::unit())),
         ("V", params(View::Visibility, one, Mapping::unit())),
         ("error", params(View::Error, one, Mapping::error())),
+        ("NaN / range", params(View::Range, one, Mapping::unit())),
     ];
     for map in ColorMap::ALL {
         let m = Mapping {

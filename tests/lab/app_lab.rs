@@ -140,6 +140,7 @@ fn every_view_and_overlay_changes_the_viewport() {
         ("classes", View::Classes),
         ("error", View::Error),
         ("cost", View::Cost),
+        ("NaN / range", View::Range),
         ("|cx_o|", View::DBuffer),
         ("|cx_uv|", View::DBuffer),
         ("|cx_pv|", View::DBuffer),
@@ -330,8 +331,9 @@ fn overlay_snapshots_of_wedges_and_a_line_light() {
 fn dragging_the_light_moves_the_shadow() {
     let mut h = lab(None);
     h.run();
-    click(&mut h, "V");
+    // The light first: the V view's range controls push the Selection section further down.
     click(&mut h, "light");
+    click(&mut h, "V");
     assert_eq!(h.state().selection, Selection::Light);
     h.key_press(egui::Key::F);
     h.run();

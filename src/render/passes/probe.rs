@@ -5,7 +5,9 @@
 //! - [`ProbeRequest::Fit`]: the shown scalar at [`FIT_GRID`]² samples of a grid, for the display
 //!   range's auto-fit (2.3 KiB), instead of reading the whole image;
 //! - [`ProbeRequest::Motion`]: V at [`MOTION_GRID`]² pixels of a grid (2.3 KiB), for the lab's
-//!   motion meter while the light or a caster is dragged (`app::motion`).
+//!   motion meter while the light or a caster is dragged (`app::motion`);
+//! - [`ProbeRequest::Range`]: the pixels whose V or t is NaN, infinite or outside [0, 1] (what
+//!   the range view marks), counted on the GPU: [`COUNT_GROUPS`] partial counts (256 bytes).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -29,6 +31,10 @@ pub const FIT_GRID: u32 = 24;
 pub const PROBE_PIXEL: u32 = 0;
 pub const PROBE_FIT: u32 = 1;
 pub const PROBE_MOTION: u32 = 2;
+pub const PROBE_COUNT: u32 = 3;
+/// The range count runs this many workgroups of 64, each counting every `COUNT_GROUPS · 64`-th
+/// pixel; their counts come back and add up to the frame's.
+pub const COUNT_GROUPS: u32 = 64;
 /// The motion probe reads V at a grid of this many squared pixels (the fit's grid).
 pub const MOTION_GRID: u32 = FIT_GRID;
 
@@ -50,6 +56,18 @@ pub enum ProbeRequest {
     /// V over a grid of [`MOTION_GRID`]² pixels (NaN where no surface), whatever the view;
     /// `tag` comes back with the answer.
     Motion { tag: u64, params: ViewParams },
+    /// The pixels the range view marks, counted ([`range_count`] of the answer); `serial`
+    /// (the frame's, as the caller numbers them) comes back with the answer.
+    Range { params: ViewParams, serial: u64 },
+}
+
+/// The count a [`ProbeRequest::Range`] answer holds: its workgroups' counts added up.
+pub fn range_count(values: &[f32]) -> u64 {
+    values
+        .iter()
+        .filter(|v| v.is_finite() && **v > 0.0)
+        .map(|v| *v as u64)
+        .sum()
 }
 
 impl ProbeRequest {
@@ -57,7 +75,8 @@ impl ProbeRequest {
         match self {
             ProbeRequest::Pixel { params, .. }
             | ProbeRequest::Fit { params }
-            | ProbeRequest::Motion { params, .. } => params,
+            | ProbeRequest::Motion { params, .. }
+            | ProbeRequest::Range { params, .. } => params,
         }
     }
 
@@ -66,6 +85,7 @@ impl ProbeRequest {
             ProbeRequest::Pixel { .. } => PIXEL_FLOATS,
             ProbeRequest::Fit { .. } => (FIT_GRID * FIT_GRID) as usize,
             ProbeRequest::Motion { .. } => (MOTION_GRID * MOTION_GRID) as usize,
+            ProbeRequest::Range { .. } => COUNT_GROUPS as usize,
         }
     }
 }
@@ -161,6 +181,7 @@ pub struct Probe {
     pixel: Slot,
     fit: Slot,
     motion: Slot,
+    range: Slot,
     /// Answers that arrived and were not taken yet.
     arrived: Vec<ProbeResult>,
 }
@@ -172,6 +193,7 @@ impl Probe {
             pixel: Slot::new(ctx, &pass, PIXEL_FLOATS),
             fit: Slot::new(ctx, &pass, (FIT_GRID * FIT_GRID) as usize),
             motion: Slot::new(ctx, &pass, (MOTION_GRID * MOTION_GRID) as usize),
+            range: Slot::new(ctx, &pass, COUNT_GROUPS as usize),
             pass,
             arrived: Vec::new(),
         }
@@ -179,12 +201,24 @@ impl Probe {
 
     /// Whether an answer is still on its way.
     pub fn pending(&self) -> bool {
-        self.pixel.pending.is_some() || self.fit.pending.is_some() || self.motion.pending.is_some()
+        [&self.pixel, &self.fit, &self.motion, &self.range]
+            .iter()
+            .any(|s| s.pending.is_some())
+    }
+
+    /// Whether a range count is on its way (another asked for meanwhile would be skipped).
+    pub fn range_pending(&self) -> bool {
+        self.range.pending.is_some()
     }
 
     /// Ask for the staging buffers copied into by the last submit to be mapped.
     pub fn request_map(&mut self) {
-        for slot in [&mut self.pixel, &mut self.fit, &mut self.motion] {
+        for slot in [
+            &mut self.pixel,
+            &mut self.fit,
+            &mut self.motion,
+            &mut self.range,
+        ] {
             if slot.pending.is_some() && !slot.map_requested {
                 slot.map_requested = true;
                 let mapped = slot.mapped.clone();
@@ -200,7 +234,12 @@ impl Probe {
     /// Answers that have arrived, without waiting.
     pub fn poll(&mut self, ctx: &GpuContext) -> Vec<ProbeResult> {
         let _ = ctx.device.poll(wgpu::PollType::Poll);
-        for slot in [&mut self.pixel, &mut self.fit, &mut self.motion] {
+        for slot in [
+            &mut self.pixel,
+            &mut self.fit,
+            &mut self.motion,
+            &mut self.range,
+        ] {
             if !slot.mapped.load(Ordering::Acquire) {
                 continue;
             }
@@ -250,6 +289,7 @@ pub fn record(
         ProbeRequest::Pixel { .. } => &mut probe.pixel,
         ProbeRequest::Fit { .. } => &mut probe.fit,
         ProbeRequest::Motion { .. } => &mut probe.motion,
+        ProbeRequest::Range { .. } => &mut probe.range,
     };
     if slot.pending.is_some() {
         return 0;
@@ -279,6 +319,10 @@ pub fn record(
         ProbeRequest::Motion { .. } => {
             uniforms.probe = [0, 0, PROBE_MOTION, MOTION_GRID];
             (MOTION_GRID * MOTION_GRID).div_ceil(64)
+        }
+        ProbeRequest::Range { .. } => {
+            uniforms.probe = [0, 0, PROBE_COUNT, 0];
+            COUNT_GROUPS
         }
     };
     let group = slot.bindings.bind(ctx, &inputs, &uniforms);

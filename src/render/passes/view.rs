@@ -1,6 +1,6 @@
 //! The view pass (`shaders/passes/view.wgsl`): what the lab's viewport shows of a frame, drawn on
 //! the GPU into the texture the viewport samples — the final image, V, t, the classes, |ΔV|
-//! against the reference, or the shown method's light-space maps with channel isolation, each
+//! against the reference, the pixels whose V or t is out of range, or the shown method's light-space maps with channel isolation, each
 //! scalar through a [`Mapping`] (black/white range, colour map). The frame never leaves the GPU
 //! for it. Its CPU twin is [`super::view_twin`]; a test holds the two to agree on every view.
 
@@ -38,10 +38,13 @@ pub enum View {
     DBuffer,
     /// The shown method's work per pixel (taps, steps, listed edges, rays: its cost view).
     Cost,
+    /// The pixels whose V or t (decoded from t + 2 × branch) is NaN, infinite, below 0 or above
+    /// 1, in magenta over the image in dimmed grey ([`crate::render::Frame::out_of_range`]).
+    Range,
 }
 
 impl View {
-    pub const ALL: [View; 8] = [
+    pub const ALL: [View; 9] = [
         View::Final,
         View::Visibility,
         View::T,
@@ -50,6 +53,7 @@ impl View {
         View::Flip,
         View::DBuffer,
         View::Cost,
+        View::Range,
     ];
 
     pub fn name(self) -> &'static str {
@@ -62,6 +66,7 @@ impl View {
             View::Flip => "FLIP",
             View::DBuffer => "D-buffer",
             View::Cost => "cost",
+            View::Range => "NaN / range",
         }
     }
 
@@ -81,6 +86,10 @@ impl View {
                 "the method's work per pixel (its taps, steps, listed edges or rays; the \
                  inspector names the unit and the path taken)"
             }
+            View::Range => {
+                "in magenta the pixels whose V or t is NaN, infinite, below 0 or above 1 (what \
+                 the method returned, before any clamp); the rest of the image dimmed"
+            }
         }
     }
 
@@ -95,6 +104,7 @@ impl View {
             View::DBuffer => 5,
             View::Cost => 6,
             View::Flip => 7,
+            View::Range => 8,
         }
     }
 
@@ -421,7 +431,7 @@ impl ViewBindings {
 pub struct ViewPass {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
-    pipelines: [OnceLock<wgpu::RenderPipeline>; 8 * 3],
+    pipelines: [OnceLock<wgpu::RenderPipeline>; 9 * 3],
 }
 
 impl ViewPass {
@@ -442,10 +452,10 @@ impl ViewPass {
             View::Visibility | View::T | View::Error | View::Flip | View::DBuffer | View::Cost => {
                 params.mapping.map.code()
             }
-            View::Final | View::Classes => 0,
+            View::Final | View::Classes | View::Range => 0,
         };
         let slot = (params.view.code() * 3 + map) as usize;
-        self.pipelines[slot.min(23)].get_or_init(|| {
+        self.pipelines[slot.min(9 * 3 - 1)].get_or_init(|| {
             let constants = [
                 ("VIEW_KIND", f64::from(params.view.code())),
                 ("COLORMAP", f64::from(map)),

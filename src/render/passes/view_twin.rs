@@ -16,6 +16,16 @@ pub const BRANCH_COLORS: [([u8; 4], &str); 4] = [
     ([200, 196, 186, 255], "lit"),
 ];
 
+/// The range view's mark (`RANGE_MARK` of `shaders/passes/view.wgsl`): magenta.
+pub const RANGE_MARK: [u8; 4] = [255, 0, 255, 255];
+
+/// The range view's dimmed grey of an image pixel's sRGB bytes: 0.4 × the mean of its channels.
+pub fn range_grey(c: [u8; 4]) -> [u8; 4] {
+    let mean = (f32::from(c[0]) + f32::from(c[1]) + f32::from(c[2])) / 255.0;
+    let g = mean * (0.4 / 3.0);
+    rgb(g, g, g)
+}
+
 pub fn branch_name(code: u8) -> &'static str {
     BRANCH_COLORS
         .get(usize::from(code))
@@ -123,6 +133,13 @@ pub fn render(
     };
     match params.view {
         View::Final => camera(&color),
+        View::Range => camera(&|i| {
+            if frame.out_of_range(i) {
+                RANGE_MARK
+            } else {
+                range_grey(color(i))
+            }
+        }),
         View::Visibility | View::T | View::Cost => {
             camera(&|i| scalar(frame, reference, params.view, i).map_or(NO_DATA, |v| m.color(v)))
         }
