@@ -83,9 +83,11 @@ struct Visibility {
 };
 
 // The visible fraction of the unit disk beyond a chord at signed distance h from its centre.
+// Near h = 1 it is a difference of two nearly equal terms, which rounds a hair below 0: held at 0
+// (V is a fraction; the NaN / range view counts anything below).
 fn disk_segment_fraction(h_in: f32) -> f32 {
     let h = clamp(h_in, -1.0, 1.0);
-    return (acos(h) - h * sqrt(max(1.0 - h * h, 0.0))) / 3.14159265358979;
+    return max((acos(h) - h * sqrt(max(1.0 - h * h, 0.0))) / 3.14159265358979, 0.0);
 }
 
 // The area of the unit disk within dot(m1, p) >= h1 and dot(m2, p) >= h2 (m1, m2 unit), by

@@ -353,7 +353,8 @@ impl Outline2d {
 /// The visible fraction of the unit disk beyond a chord at signed distance `h` from its centre.
 pub fn disk_segment_fraction(h: f32) -> f32 {
     let h = h.clamp(-1.0, 1.0);
-    (h.acos() - h * (1.0 - h * h).max(0.0).sqrt()) / std::f32::consts::PI
+    // A difference of two nearly equal terms near h = 1: held at 0, as the camera pass holds it.
+    ((h.acos() - h * (1.0 - h * h).max(0.0).sqrt()) / std::f32::consts::PI).max(0.0)
 }
 
 /// The signed area of a polygon (counter-clockwise positive).
