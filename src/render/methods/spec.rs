@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+use super::user::UserMethod;
 use super::{AdapterNeeds, Knob, Knobs, MethodState, Quality, Sweep};
 use crate::render::GpuContext;
 use crate::scene::{LightKind, LineLight};
@@ -49,6 +50,9 @@ pub struct MethodSpec {
     pub history: Option<&'static Knob>,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
+    /// A user's method (`--method file:PATH.wgsl`): its file, drawn by the D-buffer's state
+    /// instead of `new`'s ([`MethodSpec::state`]).
+    pub user: Option<&'static UserMethod>,
 }
 
 /// What a method's cost view shows: the work its camera shader counted at each pixel with
@@ -130,7 +134,23 @@ impl MethodSpec {
             sweep: Sweep::UNSTATED,
             history: None,
             new,
+            user: None,
         }
+    }
+
+    /// Its per-scene GPU state: `new`'s, or for a user's method the D-buffer's drawing the
+    /// user's shader.
+    pub fn state(&'static self, ctx: &GpuContext) -> Box<dyn MethodState> {
+        match self.user {
+            Some(user) => Box::new(super::dbuffer::DBuffer::user(ctx, self, user)),
+            None => (self.new)(ctx),
+        }
+    }
+
+    /// A user's method, `user` its file.
+    pub const fn user(mut self, user: &'static UserMethod) -> Self {
+        self.user = Some(user);
+        self
     }
 
     /// `dbuffer study` sweeps its quality `axes` over `settings` (a value per axis each,
