@@ -149,10 +149,7 @@ impl MethodFlags {
             .into_iter()
             .map(|n| Method::parse_with(n, &self.user).map_err(anyhow::Error::msg))
             .collect::<Result<Vec<_>>>()?;
-        if let (Some(k), false) = (
-            self.user.first(),
-            methods.iter().any(|m| m.user().is_some()),
-        ) {
+        if let (Some(k), false) = (self.user.first(), methods.iter().any(|m| m.is_user())) {
             bail!(
                 "--knob {k}: --knob sets the knobs of a user's method, and no --method \
                  file:PATH.wgsl is named"

@@ -224,7 +224,7 @@ impl Plan {
     pub fn with(light: LightKind, caps: &Capabilities, named: &[Method]) -> Plan {
         let mut drawn = vec![truth::SOFT];
         let mut not_applicable = Vec::new();
-        let users = named.iter().filter(|m| m.user().is_some());
+        let users = named.iter().filter(|m| m.is_user());
         for &method in Method::all().iter().chain(users) {
             if truth::is_soft(method) {
                 continue;

@@ -83,6 +83,45 @@ fn the_example_renders_and_compare_scores_it() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+#[test]
+fn the_pcss_variant_takes_its_knobs() {
+    let dir = temp_dir("pcss-variant");
+    let method = "file:examples/methods/pcss_variant.wgsl";
+    let args = [
+        "render",
+        "fig7-concave",
+        "--size",
+        "32x32",
+        "--method",
+        method,
+        "--knob",
+        "taps=3",
+        "--knob",
+        "softness=1.5",
+    ];
+    let o = run(&args, &dir);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir.join("visibility.exr").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = run(
+        &[
+            "render",
+            "fig7-concave",
+            "--method",
+            method,
+            "--knob",
+            "taps=9",
+        ],
+        &dir,
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("--knob taps=9: taps takes 2 to 8 (examples/methods/pcss_variant.wgsl:8)"),
+        "{stderr}"
+    );
+    assert!(!dir.exists());
+}
+
 /// `render` with `--method file:FILE` (FILE holding `text`, or absent for `None`) and `extra`
 /// fails with exactly one line on stderr containing every needle, leaving no folder.
 fn refused(case: &str, text: Option<&str>, extra: &[&str], needles: &[&str]) {

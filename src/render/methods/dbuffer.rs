@@ -8,7 +8,6 @@
 //! with `shaders/methods/dbuffer.wgsl`. CPU twin: `geometry::DBufferTwin`.
 
 use super::dbuffer_light::DBufferLight;
-use super::user::{UserMethod, USER_BINDING};
 use super::{
     require, CameraGroup, Cost, LightMaps, MethodSpec, MethodState, Prepare, Quality, SharedMaps,
     Switch,
@@ -72,26 +71,16 @@ pub static HORIZON: Switch = Switch::new(
 const SHADER: &str = "methods/dbuffer.wgsl";
 
 /// A user's method's knobs of the D-buffer's own (its `params`).
-static USER_KNOBS: [&super::Knob; 2] = [&HORIZON.0, &CORNERS.0];
+pub static USER_KNOBS: [&super::Knob; 2] = [&HORIZON.0, &CORNERS.0];
 
-/// A user's method (`--method file:PATH.wgsl`, [`super::user`]): the D-buffer's state and
-/// needs, the user's shader `shader` (its key, `file:PATH`) under `name`.
-pub fn user_spec(
-    name: &'static str,
-    shader: &'static str,
-    user: &'static UserMethod,
-) -> MethodSpec {
-    MethodSpec::new(name, shader, |ctx| Box::new(DBuffer::new(ctx, false)))
-        .adapter(NEEDS)
-        .knobs(&USER_KNOBS)
-        .lights(super::AREA_LIGHTS)
-        .user(user)
-}
+/// Where a user's method's knobs are bound in group 1 (`user_params`, a `vec4<f32>`): after the
+/// D-buffer's six.
+pub const USER_BINDING: u32 = 6;
 
 /// The centre's shadow map (`|cx_o|`) and the volume channels: distance, `|cx_s|` and the lit
 /// side per texel (`passes::dbuffer_volumes::VolumeLayout`: `Rg32Float`, or `Rgba32Float` with
 /// the side for `V exact`).
-const NEEDS: super::AdapterNeeds = super::AdapterNeeds::formats(&[
+pub const NEEDS: super::AdapterNeeds = super::AdapterNeeds::formats(&[
     super::SHADOW_MAP[0],
     super::SHADOW_MAP[1],
     crate::render::adapter::FormatNeed::new(
@@ -130,8 +119,8 @@ pub struct DBuffer {
     params: wgpu::Buffer,
     /// The method's name, for an error about its light.
     name: &'static str,
-    /// A user's method: its file and the uniform of its knobs (at [`USER_BINDING`]).
-    user: Option<(&'static UserMethod, wgpu::Buffer)>,
+    /// A user's method: its knobs' values and their uniform (at [`USER_BINDING`]).
+    user: Option<(&'static [f32; 4], wgpu::Buffer)>,
 }
 
 /// What the camera bind group binds: the shadow map's and the volume channels' generations, and
@@ -174,19 +163,24 @@ impl DBuffer {
         }
     }
 
-    /// The paper's D-buffer drawn by a user's shader (`spec.shader`, its source in `user`), its
-    /// group 1 the D-buffer's and the knobs' uniform.
-    pub fn user(ctx: &GpuContext, spec: &'static MethodSpec, user: &'static UserMethod) -> DBuffer {
+    /// The paper's D-buffer drawn by a user's shader (`spec.shader`, its expanded `source`),
+    /// its group 1 the D-buffer's and the uniform of the knobs' `values`.
+    pub fn user(
+        ctx: &GpuContext,
+        spec: &'static MethodSpec,
+        source: &str,
+        values: &'static [f32; 4],
+    ) -> DBuffer {
         let mut entries = Self::entries();
         entries.push(uniform_entry(USER_BINDING, wgpu::ShaderStages::FRAGMENT));
         DBuffer {
             paper: DBufferLight::new(ctx, false),
-            camera: CameraGroup::from_source(ctx, spec.shader, &user.source, &entries),
+            camera: CameraGroup::from_source(ctx, spec.shader, source, &entries),
             uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "DBuffer::uniforms"),
             params: uniform_buffer::<DBufferParams>(&ctx.device, "DBuffer::params"),
             name: spec.name,
             user: Some((
-                user,
+                values,
                 uniform_buffer::<[f32; 4]>(&ctx.device, "DBuffer::user_params"),
             )),
         }
@@ -215,8 +209,8 @@ impl MethodState for DBuffer {
         let queue = &inputs.ctx.queue;
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        if let Some((user, buffer)) = &self.user {
-            queue.write_buffer(buffer, 0, bytemuck::bytes_of(&user.values));
+        if let Some((values, buffer)) = &self.user {
+            queue.write_buffer(buffer, 0, bytemuck::bytes_of(*values));
         }
         let bound = Bound {
             map: map.generation,

@@ -28,7 +28,7 @@ mod needs;
 mod screen_volumes;
 pub use needs::{AdapterNeeds, MAP_AND_SCREEN, SHADOW_MAP, SHADOW_MAPPED, STENCIL_VOLUMES};
 mod spec;
-pub use spec::{Bench, Cost, MethodSpec, SCREEN_COST};
+pub use spec::{Bench, Cost, MakeState, MethodSpec, SCREEN_COST};
 mod state;
 pub use state::{MethodState, SharedMaps};
 pub mod user;
@@ -275,9 +275,9 @@ impl Method {
         }
     }
 
-    /// A user's method's file, if it is one.
-    pub fn user(self) -> Option<&'static user::UserMethod> {
-        self.0.user
+    /// Whether it is a user's method (`file:PATH.wgsl`), made at run time.
+    pub fn is_user(self) -> bool {
+        self.0.user.is_some()
     }
 }
 

@@ -4,7 +4,6 @@
 
 use glam::Vec3;
 
-use super::user::UserMethod;
 use super::{AdapterNeeds, Knob, Knobs, MethodState, Quality, Sweep};
 use crate::render::GpuContext;
 use crate::scene::{LightKind, LineLight};
@@ -50,9 +49,15 @@ pub struct MethodSpec {
     pub history: Option<&'static Knob>,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
-    /// A user's method (`--method file:PATH.wgsl`): its file, drawn by the D-buffer's state
-    /// instead of `new`'s ([`MethodSpec::state`]).
-    pub user: Option<&'static UserMethod>,
+    /// A method made at run time (a user's file, `--method file:PATH.wgsl`): what makes its
+    /// state instead of `new` ([`MethodSpec::state`]).
+    pub user: Option<&'static dyn MakeState>,
+}
+
+/// What makes the state of a method known only at run time (a user's file, whose state holds
+/// its shader and knobs): `new` is a plain `fn` and cannot carry them.
+pub trait MakeState: Send + Sync {
+    fn state(&'static self, ctx: &GpuContext, spec: &'static MethodSpec) -> Box<dyn MethodState>;
 }
 
 /// What a method's cost view shows: the work its camera shader counted at each pixel with
@@ -138,17 +143,16 @@ impl MethodSpec {
         }
     }
 
-    /// Its per-scene GPU state: `new`'s, or for a user's method the D-buffer's drawing the
-    /// user's shader.
+    /// Its per-scene GPU state: `new`'s, or for a method made at run time its maker's.
     pub fn state(&'static self, ctx: &GpuContext) -> Box<dyn MethodState> {
         match self.user {
-            Some(user) => Box::new(super::dbuffer::DBuffer::user(ctx, self, user)),
+            Some(user) => user.state(ctx, self),
             None => (self.new)(ctx),
         }
     }
 
-    /// A user's method, `user` its file.
-    pub const fn user(mut self, user: &'static UserMethod) -> Self {
+    /// A method made at run time, `user` making its state.
+    pub const fn user(mut self, user: &'static dyn MakeState) -> Self {
         self.user = Some(user);
         self
     }

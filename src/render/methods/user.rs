@@ -17,7 +17,9 @@ use std::path::Path;
 
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
-use super::{Cost, Method};
+use super::dbuffer::{DBuffer, NEEDS, USER_BINDING, USER_KNOBS};
+use super::{Cost, MakeState, Method, MethodSpec, MethodState};
+use crate::render::GpuContext;
 use crate::shader_source::{self, Expanded};
 
 /// What `--method` takes before a user's file: `file:PATH.wgsl`.
@@ -28,9 +30,6 @@ pub const MAX_USER_KNOBS: usize = 4;
 
 /// The name of the code generated for a user's file, as its errors name it.
 pub const GENERATED: &str = "generated/user_method.wgsl";
-
-/// Where the user's knobs are bound in group 1: after the D-buffer's six.
-pub const USER_BINDING: u32 = 6;
 
 /// A knob of a user's file: `// knob: NAME MIN..MAX = DEFAULT` on line `line`.
 #[derive(Clone, Debug, PartialEq)]
@@ -52,6 +51,13 @@ pub struct UserMethod {
     pub values: [f32; MAX_USER_KNOBS],
     /// The shader: the file, its includes and the generated code.
     pub source: String,
+}
+
+/// Its state: the D-buffer's, drawing the file's shader with its knobs.
+impl MakeState for UserMethod {
+    fn state(&'static self, ctx: &GpuContext, spec: &'static MethodSpec) -> Box<dyn MethodState> {
+        Box::new(DBuffer::user(ctx, spec, &self.source, &self.values))
+    }
 }
 
 /// `file:PATH` → `PATH`, for any other name `None`.
@@ -82,7 +88,12 @@ pub fn load(path: &str, settings: &[String]) -> Result<Method, String> {
     let name: &'static str = Box::leak(method_name(path).into_boxed_str());
     let shader: &'static str = Box::leak(format!("{PREFIX}{path}").into_boxed_str());
     let about: &'static str = Box::leak(format!("a user's method from {path}").into_boxed_str());
-    let spec = super::dbuffer::user_spec(name, shader, user)
+    // The D-buffer's needs, knobs and lights: its state draws the file.
+    let spec = MethodSpec::new(name, shader, |ctx| Box::new(DBuffer::new(ctx, false)))
+        .adapter(NEEDS)
+        .knobs(&USER_KNOBS)
+        .lights(super::AREA_LIGHTS)
+        .user(user)
         .about(about)
         .cost(Cost::DEFAULT)
         .fixed_quality("a user's method has no quality settings the study knows");
@@ -114,7 +125,9 @@ pub fn parse_header(path: &str, text: &str) -> Result<Vec<UserKnob>, String> {
     let mut knobs: Vec<UserKnob> = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line_no = u32::try_from(i + 1).unwrap_or(u32::MAX);
-        let Some(rest) = line.trim_start().strip_prefix("// knob:") else {
+        // `// knob:`, with any white space after the slashes.
+        let header = line.trim_start().strip_prefix("//").map(str::trim_start);
+        let Some(rest) = header.and_then(|h| h.strip_prefix("knob:")) else {
             continue;
         };
         let bad = |why: &str| {
