@@ -435,6 +435,30 @@ mod tests {
     }
 
     #[test]
+    fn a_users_file_keeps_its_line_numbers_and_gets_the_generated_code() {
+        let main = "// #include shared/frame_tag.wgsl\nfn f() {}\nfn g() {}";
+        let out =
+            expand_user("my.wgsl", main, ("generated/x.wgsl", "const K = 1;\n")).expect("expands");
+        let g = out
+            .source
+            .lines()
+            .position(|l| l == "fn g() {}")
+            .expect("g")
+            + 1;
+        assert_eq!(out.origin(g as u32), Some(("my.wgsl", 3)));
+        let k = out
+            .source
+            .lines()
+            .position(|l| l == "const K = 1;")
+            .expect("K")
+            + 1;
+        assert_eq!(out.origin(k as u32), Some(("generated/x.wgsl", 1)));
+        assert!(out
+            .source
+            .contains(embedded("shared/frame_tag.wgsl").expect("embedded")));
+    }
+
+    #[test]
     fn embedded_shaders_load() {
         let src = load("passes/view.wgsl").expect("embedded shader expands");
         assert!(
