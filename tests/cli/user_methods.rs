@@ -194,6 +194,16 @@ fn a_file_that_cannot_be_a_method_is_refused_naming_its_line() {
         &[],
         &["FILE:4:9: the type of `a` is expected to be `f32`"],
     );
+    // naga's validator, after the parse: a function that may end without its return.
+    refused(
+        "validation",
+        Some(&format!(
+            "{HEAD}\nfn helper(a: f32) -> f32 {{\n    if a > 0.0 {{ return a; }}\n}}\n{VIS} {{\n    \
+             return plain(helper(x.x));\n}}\n"
+        )),
+        &[],
+        &["FILE:3:1: Function", "'helper' is invalid"],
+    );
     refused(
         "group",
         Some(&format!(
