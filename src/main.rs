@@ -99,8 +99,9 @@ enum Command {
         #[arg(long, default_value_t = 24)]
         frames: usize,
         /// Comma-separated methods to compare instead of every one, e.g. dbuffer,hard (the
-        /// reference always; reference-hard too with a hard method).
-        #[arg(long)]
+        /// reference always; reference-hard too with a hard method); a user's method is
+        /// file:PATH.wgsl. `--method` is the same flag.
+        #[arg(long, alias = "method")]
         methods: Option<String>,
         /// Which engine traces the reference's shadow rays: cpu (the independent oracle) or
         /// gpu (the same rays on the GPU's tracer); the --orbit frames use the CPU's.

@@ -165,6 +165,33 @@ pub fn load_mapped(name: &str) -> Result<Expanded, ShaderSourceError> {
     expand_named(name, main, embedded)
 }
 
+/// A user's shader `main` (its path as `name`), its includes taken from the embedded shaders
+/// and from `generated` (`(name, text)`: code made for it at run time, which it need not
+/// include: it is pasted at the end, after the file's own lines, so their numbers are kept).
+pub fn expand_user(
+    name: &str,
+    main: &str,
+    generated: (&str, &str),
+) -> Result<Expanded, ShaderSourceError> {
+    let (generated_name, generated_text) = generated;
+    let mut text = String::with_capacity(main.len() + 64);
+    text.push_str(main);
+    if !text.ends_with('\n') && !text.is_empty() {
+        text.push('\n');
+    }
+    text.push_str(INCLUDE_DIRECTIVE);
+    text.push(' ');
+    text.push_str(generated_name);
+    text.push('\n');
+    expand_with(name, &text, &mut |n| {
+        Ok(if n == generated_name {
+            Some(Cow::Owned(generated_text.to_owned()))
+        } else {
+            embedded(n).map(Cow::Borrowed)
+        })
+    })
+}
+
 type Lookup<'a, 's> = dyn FnMut(&str) -> Result<Option<Cow<'s, str>>, ShaderSourceError> + 'a;
 
 fn expand_with(
@@ -405,6 +432,30 @@ mod tests {
             Err(ShaderSourceError::BadName { .. })
         ));
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_users_file_keeps_its_line_numbers_and_gets_the_generated_code() {
+        let main = "// #include shared/frame_tag.wgsl\nfn f() {}\nfn g() {}";
+        let out =
+            expand_user("my.wgsl", main, ("generated/x.wgsl", "const K = 1;\n")).expect("expands");
+        let g = out
+            .source
+            .lines()
+            .position(|l| l == "fn g() {}")
+            .expect("g")
+            + 1;
+        assert_eq!(out.origin(g as u32), Some(("my.wgsl", 3)));
+        let k = out
+            .source
+            .lines()
+            .position(|l| l == "const K = 1;")
+            .expect("K")
+            + 1;
+        assert_eq!(out.origin(k as u32), Some(("generated/x.wgsl", 1)));
+        assert!(out
+            .source
+            .contains(embedded("shared/frame_tag.wgsl").expect("embedded")));
     }
 
     #[test]

@@ -81,7 +81,10 @@ pub fn error_lines(e: &anyhow::Error) -> String {
         out.push_str(": ");
     }
     out.push_str(&gpu_lines(&gpu.to_string()));
-    if matches!(gpu, RenderError::Gpu(_) | RenderError::Device(_)) {
+    // Another adapter is advice for what the adapter refused, not for a user's shader (its
+    // pipeline labelled `file:PATH`): that is the file's to fix.
+    let user_shader = gpu.to_string().contains("label = 'file:");
+    if matches!(gpu, RenderError::Gpu(_) | RenderError::Device(_)) && !user_shader {
         out.push_str(
             "  what you can do: try another backend or adapter (--backend vulkan|gl|metal|dx12; \
              `dbuffer adapters` lists them and what each method needs), and report this \
@@ -156,6 +159,17 @@ mod tests {
             !text.contains("\\n") && !text.contains("Caused by"),
             "{text}"
         );
+    }
+
+    /// A user's method's pipeline error is the file's to fix: no advice to change adapters.
+    #[test]
+    fn a_user_shader_error_gets_no_adapter_advice() {
+        let wgpu = "Validation Error\n\nCaused by:\n  In Device::create_render_pipeline, label = \
+                    'file:my.wgsl'\n    Error matching shader requirements\n";
+        let e = anyhow::Error::new(RenderError::Gpu(wgpu.into()));
+        let text = error_lines(&e);
+        assert!(text.contains("label = 'file:my.wgsl'"), "{text}");
+        assert!(!text.contains("what you can do"), "{text}");
     }
 
     /// Any other error stays one line, a newline in a name escaped (it cannot fake a line).

@@ -34,7 +34,7 @@ pub struct AnimateArgs<'a> {
 pub fn animate(args: &AnimateArgs) -> Result<()> {
     let (width, height) = parse_size(args.size)?;
     let orbit: Orbit = args.orbit.parse().map_err(anyhow::Error::msg)?;
-    let named = super::parse_method(args.method)?;
+    let named = super::parse_method(args.method, args.knobs)?;
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
     let mut spec = AnimationSpec {

@@ -48,7 +48,10 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     };
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
-    let only = args.methods.map(parse_methods).transpose()?;
+    let only = args
+        .methods
+        .map(|list| parse_methods(list, args.knobs))
+        .transpose()?;
     let engine: truth::Engine = args.reference.parse().map_err(anyhow::Error::msg)?;
     let mut knobs = args.knobs.knobs()?;
     if orbit.is_some() && knobs.given(&SAMPLES).is_none() {
@@ -93,7 +96,8 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let cannot_write = || format!("cannot write the report into {}", args.out.display());
     // Each method's files are written (into the folder's hidden staging folder) as it finishes,
     // and its frame let go of; everything is moved into place at the end, all or nothing.
-    let mut plan = compare::Plan::new(scene.light.kind(), &offline.ctx.caps);
+    let named = only.as_deref().unwrap_or_default();
+    let mut plan = compare::Plan::with(scene.light.kind(), &offline.ctx.caps, named);
     if let Some(only) = &only {
         plan = plan.only(only);
     }
@@ -176,14 +180,11 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     Ok(())
 }
 
-/// `--methods a,b,c`: each a method of the registry (an unknown name lists them).
-fn parse_methods(list: &str) -> Result<Vec<Method>> {
-    let methods = list
-        .split(',')
-        .map(str::trim)
-        .filter(|m| !m.is_empty())
-        .map(|m| m.parse::<Method>().map_err(anyhow::Error::msg))
-        .collect::<Result<Vec<_>>>()
+/// `--methods a,b,c`: each a method of the registry (an unknown name lists them) or a user's
+/// file (`file:PATH.wgsl`, with the `--knob` settings of `flags`).
+fn parse_methods(list: &str, flags: &MethodFlags) -> Result<Vec<Method>> {
+    let methods = flags
+        .methods(list.split(',').map(str::trim).filter(|m| !m.is_empty()))
         .context("--methods")?;
     if methods.is_empty() {
         anyhow::bail!("--methods expects a comma-separated list of methods, e.g. dbuffer,hard");

@@ -64,6 +64,9 @@ pub use compare::{compare, CompareArgs};
 pub struct MethodFlags {
     /// The knobs given on the command line, not yet checked against their ranges.
     pub given: Knobs,
+    /// `--knob NAME=VALUE`: a user's method's knobs (`--method file:PATH.wgsl`), checked when
+    /// its file is loaded.
+    pub user: Vec<String>,
 }
 
 impl clap::FromArgMatches for MethodFlags {
@@ -74,7 +77,11 @@ impl clap::FromArgMatches for MethodFlags {
                 given = given.with(k, v);
             }
         }
-        Ok(MethodFlags { given })
+        let user = m
+            .get_many::<String>(USER_KNOB)
+            .map(|v| v.cloned().collect())
+            .unwrap_or_default();
+        Ok(MethodFlags { given, user })
     }
 
     fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
@@ -85,6 +92,16 @@ impl clap::FromArgMatches for MethodFlags {
 
 impl clap::Args for MethodFlags {
     fn augment_args(mut cmd: clap::Command) -> clap::Command {
+        cmd = cmd.arg(
+            clap::Arg::new(USER_KNOB)
+                .long(USER_KNOB)
+                .value_name("NAME=VALUE")
+                .action(clap::ArgAction::Append)
+                .help(
+                    "A knob of a user's method (--method file:PATH.wgsl), as its file's header \
+                     declares it (`// knob: NAME MIN..MAX = DEFAULT`); repeatable",
+                ),
+        );
         for k in all_knobs() {
             let (min, max) = k.range();
             // Every kind takes the whole number it is kept as; a switch also takes true/false.
@@ -111,6 +128,9 @@ impl clap::Args for MethodFlags {
     }
 }
 
+/// The flag of a user's method's knobs.
+const USER_KNOB: &str = "knob";
+
 /// An on/off knob's value: a whole number (checked against 0 to 1 with the others), `true` or
 /// `false`.
 fn parse_switch(text: &str) -> Result<u32, std::num::ParseIntError> {
@@ -122,6 +142,22 @@ fn parse_switch(text: &str) -> Result<u32, std::num::ParseIntError> {
 }
 
 impl MethodFlags {
+    /// The methods `--method` or `--methods` named, `names`: a user's file loaded with the
+    /// `--knob` settings; `--knob` without a user's method among them is refused.
+    pub fn methods<'a>(&self, names: impl IntoIterator<Item = &'a str>) -> Result<Vec<Method>> {
+        let methods = names
+            .into_iter()
+            .map(|n| Method::parse_with(n, &self.user).map_err(anyhow::Error::msg))
+            .collect::<Result<Vec<_>>>()?;
+        if let (Some(k), false) = (self.user.first(), methods.iter().any(|m| m.is_user())) {
+            bail!(
+                "--knob {k}: --knob sets the knobs of a user's method, and no --method \
+                 file:PATH.wgsl is named"
+            );
+        }
+        Ok(methods)
+    }
+
     /// The knobs, each checked against its range (the message names the flag).
     pub fn knobs(&self) -> Result<Knobs> {
         self.given.validate().map_err(anyhow::Error::msg)?;
@@ -162,15 +198,15 @@ pub(crate) fn load_scene(name: &str, gltf_scene: Option<usize>) -> Result<scene:
     Ok(loaded.scene)
 }
 
-/// `--method` if given (an unknown name lists the methods).
-pub(crate) fn parse_method(name: Option<&str>) -> Result<Option<Method>> {
-    name.map(|n| n.parse::<Method>().map_err(anyhow::Error::msg))
-        .transpose()
+/// `--method` if given (an unknown name lists the methods; a user's file is loaded with the
+/// `--knob` settings of `flags`).
+pub(crate) fn parse_method(name: Option<&str>, flags: &MethodFlags) -> Result<Option<Method>> {
+    Ok(flags.methods(name)?.first().copied())
 }
 
 pub fn render(args: &RenderArgs) -> Result<()> {
     let (width, height) = parse_size(args.size)?;
-    let named = parse_method(args.method)?;
+    let named = parse_method(args.method, args.knobs)?;
     let vt: VtVariant = args.vt.parse().map_err(anyhow::Error::msg)?;
     check_dbuffer_size(args.dbuffer_size)?;
     let knobs = args.knobs.knobs()?;

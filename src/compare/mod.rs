@@ -216,9 +216,16 @@ pub struct Plan {
 impl Plan {
     /// The plan for a scene lit by `light` on a device with `caps`.
     pub fn new(light: LightKind, caps: &Capabilities) -> Plan {
+        Plan::with(light, caps, &[])
+    }
+
+    /// [`Plan::new`], with the users' methods (`--method file:PATH.wgsl`) among `named` after
+    /// the registry's.
+    pub fn with(light: LightKind, caps: &Capabilities, named: &[Method]) -> Plan {
         let mut drawn = vec![truth::SOFT];
         let mut not_applicable = Vec::new();
-        for &method in Method::all() {
+        let users = named.iter().filter(|m| m.is_user());
+        for &method in Method::all().iter().chain(users) {
             if truth::is_soft(method) {
                 continue;
             }

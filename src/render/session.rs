@@ -384,7 +384,7 @@ impl Session {
         let state = self
             .methods
             .entry(method)
-            .or_insert_with(|| (method.spec().new)(ctx));
+            .or_insert_with(|| method.spec().state(ctx));
         let reference = self
             .reference
             .as_ref()
@@ -620,7 +620,7 @@ impl Session {
         let state = self
             .methods
             .entry(method)
-            .or_insert_with(|| (method.spec().new)(ctx));
+            .or_insert_with(|| method.spec().state(ctx));
         let inputs = FrameInputs {
             ctx,
             scene: &self.scene,

@@ -14,3 +14,4 @@ mod large_frames;
 mod registry;
 mod render_cli;
 mod study_cli;
+mod user_methods;

@@ -30,6 +30,7 @@ mod snapshot_harness;
 mod study_resume;
 mod temporal;
 mod trace;
+mod user_methods;
 mod view_pass;
 mod view_session;
 mod wedges;

@@ -31,9 +31,27 @@ impl MethodPipeline {
         entries: &[wgpu::BindGroupLayoutEntry],
         two_draws: bool,
     ) -> Arc<MethodPipeline> {
+        Self::get_from(ctx, shader, None, entries, two_draws)
+    }
+
+    /// [`MethodPipeline::get`] with the shader's expanded `source` given (a user's file)
+    /// rather than read from the embedded shaders by name.
+    fn get_from(
+        ctx: &GpuContext,
+        shader: &'static str,
+        source: Option<&str>,
+        entries: &[wgpu::BindGroupLayoutEntry],
+        two_draws: bool,
+    ) -> Arc<MethodPipeline> {
         ctx.shared_named(shader, |device| MethodPipeline {
             shader,
-            module: crate::render::shader_module(device, shader),
+            module: match source {
+                Some(source) => device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(shader),
+                    source: wgpu::ShaderSource::Wgsl(source.into()),
+                }),
+                None => crate::render::shader_module(device, shader),
+            },
             layout: device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(shader),
                 entries,
@@ -100,6 +118,20 @@ impl CameraGroup {
     ) -> CameraGroup {
         CameraGroup {
             pipeline: MethodPipeline::get(ctx, shader, layout, false),
+            bound: None,
+        }
+    }
+
+    /// The camera pipelines of a user's shader: `name` its key (`file:PATH`), `source` its
+    /// expanded text.
+    pub fn from_source(
+        ctx: &GpuContext,
+        name: &'static str,
+        source: &str,
+        layout: &[wgpu::BindGroupLayoutEntry],
+    ) -> CameraGroup {
+        CameraGroup {
+            pipeline: MethodPipeline::get_from(ctx, name, Some(source), layout, false),
             bound: None,
         }
     }

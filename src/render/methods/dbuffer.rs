@@ -70,10 +70,17 @@ pub static HORIZON: Switch = Switch::new(
 
 const SHADER: &str = "methods/dbuffer.wgsl";
 
+/// A user's method's knobs of the D-buffer's own (its `params`).
+pub static USER_KNOBS: [&super::Knob; 2] = [&HORIZON.0, &CORNERS.0];
+
+/// Where a user's method's knobs are bound in group 1 (`user_params`, a `vec4<f32>`): after the
+/// D-buffer's six.
+pub const USER_BINDING: u32 = 6;
+
 /// The centre's shadow map (`|cx_o|`) and the volume channels: distance, `|cx_s|` and the lit
 /// side per texel (`passes::dbuffer_volumes::VolumeLayout`: `Rg32Float`, or `Rgba32Float` with
 /// the side for `V exact`).
-const NEEDS: super::AdapterNeeds = super::AdapterNeeds::formats(&[
+pub const NEEDS: super::AdapterNeeds = super::AdapterNeeds::formats(&[
     super::SHADOW_MAP[0],
     super::SHADOW_MAP[1],
     crate::render::adapter::FormatNeed::new(
@@ -110,6 +117,10 @@ pub struct DBuffer {
     camera: CameraGroup,
     uniforms: wgpu::Buffer,
     params: wgpu::Buffer,
+    /// The method's name, for an error about its light.
+    name: &'static str,
+    /// A user's method: its knobs' values and their uniform (at [`USER_BINDING`]).
+    user: Option<(&'static [f32; 4], wgpu::Buffer)>,
 }
 
 /// What the camera bind group binds: the shadow map's and the volume channels' generations, and
@@ -123,7 +134,8 @@ struct Bound {
 }
 
 impl DBuffer {
-    pub fn new(ctx: &GpuContext, center_silhouettes: bool) -> DBuffer {
+    /// Group 1 of `methods/dbuffer.wgsl`.
+    fn entries() -> Vec<wgpu::BindGroupLayoutEntry> {
         let mut entries = lookup_entries().to_vec();
         let fragment = wgpu::ShaderStages::FRAGMENT;
         let d2 = wgpu::TextureViewDimension::D2;
@@ -133,21 +145,50 @@ impl DBuffer {
             texture_entry(4, fragment, d2),
             texture_entry(5, fragment, d2),
         ]);
+        entries
+    }
+
+    pub fn new(ctx: &GpuContext, center_silhouettes: bool) -> DBuffer {
         DBuffer {
             paper: DBufferLight::new(ctx, center_silhouettes),
-            camera: CameraGroup::new(ctx, SHADER, &entries),
+            camera: CameraGroup::new(ctx, SHADER, &Self::entries()),
             uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "DBuffer::uniforms"),
             params: uniform_buffer::<DBufferParams>(&ctx.device, "DBuffer::params"),
+            name: if center_silhouettes {
+                DBUFFER_CENTER.name
+            } else {
+                DBUFFER.name
+            },
+            user: None,
+        }
+    }
+
+    /// The paper's D-buffer drawn by a user's shader (`spec.shader`, its expanded `source`),
+    /// its group 1 the D-buffer's and the uniform of the knobs' `values`.
+    pub fn user(
+        ctx: &GpuContext,
+        spec: &'static MethodSpec,
+        source: &str,
+        values: &'static [f32; 4],
+    ) -> DBuffer {
+        let mut entries = Self::entries();
+        entries.push(uniform_entry(USER_BINDING, wgpu::ShaderStages::FRAGMENT));
+        DBuffer {
+            paper: DBufferLight::new(ctx, false),
+            camera: CameraGroup::from_source(ctx, spec.shader, source, &entries),
+            uniforms: uniform_buffer::<ShadowUniforms>(&ctx.device, "DBuffer::uniforms"),
+            params: uniform_buffer::<DBufferParams>(&ctx.device, "DBuffer::params"),
+            name: spec.name,
+            user: Some((
+                values,
+                uniform_buffer::<[f32; 4]>(&ctx.device, "DBuffer::user_params"),
+            )),
         }
     }
 
     /// The method's name, for an error about its light.
     fn name(&self) -> &'static str {
-        if self.paper.center_silhouettes() {
-            DBUFFER_CENTER.name
-        } else {
-            DBUFFER.name
-        }
+        self.name
     }
 }
 
@@ -168,23 +209,26 @@ impl MethodState for DBuffer {
         let queue = &inputs.ctx.queue;
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        if let Some((values, buffer)) = &self.user {
+            queue.write_buffer(buffer, 0, bytemuck::bytes_of(*values));
+        }
         let bound = Bound {
             map: map.generation,
             volumes: v.generation,
             corners: self.paper.geometry_builds().0,
         };
-        self.camera.bind(
-            &inputs.ctx.device,
-            bound,
-            &[
-                buffer_entry(0, &self.uniforms),
-                view_entry(1, &map.distance.view),
-                buffer_entry(PARAMS_BINDING, &self.params),
-                view_entry(3, &v.umbra.view),
-                view_entry(4, &v.penumbra.view),
-                view_entry(5, self.paper.corners()),
-            ],
-        );
+        let mut entries = vec![
+            buffer_entry(0, &self.uniforms),
+            view_entry(1, &map.distance.view),
+            buffer_entry(PARAMS_BINDING, &self.params),
+            view_entry(3, &v.umbra.view),
+            view_entry(4, &v.penumbra.view),
+            view_entry(5, self.paper.corners()),
+        ];
+        if let Some((_, buffer)) = &self.user {
+            entries.push(buffer_entry(USER_BINDING, buffer));
+        }
+        self.camera.bind(&inputs.ctx.device, bound, &entries);
         Ok(&self.camera)
     }
 

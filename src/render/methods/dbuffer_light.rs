@@ -170,11 +170,6 @@ impl DBufferLight {
         Ok(())
     }
 
-    /// Its silhouettes and volumes are taken from the light's centre only (`dbuffer-center`).
-    pub fn center_silhouettes(&self) -> bool {
-        self.center_silhouettes
-    }
-
     /// The volume channels, once drawn.
     pub fn targets(&self) -> Option<&VolumeTargets> {
         self.volumes.targets()

@@ -28,9 +28,10 @@ mod needs;
 mod screen_volumes;
 pub use needs::{AdapterNeeds, MAP_AND_SCREEN, SHADOW_MAP, SHADOW_MAPPED, STENCIL_VOLUMES};
 mod spec;
-pub use spec::{Bench, Cost, MethodSpec, SCREEN_COST};
+pub use spec::{Bench, Cost, MakeState, MethodSpec, SCREEN_COST};
 mod state;
 pub use state::{MethodState, SharedMaps};
+pub mod user;
 
 // The vocabulary the passes share with the methods lives below both; the method modules name it
 // through here.
@@ -264,12 +265,34 @@ impl fmt::Display for Method {
     }
 }
 
+impl Method {
+    /// `s` as `--method` takes it: a method of [`ALL`] by name, or a user's file
+    /// (`file:PATH.wgsl`, [`user::load`]) with its knobs set by `user_knobs` (`NAME=VALUE`).
+    pub fn parse_with(s: &str, user_knobs: &[String]) -> Result<Method, String> {
+        match user::path_of(s) {
+            Some(path) => user::load(path, user_knobs),
+            None => s.parse(),
+        }
+    }
+
+    /// Whether it is a user's method (`file:PATH.wgsl`), made at run time.
+    pub fn is_user(self) -> bool {
+        self.0.user.is_some()
+    }
+}
+
 impl FromStr for Method {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if let Some(path) = user::path_of(s) {
+            return user::load(path, &[]);
+        }
         ALL.iter().copied().find(|m| m.name() == s).ok_or_else(|| {
             let names: Vec<&str> = ALL.iter().map(|m| m.name()).collect();
-            format!("unknown method '{s}': expected one of {}", names.join(", "))
+            format!(
+                "unknown method '{s}': expected one of {}, or file:PATH.wgsl",
+                names.join(", ")
+            )
         })
     }
 }

@@ -49,6 +49,15 @@ pub struct MethodSpec {
     pub history: Option<&'static Knob>,
     /// Its per-scene GPU state.
     pub new: fn(&GpuContext) -> Box<dyn MethodState>,
+    /// A method made at run time (a user's file, `--method file:PATH.wgsl`): what makes its
+    /// state instead of `new` ([`MethodSpec::state`]).
+    pub user: Option<&'static dyn MakeState>,
+}
+
+/// What makes the state of a method known only at run time (a user's file, whose state holds
+/// its shader and knobs): `new` is a plain `fn` and cannot carry them.
+pub trait MakeState: Send + Sync {
+    fn state(&'static self, ctx: &GpuContext, spec: &'static MethodSpec) -> Box<dyn MethodState>;
 }
 
 /// What a method's cost view shows: the work its camera shader counted at each pixel with
@@ -130,7 +139,22 @@ impl MethodSpec {
             sweep: Sweep::UNSTATED,
             history: None,
             new,
+            user: None,
         }
+    }
+
+    /// Its per-scene GPU state: `new`'s, or for a method made at run time its maker's.
+    pub fn state(&'static self, ctx: &GpuContext) -> Box<dyn MethodState> {
+        match self.user {
+            Some(user) => user.state(ctx, self),
+            None => (self.new)(ctx),
+        }
+    }
+
+    /// A method made at run time, `user` making its state.
+    pub const fn user(mut self, user: &'static dyn MakeState) -> Self {
+        self.user = Some(user);
+        self
     }
 
     /// `dbuffer study` sweeps its quality `axes` over `settings` (a value per axis each,

@@ -215,7 +215,11 @@ impl RtTargets {
         generation: u64,
     ) -> Result<RtTargets, RenderError> {
         let n = u64::from(width) * u64::from(height);
-        super::trace::fits(ctx, "raytraced's per-pixel buffers (16 bytes a pixel)", n * 16)?;
+        super::trace::fits(
+            ctx,
+            "raytraced's per-pixel buffers (16 bytes a pixel)",
+            n * 16,
+        )?;
         let b = |label: &str| pixel_buffer(ctx, label, n);
         Ok(RtTargets {
             width,

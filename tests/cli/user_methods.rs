@@ -1,0 +1,252 @@
+//! `--method file:PATH.wgsl` through the binary: the shipped example renders and `compare`
+//! scores it under its name; `--knob` sets a user's knob; a file that cannot be a method is
+//! refused before any work, in one line that names the user's file and the line in it, without
+//! the advice to change adapters.
+
+use std::path::{Path, PathBuf};
+
+use crate::support::{self as cli, dbuffer};
+
+const EXAMPLE: &str = "file:examples/methods/dbuffer_vt.wgsl";
+
+fn temp_dir(name: &str) -> PathBuf {
+    cli::temp_dir("user-methods", name)
+}
+
+/// `dbuffer ARGS --out OUT` from the crate's root (the example's path is relative to it).
+fn run(args: &[&str], out: &Path) -> std::process::Output {
+    dbuffer()
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .expect("the binary runs")
+}
+
+#[test]
+fn the_example_renders_and_compare_scores_it() {
+    let dir = temp_dir("render");
+    let o = run(
+        &[
+            "render",
+            "fig7-concave",
+            "--size",
+            "48x48",
+            "--method",
+            EXAMPLE,
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let meta = std::fs::read_to_string(dir.join("meta.json")).expect("meta.json");
+    assert!(meta.contains("\"user-dbuffer_vt\""), "{meta}");
+    assert!(dir.join("visibility.exr").is_file() && dir.join("image.png").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+
+    let dir = temp_dir("compare");
+    let o = run(
+        &[
+            "compare",
+            "fig7-concave",
+            "--size",
+            "48x48",
+            "--samples",
+            "32",
+            "--method",
+            EXAMPLE,
+        ],
+        &dir,
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let row = stdout
+        .lines()
+        .find(|l| l.starts_with("| user-dbuffer_vt |"))
+        .unwrap_or_else(|| panic!("no row for the user's method in:\n{stdout}"));
+    // Its MAE column is a number: the method was scored against the reference.
+    let mae: f64 = row
+        .split('|')
+        .nth(3)
+        .unwrap_or("")
+        .trim()
+        .parse()
+        .expect(row);
+    assert!((0.0..0.05).contains(&mae), "{row}");
+    for file in [
+        "user-dbuffer_vt.png",
+        "user-dbuffer_vt-visibility.exr",
+        "report.json",
+    ] {
+        assert!(dir.join(file).is_file(), "{file} missing");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_pcss_variant_takes_its_knobs() {
+    let dir = temp_dir("pcss-variant");
+    let method = "file:examples/methods/pcss_variant.wgsl";
+    let args = [
+        "render",
+        "fig7-concave",
+        "--size",
+        "32x32",
+        "--method",
+        method,
+        "--knob",
+        "taps=3",
+        "--knob",
+        "softness=1.5",
+    ];
+    let o = run(&args, &dir);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir.join("visibility.exr").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = run(
+        &[
+            "render",
+            "fig7-concave",
+            "--method",
+            method,
+            "--knob",
+            "taps=9",
+        ],
+        &dir,
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("--knob taps=9: taps takes 2 to 8 (examples/methods/pcss_variant.wgsl:8)"),
+        "{stderr}"
+    );
+    assert!(!dir.exists());
+}
+
+/// `render` with `--method file:FILE` (FILE holding `text`, or absent for `None`) and `extra`
+/// fails with exactly one line on stderr containing every needle, leaving no folder.
+fn refused(case: &str, text: Option<&str>, extra: &[&str], needles: &[&str]) {
+    let src = std::env::temp_dir().join(format!("dbuffer-user-src-{}-{case}", std::process::id()));
+    std::fs::create_dir_all(&src).expect("temp dir");
+    let file = src.join(format!("{case}.wgsl"));
+    if let Some(text) = text {
+        std::fs::write(&file, text).expect("write");
+    }
+    let method = format!("file:{}", file.display());
+    let dir = temp_dir(case);
+    let mut args = vec![
+        "render",
+        "fig7-concave",
+        "--size",
+        "16x16",
+        "--method",
+        &method,
+    ];
+    args.extend(extra);
+    let o = run(&args, &dir);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{case}: should fail");
+    assert_eq!(stderr.lines().count(), 1, "{case}: one line: {stderr}");
+    for needle in needles {
+        let needle = needle.replace("FILE", &file.display().to_string());
+        assert!(
+            stderr.contains(&needle),
+            "{case}: expected '{needle}' in: {stderr}"
+        );
+    }
+    assert!(!stderr.contains("adapter"), "{case}: {stderr}");
+    assert!(!dir.exists(), "{case}: left a folder behind");
+    let _ = std::fs::remove_dir_all(&src);
+}
+
+const HEAD: &str = "// #include shared/camera.wgsl\n";
+const VIS: &str =
+    "fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility";
+
+#[test]
+fn a_file_that_cannot_be_a_method_is_refused_naming_its_line() {
+    refused("missing", None, &[], &["cannot read the method file FILE"]);
+    refused(
+        "bad-knob",
+        Some(&format!(
+            "{HEAD}\n// knob: soft 0..1\n{VIS} {{ return plain(1.0); }}\n"
+        )),
+        &[],
+        &["FILE:3: bad knob header `// knob: soft 0..1`"],
+    );
+    refused(
+        "no-visibility",
+        Some(&format!("{HEAD}fn other() {{}}\n")),
+        &[],
+        &["FILE: defines no `fn method_visibility"],
+    );
+    // Lines 4, column 24 of the user's file, not of the expanded shader.
+    refused(
+        "parse",
+        Some(&format!("{HEAD}\n{VIS} {{\n    return plain(1.0) +;\n}}\n")),
+        &[],
+        &["FILE:4:24: expected expression"],
+    );
+    refused(
+        "types",
+        Some(&format!(
+            "{HEAD}\n{VIS} {{\n    let a: f32 = 1u;\n    return plain(a);\n}}\n"
+        )),
+        &[],
+        &["FILE:4:9: the type of `a` is expected to be `f32`"],
+    );
+    // naga's validator, after the parse: a function that may end without its return.
+    refused(
+        "validation",
+        Some(&format!(
+            "{HEAD}\nfn helper(a: f32) -> f32 {{\n    if a > 0.0 {{ return a; }}\n}}\n{VIS} {{\n    \
+             return plain(helper(x.x));\n}}\n"
+        )),
+        &[],
+        &["FILE:3:1: Function", "'helper' is invalid"],
+    );
+    refused(
+        "group",
+        Some(&format!(
+            "{HEAD}@group(1) @binding(7) var tex: texture_2d<f32>;\n{VIS} {{\n    \
+             return plain(textureLoad(tex, vec2<i32>(0), 0).x);\n}}\n"
+        )),
+        &[],
+        &["FILE:2: declares `tex` at @group(1) @binding(7)"],
+    );
+    let knob = format!("{HEAD}// knob: soft 0..1 = 0.5\n{VIS} {{ return plain(knob_soft()); }}\n");
+    refused(
+        "knob-range",
+        Some(&knob),
+        &["--knob", "soft=2"],
+        &["--knob soft=2: soft takes 0 to 1 (FILE:2), found 2"],
+    );
+    refused(
+        "knob-name",
+        Some(&knob),
+        &["--knob", "hard=0"],
+        &["has no knob `hard` (its knobs: soft)"],
+    );
+}
+
+#[test]
+fn knob_without_a_users_method_is_refused() {
+    let dir = temp_dir("knob-alone");
+    let o = run(
+        &[
+            "render",
+            "fig7-concave",
+            "--size",
+            "16x16",
+            "--knob",
+            "soft=0.5",
+        ],
+        &dir,
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        stderr.contains("--knob sets the knobs of a user's method"),
+        "{stderr}"
+    );
+    assert!(!dir.exists());
+}
