@@ -15,6 +15,7 @@
 // after two where all of it was hit (UE votes over a wave).
 // #include shared/camera.wgsl
 // #include shared/shadow_lookup.wgsl
+// #include shared/hash.wgsl
 
 // SmrtParams of src/render/methods/smrt.rs.
 struct SmrtParams {
@@ -65,17 +66,6 @@ fn evolve(seed: u32) -> u32 {
 
 fn unit_of(bits: u32) -> f32 {
     return f32(bits >> 8u) * 5.96046448e-8;
-}
-
-// A hash of two words (lowbias32 of their mix): the per-pixel scramble of the light samples.
-fn hash2(a: u32, b: u32) -> u32 {
-    var x = (a * 0x9e3779b9u) ^ (b + 0x7f4a7c15u);
-    x ^= x >> 16u;
-    x *= 0x7feb352du;
-    x ^= x >> 15u;
-    x *= 0x846ca68bu;
-    x ^= x >> 16u;
-    return x;
 }
 
 // Point i of the two-dimensional Sobol sequence, XOR-scrambled by `scramble`: every power-of-two

@@ -21,6 +21,7 @@
 // V when the denoiser is off.
 
 // #include shared/bvh_trace.wgsl
+// #include shared/hash.wgsl
 
 // RtUniforms of src/render/passes/raytraced.rs.
 struct RtUniforms {
@@ -130,17 +131,6 @@ fn rt_normal_of(code: f32) -> vec3<f32> {
         n = vec3<f32>((1.0 - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0)), n.z);
     }
     return normalize(n);
-}
-
-// A hash of two words (lowbias32 of their mix): the per-pixel scramble of the sequence.
-fn rt_hash(a: u32, b: u32) -> u32 {
-    var x = (a * 0x9e3779b9u) ^ (b + 0x7f4a7c15u);
-    x ^= x >> 16u;
-    x *= 0x7feb352du;
-    x ^= x >> 15u;
-    x *= 0x846ca68bu;
-    x ^= x >> 16u;
-    return x;
 }
 
 // Point k of the R2 sequence shifted by `seed`, in 0.32 fixed point so that it never loses
@@ -262,7 +252,7 @@ fn cs_trace(@builtin(global_invocation_id) id: vec3<u32>) {
         raw[i] = vec4<f32>(0.0);
         return;
     }
-    let seed = vec2<u32>(rt_hash(u32(p.x), u32(p.y)), rt_hash(u32(p.y) + 0x632be5abu, u32(p.x)));
+    let seed = vec2<u32>(hash2(u32(p.x), u32(p.y)), hash2(u32(p.y) + 0x632be5abu, u32(p.x)));
     var seen = 0u;
     var blocked = 0u;
     var hit_distance = 0.0;

@@ -14,41 +14,10 @@
 
 enable wgpu_ray_query;
 
-struct TraceUniforms {
-    // Pixels (cs_reference) or rays (cs_any_hit) to answer.
-    count: u32,
-    // The batch of samples: samples[first .. first + samples].
-    first: u32,
-    samples: u32,
-    // Invocations per row of the dispatch (its x workgroups × 64): item = x + y · row.
-    row: u32,
-    node_count: u32,
-    triangle_count: u32,
-    // cs_reference: the first pixel of this dispatch (it answers pixels offset .. count), so a
-    // batch of samples can be traced over the image in slices of pixels.
-    offset: u32,
-    _pad1: u32,
-};
+// #include shared/trace_io.wgsl
 
-// Hits closer than this fraction of the segment to either end are ignored (geometry::oracle's
-// SELF_EPS).
-const SELF_EPS: f32 = 1e-4;
-
-@group(0) @binding(0) var<uniform> trace_in: TraceUniforms;
 // The scene's triangles.
 @group(0) @binding(1) var scene_tlas: acceleration_structure;
-// cs_reference: one point per pixel, w = 1 where the light reaches a surface (0: V = 0).
-// cs_any_hit: two per ray, (origin, t_min) and (dir, t_max).
-@group(0) @binding(2) var<storage, read> items: array<vec4<f32>>;
-// The light's sample points, in the order they are taken.
-@group(0) @binding(3) var<storage, read> light_samples: array<vec4<f32>>;
-// Three per item, as passes/trace.wgsl lays them out: cs_reference's visible samples so far
-// (cs_any_hit's: 1 where the ray is blocked), then two counts this path leaves at 0.
-@group(0) @binding(4) var<storage, read_write> results: array<u32>;
-
-fn item_of(id: vec3<u32>) -> u32 {
-    return id.x + id.y * trace_in.row;
-}
 
 // Whether a triangle lies on origin + t·dir for some t in [t_min, t_max] (t in units of dir's
 // length, as the CPU's query takes it: dir is not normalized).
