@@ -77,6 +77,12 @@ pub fn config(args: &BenchArgs) -> Result<Config> {
             bail!("--methods expects a comma-separated list of methods, e.g. dbuffer,hard");
         }
         config.cases.retain(|c| wanted.contains(&c.method));
+        // A user's method (`file:PATH.wgsl`) is on no list of cases: timed at its defaults.
+        for &m in &wanted {
+            if !config.cases.iter().any(|c| c.method == m) {
+                config.cases.push(dbuffer::bench::Case::for_method(m));
+            }
+        }
     }
     config.validate()?;
     Ok(config)

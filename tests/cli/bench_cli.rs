@@ -188,3 +188,41 @@ fn bad_flags_are_refused_with_a_reason() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--fast"));
 }
+
+/// A user's method from a WGSL file is timed like a method of the registry: its row has a
+/// timing, beside the built-in it is drawn like.
+#[test]
+fn a_users_method_is_timed() {
+    let dir = temp_dir("user");
+    let out = dbuffer()
+        .args([
+            "bench",
+            "--scenes",
+            "table1-224",
+            "--sizes",
+            "32",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--max-triangles",
+            "1024",
+            "--methods",
+            "dbuffer,file:examples/methods/dbuffer_vt.wgsl",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let json = std::fs::read(dir.join("bench.json")).expect("bench.json written");
+    let report: Report = serde_json::from_slice(&json).expect("bench.json parses as a Report");
+    let user = report
+        .runs
+        .iter()
+        .find(|r| r.method == "user-dbuffer_vt")
+        .unwrap_or_else(|| panic!("no row for the user's method: {stderr}"));
+    assert!(user.timing.is_some(), "not timed: {:?}", user.error);
+    assert!(report.run("table1-224", 32, Method::DBUFFER).is_some());
+}
