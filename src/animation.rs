@@ -25,7 +25,7 @@ use std::sync::{Arc, Mutex};
 
 use crate::budget::MAX_ANIMATE_PIXELS;
 use crate::output::{self, OutputError, Staged};
-use crate::render::offline::render_in;
+use crate::render::offline::render_in_history;
 use crate::render::{FrameRequest, GpuContext, RenderError, Session};
 use crate::scene::orbit::{Orbit, Poses};
 use crate::scene::Scene;
@@ -223,11 +223,14 @@ impl Recording {
         let (light, camera) = self.poses.at(k, self.spec.frames);
         self.session.set_light(light);
         self.session.set_camera(camera);
-        let (frame, report) = render_in(
+        // A temporal method's history is filled at the first pose, as a still view's is, then
+        // carried from frame to frame as the light or camera moves.
+        let (frame, report) = render_in_history(
             ctx,
             &mut self.session,
             &self.spec.request,
             reference_progress,
+            k == 0,
         )?;
         let (w, h) = (self.spec.request.width, self.spec.request.height);
         let width = w as usize;

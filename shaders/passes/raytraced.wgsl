@@ -403,9 +403,11 @@ fn cs_spatial(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         pen = max(pen, penumbra_pixels(geo[j].xyz, history[j]));
     }
-    // Shrunk as samples accumulate: the noise left falls as 1/sqrt(samples).
+    // Shrunk as samples accumulate: the noise left falls as 1/sqrt(samples), and so does the
+    // footprint that still pays for its blur (the whole half width at one sample, a quarter of it
+    // at 16).
     let samples = h.z * f32(max(rt.rays, 1u));
-    let radius = min(rt.radius, pen * min(1.0, 2.0 / sqrt(samples)));
+    let radius = min(rt.radius, pen * min(1.0, 1.0 / sqrt(samples)));
     if radius < 0.75 {
         denoised[i] = vec4<f32>(h.x, work, 0.0, h.z);
         return;

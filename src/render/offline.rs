@@ -97,6 +97,18 @@ pub fn render_in(
     request: &FrameRequest,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(Frame, FrameReport), RenderError> {
+    render_in_history(ctx, session, request, progress, true)
+}
+
+/// [`render_in`], a temporal method's history begun afresh and filled first where `fresh` (a
+/// still view), or carried on from the session's frames before (the next frame of an animation).
+pub fn render_in_history(
+    ctx: &GpuContext,
+    session: &mut Session,
+    request: &FrameRequest,
+    progress: &mut dyn FnMut(usize, usize),
+    fresh: bool,
+) -> Result<(Frame, FrameReport), RenderError> {
     request.validate(ctx)?;
     let mut report = FrameReport::default();
     if let Some(cast) = session.cast_truth(ctx, request, progress)? {
@@ -106,7 +118,7 @@ pub fn render_in(
     }
     // A temporal method is shown as a still view is: after the frames of history its knob
     // states, drawn first from a history begun afresh.
-    if let Some(frames) = request.method.spec().history {
+    if let Some(frames) = request.method.spec().history.filter(|_| fresh) {
         session.reset_history(request.method);
         for _ in 0..request.knobs.get(frames) {
             session.draw(ctx, request)?;

@@ -208,3 +208,34 @@ fn a_moved_light_leaves_little_ghost() {
         m_fresh.mae
     );
 }
+
+/// A still view fills the history first (the stated frames, then the one read); the next frame
+/// of an animation carries it on: one frame drawn, its sequence continued, not begun again.
+#[test]
+fn a_still_view_fills_its_history_and_an_animation_carries_it() {
+    use dbuffer::render::offline::render_in_history;
+    let scene = scene::load("fig7-concave").unwrap_or_else(|e| panic!("{e}"));
+    let offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let mut session = offline.session(scene.clone());
+    let req = request(rt(), Knobs::default());
+    let mut quiet = |_: usize, _: usize| {};
+    let before = session.submits();
+    let (still, _) = render_in_history(&offline.ctx, &mut session, &req, &mut quiet, true)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let frames = u64::from(FRAMES.default);
+    assert_eq!(session.submits() - before, frames + 1, "a still view");
+    let Light::Area(mut disk) = scene.light else {
+        panic!("fig7-concave has a disk light")
+    };
+    disk.center += glam::Vec3::new(0.05, 0.0, 0.0);
+    session.set_light(Light::Area(disk));
+    let before = session.submits();
+    let (next, _) = render_in_history(&offline.ctx, &mut session, &req, &mut quiet, false)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        session.submits() - before,
+        1,
+        "the next frame of an animation"
+    );
+    assert!(next.visibility != still.visibility, "the light moved");
+}
