@@ -404,17 +404,13 @@ pub fn run_in(
             // A temporal method keeps its state from frame to frame (its history, as a user
             // moving the light or camera has it), filled at the first pose as a still view's is;
             // every other method is let go of after its frame.
-            let frame = match method.spec().history {
-                Some(history) => {
-                    if k == 0 {
-                        session.reset_history(method);
-                        for _ in 0..req.knobs.get(history) {
-                            session.draw(&offline.ctx, &req)?;
-                        }
-                    }
-                    session.frame(&offline.ctx, &req)?
+            let frame = if method.spec().history.is_some() {
+                if k == 0 {
+                    session.fill_history(&offline.ctx, &req)?;
                 }
-                None => session.frame_releasing(&offline.ctx, &req)?,
+                session.frame(&offline.ctx, &req)?
+            } else {
+                session.frame_releasing(&offline.ctx, &req)?
             };
             if i == 0 {
                 mask = facing

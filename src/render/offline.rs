@@ -118,11 +118,8 @@ pub fn render_in_history(
     }
     // A temporal method is shown as a still view is: after the frames of history its knob
     // states, drawn first from a history begun afresh.
-    if let Some(frames) = request.method.spec().history.filter(|_| fresh) {
-        session.reset_history(request.method);
-        for _ in 0..request.knobs.get(frames) {
-            session.draw(ctx, request)?;
-        }
+    if fresh {
+        session.fill_history(ctx, request)?;
     }
     let t = Instant::now();
     let frame = session.frame(ctx, request)?;

@@ -209,6 +209,24 @@ impl Session {
         }
     }
 
+    /// A still view of a temporal method (its spec's `history` knob): its history begun afresh
+    /// and filled with the frames of `request` the knob states, drawn without reading back, so
+    /// the next frame is the one a user standing still sees. Nothing for any other method.
+    pub fn fill_history(
+        &mut self,
+        ctx: &GpuContext,
+        request: &FrameRequest,
+    ) -> Result<(), RenderError> {
+        let Some(frames) = request.method.spec().history else {
+            return Ok(());
+        };
+        self.reset_history(request.method);
+        for _ in 0..request.knobs.get(frames) {
+            self.draw(ctx, request)?;
+        }
+        Ok(())
+    }
+
     /// Whether more frames of a still view would still change `method`'s image (a temporal
     /// method's history is filling): a window keeps drawing while it is.
     pub fn settling(&self, method: Method) -> bool {

@@ -345,22 +345,26 @@ fn results_buffer(ctx: &GpuContext, label: &str, words: u64) -> wgpu::Buffer {
     })
 }
 
-/// The `u32`s of `buffer`, copied to a staging buffer and read back (waits for the GPU).
-fn read_u32s(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u32>, RenderError> {
+/// A mappable copy of `buffer`, its copy submitted (not waited for).
+fn copy_to_staging(ctx: &GpuContext, buffer: &wgpu::Buffer, label: &str) -> wgpu::Buffer {
     let size = buffer.size();
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("Trace::staging"),
+        label: Some(label),
         size,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
     let mut encoder = ctx
         .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("Trace::read"),
-        });
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
     encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
     ctx.queue.submit([encoder.finish()]);
+    staging
+}
+
+/// The `u32`s of `buffer`, copied to a staging buffer and read back (waits for the GPU).
+fn read_u32s(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u32>, RenderError> {
+    let staging = copy_to_staging(ctx, buffer, "Trace::staging");
     let slice = staging.slice(..);
     slice.map_async(wgpu::MapMode::Read, |_| {});
     map_now(&ctx.device)?;
@@ -545,20 +549,7 @@ impl ReferenceRays {
     /// a staging buffer, submitted, its mapping requested) without waiting: the answer comes
     /// through [`PendingCounts::poll`] once the GPU has got there.
     pub fn start_read(&self, ctx: &GpuContext) -> PendingCounts {
-        let size = self.results.size();
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("ReferenceRays::staging"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("ReferenceRays::read"),
-            });
-        encoder.copy_buffer_to_buffer(&self.results, 0, &staging, 0, size);
-        ctx.queue.submit([encoder.finish()]);
+        let staging = copy_to_staging(ctx, &self.results, "ReferenceRays::staging");
         let mapped = Arc::new(Mutex::new(None));
         let sink = mapped.clone();
         staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
