@@ -207,6 +207,10 @@ enum Command {
         /// Image size, WxH, instead of the study's.
         #[arg(long)]
         size: Option<String>,
+        /// A knob of a user's method in --methods (file:PATH.wgsl), as its file's header
+        /// declares it; repeatable.
+        #[arg(long = "knob", value_name = "NAME=VALUE")]
+        knobs: Vec<String>,
     },
     /// List the built-in scenes, one a line.
     Scenes,
@@ -269,6 +273,7 @@ fn main() -> ExitCode {
             scenes,
             methods,
             size,
+            knobs,
         }) => cli::study::run(&cli::study::StudyArgs {
             file: file.as_deref(),
             out: &out,
@@ -276,6 +281,7 @@ fn main() -> ExitCode {
             scenes: scenes.as_deref(),
             methods: methods.as_deref(),
             size: size.as_deref(),
+            knobs: &knobs,
         }),
         Some(Command::Scenes) => cli::scenes(),
         Some(Command::Adapters) => cli::adapters::list(),

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use dbuffer::render::{GpuContext, Method};
+use dbuffer::render::GpuContext;
 use dbuffer::study::{self, Flow, Progress, StudySpec};
 
 /// The arguments of `dbuffer study`, as typed.
@@ -16,6 +16,8 @@ pub struct StudyArgs<'a> {
     pub scenes: Option<&'a str>,
     pub methods: Option<&'a str>,
     pub size: Option<&'a str>,
+    /// `--knob NAME=VALUE`: the knobs of a user's method among `methods`.
+    pub knobs: &'a [String],
 }
 
 fn items(list: &str) -> Vec<String> {
@@ -37,16 +39,27 @@ pub fn spec(args: &StudyArgs) -> Result<(StudySpec, Vec<dbuffer::scene::Scene>)>
         Some(path) => StudySpec::from_file(path, base)?,
         None => base,
     };
-    let methods = args
-        .methods
-        .map(|list| {
-            items(list)
-                .iter()
-                .map(|s| s.parse::<Method>().map_err(anyhow::Error::msg))
-                .collect::<Result<Vec<_>>>()
-        })
-        .transpose()
-        .context("--methods")?;
+    // A user's method (file:PATH.wgsl) is loaded with the --knob settings, as render takes it.
+    let flags = super::MethodFlags {
+        user: args.knobs.to_vec(),
+        ..super::MethodFlags::default()
+    };
+    let methods = match args.methods {
+        Some(list) => Some(
+            flags
+                .methods(items(list).iter().map(String::as_str))
+                .context("--methods")?,
+        ),
+        None => {
+            if let Some(k) = args.knobs.first() {
+                anyhow::bail!(
+                    "--knob {k}: --knob sets the knobs of a user's method, and --methods names \
+                     no file:PATH.wgsl"
+                );
+            }
+            None
+        }
+    };
     let size = args.size.map(super::parse_size).transpose()?;
     spec.narrow(args.scenes.map(items), methods, size)?;
     spec.check_budget()?;

@@ -141,10 +141,11 @@ pub fn scene_png(
             }
         }
         for m in order {
+            // A user's method (not in the registry) takes the colour after the registry's.
             let index = crate::render::Method::all()
                 .iter()
                 .position(|x| x.name() == m)
-                .unwrap_or(0);
+                .unwrap_or(crate::render::Method::all().len());
             let (r, g, b) = colour(index);
             let c = RGBColor(r, g, b);
             let mut line: Vec<(f64, f64)> = pts

@@ -234,6 +234,19 @@ impl Reference {
 }
 
 /// The frame request of a cell.
+/// A method in a cell's cache key: its name, and for a user's method the hash of its shader
+/// and its knob values, so an edited file or another `--knob` is measured again.
+fn method_key(method: Method) -> String {
+    match method.user_shader() {
+        Some((source, values)) => format!(
+            "{}#{:016x}{values:?}",
+            method.name(),
+            super::cache::hash_str(source)
+        ),
+        None => method.name().to_string(),
+    }
+}
+
 fn request(spec: &StudySpec, method: Method, setting: &Setting) -> FrameRequest {
     FrameRequest {
         width: spec.width,
@@ -304,7 +317,7 @@ pub fn run(
                 let req = request(spec, sweep.method, setting);
                 let cell_key = format!(
                     "{base}|{}|{:?}|{}",
-                    sweep.method.name(),
+                    method_key(sweep.method),
                     req.knobs,
                     req.dbuffer_size
                 );

@@ -381,7 +381,7 @@ impl StudySpec {
                         )?);
                     }
                     // Registry order, as every report lists methods.
-                    sweeps.sort_by_key(|s| Method::all().iter().position(|&m| m == s.method));
+                    sweeps.sort_by_key(|s| s.method.order());
                     spec.methods = sweeps;
                 }
                 other => {
@@ -424,8 +424,7 @@ impl StudySpec {
                 }
             }
             self.methods.retain(|s| methods.contains(&s.method));
-            self.methods
-                .sort_by_key(|s| Method::all().iter().position(|&m| m == s.method));
+            self.methods.sort_by_key(|s| s.method.order());
         }
         if let Some((w, h)) = size {
             self.width = w;

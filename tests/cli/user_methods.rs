@@ -250,3 +250,94 @@ fn knob_without_a_users_method_is_refused() {
     );
     assert!(!dir.exists());
 }
+
+/// `study --methods` takes a user's file like a registry name: the D-buffer example's cell
+/// scores as `dbuffer`'s at the same map size (its images are equal), a second run takes it
+/// from the cache, an edit to the file measures it again (its key holds the shader, not only
+/// the name), and `--knob` without a user's method is refused before any work.
+#[test]
+fn study_measures_a_users_file_and_remeasures_it_when_edited() {
+    let dir = temp_dir("study");
+    std::fs::create_dir_all(&dir).expect("temp dir made");
+    let file = dir.join("mine.wgsl");
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/methods/dbuffer_vt.wgsl");
+    let text = std::fs::read_to_string(&example).expect("the example is in the repository");
+    std::fs::write(&file, &text).expect("temp file written");
+    let out = dir.join("out");
+    let study = |extra: &[&str]| {
+        let o = dbuffer()
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args([
+                "study",
+                "--quick",
+                "--scenes",
+                "fig7-concave",
+                "--size",
+                "48x48",
+            ])
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .expect("the binary runs");
+        let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+        (o.status.success(), stderr)
+    };
+    let methods = format!("dbuffer,file:{}", file.display());
+    let read = || -> dbuffer::study::Study {
+        let json = std::fs::read(out.join("study.json")).expect("study.json written");
+        serde_json::from_slice(&json).expect("study.json parses")
+    };
+    let (ok, stderr) = study(&["--methods", &methods]);
+    assert!(ok, "{stderr}");
+    let first = read();
+    let cells = &first.scenes[0].cells;
+    let mine = cells
+        .iter()
+        .find(|c| c.method == "user-mine")
+        .unwrap_or_else(|| panic!("no user-mine cell: {cells:?}"));
+    let error = mine.error.expect("the user's cell has an error");
+    assert!(mine.cost.is_some(), "and a cost: {mine:?}");
+    let twin = cells
+        .iter()
+        .find(|c| c.method == "dbuffer" && c.map_size == mine.map_size)
+        .unwrap_or_else(|| panic!("a dbuffer cell at {}²: {cells:?}", mine.map_size));
+    let twin_error = twin.error.expect("dbuffer's cell has an error");
+    assert_eq!(
+        (
+            error.mae.to_bits(),
+            error.penumbra_mae.to_bits(),
+            error.p99.to_bits()
+        ),
+        (
+            twin_error.mae.to_bits(),
+            twin_error.penumbra_mae.to_bits(),
+            twin_error.p99.to_bits()
+        ),
+        "the D-buffer example scores as dbuffer: {error:?} against {twin_error:?}"
+    );
+    // Listed after the registry's methods.
+    assert_eq!(cells.last().map(|c| c.method.as_str()), Some("user-mine"));
+
+    let (ok, stderr) = study(&["--methods", &methods]);
+    assert!(ok, "{stderr}");
+    assert!(
+        read().scenes[0].cells.iter().all(|c| c.cached),
+        "all from the cache"
+    );
+
+    std::fs::write(&file, format!("{text}\n// edited\n")).expect("file edited");
+    let (ok, stderr) = study(&["--methods", &methods]);
+    assert!(ok, "{stderr}");
+    for c in &read().scenes[0].cells {
+        assert_eq!(
+            c.cached,
+            c.method != "user-mine",
+            "only the edited file's cell is measured again: {c:?}"
+        );
+    }
+
+    let (ok, stderr) = study(&["--methods", "dbuffer", "--knob", "k=1"]);
+    assert!(!ok, "--knob without a user's method is refused");
+    assert!(stderr.contains("--knob k=1"), "{stderr}");
+}

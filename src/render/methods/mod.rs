@@ -279,6 +279,18 @@ impl Method {
     pub fn is_user(self) -> bool {
         self.0.user.is_some()
     }
+
+    /// Its place in reports and plots: its index in [`ALL`]; a user's method comes after all
+    /// of them.
+    pub fn order(self) -> usize {
+        ALL.iter().position(|&m| m == self).unwrap_or(ALL.len())
+    }
+
+    /// A user's method's expanded shader and knob values (what decides its images beyond its
+    /// name, for caches keyed by the method); `None` for the registry's.
+    pub fn user_shader(self) -> Option<(&'static str, &'static [f32])> {
+        self.0.user.map(|u| u.shader_and_values())
+    }
 }
 
 impl FromStr for Method {

@@ -58,6 +58,10 @@ pub struct MethodSpec {
 /// its shader and knobs): `new` is a plain `fn` and cannot carry them.
 pub trait MakeState: Send + Sync {
     fn state(&'static self, ctx: &GpuContext, spec: &'static MethodSpec) -> Box<dyn MethodState>;
+
+    /// The expanded shader and the knob values that decide what it draws, beyond its name:
+    /// what a cache keyed by the method must hold so an edited file is measured again.
+    fn shader_and_values(&self) -> (&str, &[f32]);
 }
 
 /// What a method's cost view shows: the work its camera shader counted at each pixel with

@@ -58,6 +58,10 @@ impl MakeState for UserMethod {
     fn state(&'static self, ctx: &GpuContext, spec: &'static MethodSpec) -> Box<dyn MethodState> {
         Box::new(DBuffer::user(ctx, spec, &self.source, &self.values))
     }
+
+    fn shader_and_values(&self) -> (&str, &[f32]) {
+        (&self.source, &self.values)
+    }
 }
 
 /// `file:PATH` → `PATH`, for any other name `None`.
