@@ -243,6 +243,12 @@ enum Command {
     },
 }
 
+/// The watchdog's end of a command whose GPU work does not finish.
+fn stalled(message: &str) -> ! {
+    cli::print::err(format_args!("dbuffer: {message}\n"));
+    std::process::exit(1)
+}
+
 fn main() -> ExitCode {
     // Before any thread starts: no window system is asked anything by a headless command.
     dbuffer::render::adapter::quiet_device_select();
@@ -265,6 +271,11 @@ fn main() -> ExitCode {
     }
     cli::set_verbose(args.verbose);
     let verbose = args.verbose;
+    // A command line stops, naming the work, where the GPU never finishes it (a user's shader
+    // that does not end); the lab starts no watchdog.
+    if !matches!(args.command, Some(Command::Gui { .. }) | None) {
+        dbuffer::render::watchdog::start(stalled);
+    }
     let result = match args.command {
         Some(Command::Study {
             file,

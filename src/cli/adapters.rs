@@ -108,6 +108,7 @@ fn gpu_error<'a>(e: &'a (dyn std::error::Error + 'static)) -> Option<&'a RenderE
         RenderError::Gpu(_)
             | RenderError::Device(_)
             | RenderError::Lost(_)
+            | RenderError::Stalled(_)
             | RenderError::NoAdapter(_)
             | RenderError::Readback(_)
     )

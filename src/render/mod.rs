@@ -31,6 +31,7 @@ pub mod session;
 pub mod timer;
 pub mod truth;
 pub mod view_session;
+pub mod watchdog;
 
 pub use context::GpuContext;
 pub use frame::{Frame, FrameRequest, FrameTargets};
@@ -397,6 +398,12 @@ pub enum RenderError {
          start dbuffer again"
     )]
     Lost(String),
+    #[error(
+        "the GPU did not finish its work within {0} s (DBUFFER_GPU_TIMEOUT_S sets the limit): a \
+         shader that does not end, such as a loop whose exit is never taken, or a frame too \
+         large for this device; nothing more can be drawn with it"
+    )]
+    Stalled(f64),
     #[error("{0}")]
     Request(String),
     #[error("reading back from the GPU failed: {0}")]

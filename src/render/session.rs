@@ -585,6 +585,13 @@ impl Session {
         request: &FrameRequest,
         release: bool,
     ) -> Result<Frame, RenderError> {
+        let _watch = super::watchdog::watch(|| {
+            let m = request.method;
+            match m.user_path() {
+                Some(path) => format!("a frame of {} ({path})", m.name()),
+                None => format!("a frame of {}", m.name()),
+            }
+        });
         let mut own = std::mem::take(&mut self.own);
         let dbuffer = request
             .read_dbuffer

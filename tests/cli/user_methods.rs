@@ -341,3 +341,62 @@ fn study_measures_a_users_file_and_remeasures_it_when_edited() {
     assert!(!ok, "--knob without a user's method is refused");
     assert!(stderr.contains("--knob k=1"), "{stderr}");
 }
+
+/// A user's method whose loop never takes its exit: `render` does not hang. On a CPU rasteriser
+/// the loop runs as long as the driver lets it (lavapipe ends an invocation's loops after about
+/// 65,535 steps), so the frame takes seconds where it should take milliseconds; on a GPU the
+/// driver loses the device. Either way the command ends with one message naming the method's
+/// file, no advice to change adapters, and a failing status — here by the watchdog at the
+/// limit `DBUFFER_GPU_TIMEOUT_S` sets.
+#[test]
+fn a_shader_that_does_not_end_stops_render_with_a_message() {
+    let dir = temp_dir("endless");
+    std::fs::create_dir_all(&dir).expect("temp dir made");
+    let file = dir.join("endless.wgsl");
+    std::fs::write(
+        &file,
+        "// A loop whose exit is never taken.\n\
+         // #include shared/camera.wgsl\n\
+         fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {\n\
+         \x20   var acc = bitcast<u32>(x.y);\n\
+         \x20   loop {\n\
+         \x20       acc = acc * 1664525u + 1013904223u;\n\
+         \x20       if pixel.x < -1.0 {\n\
+         \x20           break;\n\
+         \x20       }\n\
+         \x20   }\n\
+         \x20   return plain(f32(acc & 255u) / 255.0);\n\
+         }\n",
+    )
+    .expect("temp file written");
+    let method = format!("file:{}", file.display());
+    let o = dbuffer()
+        .env("DBUFFER_GPU_TIMEOUT_S", "0.5")
+        .args([
+            "render",
+            "fig7-concave",
+            "--size",
+            "512x512",
+            "--method",
+            &method,
+        ])
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success(),
+        "a frame that does not end fails render"
+    );
+    assert!(
+        stderr.contains(&format!("a frame of user-endless ({})", file.display())),
+        "names the method and its file: {stderr}"
+    );
+    assert!(
+        stderr.contains("did not finish") || stderr.contains("device was lost"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("what you can do"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

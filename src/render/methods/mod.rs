@@ -286,6 +286,11 @@ impl Method {
         ALL.iter().position(|&m| m == self).unwrap_or(ALL.len())
     }
 
+    /// A user's method's file, as given; `None` for the registry's.
+    pub fn user_path(self) -> Option<&'static str> {
+        self.0.user.map(|u| u.path())
+    }
+
     /// A user's method's expanded shader and knob values (what decides its images beyond its
     /// name, for caches keyed by the method); `None` for the registry's.
     pub fn user_shader(self) -> Option<(&'static str, &'static [f32])> {

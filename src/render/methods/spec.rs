@@ -62,6 +62,9 @@ pub trait MakeState: Send + Sync {
     /// The expanded shader and the knob values that decide what it draws, beyond its name:
     /// what a cache keyed by the method must hold so an edited file is measured again.
     fn shader_and_values(&self) -> (&str, &[f32]);
+
+    /// The file it was loaded from, as given.
+    fn path(&self) -> &str;
 }
 
 /// What a method's cost view shows: the work its camera shader counted at each pixel with

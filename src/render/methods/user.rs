@@ -62,6 +62,10 @@ impl MakeState for UserMethod {
     fn shader_and_values(&self) -> (&str, &[f32]) {
         (&self.source, &self.values)
     }
+
+    fn path(&self) -> &str {
+        &self.path
+    }
 }
 
 /// `file:PATH` → `PATH`, for any other name `None`.
