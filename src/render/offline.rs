@@ -7,7 +7,7 @@ use std::time::Instant;
 use super::frame::{Frame, FrameRequest};
 use super::session::{dbuffer_of, Session};
 use super::truth;
-use super::{GpuContext, RenderError};
+use super::{GpuContext, Method, RenderError};
 use crate::geometry::GeometryStats;
 use crate::scene::Scene;
 
@@ -137,4 +137,46 @@ pub fn render_in_history(
     }
     report.clipped = session.light_view().clipped;
     Ok((frame, report))
+}
+
+/// Draw one small frame of `method` on `scene` on a device of its own, on a thread of its own,
+/// and wait at most `limit` for it: what the lab does before it switches to a user's method (or
+/// a new version of one), so a shader that loses its device, or never ends, loses that device
+/// and not the lab's, and the lab keeps drawing the method it had. A trial that does not end in
+/// time is left behind (its thread blocked on its own device).
+pub fn trial(method: Method, scene: &Scene, limit: std::time::Duration) -> Result<(), String> {
+    const SIDE: u32 = 64;
+    let (tx, rx) = std::sync::mpsc::channel();
+    let scene = scene.clone();
+    let spawned = std::thread::Builder::new()
+        .name("method-trial".into())
+        .spawn(move || {
+            let result = (|| {
+                let ctx = GpuContext::headless()?;
+                let mut session = Session::new(&ctx, scene);
+                let request = FrameRequest {
+                    width: SIDE,
+                    height: SIDE,
+                    dbuffer_size: 256,
+                    method,
+                    ..FrameRequest::default()
+                };
+                session.frame(&ctx, &request)?;
+                ctx.check_lost_after_poll()
+            })();
+            let _ = tx.send(result.map_err(|e| e.to_string()));
+        });
+    if let Err(e) = spawned {
+        return Err(format!("cannot start a trial of {}: {e}", method.name()));
+    }
+    let name = method.user_path().unwrap_or(method.name());
+    match rx.recv_timeout(limit) {
+        Ok(Ok(())) => Ok(()),
+        Ok(Err(e)) => Err(format!("{name}: a {SIDE}² trial frame failed: {e}")),
+        Err(_) => Err(format!(
+            "{name}: a {SIDE}² trial frame did not finish within {} s on a device of its own: a \
+             shader that does not end, such as a loop whose exit is never taken?",
+            limit.as_secs_f64()
+        )),
+    }
 }

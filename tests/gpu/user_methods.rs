@@ -109,3 +109,52 @@ fn a_knob_reaches_the_shader() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The lab's trial of a user's method before it switches to it: the example passes; a method
+/// whose frame does not end within the limit is refused with a message naming its file, on a
+/// device of its own, and the caller's device draws on. (On lavapipe a loop without exit ends
+/// after about 65,535 steps, so its 64² frame takes some 100 ms: a limit of 20 ms stands in for
+/// a frame that never ends.)
+#[test]
+fn a_trial_frame_refuses_a_method_that_does_not_finish_and_the_caller_draws_on() {
+    let scene = load("fig7-concave");
+    let good = Method::parse_with(&format!("file:{}", example("dbuffer_vt.wgsl")), &[])
+        .expect("the example loads");
+    let long = std::time::Duration::from_secs(60);
+    dbuffer::render::offline::trial(good, &scene, long).expect("the example's trial passes");
+
+    let dir = std::env::temp_dir().join(format!("dbuffer-trial-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir made");
+    let path = dir.join("endless.wgsl");
+    std::fs::write(
+        &path,
+        "// #include shared/camera.wgsl\n\
+         fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {\n\
+         \x20   var acc = bitcast<u32>(x.y);\n\
+         \x20   loop {\n\
+         \x20       acc = acc * 1664525u + 1013904223u;\n\
+         \x20       if pixel.x < -1.0 {\n\
+         \x20           break;\n\
+         \x20       }\n\
+         \x20   }\n\
+         \x20   return plain(f32(acc & 255u) / 255.0);\n\
+         }\n",
+    )
+    .expect("temp file written");
+    let endless = Method::parse_with(&format!("file:{}", path.display()), &[])
+        .expect("an endless loop is valid WGSL");
+    let short = std::time::Duration::from_millis(20);
+    let refused = dbuffer::render::offline::trial(endless, &scene, short)
+        .expect_err("a frame past the limit is refused");
+    assert!(
+        refused.starts_with(&format!(
+            "{}: a 64² trial frame did not finish",
+            path.display()
+        )),
+        "{refused}"
+    );
+    // The caller's own device is untouched.
+    let mut offline = Offline::new().expect("a device");
+    let frame = render(&mut offline, &scene, Method::DBUFFER, VtVariant::Smoothstep);
+    assert!(frame.visibility.iter().any(|&v| v > 0.5) && frame.visibility.iter().any(|&v| v < 0.5));
+}
