@@ -329,6 +329,22 @@ impl LabApp {
         self.core.as_ref().map(|c| c.ctx.adapter_description())
     }
 
+    /// Capture the next frame in the attached graphics debugger (Debug → Capture frame).
+    pub fn capture_frame(&mut self) {
+        let Some(core) = self.core.as_mut() else {
+            return;
+        };
+        core.capture_next_frame();
+        if crate::render::context::renderdoc_attached() == Some(false) {
+            self.set_status(
+                "Capture frame: no graphics debugger is attached, so nothing is captured; run \
+                 the lab under RenderDoc (renderdoccmd capture dbuffer gui, or its Launch \
+                 Application)",
+                Level::Warning,
+            );
+        }
+    }
+
     fn set_status(&mut self, text: impl Into<String>, level: Level) {
         self.status = (text.into(), level);
     }

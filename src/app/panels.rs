@@ -102,6 +102,15 @@ impl LabApp {
                         self.camera = self.doc.camera();
                     }
                 });
+                ui.menu_button("Debug", |ui| {
+                    let capture = ui.button("Capture frame").on_hover_text(
+                        "The next frame's GPU work, every pass under its name, in RenderDoc \
+                         when the lab runs under it (docs/guide/lab.md)",
+                    );
+                    if capture.clicked() {
+                        self.capture_frame();
+                    }
+                });
                 ui.menu_button("Help", |ui| {
                     ui.label(CONTROLS);
                 });

@@ -243,6 +243,13 @@ impl LabApp {
     /// What the view session did and what came back: statistics, probe answers (the
     /// inspector, the motion meter, the display range's fit), repaints, errors.
     fn take_update(&mut self, ctx: &egui::Context, update: Update) {
+        if update.captured && crate::render::context::renderdoc_attached() != Some(false) {
+            self.set_status(
+                "Captured one frame for the graphics debugger (RenderDoc lists it under its \
+                 captures)",
+                Level::Info,
+            );
+        }
         if update.methods_changed {
             // The Stats panel lists the passes of the methods shown, not those shown before.
             self.stats.gpu.clear();

@@ -238,3 +238,30 @@ impl GpuContext {
         self.device.limits().max_buffer_size
     }
 }
+
+/// Run `work` (recording and submitting GPU work on `device`) inside a capture of the attached
+/// graphics debugger (RenderDoc's `StartFrameCapture`/`EndFrameCapture`, Xcode's capture
+/// manager), waiting for the GPU before the capture ends; without a debugger attached wgpu does
+/// nothing. The passes appear under the debug groups the frame's timer names.
+pub fn capture<T>(device: &wgpu::Device, work: impl FnOnce() -> T) -> T {
+    // SAFETY: wgpu's conditions: no other capture is active (this is the only place dbuffer
+    // starts one, and `work` records and submits frames, never starting one) and one is active
+    // when it is stopped (started just above, on the same device).
+    unsafe { device.start_graphics_debugger_capture() };
+    let out = work();
+    let _ = device.poll(wgpu::PollType::Wait {
+        submission_index: None,
+        timeout: Some(super::readback::gpu_timeout()),
+    });
+    // SAFETY: the capture started above is the one active.
+    unsafe { device.stop_graphics_debugger_capture() };
+    out
+}
+
+/// Whether RenderDoc's library is loaded in this process (Linux: `/proc/self/maps`), which is
+/// how wgpu finds it; `None` where that cannot be told.
+pub fn renderdoc_attached() -> Option<bool> {
+    std::fs::read_to_string("/proc/self/maps")
+        .ok()
+        .map(|maps| maps.contains("librenderdoc"))
+}

@@ -145,6 +145,9 @@ pub struct Update {
     /// Probe answers that arrived, per side.
     pub probes: [Vec<ProbeResult>; 2],
     pub repaint: Repaint,
+    /// This advance's work ran inside a graphics-debugger capture
+    /// ([`ViewSession::capture_next_frame`]).
+    pub captured: bool,
 }
 
 /// A FLIP map, as the thread that computed it hands it over.
@@ -224,9 +227,18 @@ pub struct ViewSession {
     /// of earlier submits are another method's.
     methods: [Option<Method>; 2],
     timed_from: u64,
+    /// The next advance's work goes inside a graphics-debugger capture.
+    capture_next: bool,
 }
 
 impl ViewSession {
+    /// Capture the next advance's GPU work (every pass of the frame, under the debug groups
+    /// the timer names) in the attached graphics debugger: RenderDoc when the lab runs under
+    /// it; without one, nothing is captured.
+    pub fn capture_next_frame(&mut self) {
+        self.capture_next = true;
+    }
+
     /// A view of `scene` on `ctx`'s device.
     pub fn new(ctx: GpuContext, scene: Scene) -> ViewSession {
         let session = Session::new(&ctx, scene);
@@ -245,6 +257,7 @@ impl ViewSession {
             serial: 0,
             methods: [None; 2],
             timed_from: 0,
+            capture_next: false,
         }
     }
 
@@ -403,7 +416,23 @@ impl ViewSession {
         };
         let soft = self.feed_soft_truth(&base, &methods, params.view, &mut update);
         let hard = self.feed_hard_truth(&base, &methods, &mut update);
-        self.record(intent, base, methods, soft, hard, motion, &mut update);
+        if std::mem::take(&mut self.capture_next) {
+            // A full frame (not only its colour), redrawn even where nothing changed.
+            let full = FrameRequest {
+                colour_only: false,
+                ..base
+            };
+            for side in &mut self.sides {
+                side.clear();
+            }
+            let device = self.ctx.device.clone();
+            super::context::capture(&device, || {
+                self.record(intent, full, methods, soft, hard, motion, &mut update)
+            });
+            update.captured = true;
+        } else {
+            self.record(intent, base, methods, soft, hard, motion, &mut update);
+        }
         // The GPU engine's next batch goes after this frame's work on the queue.
         self.gpu_worker.submit_next(&self.ctx);
         if let (View::Flip, Some(serial)) = (params.view, soft) {

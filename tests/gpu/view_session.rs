@@ -212,3 +212,32 @@ fn timings_of_a_method_no_longer_shown_are_never_handed_back() {
         let _ = v.ctx.device.poll(wgpu::PollType::wait_indefinitely());
     }
 }
+
+/// Debug → Capture frame: the next advance draws the whole frame again (V and t too, not only
+/// the colour a still view keeps) inside a graphics-debugger capture, and says so; the one
+/// after is as before. Without RenderDoc attached wgpu's capture calls do nothing, so this
+/// holds what the lab does around them, not what RenderDoc records.
+#[test]
+fn capture_next_frame_redraws_the_frame_inside_a_capture_once() {
+    let mut v = view_session();
+    let still = intent(Method::DBUFFER, View::Final);
+    let first = v.advance(&still, &mut no_motion);
+    assert!(first.errors.is_empty(), "{:?}", first.errors);
+    assert!(!first.captured);
+    let idle = v.advance(&still, &mut no_motion);
+    assert_eq!(
+        idle.submitted.map_or(0, |s| s.renders),
+        0,
+        "nothing changed"
+    );
+    v.capture_next_frame();
+    let captured = v.advance(&still, &mut no_motion);
+    assert!(captured.errors.is_empty(), "{:?}", captured.errors);
+    assert!(captured.captured);
+    assert!(
+        captured.submitted.map_or(0, |s| s.renders) >= 1,
+        "the captured advance draws the frame again"
+    );
+    let after = v.advance(&still, &mut no_motion);
+    assert!(!after.captured, "one frame only");
+}
