@@ -14,4 +14,5 @@ mod large_frames;
 mod registry;
 mod render_cli;
 mod study_cli;
+mod tutorial;
 mod user_methods;
