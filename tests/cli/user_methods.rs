@@ -400,3 +400,42 @@ fn a_shader_that_does_not_end_stops_render_with_a_message() {
     assert!(!stderr.contains("what you can do"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+/// The traced example (`scene_occluded` through the scene's BVH, an 8 × 8 grid over the light)
+/// scores well under PCSS on a disk and on a polygon light: rays against the real casters.
+#[test]
+fn the_traced_example_scores_under_pcss() {
+    for scene in ["fig7-concave", "polygon-triangle"] {
+        let dir = temp_dir(&format!("traced-{scene}"));
+        let o = run(
+            &[
+                "compare",
+                scene,
+                "--size",
+                "64x64",
+                "--methods",
+                "pcss,file:examples/methods/traced.wgsl",
+                "--knob",
+                "grid=8",
+            ],
+            &dir,
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json = std::fs::read(dir.join("report.json")).expect("report.json written");
+        let report: dbuffer::compare::report::Report =
+            serde_json::from_slice(&json).expect("report.json parses");
+        let mae = |m: &str| {
+            report
+                .methods
+                .iter()
+                .find(|r| r.method == m)
+                .unwrap_or_else(|| panic!("{scene}: no {m} row"))
+                .penumbra_mae
+        };
+        let (traced, pcss) = (mae("user-traced"), mae("pcss"));
+        assert!(
+            traced < 0.5 * pcss && traced < 0.03,
+            "{scene}: traced {traced} against pcss {pcss}"
+        );
+    }
+}

@@ -158,3 +158,44 @@ fn a_trial_frame_refuses_a_method_that_does_not_finish_and_the_caller_draws_on()
     let frame = render(&mut offline, &scene, Method::DBUFFER, VtVariant::Smoothstep);
     assert!(frame.visibility.iter().any(|&v| v > 0.5) && frame.visibility.iter().any(|&v| v < 0.5));
 }
+
+/// A user's file that calls `scene_occluded` gets the scene's BVH: the shipped
+/// `examples/methods/traced.wgsl` traces a grid over the light with it, and needs a storage
+/// buffer in the fragment stage, so an adapter without one refuses it up front while the
+/// D-buffer example, which binds none, still runs there.
+#[test]
+fn the_scene_bvh_is_bound_for_a_file_that_traces_and_needs_storage() {
+    let traced = Method::parse_with(&format!("file:{}", example("traced.wgsl")), &[])
+        .expect("the traced example loads");
+    let dbuffer_vt = Method::parse_with(&format!("file:{}", example("dbuffer_vt.wgsl")), &[])
+        .expect("the example loads");
+    let mut offline = Offline::new().expect("a device");
+    assert_eq!(
+        traced.refuses_on(&offline.ctx.caps),
+        None,
+        "lavapipe runs it"
+    );
+    let scene = load("fig7-concave");
+    let frame = render(&mut offline, &scene, traced, VtVariant::Smoothstep);
+    let partly = frame
+        .visibility
+        .iter()
+        .filter(|&&v| v > 0.05 && v < 0.95)
+        .count();
+    assert!(
+        partly > 20,
+        "a penumbra is traced: {partly} pixels between 0 and 1"
+    );
+    let no_storage = wgpu::Limits {
+        max_storage_buffers_per_shader_stage: 0,
+        ..wgpu::Limits::downlevel_webgl2_defaults()
+    };
+    let caps = dbuffer::render::adapter::Capabilities::webgpu(
+        &offline.ctx.adapter,
+        wgpu::Features::empty(),
+        no_storage,
+    );
+    let why = traced.refuses_on(&caps).unwrap_or_default();
+    assert!(why.contains("storage buffer"), "refused as: {why}");
+    assert_eq!(dbuffer_vt.refuses_on(&caps), None, "it binds no storage");
+}

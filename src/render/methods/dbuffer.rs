@@ -12,11 +12,14 @@ use super::{
     require, CameraGroup, Cost, LightMaps, MethodSpec, MethodState, Prepare, Quality, SharedMaps,
     Switch,
 };
+use crate::geometry::bvh::Bvh;
 use crate::geometry::SceneGeometry;
 use crate::render::passes::dbuffer_volumes::VolumeLayout;
+use crate::render::passes::trace::{Path, TraceScene};
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms, PARAMS_BINDING};
 use crate::render::{
-    buffer_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext, RenderError,
+    buffer_entry, storage_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext,
+    RenderError,
 };
 
 /// Both D-buffers' cost view: the texels they read, and which answer won.
@@ -77,6 +80,18 @@ pub static USER_KNOBS: [&super::Knob; 2] = [&HORIZON.0, &CORNERS.0];
 /// D-buffer's six.
 pub const USER_BINDING: u32 = 6;
 
+/// Where a user's method that calls `scene_occluded` gets the scene's BVH (one storage buffer,
+/// `passes::trace::TraceScene`) and its counts (a uniform `vec4<u32>`) in group 1.
+pub const BVH_BINDING: u32 = 7;
+pub const BVH_COUNTS_BINDING: u32 = 8;
+
+/// [`NEEDS`] and a storage buffer the fragment stage reads: a user's method that traces the
+/// scene's BVH.
+pub const NEEDS_WITH_BVH: super::AdapterNeeds = super::AdapterNeeds {
+    storage_buffers_per_stage: 1,
+    ..NEEDS
+};
+
 /// The centre's shadow map (`|cx_o|`) and the volume channels: distance, `|cx_s|` and the lit
 /// side per texel (`passes::dbuffer_volumes::VolumeLayout`: `Rg32Float`, or `Rgba32Float` with
 /// the side for `V exact`).
@@ -121,6 +136,9 @@ pub struct DBuffer {
     name: &'static str,
     /// A user's method: its knobs' values and their uniform (at [`USER_BINDING`]).
     user: Option<(&'static [f32; 4], wgpu::Buffer)>,
+    /// A user's method that traces the scene: its BVH's counts uniform, and the BVH once built
+    /// (with the mesh revision it was built for).
+    bvh: Option<(wgpu::Buffer, Option<(TraceScene, u64)>)>,
 }
 
 /// What the camera bind group binds: the shadow map's and the volume channels' generations, and
@@ -131,6 +149,8 @@ struct Bound {
     volumes: u64,
     /// The geometry build the corners' texture was made for.
     corners: u64,
+    /// The mesh revision the scene's BVH was built for (a user's method that traces it).
+    bvh: Option<u64>,
 }
 
 impl DBuffer {
@@ -160,6 +180,7 @@ impl DBuffer {
                 DBUFFER.name
             },
             user: None,
+            bvh: None,
         }
     }
 
@@ -170,9 +191,15 @@ impl DBuffer {
         spec: &'static MethodSpec,
         source: &str,
         values: &'static [f32; 4],
+        bvh: bool,
     ) -> DBuffer {
+        let fragment = wgpu::ShaderStages::FRAGMENT;
         let mut entries = Self::entries();
-        entries.push(uniform_entry(USER_BINDING, wgpu::ShaderStages::FRAGMENT));
+        entries.push(uniform_entry(USER_BINDING, fragment));
+        if bvh {
+            entries.push(storage_entry(BVH_BINDING, fragment, true));
+            entries.push(uniform_entry(BVH_COUNTS_BINDING, fragment));
+        }
         DBuffer {
             paper: DBufferLight::new(ctx, false),
             camera: CameraGroup::from_source(ctx, spec.shader, source, &entries),
@@ -183,6 +210,12 @@ impl DBuffer {
                 values,
                 uniform_buffer::<[f32; 4]>(&ctx.device, "DBuffer::user_params"),
             )),
+            bvh: bvh.then(|| {
+                (
+                    uniform_buffer::<[u32; 4]>(&ctx.device, "DBuffer::bvh_counts"),
+                    None,
+                )
+            }),
         }
     }
 
@@ -212,10 +245,23 @@ impl MethodState for DBuffer {
         if let Some((values, buffer)) = &self.user {
             queue.write_buffer(buffer, 0, bytemuck::bytes_of(*values));
         }
+        if let Some((counts, built)) = &mut self.bvh {
+            if built.as_ref().is_none_or(|(_, meshes)| *meshes != inputs.meshes) {
+                let bvh = Bvh::build(inputs.scene.all_triangles());
+                let gpu = TraceScene::new(inputs.ctx, &bvh, Path::WgslBvh)?;
+                let words = [gpu.node_count(), gpu.triangle_count(), 0, 0];
+                queue.write_buffer(counts, 0, bytemuck::bytes_of(&words));
+                *built = Some((gpu, inputs.meshes));
+            }
+        }
         let bound = Bound {
             map: map.generation,
             volumes: v.generation,
             corners: self.paper.geometry_builds().0,
+            bvh: self
+                .bvh
+                .as_ref()
+                .and_then(|(_, b)| b.as_ref().map(|(_, m)| *m)),
         };
         let mut entries = vec![
             buffer_entry(0, &self.uniforms),
@@ -227,6 +273,14 @@ impl MethodState for DBuffer {
         ];
         if let Some((_, buffer)) = &self.user {
             entries.push(buffer_entry(USER_BINDING, buffer));
+        }
+        if let Some((counts, built)) = &self.bvh {
+            let (gpu, _) = require(built.as_ref(), "the scene's BVH")?;
+            entries.push(wgpu::BindGroupEntry {
+                binding: BVH_BINDING,
+                resource: gpu.resource(),
+            });
+            entries.push(buffer_entry(BVH_COUNTS_BINDING, counts));
         }
         self.camera.bind(&inputs.ctx.device, bound, &entries);
         Ok(&self.camera)

@@ -17,7 +17,9 @@ use std::path::Path;
 
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
-use super::dbuffer::{DBuffer, NEEDS, USER_BINDING, USER_KNOBS};
+use super::dbuffer::{
+    DBuffer, BVH_BINDING, BVH_COUNTS_BINDING, NEEDS, NEEDS_WITH_BVH, USER_BINDING, USER_KNOBS,
+};
 use super::{Cost, MakeState, Method, MethodSpec, MethodState};
 use crate::render::GpuContext;
 use crate::shader_source::{self, Expanded};
@@ -51,12 +53,20 @@ pub struct UserMethod {
     pub values: [f32; MAX_USER_KNOBS],
     /// The shader: the file, its includes and the generated code.
     pub source: String,
+    /// The file calls `scene_occluded`: the scene's BVH is bound for it.
+    pub bvh: bool,
 }
 
 /// Its state: the D-buffer's, drawing the file's shader with its knobs.
 impl MakeState for UserMethod {
     fn state(&'static self, ctx: &GpuContext, spec: &'static MethodSpec) -> Box<dyn MethodState> {
-        Box::new(DBuffer::user(ctx, spec, &self.source, &self.values))
+        Box::new(DBuffer::user(
+            ctx,
+            spec,
+            &self.source,
+            &self.values,
+            self.bvh,
+        ))
     }
 
     fn shader_and_values(&self) -> (&str, &[f32]) {
@@ -83,7 +93,8 @@ pub fn load(path: &str, settings: &[String]) -> Result<Method, String> {
         .map_err(|e| format!("cannot read the method file {path}: {e}"))?;
     let knobs = parse_header(path, &text)?;
     let values = knob_values(path, &knobs, settings)?;
-    let generated = generated_code(&knobs);
+    let bvh = uses_scene_bvh(&text);
+    let generated = generated_code(&knobs, bvh);
     let expanded = shader_source::expand_user(path, &text, (GENERATED, &generated))
         .map_err(|e| format!("{path}: {e}"))?;
     check(path, &text, &expanded)?;
@@ -92,13 +103,14 @@ pub fn load(path: &str, settings: &[String]) -> Result<Method, String> {
         knobs,
         values,
         source: expanded.source,
+        bvh,
     }));
     let name: &'static str = Box::leak(method_name(path).into_boxed_str());
     let shader: &'static str = Box::leak(format!("{PREFIX}{path}").into_boxed_str());
     let about: &'static str = Box::leak(format!("a user's method from {path}").into_boxed_str());
     // The D-buffer's needs, knobs and lights: its state draws the file.
     let spec = MethodSpec::new(name, shader, |ctx| Box::new(DBuffer::new(ctx, false)))
-        .adapter(NEEDS)
+        .adapter(if bvh { NEEDS_WITH_BVH } else { NEEDS })
         .knobs(&USER_KNOBS)
         .lights(super::AREA_LIGHTS)
         .user(user)
@@ -246,7 +258,7 @@ fn knob_values(
 
 /// The code pasted after the user's file: the includes every method of the D-buffer's state
 /// has, its group 1 and the knobs' accessors.
-pub fn generated_code(knobs: &[UserKnob]) -> String {
+pub fn generated_code(knobs: &[UserKnob], bvh: bool) -> String {
     let mut out = String::from(
         "// Generated for a user's method (render::methods::user): the D-buffer's inputs in \
          group 1 and the knobs.\n\
@@ -269,7 +281,32 @@ pub fn generated_code(knobs: &[UserKnob]) -> String {
             k.name
         ));
     }
+    if bvh {
+        out.push_str(&format!(
+            "// The scene's BVH (geometry::bvh::FlatBvh), traced by shared/bvh_trace.wgsl.\n\
+             @group(1) @binding({BVH_BINDING}) var<storage, read> bvh: array<vec4<f32>>;\n\
+             // (nodes, triangles, 0, 0)\n\
+             @group(1) @binding({BVH_COUNTS_BINDING}) var<uniform> bvh_counts: vec4<u32>;\n\
+             // #include shared/bvh_trace.wgsl\n\
+             // Whether a triangle of the scene crosses the segment from `a` to `b` (its \
+             ends left out by 1e-4 of its length, as the reference's rays leave theirs).\n\
+             fn scene_occluded(a: vec3<f32>, b: vec3<f32>) -> bool {{\n\
+             \x20   return bvh_any_hit(a, b - a, 1e-4, 1.0 - 1e-4, bvh_counts.x, bvh_counts.y).hit;\n\
+             }}\n"
+        ));
+    }
     out
+}
+
+/// Whether the file calls `scene_occluded` outside comments: the scene's BVH is then bound for
+/// it (a storage buffer the fragment stage reads, which the weakest adapters lack).
+fn uses_scene_bvh(text: &str) -> bool {
+    text.lines().any(|line| {
+        line.split("//")
+            .next()
+            .unwrap_or_default()
+            .contains("scene_occluded(")
+    })
 }
 
 /// Whether `text` defines `fn method_visibility` outside comments.
