@@ -265,6 +265,7 @@ pub fn generated_code(knobs: &[UserKnob], bvh: bool) -> String {
          // #include shared/camera.wgsl\n\
          // #include shared/shadow_lookup.wgsl\n\
          // #include shared/frame_tag.wgsl\n\
+         // #include shared/light_sample.wgsl\n\
          struct DBufferParams {\n    horizon: u32,\n    corners: u32,\n    tag: u32,\n    _pad0: u32,\n};\n\
          @group(1) @binding(2) var<uniform> params: DBufferParams;\n\
          @group(1) @binding(3) var d_u: texture_2d<f32>;\n\
