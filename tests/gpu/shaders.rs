@@ -116,6 +116,32 @@ fn every_wgsl_file_parses_and_validates() {
             Err(report) => failures.push(report),
         }
     }
+    // A user's method's shader (render::methods::user): a least file and the code generated for
+    // it, with the scene's BVH bound, includes and validates like a pass shader.
+    {
+        use dbuffer::render::methods::user::{generated_code, GENERATED};
+        let least = "// #include shared/camera.wgsl\n\
+                     fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {\n\
+                     \x20   return plain(select(1.0, 0.0, scene_occluded(x, light_sample(vec2<f32>(0.5)))));\n\
+                     }\n";
+        match shader_source::expand_user(
+            "user.wgsl",
+            least,
+            (GENERATED, &generated_code(&[], true)),
+        ) {
+            Ok(expanded) => {
+                for line in 1..=expanded.source.lines().count() as u32 {
+                    if let Some((file, _)) = expanded.origin(line) {
+                        included.insert(file.to_owned());
+                    }
+                }
+                if let Err(report) = validate_expanded("a user's method", &expanded) {
+                    failures.push(report);
+                }
+            }
+            Err(e) => failures.push(format!("a user's method: {e}")),
+        }
+    }
     for name in &shared {
         if !included.contains(name.as_str()) {
             failures.push(format!(
