@@ -251,7 +251,7 @@ pub fn capture<T>(device: &wgpu::Device, work: impl FnOnce() -> T) -> T {
     let out = work();
     let _ = device.poll(wgpu::PollType::Wait {
         submission_index: None,
-        timeout: Some(super::readback::gpu_timeout()),
+        timeout: Some(super::watchdog::gpu_timeout()),
     });
     // SAFETY: the capture started above is the one active.
     unsafe { device.stop_graphics_debugger_capture() };

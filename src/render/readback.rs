@@ -84,12 +84,12 @@ pub struct Readback {
 }
 
 /// Wait until everything submitted has run and mapping callbacks have fired, at most
-/// [`gpu_timeout`]: past it the device is taken to be stuck (a shader that never ends) and
+/// [`gpu_timeout`](super::watchdog::gpu_timeout): past it the device is taken to be stuck (a shader that never ends) and
 /// [`RenderError::Stalled`] returned. The device is then kept alive for the rest of the process
 /// (one handle leaked): dropping it would wait for the stuck work, and the program could not
 /// say why it stopped.
 pub fn map_now(device: &wgpu::Device) -> Result<(), RenderError> {
-    let timeout = gpu_timeout();
+    let timeout = super::watchdog::gpu_timeout();
     match device.poll(wgpu::PollType::Wait {
         submission_index: None,
         timeout: Some(timeout),
@@ -101,25 +101,6 @@ pub fn map_now(device: &wgpu::Device) -> Result<(), RenderError> {
         }
         Err(e) => Err(RenderError::Readback(e.to_string())),
     }
-}
-
-/// The variable that sets [`gpu_timeout`] in seconds.
-pub const GPU_TIMEOUT_ENV: &str = "DBUFFER_GPU_TIMEOUT_S";
-
-/// The longest a blocking wait for the GPU may take: 120 s, or [`GPU_TIMEOUT_ENV`]'s seconds
-/// (a positive number; anything else keeps the default). Far above any frame dbuffer draws at
-/// its largest sizes on a CPU rasteriser; a wait longer than this is a stuck device.
-pub fn gpu_timeout() -> std::time::Duration {
-    static TIMEOUT: std::sync::OnceLock<std::time::Duration> = std::sync::OnceLock::new();
-    *TIMEOUT.get_or_init(|| {
-        std::env::var(GPU_TIMEOUT_ENV)
-            .ok()
-            .and_then(|v| v.trim().parse::<f64>().ok())
-            .filter(|s| s.is_finite() && *s > 0.0)
-            .map_or(std::time::Duration::from_secs(120), |s| {
-                std::time::Duration::from_secs_f64(s.min(86_400.0))
-            })
-    })
 }
 
 fn padded_row(width: u32, texel: u32) -> u64 {

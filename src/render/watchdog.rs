@@ -10,8 +10,6 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-pub use super::readback::{gpu_timeout, GPU_TIMEOUT_ENV};
-
 static STARTED: AtomicBool = AtomicBool::new(false);
 static NEXT: AtomicU64 = AtomicU64::new(0);
 /// The open watches: (id, since, what).
@@ -81,6 +79,25 @@ pub fn start(stop: fn(&str) -> !) {
     if spawned.is_err() {
         STARTED.store(false, Ordering::SeqCst);
     }
+}
+
+/// The variable that sets [`gpu_timeout`] in seconds.
+pub const GPU_TIMEOUT_ENV: &str = "DBUFFER_GPU_TIMEOUT_S";
+
+/// The longest a blocking wait for the GPU may take: 120 s, or [`GPU_TIMEOUT_ENV`]'s seconds
+/// (a positive number; anything else keeps the default). Far above any frame dbuffer draws at
+/// its largest sizes on a CPU rasteriser; a wait longer than this is a stuck device.
+pub fn gpu_timeout() -> std::time::Duration {
+    static TIMEOUT: std::sync::OnceLock<std::time::Duration> = std::sync::OnceLock::new();
+    *TIMEOUT.get_or_init(|| {
+        std::env::var(GPU_TIMEOUT_ENV)
+            .ok()
+            .and_then(|v| v.trim().parse::<f64>().ok())
+            .filter(|s| s.is_finite() && *s > 0.0)
+            .map_or(std::time::Duration::from_secs(120), |s| {
+                std::time::Duration::from_secs_f64(s.min(86_400.0))
+            })
+    })
 }
 
 #[cfg(test)]

@@ -15,11 +15,11 @@ use super::{
 use crate::geometry::bvh::Bvh;
 use crate::geometry::SceneGeometry;
 use crate::render::passes::dbuffer_volumes::VolumeLayout;
-use crate::render::passes::trace::{Path, TraceScene};
 use crate::render::passes::shadow_map::{lookup_entries, ShadowUniforms, PARAMS_BINDING};
+use crate::render::passes::trace::{Path, TraceScene};
 use crate::render::{
-    buffer_entry, storage_entry, texture_entry, uniform_buffer, uniform_entry, view_entry, GpuContext,
-    RenderError,
+    buffer_entry, storage_entry, texture_entry, uniform_buffer, uniform_entry, view_entry,
+    GpuContext, RenderError,
 };
 
 /// Both D-buffers' cost view: the texels they read, and which answer won.
@@ -246,7 +246,10 @@ impl MethodState for DBuffer {
             queue.write_buffer(buffer, 0, bytemuck::bytes_of(*values));
         }
         if let Some((counts, built)) = &mut self.bvh {
-            if built.as_ref().is_none_or(|(_, meshes)| *meshes != inputs.meshes) {
+            if built
+                .as_ref()
+                .is_none_or(|(_, meshes)| *meshes != inputs.meshes)
+            {
                 let bvh = Bvh::build(inputs.scene.all_triangles());
                 let gpu = TraceScene::new(inputs.ctx, &bvh, Path::WgslBvh)?;
                 let words = [gpu.node_count(), gpu.triangle_count(), 0, 0];
