@@ -351,24 +351,7 @@ fn study_measures_a_users_file_and_remeasures_it_when_edited() {
 #[test]
 fn a_shader_that_does_not_end_stops_render_with_a_message() {
     let dir = temp_dir("endless");
-    std::fs::create_dir_all(&dir).expect("temp dir made");
-    let file = dir.join("endless.wgsl");
-    std::fs::write(
-        &file,
-        "// A loop whose exit is never taken.\n\
-         // #include shared/camera.wgsl\n\
-         fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {\n\
-         \x20   var acc = bitcast<u32>(x.y);\n\
-         \x20   loop {\n\
-         \x20       acc = acc * 1664525u + 1013904223u;\n\
-         \x20       if pixel.x < -1.0 {\n\
-         \x20           break;\n\
-         \x20       }\n\
-         \x20   }\n\
-         \x20   return plain(f32(acc & 255u) / 255.0);\n\
-         }\n",
-    )
-    .expect("temp file written");
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/methods/endless.wgsl");
     let method = format!("file:{}", file.display());
     let o = dbuffer()
         .env("DBUFFER_GPU_TIMEOUT_S", "0.5")

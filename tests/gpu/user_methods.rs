@@ -123,24 +123,7 @@ fn a_trial_frame_refuses_a_method_that_does_not_finish_and_the_caller_draws_on()
     let long = std::time::Duration::from_secs(60);
     dbuffer::render::offline::trial(good, &scene, long).expect("the example's trial passes");
 
-    let dir = std::env::temp_dir().join(format!("dbuffer-trial-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir made");
-    let path = dir.join("endless.wgsl");
-    std::fs::write(
-        &path,
-        "// #include shared/camera.wgsl\n\
-         fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {\n\
-         \x20   var acc = bitcast<u32>(x.y);\n\
-         \x20   loop {\n\
-         \x20       acc = acc * 1664525u + 1013904223u;\n\
-         \x20       if pixel.x < -1.0 {\n\
-         \x20           break;\n\
-         \x20       }\n\
-         \x20   }\n\
-         \x20   return plain(f32(acc & 255u) / 255.0);\n\
-         }\n",
-    )
-    .expect("temp file written");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/methods/endless.wgsl");
     let endless = Method::parse_with(&format!("file:{}", path.display()), &[])
         .expect("an endless loop is valid WGSL");
     let short = std::time::Duration::from_millis(20);
