@@ -292,14 +292,28 @@ pub fn render(args: &RenderArgs) -> Result<()> {
 
 /// The lab window. `DBUFFER_SMOKE_SCREENSHOT=shot.png` makes it screenshot itself once frames
 /// show and exit (the scripted smoke run under Xvfb).
-pub fn gui(
-    scene: Option<String>,
-    gltf_scene: Option<usize>,
-    bench: Option<u32>,
-    bench_out: Option<std::path::PathBuf>,
-    study: Option<std::path::PathBuf>,
-    verbose: bool,
-) -> Result<()> {
+/// `dbuffer gui`'s flags.
+pub struct GuiArgs {
+    pub gltf_scene: Option<usize>,
+    pub bench: Option<u32>,
+    pub bench_out: Option<std::path::PathBuf>,
+    pub study: Option<std::path::PathBuf>,
+    pub shaders: Option<std::path::PathBuf>,
+}
+
+pub fn gui(scene: Option<String>, args: GuiArgs, verbose: bool) -> Result<()> {
+    let GuiArgs {
+        gltf_scene,
+        bench,
+        bench_out,
+        study,
+        shaders,
+    } = args;
+    let shaders = shaders
+        .as_deref()
+        .map(dbuffer::app::check_shader_dir)
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
     if let Some(dir) = &study {
         let json = dir.join("study.json");
         if !json.is_file() {
@@ -325,6 +339,7 @@ pub fn gui(
         smoke_screenshot,
         verbose,
         study,
+        shaders,
         ..Default::default()
     })
 }

@@ -19,6 +19,7 @@ const RANKS: &[(&str, u32)] = &[
     ("mod", 0),
     ("adapter", 0),
     ("frame_tag", 0),
+    ("shaders", 0),
     ("context", 1),
     ("readback", 2),
     ("timer", 3),

@@ -7,6 +7,8 @@
 //! (`|cx_o|`) and the volume channels (`passes::dbuffer_volumes`). Per frame: the camera pass
 //! with `shaders/methods/dbuffer.wgsl`. CPU twin: `geometry::DBufferTwin`.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use super::dbuffer_light::DBufferLight;
 use super::{
     require, CameraGroup, Cost, LightMaps, MethodSpec, MethodState, Prepare, Quality, SharedMaps,
@@ -120,7 +122,7 @@ pub struct DBuffer {
     /// The method's name, for an error about its light.
     name: &'static str,
     /// A user's method: its knobs' values and their uniform (at [`USER_BINDING`]).
-    user: Option<(&'static [f32; 4], wgpu::Buffer)>,
+    user: Option<(&'static UserValues, wgpu::Buffer)>,
 }
 
 /// What the camera bind group binds: the shadow map's and the volume channels' generations, and
@@ -131,6 +133,28 @@ struct Bound {
     volumes: u64,
     /// The geometry build the corners' texture was made for.
     corners: u64,
+}
+
+/// A user's method's four knob values (`user_params.values`), read each frame: the lab's
+/// sliders set them while it draws.
+#[derive(Debug, Default)]
+pub struct UserValues([AtomicU32; 4]);
+
+impl UserValues {
+    pub fn new(values: [f32; 4]) -> UserValues {
+        UserValues(values.map(|v| AtomicU32::new(v.to_bits())))
+    }
+
+    pub fn get(&self) -> [f32; 4] {
+        std::array::from_fn(|i| f32::from_bits(self.0[i].load(Ordering::Relaxed)))
+    }
+
+    /// Set value `i` (nothing past the fourth).
+    pub fn set(&self, i: usize, value: f32) {
+        if let Some(v) = self.0.get(i) {
+            v.store(value.to_bits(), Ordering::Relaxed);
+        }
+    }
 }
 
 impl DBuffer {
@@ -169,7 +193,7 @@ impl DBuffer {
         ctx: &GpuContext,
         spec: &'static MethodSpec,
         source: &str,
-        values: &'static [f32; 4],
+        values: &'static UserValues,
     ) -> DBuffer {
         let mut entries = Self::entries();
         entries.push(uniform_entry(USER_BINDING, wgpu::ShaderStages::FRAGMENT));
@@ -210,7 +234,7 @@ impl MethodState for DBuffer {
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         if let Some((values, buffer)) = &self.user {
-            queue.write_buffer(buffer, 0, bytemuck::bytes_of(*values));
+            queue.write_buffer(buffer, 0, bytemuck::bytes_of(&values.get()));
         }
         let bound = Bound {
             map: map.generation,

@@ -287,6 +287,9 @@ impl FromStr for Method {
         if let Some(path) = user::path_of(s) {
             return user::load(path, &[]);
         }
+        if let Some(m) = user::by_name(s) {
+            return Ok(m);
+        }
         ALL.iter().copied().find(|m| m.name() == s).ok_or_else(|| {
             let names: Vec<&str> = ALL.iter().map(|m| m.name()).collect();
             format!(
