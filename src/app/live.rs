@@ -19,6 +19,9 @@ use crate::render::Method;
 /// The watched shaders and what their last reload said.
 #[derive(Default)]
 pub struct Live {
+    /// `--shaders DIR`: the folder this lab reads and reloads (the render core's is the
+    /// process's; a lab started without one never reloads it).
+    dir: Option<PathBuf>,
     watcher: Option<Watcher>,
     /// The egui context to wake on a change.
     wake: Option<egui::Context>,
@@ -34,9 +37,10 @@ pub struct Live {
 impl Live {
     fn watcher(&mut self) -> &Watcher {
         let wake = self.wake.clone();
+        let dir = self.dir.clone();
         self.watcher.get_or_insert_with(|| {
             Watcher::new(
-                shaders::dir(),
+                dir,
                 Box::new(move || {
                     if let Some(ctx) = &wake {
                         ctx.request_repaint();
@@ -52,6 +56,7 @@ impl LabApp {
     pub(super) fn start_live(&mut self, ctx: &egui::Context, dir: Option<&Path>) {
         self.live.wake = Some(ctx.clone());
         let Some(dir) = dir else { return };
+        self.live.dir = Some(dir.to_owned());
         if let Err(e) = shaders::set_dir(Some(dir)) {
             self.live.errors.insert(String::new(), e);
         }
@@ -98,7 +103,7 @@ impl LabApp {
             return;
         }
         let mut changed = BTreeSet::new();
-        if shaders::dir().is_some() {
+        if self.live.dir.is_some() {
             match shaders::reload() {
                 Ok(reloaded) => {
                     self.live.errors.remove("");

@@ -250,3 +250,54 @@ fn knob_without_a_users_method_is_refused() {
     );
     assert!(!dir.exists());
 }
+
+/// `DBUFFER_SHADER_DIR` with a broken file: refused before any GPU work, naming the file in the
+/// folder, its line and column, then the offending line itself; no advice about adapters.
+#[test]
+fn a_broken_file_of_the_shader_folder_names_its_line() {
+    let dir = temp_dir("shader-dir");
+    let shaders = dir.join("shaders");
+    std::fs::create_dir_all(shaders.join("methods")).expect("folder");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/methods/vsm.wgsl"),
+    )
+    .expect("vsm.wgsl");
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("fn method_visibility"))
+        .expect("its V")
+        + 2;
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.insert(line - 1, "    let oops = ;");
+    let file = shaders.join("methods/vsm.wgsl");
+    std::fs::write(&file, lines.join("\n")).expect("write");
+    let o = dbuffer()
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env("DBUFFER_SHADER_DIR", &shaders)
+        .args([
+            "render",
+            "fig7-concave",
+            "--size",
+            "16x16",
+            "--method",
+            "vsm",
+        ])
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    let place = format!("dbuffer: {}:{line}:16: expected expression", file.display());
+    assert!(lines[0].starts_with(&place), "{stderr}");
+    // The line as written (its own indent), under the headline indented by four.
+    assert_eq!(
+        lines.get(1).copied(),
+        Some("        let oops = ;"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("what you can do"), "{stderr}");
+    assert!(!dir.join("out").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -212,3 +212,34 @@ fn timings_of_a_method_no_longer_shown_are_never_handed_back() {
         let _ = v.ctx.device.poll(wgpu::PollType::wait_indefinitely());
     }
 }
+
+/// A changed shader file drops exactly the pipelines made from it (`GpuContext::forget_shaders`,
+/// from what each cached object recorded while it was made), and the view draws again after
+/// `ViewSession::shaders_changed`.
+#[test]
+fn a_changed_shader_drops_only_the_pipelines_made_from_it() {
+    let files = |names: &[&str]| -> std::collections::BTreeSet<String> {
+        names.iter().map(|n| n.to_string()).collect()
+    };
+    let vsm: Method = "vsm".parse().expect("vsm");
+    let mut v = view_session();
+    for m in [Method::DBUFFER, vsm] {
+        let u = v.advance(&intent(m, View::Visibility), &mut no_motion);
+        assert!(u.errors.is_empty(), "{m}: {:?}", u.errors);
+    }
+    // No pipeline was made from pcss's shader; vsm's camera pipelines alone from vsm's.
+    assert_eq!(v.ctx.forget_shaders(&files(&["methods/pcss.wgsl"])), 0);
+    assert_eq!(v.ctx.forget_shaders(&files(&["methods/vsm.wgsl"])), 1);
+    assert_eq!(v.ctx.forget_shaders(&files(&["methods/vsm.wgsl"])), 0);
+    // The camera's shared file: what every method's shader includes (the D-buffer's camera
+    // pipelines are left of the two).
+    assert_eq!(v.ctx.forget_shaders(&files(&["shared/camera.wgsl"])), 1);
+    // The view pass's shader: its pipelines, nothing of the methods.
+    assert_eq!(v.ctx.forget_shaders(&files(&["passes/view.wgsl"])), 1);
+    let serial = v.shown(0).map_or(0, |s| s.serial);
+    v.shaders_changed(&files(&["methods/vsm.wgsl"]));
+    let u = v.advance(&intent(vsm, View::Visibility), &mut no_motion);
+    assert!(u.errors.is_empty(), "{:?}", u.errors);
+    let shown = v.shown(0).expect("drawn again");
+    assert!(shown.serial > serial && shown.method == vsm);
+}

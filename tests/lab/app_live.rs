@@ -56,6 +56,32 @@ fn save(h: &mut Harness<'_, LabApp>, path: &Path, text: &str) {
     );
 }
 
+/// `text` with V a constant 0.25: the method's own function renamed, a constant one after it.
+fn constant_v(text: &str) -> String {
+    text.replace("fn method_visibility(", "fn method_visibility_was(")
+        + "\nfn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {\n    \
+           return plain(0.25);\n}\n"
+}
+
+/// [`constant_v`]'s text with a syntax error, and the error's line.
+fn broken(constant: &str) -> (String, usize) {
+    let broken = constant.replace(
+        "    return plain(0.25);",
+        "    let oops = ;\n    return plain(0.25);",
+    );
+    let line = broken
+        .lines()
+        .position(|l| l.contains("let oops"))
+        .expect("the broken line")
+        + 1;
+    (broken, line)
+}
+
+/// Whether more than a quarter of `v` is 0.25 (the constant V).
+fn mostly_quarter(v: &[f32]) -> bool {
+    v.iter().filter(|x| **x == 0.25).count() > v.len() / 4
+}
+
 #[test]
 fn a_saved_shader_redraws_and_a_broken_one_is_shown_until_fixed() {
     let dir: PathBuf = std::env::temp_dir().join(format!("dbuffer-live-{}", std::process::id()));
@@ -84,10 +110,7 @@ fn a_saved_shader_redraws_and_a_broken_one_is_shown_until_fixed() {
     assert!(h.state().shader_errors().is_empty());
     let before = visibility(&mut h);
 
-    // V a constant: the method's own function renamed, a constant one in its place.
-    let constant = original.replace("fn method_visibility(", "fn method_visibility_was(")
-        + "\nfn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: vec2<f32>) -> Visibility {\n    \
-           return plain(0.25);\n}\n";
+    let constant = constant_v(&original);
     save(&mut h, &file, &constant);
     assert!(
         step_until_gpu(&mut h, 20, |h| h.state().shader_reloads() == 1),
@@ -96,11 +119,9 @@ fn a_saved_shader_redraws_and_a_broken_one_is_shown_until_fixed() {
     );
     step_until_gpu(&mut h, 5, |_| false);
     let flat = visibility(&mut h);
-    let quarter = flat.iter().filter(|v| **v == 0.25).count();
     assert!(
-        quarter > flat.len() / 4 && flat != before,
-        "V = 0.25 on {quarter} of {} pixels after the save",
-        flat.len()
+        mostly_quarter(&flat) && flat != before,
+        "V is not the saved constant"
     );
 
     // A syntax error: shown with the file, its line and the line, the constant still drawn.
@@ -166,5 +187,86 @@ fn a_saved_shader_redraws_and_a_broken_one_is_shown_until_fixed() {
     );
 
     shaders::set_dir(None).expect("the embedded shaders");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_opened_method_is_listed_with_its_knobs_and_its_file_watched() {
+    let dir: PathBuf =
+        std::env::temp_dir().join(format!("dbuffer-live-method-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp folder");
+    let file = dir.join("mine.wgsl");
+    let original = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/methods/pcss_variant.wgsl"),
+    )
+    .expect("the example");
+    std::fs::write(&file, &original).expect("copy");
+
+    let mut h = support_lab::lab_sized(None, 900.0, 700.0);
+    h.run();
+    // What File > Open method... does once its dialog gave the path.
+    h.state_mut().open_method(&file);
+    assert!(
+        step_until_gpu(&mut h, 20, |h| h
+            .state()
+            .shown()
+            .is_some_and(|s| s.method.name() == "user-mine")),
+        "the opened method was not shown: {:?}",
+        h.state().status()
+    );
+    // Listed among the methods, its header's knobs as sliders.
+    h.get_by_label("user-mine");
+    for knob in ["taps", "search_depth", "softness"] {
+        assert!(
+            h.query_all_by_label(knob).next().is_some(),
+            "no slider {knob}"
+        );
+    }
+    let before = visibility(&mut h);
+
+    save(&mut h, &file, &constant_v(&original));
+    assert!(
+        step_until_gpu(&mut h, 20, |h| h.state().shader_reloads() == 1),
+        "the save was not reloaded: {:?}",
+        h.state().shader_errors()
+    );
+    step_until_gpu(&mut h, 5, |_| false);
+    let flat = visibility(&mut h);
+    assert!(
+        mostly_quarter(&flat) && flat != before,
+        "V is not the saved constant"
+    );
+
+    let (broken, line) = broken(&constant_v(&original));
+    save(&mut h, &file, &broken);
+    assert!(
+        step_until_gpu(&mut h, 20, |h| !h.state().shader_errors().is_empty()),
+        "no error shown"
+    );
+    let e = h.state().shader_errors()[0].clone();
+    assert_eq!(
+        (e.file.as_str(), e.line as usize),
+        (file.display().to_string().as_str(), line),
+        "{e}"
+    );
+    step_until_gpu(&mut h, 5, |_| false);
+    assert_eq!(
+        visibility(&mut h),
+        flat,
+        "the last good version stopped drawing"
+    );
+
+    save(&mut h, &file, &original);
+    assert!(
+        step_until_gpu(&mut h, 20, |h| h.state().shader_reloads() == 2),
+        "the fix was not reloaded"
+    );
+    assert!(h.state().shader_errors().is_empty());
+    step_until_gpu(&mut h, 5, |_| false);
+    assert_eq!(
+        visibility(&mut h),
+        before,
+        "the original V did not come back"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
