@@ -135,12 +135,18 @@ impl LabApp {
                 let files: Vec<&str> = changed.iter().map(String::as_str).collect();
                 self.set_status(
                     format!(
-                        "reloaded {} ({made} pass objects made again)",
+                        "reloaded {} ({made} cached pipeline objects made again)",
                         files.join(", ")
                     ),
                     Level::Info,
                 );
             }
+        }
+        if !self.live.errors.is_empty() {
+            self.set_status(
+                "a shader does not validate (see the viewport): the last good ones keep drawing",
+                Level::Warning,
+            );
         }
         ctx.request_repaint();
     }
@@ -201,7 +207,7 @@ impl LabApp {
                 egui::Frame::popup(ui.style())
                     .fill(egui::Color32::from_rgba_unmultiplied(40, 0, 0, 230))
                     .show(ui, |ui| {
-                        ui.set_max_width(rect.width() - 32.0);
+                        ui.set_width((rect.width() - 32.0).max(120.0));
                         for e in self.live.errors.values() {
                             ui.colored_label(egui::Color32::from_rgb(255, 120, 110), e.headline());
                             if let Some(text) = &e.text {
