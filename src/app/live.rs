@@ -72,6 +72,11 @@ impl LabApp {
                 self.live.watcher().watch(path);
                 self.live.methods.retain(|m| *m != method);
                 self.live.methods.push(method);
+                // Opened again (or another file of the same name): nothing drawn from the
+                // method of that name before is kept.
+                if let (Some(core), Some(u)) = (self.core.as_mut(), user::of(method)) {
+                    core.shaders_changed(&BTreeSet::from([u.shader_key()]));
+                }
                 self.settings.method = method.name().into();
                 self.set_status(format!("opened method {text} as {method}"), Level::Info);
             }

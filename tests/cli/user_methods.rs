@@ -1,7 +1,7 @@
 //! `--method file:PATH.wgsl` through the binary: the shipped example renders and `compare`
 //! scores it under its name; `--knob` sets a user's knob; a file that cannot be a method is
 //! refused before any work, in one line that names the user's file and the line in it, without
-//! the advice to change adapters.
+//! the advice to change adapters; so is a broken file of `DBUFFER_SHADER_DIR`'s folder.
 
 use std::path::{Path, PathBuf};
 
@@ -300,4 +300,21 @@ fn a_broken_file_of_the_shader_folder_names_its_line() {
     assert!(!stderr.contains("what you can do"), "{stderr}");
     assert!(!dir.join("out").exists());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `gui --shaders` takes a folder, checked before a window opens.
+#[test]
+fn gui_shaders_must_be_a_folder() {
+    let missing = temp_dir("no-such-folder");
+    let o = dbuffer()
+        .args(["gui", "--shaders"])
+        .arg(&missing)
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert_eq!(
+        stderr.trim_end(),
+        format!("dbuffer: --shaders {}: not a folder", missing.display()),
+    );
 }
