@@ -201,6 +201,21 @@ impl Session {
         super::readback::map_now(&ctx.device)
     }
 
+    /// The shaders changed and the pipelines made from them were let go of
+    /// ([`GpuContext::forget_shaders`]): what holds pipelines — every method's state, the shadow
+    /// map's pass, the camera's group, the targets' view and probe passes — is made again on
+    /// the next frame, from the pipelines cached now. The scene, its surfaces and the truths
+    /// handed in stay.
+    pub fn shaders_changed(&mut self, ctx: &GpuContext) {
+        self.methods.clear();
+        self.shared = SharedMaps {
+            shadow_map: ShadowMap::new(ctx),
+        };
+        self.camera = Camera::new(ctx);
+        self.progressive = None;
+        self.own = FrameTargets::new();
+    }
+
     /// Forget `method`'s frames before (a temporal method's history): its next frame is a
     /// first one.
     pub fn reset_history(&mut self, method: Method) {

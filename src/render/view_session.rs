@@ -271,12 +271,12 @@ impl ViewSession {
     /// The shader files `changed` (named as [`super::shaders`] names them, a user's method as
     /// `file:PATH`) have a new text: the pipelines made from them are let go of (those of other
     /// files are kept), the methods' states and the view's and probes' passes are made again
-    /// from what is cached now, and every side draws again. How many pipelines' objects were
+    /// from what is cached now ([`Session::shaders_changed`]; the scene and the truths handed
+    /// in stay), and every side draws again. How many pipelines' objects were
     /// let go of.
     pub fn shaders_changed(&mut self, changed: &std::collections::BTreeSet<String>) -> usize {
         let forgotten = self.ctx.forget_shaders(changed);
-        let scene = self.session.scene().clone();
-        self.session = Session::new(&self.ctx, scene);
+        self.session.shaders_changed(&self.ctx);
         for side in &mut self.sides {
             side.targets.rendered = None;
             side.targets.view = None;

@@ -236,10 +236,21 @@ fn a_changed_shader_drops_only_the_pipelines_made_from_it() {
     assert_eq!(v.ctx.forget_shaders(&files(&["shared/camera.wgsl"])), 1);
     // The view pass's shader: its pipelines, nothing of the methods.
     assert_eq!(v.ctx.forget_shaders(&files(&["passes/view.wgsl"])), 1);
+    // The error view against the converged truth, then a change: the view draws again with
+    // the truth it had (handed in before, not traced again).
+    let error = intent(vsm, View::Error);
+    advance_until(
+        &mut v,
+        &error,
+        |_, _| {},
+        |v| converged(v) && v.shown(0).is_some_and(|s| s.note.is_none()),
+    );
     let serial = v.shown(0).map_or(0, |s| s.serial);
     v.shaders_changed(&files(&["methods/vsm.wgsl"]));
-    let u = v.advance(&intent(vsm, View::Visibility), &mut no_motion);
+    let u = v.advance(&error, &mut no_motion);
     assert!(u.errors.is_empty(), "{:?}", u.errors);
     let shown = v.shown(0).expect("drawn again");
     assert!(shown.serial > serial && shown.method == vsm);
+    assert_eq!(shown.note, None, "the error view lost its truth");
+    assert_eq!(shown.reference, Some((SAMPLES, SAMPLES)));
 }
