@@ -276,7 +276,7 @@ impl ViewSession {
     /// let go of.
     pub fn shaders_changed(&mut self, changed: &std::collections::BTreeSet<String>) -> usize {
         let forgotten = self.ctx.forget_shaders(changed);
-        self.session.shaders_changed(&self.ctx);
+        self.session.shaders_changed(&self.ctx, changed);
         for side in &mut self.sides {
             side.targets.rendered = None;
             side.targets.view = None;

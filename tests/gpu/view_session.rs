@@ -253,4 +253,17 @@ fn a_changed_shader_drops_only_the_pipelines_made_from_it() {
     assert!(shown.serial > serial && shown.method == vsm);
     assert_eq!(shown.note, None, "the error view lost its truth");
     assert_eq!(shown.reference, Some((SAMPLES, SAMPLES)));
+    // The D-buffer's state (its geometry with it) outlives a change of vsm's file, not one of
+    // its own.
+    assert!(v.session.geometry(Method::DBUFFER).is_some());
+    v.shaders_changed(&files(&["methods/vsm.wgsl"]));
+    assert!(
+        v.session.geometry(Method::DBUFFER).is_some(),
+        "dropped for vsm's file"
+    );
+    v.shaders_changed(&files(&["methods/dbuffer.wgsl"]));
+    assert!(
+        v.session.geometry(Method::DBUFFER).is_none(),
+        "kept after its own file"
+    );
 }
