@@ -13,7 +13,7 @@ use dbuffer::geometry::fused::{FusedParams, FusedPath, FusedTwin};
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
 use dbuffer::output;
-use dbuffer::render::methods::{all_knobs, KnobKind};
+use dbuffer::render::methods::{all_knobs, user, KnobKind};
 use dbuffer::render::offline::Offline;
 use dbuffer::render::{FrameRequest, Knobs, Method};
 use dbuffer::scene;
@@ -147,7 +147,14 @@ impl MethodFlags {
     pub fn methods<'a>(&self, names: impl IntoIterator<Item = &'a str>) -> Result<Vec<Method>> {
         let methods = names
             .into_iter()
-            .map(|n| Method::parse_with(n, &self.user).map_err(anyhow::Error::msg))
+            .map(|n| match user::path_of(n) {
+                // A shader's error whole: the command line prints its offending line too.
+                Some(path) => user::load_checked(path, &self.user).map_err(|e| match e {
+                    user::LoadError::Shader(e) => anyhow::Error::new(e),
+                    user::LoadError::Other(e) => anyhow::Error::msg(e),
+                }),
+                None => Method::parse_with(n, &self.user).map_err(anyhow::Error::msg),
+            })
             .collect::<Result<Vec<_>>>()?;
         if let (Some(k), false) = (self.user.first(), methods.iter().any(|m| m.is_user())) {
             bail!(

@@ -123,7 +123,8 @@ fn the_pcss_variant_takes_its_knobs() {
 }
 
 /// `render` with `--method file:FILE` (FILE holding `text`, or absent for `None`) and `extra`
-/// fails with exactly one line on stderr containing every needle, leaving no folder.
+/// fails with one line on stderr containing every needle (and, where it names a line of FILE,
+/// that line under it), leaving no folder.
 fn refused(case: &str, text: Option<&str>, extra: &[&str], needles: &[&str]) {
     let src = std::env::temp_dir().join(format!("dbuffer-user-src-{}-{case}", std::process::id()));
     std::fs::create_dir_all(&src).expect("temp dir");
@@ -145,7 +146,20 @@ fn refused(case: &str, text: Option<&str>, extra: &[&str], needles: &[&str]) {
     let o = run(&args, &dir);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{case}: should fail");
-    assert_eq!(stderr.lines().count(), 1, "{case}: one line: {stderr}");
+    // One line, and under an error at a line of the file that line itself, indented.
+    let lines: Vec<&str> = stderr.lines().collect();
+    let quoted = text.and_then(|t| {
+        let place = lines[0].strip_prefix(&format!("dbuffer: {}:", file.display()))?;
+        let n: usize = place.split(':').next()?.parse().ok()?;
+        t.lines().nth(n - 1)
+    });
+    match quoted {
+        Some(line) => {
+            assert_eq!(lines.len(), 2, "{case}: the line under it: {stderr}");
+            assert_eq!(lines[1], format!("    {}", line.trim_end()), "{case}");
+        }
+        None => assert_eq!(lines.len(), 1, "{case}: one line: {stderr}"),
+    }
     for needle in needles {
         let needle = needle.replace("FILE", &file.display().to_string());
         assert!(

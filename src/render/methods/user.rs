@@ -194,10 +194,26 @@ pub fn path_of(name: &str) -> Option<&str> {
 /// Each call leaks one [`MethodSpec`] and its [`UserMethod`] (`Box::leak`): a [`Method`] is a
 /// `&'static MethodSpec`, and a command line loads a file once for the whole run.
 pub fn load(path: &str, settings: &[String]) -> Result<Method, String> {
+    load_checked(path, settings).map_err(|e| match e {
+        LoadError::Shader(e) => e.headline(),
+        LoadError::Other(e) => e,
+    })
+}
+
+/// Why a user's file is not a method: its shader (where, why, the offending line), or anything
+/// else (the file unread, a `--knob` setting) in one line.
+#[derive(Debug)]
+pub enum LoadError {
+    Shader(ShaderError),
+    Other(String),
+}
+
+/// [`load`], a shader's error kept whole: the command line prints its offending line too.
+pub fn load_checked(path: &str, settings: &[String]) -> Result<Method, LoadError> {
     let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read the method file {path}: {e}"))?;
-    let loaded = checked(path, text).map_err(|e| e.headline())?;
-    let values = knob_values(path, &loaded.knobs, settings)?;
+        .map_err(|e| LoadError::Other(format!("cannot read the method file {path}: {e}")))?;
+    let loaded = checked(path, text).map_err(LoadError::Shader)?;
+    let values = knob_values(path, &loaded.knobs, settings).map_err(LoadError::Other)?;
     let user: &'static UserMethod = Box::leak(Box::new(UserMethod {
         path: path.to_owned(),
         loaded: RwLock::new(loaded),
