@@ -7,8 +7,10 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use dbuffer::app::{LabApp, LabOptions};
+use dbuffer::render::methods::user;
 use dbuffer::render::shaders;
-use egui_kittest::kittest::Queryable;
+use eframe::egui;
+use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
 
 use crate::support::{self as support_lab, step_until_gpu};
@@ -267,6 +269,27 @@ fn an_opened_method_is_listed_with_its_knobs_and_its_file_watched() {
         visibility(&mut h),
         before,
         "the original V did not come back"
+    );
+
+    // A knob's slider: its value reaches the shader with the next frame.
+    let method = h.state().shown().expect("shown").method;
+    let slider = h
+        .query_all_by_label("softness")
+        .find(|n| n.accesskit_node().role() == egui::accesskit::Role::Slider)
+        .expect("the softness slider");
+    let serial = h.state().shown().map_or(0, |s| s.serial);
+    slider.set_value_accesskit(4.0);
+    assert!(
+        step_until_gpu(&mut h, 20, |h| user::of(method)
+            .is_some_and(|u| u.values()[2] == 4.0)
+            && h.state().shown().is_some_and(|s| s.serial > serial)),
+        "the slider did not set the knob and draw again"
+    );
+    step_until_gpu(&mut h, 5, |_| false);
+    assert_ne!(
+        visibility(&mut h),
+        before,
+        "softness 4 draws what softness 1 did"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
