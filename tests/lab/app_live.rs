@@ -1,7 +1,10 @@
 //! Shaders edited while the lab runs (`dbuffer gui --shaders DIR`): the lab on a copy of
-//! `shaders/` in a temporary folder, one method's file saved three times — V made a constant,
-//! then a syntax error, then the original again — each save waited for on the watcher's signal
-//! and then the lab's reload, never on a timer.
+//! `shaders/` in a temporary folder, one method's file saved three times — V made a constant
+//! (drawn at once, on the split view's side too), then a syntax error (shown over the viewport
+//! with its file and line, the last good image kept), then the original again (the panel gone,
+//! the original image back). The same for a user's method opened with File ▸ Open method…, whose
+//! knob slider is driven too. Each save is waited for on the watcher's signal and then the lab's
+//! reload count, never on a timer.
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -125,6 +128,23 @@ fn a_saved_shader_redraws_and_a_broken_one_is_shown_until_fixed() {
         mostly_quarter(&flat) && flat != before,
         "V is not the saved constant"
     );
+    // The split view's right side draws the new code too.
+    h.state_mut().settings.split = true;
+    h.state_mut().settings.split_method = METHOD.into();
+    assert!(
+        step_until_gpu(&mut h, 20, |h| h
+            .state()
+            .shown_split()
+            .is_some_and(|s| s.method.name() == METHOD)),
+        "no split view"
+    );
+    let right = h.state_mut().read_shown(true).expect("the right side");
+    assert!(
+        mostly_quarter(&right.visibility),
+        "the split's side is not the saved V"
+    );
+    h.state_mut().settings.split = false;
+    step_until_gpu(&mut h, 5, |_| false);
 
     // A syntax error: shown with the file, its line and the line, the constant still drawn.
     let broken = constant.replace(
