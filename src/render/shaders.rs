@@ -9,7 +9,7 @@
 //! offending line; the texts accepted before stay, so the pipelines made from them keep drawing.
 //!
 //! Which pipelines a change concerns is recorded as they are made: every shader expanded while
-//! a [`GpuContext::shared`](super::GpuContext::shared) object is built is noted ([`recording`])
+//! a [`GpuContext::shared`](super::GpuContext::shared) object is built is noted (`recording`)
 //! as one of its files, so [`GpuContext::forget_shaders`](super::GpuContext::forget_shaders)
 //! drops exactly the objects made from a changed file, and the next `get` builds them anew.
 //!

@@ -8,10 +8,11 @@
 //! lines, so the file's line numbers stay its own), with an accessor `knob_NAME()` per knob of
 //! its header (`// knob: NAME MIN..MAX = DEFAULT`, up to [`MAX_USER_KNOBS`]).
 //!
-//! Everything is checked when the file is loaded, before any GPU work: the file, its knob
-//! header, that it defines `method_visibility`, that it binds nothing in groups 0 and 1
-//! itself, and naga's parse and validation of the whole shader; each refusal is one line that
-//! names the user's file and the line (and column) in it.
+//! Everything is checked when the file is loaded, and again when the lab reloads it
+//! ([`UserMethod::reload`], which keeps the last good version), before any GPU work: the file,
+//! its knob header, that it defines `method_visibility`, that it binds nothing in groups 0 and 1
+//! itself, and naga's parse and validation of the whole shader; each refusal is a
+//! [`ShaderError`] that names the user's file and the line (and column) in it, with that line.
 
 use std::path::Path;
 
@@ -132,6 +133,9 @@ impl UserMethod {
                 .position(|o| o.name == k.name)
                 .map_or(k.default, |j| old.1[j].clamp(k.min, k.max));
             self.values.set(i, v);
+        }
+        for i in loaded.knobs.len()..MAX_USER_KNOBS {
+            self.values.set(i, 0.0);
         }
         if let Ok(mut l) = self.loaded.write() {
             *l = loaded;
