@@ -2,11 +2,12 @@
 //! set at run time (`dbuffer gui --shaders DIR`, or `DBUFFER_SHADER_DIR` for every command),
 //! whose files override the embedded ones of the same name.
 //!
-//! A folder's files are taken as a whole and only once every top-level shader they change
-//! expands and passes naga's parse and validation ([`reload`]): the accepted texts are then the
-//! ones every new pipeline is made from, until the next good set. A broken file is a
-//! [`ShaderError`] naming the file, line and column in it (not in the expansion) and the
-//! offending line; the texts accepted before stay, so the pipelines made from them keep drawing.
+//! A folder's files are taken as a whole and only once every whole shader (`methods/`,
+//! `passes/`) that includes a changed one expands and passes naga's parse and validation
+//! ([`reload`]): the accepted texts are then the ones every new pipeline is made from, until the
+//! next good set. A broken file is a [`ShaderError`] naming the file, line and column in it (not
+//! in the expansion) and the offending line; the texts accepted before stay, so the pipelines
+//! made from them keep drawing.
 //!
 //! Which pipelines a change concerns is recorded as they are made: every shader expanded while
 //! a [`GpuContext::shared`](super::GpuContext::shared) object is built is noted (`recording`)
@@ -138,7 +139,7 @@ pub struct Reloaded {
 }
 
 /// Read the folder again: `Ok(None)` when nothing changed (or no folder is set), the changed
-/// files once every top-level shader that includes one of them expands and validates, else the
+/// files once every whole shader that includes one of them expands and validates, else the
 /// first error (the accepted texts stay as they were).
 pub fn reload() -> Result<Option<Reloaded>, ShaderError> {
     let Some((dir, accepted)) = folder()
@@ -182,15 +183,16 @@ pub fn reload() -> Result<Option<Reloaded>, ShaderError> {
     }))
 }
 
-/// Every top-level shader of `files` (those outside `shared/`) that includes one of `changed`,
-/// expanded and validated.
+/// Every whole shader of `files` (`methods/` and `passes/`, as `tests/gpu/shaders.rs` has them)
+/// that includes one of `changed`, expanded and validated.
 fn check_set(
     dir: &Path,
     files: &BTreeMap<String, String>,
     changed: &BTreeSet<String>,
 ) -> Result<(), ShaderError> {
     let path_of = |name: &str| dir.join(name).display().to_string();
-    for name in files.keys().filter(|n| !n.starts_with("shared/")) {
+    let whole = |n: &&String| n.starts_with("methods/") || n.starts_with("passes/");
+    for name in files.keys().filter(whole) {
         let expanded = shader_source::expand_lookup(name, |n| files.get(n).cloned())
             .map_err(|e| source_error(e, name, &path_of, files))?;
         if expanded.files().iter().any(|f| changed.contains(f)) {
