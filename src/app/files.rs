@@ -160,6 +160,17 @@ impl LabApp {
         if dropped.is_empty() {
             return;
         }
+        // A `.wgsl` file is a method of the user's own (File ▸ Open method…).
+        let (methods, dropped): (Vec<PathBuf>, Vec<PathBuf>) = dropped.into_iter().partition(|p| {
+            p.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("wgsl"))
+        });
+        for path in &methods {
+            self.open_method(path);
+        }
+        if dropped.is_empty() {
+            return;
+        }
         match dropped.iter().find(|p| is_openable(p)) {
             Some(path) => {
                 self.open_scene(&path.display().to_string());

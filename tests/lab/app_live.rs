@@ -226,8 +226,9 @@ fn an_opened_method_is_listed_with_its_knobs_and_its_file_watched() {
 
     let mut h = support_lab::lab_sized(None, 900.0, 700.0);
     h.run();
-    // What File > Open method... does once its dialog gave the path.
-    h.state_mut().open_method(&file);
+    // What File > Open method... does once its dialog gave the path (a .wgsl dropped on the
+    // window is opened so too).
+    support_lab::drop_file(&mut h, &file);
     assert!(
         step_until_gpu(&mut h, 20, |h| h
             .state()
