@@ -92,7 +92,7 @@ impl LabApp {
         match super::files::pick_file(|| dialog.pick_file()) {
             Some(Ok(path)) => self.open_method(&path),
             Some(Err(why)) => self.set_status(
-                format!("{why}: start the lab with --method file:PATH.wgsl"),
+                format!("{why}: drop the .wgsl file on the window instead"),
                 Level::Warning,
             ),
             None => {}
@@ -140,7 +140,7 @@ impl LabApp {
                 let files: Vec<&str> = changed.iter().map(String::as_str).collect();
                 self.set_status(
                     format!(
-                        "reloaded {} ({made} cached pipeline objects made again)",
+                        "reloaded {} ({made} cached pipeline objects to make again)",
                         files.join(", ")
                     ),
                     Level::Info,
