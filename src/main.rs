@@ -44,6 +44,11 @@ enum Command {
         /// clicking a point shows that method and setting.
         #[arg(long, value_name = "DIR")]
         study: Option<std::path::PathBuf>,
+        /// Read the shaders from this folder (a copy of shaders/, or only the files you change)
+        /// and reload them whenever a file in it is saved: a broken one is shown over the
+        /// viewport, and the last good shaders keep drawing.
+        #[arg(long, value_name = "DIR")]
+        shaders: Option<std::path::PathBuf>,
     },
     /// Render a scene headless into DIR (image.png, visibility.exr, ...).
     Render {
@@ -276,6 +281,12 @@ fn main() -> ExitCode {
     if !matches!(args.command, Some(Command::Gui { .. }) | None) {
         dbuffer::render::watchdog::start(stalled);
     }
+    // `DBUFFER_SHADER_DIR`'s files, checked before any GPU work: a broken one is reported as its
+    // file, line and the line itself, not as a pipeline's error.
+    if let Err(e) = dbuffer::render::shaders::check_env() {
+        cli::print::err(format_args!("{}", cli::error_lines(&anyhow::Error::new(e))));
+        return ExitCode::FAILURE;
+    }
     let result = match args.command {
         Some(Command::Study {
             file,
@@ -313,14 +324,35 @@ fn main() -> ExitCode {
             &method,
             out.as_deref(),
         ),
-        None => cli::gui(None, None, None, None, None, verbose),
+        None => cli::gui(
+            None,
+            cli::GuiArgs {
+                gltf_scene: None,
+                bench: None,
+                bench_out: None,
+                study: None,
+                shaders: None,
+            },
+            verbose,
+        ),
         Some(Command::Gui {
             scene,
             gltf_scene,
             bench,
             bench_out,
             study,
-        }) => cli::gui(scene, gltf_scene, bench, bench_out, study, verbose),
+            shaders,
+        }) => cli::gui(
+            scene,
+            cli::GuiArgs {
+                gltf_scene,
+                bench,
+                bench_out,
+                study,
+                shaders,
+            },
+            verbose,
+        ),
         Some(Command::Render {
             scene,
             gltf_scene,

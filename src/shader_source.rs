@@ -90,6 +90,11 @@ pub struct Expanded {
 }
 
 impl Expanded {
+    /// Every file pasted into it, the top-level one first.
+    pub fn files(&self) -> &[String] {
+        &self.files
+    }
+
     /// The file and 1-based line that 1-based line `line` of [`Expanded::source`] came from.
     pub fn origin(&self, line: u32) -> Option<(&str, u32)> {
         let index = usize::try_from(line).ok()?.checked_sub(1)?;
@@ -147,6 +152,26 @@ pub fn from_dir_mapped(dir: &Path, name: &str) -> Result<Expanded, ShaderSourceE
 // `EMBEDDED`: every `.wgsl` file under `shaders/` as (name relative to `shaders/`, text), so
 // [`load`] needs no files at run time. `build.rs` writes the table from the file tree.
 include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+
+/// Every embedded shader file: (name relative to `shaders/`, text, not expanded).
+pub fn embedded_files() -> impl Iterator<Item = (&'static str, &'static str)> {
+    EMBEDDED.iter().copied()
+}
+
+/// The top-level shader `name` and its includes, every file's text from `lookup` (name → text).
+pub fn expand_lookup(
+    name: &str,
+    lookup: impl Fn(&str) -> Option<String>,
+) -> Result<Expanded, ShaderSourceError> {
+    if let Some(reason) = bad_name(name) {
+        return Err(ShaderSourceError::BadName {
+            name: name.into(),
+            reason,
+        });
+    }
+    let main = lookup(name).ok_or_else(|| ShaderSourceError::NotFound { name: name.into() })?;
+    expand_with(name, &main, &mut |n| Ok(lookup(n).map(Cow::Owned)))
+}
 
 /// The embedded text of `name` (relative to `shaders/`), not expanded.
 pub fn embedded(name: &str) -> Option<&'static str> {

@@ -82,6 +82,15 @@ fn pick(run: impl FnOnce() -> Option<PathBuf>) -> Picked {
     }
 }
 
+/// A file from `run`'s dialog: `None` when cancelled, `Some(Err)` when no dialog could be shown.
+pub(super) fn pick_file(run: impl FnOnce() -> Option<PathBuf>) -> Option<Result<PathBuf, String>> {
+    match pick(run) {
+        Picked::Path(path) => Some(Ok(path)),
+        Picked::Cancelled => None,
+        Picked::NoDialog => Some(Err(NO_DIALOG.to_owned())),
+    }
+}
+
 /// `dir/name.ext`, or `dir/name-2.ext`, `-3`… — the first that does not exist, so a fallback
 /// save never replaces a file the user did not choose.
 pub fn unused_path(dir: &Path, name: &str, ext: &str) -> PathBuf {
@@ -148,6 +157,17 @@ impl LabApp {
                 .map(|f| f.path().to_path_buf())
                 .collect()
         });
+        if dropped.is_empty() {
+            return;
+        }
+        // A `.wgsl` file is a method of the user's own (File ▸ Open method…).
+        let (methods, dropped): (Vec<PathBuf>, Vec<PathBuf>) = dropped.into_iter().partition(|p| {
+            p.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("wgsl"))
+        });
+        for path in &methods {
+            self.open_method(path);
+        }
         if dropped.is_empty() {
             return;
         }

@@ -17,6 +17,7 @@ mod files;
 mod inspector;
 mod light_fields;
 pub mod light_panel;
+mod live;
 pub mod motion;
 mod overlays;
 mod panels;
@@ -67,6 +68,8 @@ pub struct LabOptions {
     pub verbose: bool,
     /// `--study DIR`: show that study's plot for the open scene.
     pub study: Option<PathBuf>,
+    /// `--shaders DIR`: read the shaders from this folder, and reload them when they change.
+    pub shaders: Option<PathBuf>,
 }
 
 /// What a click picked.
@@ -128,7 +131,11 @@ pub struct LabApp {
     /// `--study DIR`: the study's plot of the open scene.
     pub study: study_panel::StudyPanel,
     deterministic: bool,
+    /// The shaders being watched (`--shaders DIR`, the user's methods opened).
+    live: live::Live,
 }
+
+pub use self::live::check_dir as check_shader_dir;
 
 impl LabApp {
     /// The lab on eframe's (or the test harness's) wgpu device.
@@ -214,7 +221,9 @@ impl LabApp {
                 .map(study_panel::StudyPanel::load)
                 .unwrap_or_default(),
             deterministic: options.deterministic,
+            live: live::Live::default(),
         };
+        app.start_live(&cc.egui_ctx, options.shaders.as_deref());
         let switched = app.suit_methods_to_the_light();
         if app.status.0.is_empty() {
             app.status = (app.opened_message(), Level::Info);
@@ -578,6 +587,7 @@ impl eframe::App for LabApp {
         let ctx = ui.ctx().clone();
         self.stats.ui_frame(&ctx, frame.info().cpu_usage);
         self.window_bench_step(&ctx, frame.info().cpu_usage);
+        self.live_step(&ctx);
         self.shortcuts(&ctx);
         self.open_dropped(&ctx);
         self.menu_bar(ui);
@@ -585,6 +595,7 @@ impl eframe::App for LabApp {
         self.controls_panel(ui);
         self.inspector_panel(ui);
         egui::CentralPanel::no_frame().show(ui, |ui| self.viewport_ui(ui, frame));
+        self.shader_error_ui(&ctx);
         if !ctx.input(|i| i.pointer.any_down()) {
             self.history.close();
         }

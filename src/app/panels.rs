@@ -35,6 +35,13 @@ impl LabApp {
                     if ui.button("Open…").clicked() {
                         self.open_dialog();
                     }
+                    if ui
+                        .button("Open method…")
+                        .on_hover_text("a method of your own in one WGSL file, watched for changes")
+                        .clicked()
+                    {
+                        self.open_method_dialog();
+                    }
                     ui.menu_button("Built-in scene", |ui| {
                         for name in builtin::names() {
                             if ui.button(*name).clicked() {
@@ -242,8 +249,9 @@ impl LabApp {
         // … and so are those the device cannot run (what it lacks on hover).
         let caps = self.core.as_ref().map(|c| c.ctx.caps.clone());
         let refuses = |m: Method| m.refusal(light, caps.as_ref());
+        let listed = self.listed_methods();
         ui.horizontal_wrapped(|ui| {
-            for &m in Method::all() {
+            for &m in &listed {
                 let refused = refuses(m);
                 if ui
                     .add_enabled(
@@ -273,7 +281,7 @@ impl LabApp {
             egui::ComboBox::from_id_salt("split-method")
                 .selected_text(format!("right: {}", split.name()))
                 .show_ui(ui, |ui| {
-                    for &m in Method::all() {
+                    for &m in &listed {
                         let refused = refuses(m);
                         if ui
                             .add_enabled(
@@ -570,6 +578,9 @@ impl LabApp {
             if knob_control(ui, knob, &mut value) {
                 self.settings.knobs = self.settings.knobs.with(knob, value);
             }
+        }
+        for m in shown {
+            self.user_knobs_ui(ui, m);
         }
     }
 }

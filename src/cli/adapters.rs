@@ -71,6 +71,29 @@ pub fn list() -> Result<()> {
 /// cause chain on indented lines under it, and what the user can do. Every subcommand's errors
 /// come here: the GPU's is found wherever it sits in the chain, inside an animation's error too.
 pub fn error_lines(e: &anyhow::Error) -> String {
+    // A shader's error: the file and line of its source and, under it, the line itself; no
+    // advice about adapters (the file is the user's to fix).
+    if let Some(shader) = e
+        .chain()
+        .find_map(|c| c.downcast_ref::<dbuffer::render::shaders::ShaderError>())
+    {
+        let mut out = String::from("dbuffer: ");
+        for context in e
+            .chain()
+            .take_while(|c| !c.is::<dbuffer::render::shaders::ShaderError>())
+        {
+            out.push_str(&context.to_string().replace('\n', "\\n"));
+            out.push_str(": ");
+        }
+        out.push_str(&shader.headline().replace('\n', "\\n"));
+        out.push('\n');
+        if let Some(text) = &shader.text {
+            out.push_str("    ");
+            out.push_str(text.trim_end());
+            out.push('\n');
+        }
+        return out;
+    }
     let gpu = e.chain().find_map(gpu_error);
     let Some(gpu) = gpu else {
         return format!("dbuffer: {}\n", format!("{e:#}").replace('\n', "\\n"));

@@ -13,7 +13,7 @@ use dbuffer::geometry::fused::{FusedParams, FusedPath, FusedTwin};
 use dbuffer::geometry::oracle::Oracle;
 use dbuffer::geometry::{metrics, view, DBufferTwin, PreparedCasters, VolumeParams, VtVariant};
 use dbuffer::output;
-use dbuffer::render::methods::{all_knobs, KnobKind};
+use dbuffer::render::methods::{all_knobs, user, KnobKind};
 use dbuffer::render::offline::Offline;
 use dbuffer::render::{FrameRequest, Knobs, Method};
 use dbuffer::scene;
@@ -147,7 +147,14 @@ impl MethodFlags {
     pub fn methods<'a>(&self, names: impl IntoIterator<Item = &'a str>) -> Result<Vec<Method>> {
         let methods = names
             .into_iter()
-            .map(|n| Method::parse_with(n, &self.user).map_err(anyhow::Error::msg))
+            .map(|n| match user::path_of(n) {
+                // A shader's error whole: the command line prints its offending line too.
+                Some(path) => user::load_checked(path, &self.user).map_err(|e| match e {
+                    user::LoadError::Shader(e) => anyhow::Error::new(e),
+                    user::LoadError::Other(e) => anyhow::Error::msg(e),
+                }),
+                None => Method::parse_with(n, &self.user).map_err(anyhow::Error::msg),
+            })
             .collect::<Result<Vec<_>>>()?;
         if let (Some(k), false) = (self.user.first(), methods.iter().any(|m| m.is_user())) {
             bail!(
@@ -292,14 +299,28 @@ pub fn render(args: &RenderArgs) -> Result<()> {
 
 /// The lab window. `DBUFFER_SMOKE_SCREENSHOT=shot.png` makes it screenshot itself once frames
 /// show and exit (the scripted smoke run under Xvfb).
-pub fn gui(
-    scene: Option<String>,
-    gltf_scene: Option<usize>,
-    bench: Option<u32>,
-    bench_out: Option<std::path::PathBuf>,
-    study: Option<std::path::PathBuf>,
-    verbose: bool,
-) -> Result<()> {
+/// `dbuffer gui`'s flags.
+pub struct GuiArgs {
+    pub gltf_scene: Option<usize>,
+    pub bench: Option<u32>,
+    pub bench_out: Option<std::path::PathBuf>,
+    pub study: Option<std::path::PathBuf>,
+    pub shaders: Option<std::path::PathBuf>,
+}
+
+pub fn gui(scene: Option<String>, args: GuiArgs, verbose: bool) -> Result<()> {
+    let GuiArgs {
+        gltf_scene,
+        bench,
+        bench_out,
+        study,
+        shaders,
+    } = args;
+    let shaders = shaders
+        .as_deref()
+        .map(dbuffer::app::check_shader_dir)
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
     if let Some(dir) = &study {
         let json = dir.join("study.json");
         if !json.is_file() {
@@ -325,6 +346,7 @@ pub fn gui(
         smoke_screenshot,
         verbose,
         study,
+        shaders,
         ..Default::default()
     })
 }

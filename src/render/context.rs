@@ -6,7 +6,7 @@
 //! ([`GpuContext::shared`]), so a new scene never compiles a shader again.
 
 use std::any::{Any, TypeId};
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
@@ -15,7 +15,8 @@ pub use super::adapter::{headless_features, headless_limits, wanted_features, wa
 use super::RenderError;
 
 /// A device-lifetime object of some pass.
-type SharedObject = Arc<dyn Any + Send + Sync>;
+/// A shared object and the shader files it was made from ([`super::shaders::recording`]).
+type SharedObject = (Arc<dyn Any + Send + Sync>, BTreeSet<String>);
 
 /// A device and queue with what the render core needs to know about them.
 pub struct GpuContext {
@@ -211,21 +212,32 @@ impl GpuContext {
         make: impl FnOnce(&wgpu::Device) -> T,
     ) -> Arc<T> {
         let key = (TypeId::of::<T>(), name);
-        if let Some(found) = self
-            .shared
-            .lock()
-            .ok()
-            .and_then(|m| m.get(&key).cloned())
-            .and_then(|a| a.downcast::<T>().ok())
-        {
-            return found;
+        let cached = self.shared.lock().ok().and_then(|m| m.get(&key).cloned());
+        if let Some((found, files)) = cached {
+            if let Ok(found) = found.downcast::<T>() {
+                // What is made from it depends on its files too.
+                super::shaders::note(files.iter().map(String::as_str));
+                return found;
+            }
         }
         // Built outside the lock: making a pipeline may itself ask for another shared object.
-        let made = Arc::new(make(&self.device));
+        let (made, files) = super::shaders::recording(|| Arc::new(make(&self.device)));
         if let Ok(mut m) = self.shared.lock() {
-            m.insert(key, made.clone());
+            m.insert(key, (made.clone(), files));
         }
         made
+    }
+
+    /// Let go of every shared object made from one of `changed` (shader files, named as
+    /// [`super::shaders`] names them), and of those made with one of them: the next `get`
+    /// builds them from the shaders as they are now. How many were let go of.
+    pub fn forget_shaders(&self, changed: &BTreeSet<String>) -> usize {
+        let Ok(mut m) = self.shared.lock() else {
+            return 0;
+        };
+        let before = m.len();
+        m.retain(|_, (_, files)| files.is_disjoint(changed));
+        before - m.len()
     }
 
     /// The largest 2D texture side the device takes.

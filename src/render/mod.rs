@@ -28,6 +28,7 @@ pub mod passes;
 pub mod readback;
 pub mod reference;
 pub mod session;
+pub mod shaders;
 pub mod timer;
 pub mod truth;
 pub mod view_session;
@@ -38,18 +39,15 @@ pub use frame::{Frame, FrameRequest, FrameTargets};
 pub use methods::{Knobs, Method};
 pub use session::Session;
 
-/// The expanded source of an embedded shader. The embedded set is fixed at compile time and
-/// `tests/gpu/shaders.rs` expands and validates every file of it, so a failure here is a build defect;
-/// it still yields WGSL (an empty module) rather than a panic, and pipeline creation then reports it.
-///
-/// For shader work, `DBUFFER_SHADER_DIR=shaders` reads them from that folder instead, so an edit
-/// needs no rebuild (the validation errors then come from pipeline creation).
+/// The expanded source of a shader, as [`shaders`] reads them now: the embedded copies, or a
+/// folder's (`dbuffer gui --shaders DIR`, `DBUFFER_SHADER_DIR`) once they validated. The embedded
+/// set is fixed at compile time and `tests/gpu/shaders.rs` expands and validates every file of
+/// it, so a failure here is a build defect or a file missing from the folder; it still yields
+/// WGSL (an empty module) rather than a panic, and pipeline creation then reports it.
 pub(crate) fn shader(name: &str) -> String {
-    let loaded = match std::env::var_os("DBUFFER_SHADER_DIR") {
-        Some(dir) => crate::shader_source::from_dir(std::path::Path::new(&dir), name),
-        None => crate::shader_source::load(name),
-    };
-    loaded.unwrap_or_else(|e| format!("// {e}\n"))
+    shaders::expanded(name)
+        .map(|e| e.source)
+        .unwrap_or_else(|e| format!("// {e}\n"))
 }
 
 /// A shader module from an embedded shader, labelled with its name.

@@ -6,7 +6,7 @@
 
 use super::truth;
 use std::cell::OnceCell;
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 use std::time::Instant;
 
 use super::frame::{
@@ -62,6 +62,11 @@ pub struct Session {
     /// Bumped whenever an object's mesh changes (the reference depends on every object).
     meshes: u64,
     methods: HashMap<Method, Box<dyn MethodState>>,
+    /// The shader files each method's frames were made with (its state's pipelines, and the
+    /// passes recorded with them), as [`super::shaders::recording`] noted them.
+    files: HashMap<Method, BTreeSet<String>>,
+    /// The shader files of what every method shares: the shadow map's pass, the camera's group.
+    common: BTreeSet<String>,
     shared: SharedMaps,
     camera: Camera,
     timer: Option<PassTimer>,
@@ -88,11 +93,13 @@ impl Session {
     pub fn new(ctx: &GpuContext, scene: Scene) -> Session {
         let surfaces = GpuScene::new(ctx, &scene);
         let light_view = LightView::fit(&scene);
+        let ((shadow_map, camera), common) =
+            super::shaders::recording(|| (ShadowMap::new(ctx), Camera::new(ctx)));
         Session {
-            shared: SharedMaps {
-                shadow_map: ShadowMap::new(ctx),
-            },
-            camera: Camera::new(ctx),
+            shared: SharedMaps { shadow_map },
+            camera,
+            common,
+            files: HashMap::new(),
             timer: PassTimer::new(ctx),
             readback: Readback::default(),
             scene,
@@ -199,6 +206,31 @@ impl Session {
         }
         self.own = FrameTargets::new();
         super::readback::map_now(&ctx.device)
+    }
+
+    /// The shader files `changed` have a new text and the pipelines made from them were let go
+    /// of ([`GpuContext::forget_shaders`]): the states of the methods whose frames used one of
+    /// them are dropped (made again on their next frame, from the pipelines cached now; the
+    /// others keep theirs, a temporal method its history), and so are the session's own
+    /// targets; where what every method shares (the shadow map's pass, the camera's group) used
+    /// one, that is made again and every state dropped. The scene, its surfaces and the truths
+    /// handed in stay.
+    pub fn shaders_changed(&mut self, ctx: &GpuContext, changed: &BTreeSet<String>) {
+        if self.common.is_disjoint(changed) {
+            let files = &self.files;
+            self.methods
+                .retain(|m, _| files.get(m).is_none_or(|f| f.is_disjoint(changed)));
+        } else {
+            let ((shadow_map, camera), common) =
+                super::shaders::recording(|| (ShadowMap::new(ctx), Camera::new(ctx)));
+            self.shared = SharedMaps { shadow_map };
+            self.camera = camera;
+            self.common = common;
+            self.methods.clear();
+        }
+        let methods = &self.methods;
+        self.files.retain(|m, _| methods.contains_key(m));
+        self.own = FrameTargets::new();
     }
 
     /// Forget `method`'s frames before (a temporal method's history): its next frame is a
@@ -330,7 +362,13 @@ impl Session {
         let mut bytes = 0;
         let result = (|| {
             for job in jobs.iter_mut() {
-                bytes += self.record_job(ctx, &mut encoder, job)?;
+                let (recorded, files) =
+                    super::shaders::recording(|| self.record_job(ctx, &mut encoder, job));
+                self.files
+                    .entry(job.request.method)
+                    .or_default()
+                    .extend(files);
+                bytes += recorded?;
             }
             Ok::<_, RenderError>(())
         })();
@@ -610,7 +648,10 @@ impl Session {
             if let Some(d) = dbuffer.filter(|d| *d != request.method) {
                 // The D-buffer of the paper's method, for a method that has none of its own
                 // (after the frame, so the frame's timings are its own).
-                self.prepare_only(ctx, d, request)?;
+                let (prepared, files) =
+                    super::shaders::recording(|| self.prepare_only(ctx, d, request));
+                self.files.entry(d).or_default().extend(files);
+                prepared?;
             }
             if release && dbuffer != Some(request.method) {
                 // Nothing of the method is read: its textures go once the GPU is done.

@@ -273,6 +273,36 @@ impl ViewSession {
         self.session.scene()
     }
 
+    /// Draw every side again although nothing the request holds changed (a user's method's knob
+    /// values, which live in its method).
+    pub fn redraw(&mut self) {
+        for side in &mut self.sides {
+            side.key = None;
+        }
+    }
+
+    /// The shader files `changed` (named as [`super::shaders`] names them, a user's method as
+    /// `file:PATH`) have a new text: the pipelines made from them are let go of (those of other
+    /// files are kept), the methods' states and the view's and probes' passes are made again
+    /// from what is cached now ([`Session::shaders_changed`]; the scene and the truths handed
+    /// in stay), and every side draws again. How many pipelines' objects were
+    /// let go of.
+    pub fn shaders_changed(&mut self, changed: &std::collections::BTreeSet<String>) -> usize {
+        let forgotten = self.ctx.forget_shaders(changed);
+        self.session.shaders_changed(&self.ctx, changed);
+        for side in &mut self.sides {
+            side.targets.rendered = None;
+            side.targets.view = None;
+            side.targets.probe = None;
+            side.clear();
+            side.fitted = None;
+            side.probed = None;
+        }
+        self.flip.targets = FrameTargets::new();
+        self.flip.made = None;
+        forgotten
+    }
+
     /// Look from `camera`.
     pub fn set_camera(&mut self, camera: Camera) {
         self.session.set_camera(camera);

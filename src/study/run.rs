@@ -241,7 +241,7 @@ fn method_key(method: Method) -> String {
         Some((source, values)) => format!(
             "{}#{:016x}{values:?}",
             method.name(),
-            super::cache::hash_str(source)
+            super::cache::hash_str(&source)
         ),
         None => method.name().to_string(),
     }

@@ -1,7 +1,7 @@
 //! `--method file:PATH.wgsl` through the binary: the shipped example renders and `compare`
 //! scores it under its name; `--knob` sets a user's knob; a file that cannot be a method is
 //! refused before any work, in one line that names the user's file and the line in it, without
-//! the advice to change adapters.
+//! the advice to change adapters; so is a broken file of `DBUFFER_SHADER_DIR`'s folder.
 
 use std::path::{Path, PathBuf};
 
@@ -123,7 +123,8 @@ fn the_pcss_variant_takes_its_knobs() {
 }
 
 /// `render` with `--method file:FILE` (FILE holding `text`, or absent for `None`) and `extra`
-/// fails with exactly one line on stderr containing every needle, leaving no folder.
+/// fails with one line on stderr containing every needle (and, where it names a line of FILE,
+/// that line under it), leaving no folder.
 fn refused(case: &str, text: Option<&str>, extra: &[&str], needles: &[&str]) {
     let src = std::env::temp_dir().join(format!("dbuffer-user-src-{}-{case}", std::process::id()));
     std::fs::create_dir_all(&src).expect("temp dir");
@@ -145,7 +146,20 @@ fn refused(case: &str, text: Option<&str>, extra: &[&str], needles: &[&str]) {
     let o = run(&args, &dir);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{case}: should fail");
-    assert_eq!(stderr.lines().count(), 1, "{case}: one line: {stderr}");
+    // One line, and under an error at a line of the file that line itself, indented.
+    let lines: Vec<&str> = stderr.lines().collect();
+    let quoted = text.and_then(|t| {
+        let place = lines[0].strip_prefix(&format!("dbuffer: {}:", file.display()))?;
+        let n: usize = place.split(':').next()?.parse().ok()?;
+        t.lines().nth(n - 1)
+    });
+    match quoted {
+        Some(line) => {
+            assert_eq!(lines.len(), 2, "{case}: the line under it: {stderr}");
+            assert_eq!(lines[1], format!("    {}", line.trim_end()), "{case}");
+        }
+        None => assert_eq!(lines.len(), 1, "{case}: one line: {stderr}"),
+    }
     for needle in needles {
         let needle = needle.replace("FILE", &file.display().to_string());
         assert!(
@@ -249,6 +263,74 @@ fn knob_without_a_users_method_is_refused() {
         "{stderr}"
     );
     assert!(!dir.exists());
+}
+
+/// `DBUFFER_SHADER_DIR` with a broken file: refused before any GPU work, naming the file in the
+/// folder, its line and column, then the offending line itself; no advice about adapters.
+#[test]
+fn a_broken_file_of_the_shader_folder_names_its_line() {
+    let dir = temp_dir("shader-dir");
+    let shaders = dir.join("shaders");
+    std::fs::create_dir_all(shaders.join("methods")).expect("folder");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/methods/vsm.wgsl"),
+    )
+    .expect("vsm.wgsl");
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("fn method_visibility"))
+        .expect("its V")
+        + 2;
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.insert(line - 1, "    let oops = ;");
+    let file = shaders.join("methods/vsm.wgsl");
+    std::fs::write(&file, lines.join("\n")).expect("write");
+    let o = dbuffer()
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env("DBUFFER_SHADER_DIR", &shaders)
+        .args([
+            "render",
+            "fig7-concave",
+            "--size",
+            "16x16",
+            "--method",
+            "vsm",
+        ])
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    let place = format!("dbuffer: {}:{line}:16: expected expression", file.display());
+    assert!(lines[0].starts_with(&place), "{stderr}");
+    // The line as written (its own indent), under the headline indented by four.
+    assert_eq!(
+        lines.get(1).copied(),
+        Some("        let oops = ;"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("what you can do"), "{stderr}");
+    assert!(!dir.join("out").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `gui --shaders` takes a folder, checked before a window opens.
+#[test]
+fn gui_shaders_must_be_a_folder() {
+    let missing = temp_dir("no-such-folder");
+    let o = dbuffer()
+        .args(["gui", "--shaders"])
+        .arg(&missing)
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert_eq!(
+        stderr.trim_end(),
+        format!("dbuffer: --shaders {}: not a folder", missing.display()),
+    );
 }
 
 /// `study --methods` takes a user's file like a registry name: the D-buffer example's cell

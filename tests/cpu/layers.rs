@@ -20,6 +20,7 @@ const RANKS: &[(&str, u32)] = &[
     ("adapter", 0),
     ("frame_tag", 0),
     ("watchdog", 0),
+    ("shaders", 0),
     ("context", 1),
     ("readback", 2),
     ("timer", 3),

@@ -16,6 +16,7 @@ mod oracle_analytic;
 mod output_files;
 mod scene_builtins;
 mod scene_files;
+mod shader_reload;
 mod twin_builtins;
 mod twin_vs_oracle;
 

@@ -241,3 +241,58 @@ fn capture_next_frame_redraws_the_frame_inside_a_capture_once() {
     let after = v.advance(&still, &mut no_motion);
     assert!(!after.captured, "one frame only");
 }
+
+/// A changed shader file drops exactly the pipelines made from it (`GpuContext::forget_shaders`,
+/// from what each cached object recorded while it was made), and the view draws again after
+/// `ViewSession::shaders_changed`.
+#[test]
+fn a_changed_shader_drops_only_the_pipelines_made_from_it() {
+    let files = |names: &[&str]| -> std::collections::BTreeSet<String> {
+        names.iter().map(|n| n.to_string()).collect()
+    };
+    let vsm: Method = "vsm".parse().expect("vsm");
+    let mut v = view_session();
+    for m in [Method::DBUFFER, vsm] {
+        let u = v.advance(&intent(m, View::Visibility), &mut no_motion);
+        assert!(u.errors.is_empty(), "{m}: {:?}", u.errors);
+    }
+    // No pipeline was made from pcss's shader; vsm's camera pipelines alone from vsm's.
+    assert_eq!(v.ctx.forget_shaders(&files(&["methods/pcss.wgsl"])), 0);
+    assert_eq!(v.ctx.forget_shaders(&files(&["methods/vsm.wgsl"])), 1);
+    assert_eq!(v.ctx.forget_shaders(&files(&["methods/vsm.wgsl"])), 0);
+    // The camera's shared file: what every method's shader includes (the D-buffer's camera
+    // pipelines are left of the two).
+    assert_eq!(v.ctx.forget_shaders(&files(&["shared/camera.wgsl"])), 1);
+    // The view pass's shader: its pipelines, nothing of the methods.
+    assert_eq!(v.ctx.forget_shaders(&files(&["passes/view.wgsl"])), 1);
+    // The error view against the converged truth, then a change: the view draws again with
+    // the truth it had (handed in before, not traced again).
+    let error = intent(vsm, View::Error);
+    advance_until(
+        &mut v,
+        &error,
+        |_, _| {},
+        |v| converged(v) && v.shown(0).is_some_and(|s| s.note.is_none()),
+    );
+    let serial = v.shown(0).map_or(0, |s| s.serial);
+    v.shaders_changed(&files(&["methods/vsm.wgsl"]));
+    let u = v.advance(&error, &mut no_motion);
+    assert!(u.errors.is_empty(), "{:?}", u.errors);
+    let shown = v.shown(0).expect("drawn again");
+    assert!(shown.serial > serial && shown.method == vsm);
+    assert_eq!(shown.note, None, "the error view lost its truth");
+    assert_eq!(shown.reference, Some((SAMPLES, SAMPLES)));
+    // The D-buffer's state (its geometry with it) outlives a change of vsm's file, not one of
+    // its own.
+    assert!(v.session.geometry(Method::DBUFFER).is_some());
+    v.shaders_changed(&files(&["methods/vsm.wgsl"]));
+    assert!(
+        v.session.geometry(Method::DBUFFER).is_some(),
+        "dropped for vsm's file"
+    );
+    v.shaders_changed(&files(&["methods/dbuffer.wgsl"]));
+    assert!(
+        v.session.geometry(Method::DBUFFER).is_none(),
+        "kept after its own file"
+    );
+}

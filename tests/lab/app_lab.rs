@@ -7,7 +7,9 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 
-use crate::support::{self as support_lab, step_until_gpu, step_until_worker, worker, Worker};
+use crate::support::{
+    self as support_lab, drop_file, step_until_gpu, step_until_worker, worker, Worker,
+};
 use std::time::Duration;
 
 /// The lab in a test window tall enough for the left panel with every method of the registry
@@ -619,26 +621,6 @@ fn the_window_keeps_making_frames_while_reference_hard_is_cast() {
         "{dark} dark of {}",
         hits.len()
     );
-}
-
-/// A file dropped on the window, as egui-winit hands it over.
-#[derive(Debug)]
-struct Dropped(std::path::PathBuf);
-
-impl egui::DroppedFile for Dropped {
-    fn path(&self) -> &std::path::Path {
-        &self.0
-    }
-    fn bytes(&self) -> Result<Vec<u8>, String> {
-        std::fs::read(&self.0).map_err(|e| e.to_string())
-    }
-}
-
-fn drop_file(h: &mut Harness<'_, LabApp>, path: &std::path::Path) {
-    h.input_mut()
-        .dropped_files
-        .push(std::sync::Arc::new(Dropped(path.to_path_buf())));
-    h.run();
 }
 
 #[test]

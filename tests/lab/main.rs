@@ -7,6 +7,7 @@ mod support;
 mod app_area_lights;
 mod app_fused;
 mod app_lab;
+mod app_live;
 mod app_raytraced;
 mod app_stats;
 mod app_study;

@@ -46,10 +46,14 @@ impl MethodPipeline {
         ctx.shared_named(shader, |device| MethodPipeline {
             shader,
             module: match source {
-                Some(source) => device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some(shader),
-                    source: wgpu::ShaderSource::Wgsl(source.into()),
-                }),
+                Some(source) => {
+                    // Made again when the file changes (`render::shaders`, `user::reload`).
+                    crate::render::shaders::note([shader]);
+                    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some(shader),
+                        source: wgpu::ShaderSource::Wgsl(source.into()),
+                    })
+                }
                 None => crate::render::shader_module(device, shader),
             },
             layout: device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

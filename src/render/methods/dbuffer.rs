@@ -7,6 +7,8 @@
 //! (`|cx_o|`) and the volume channels (`passes::dbuffer_volumes`). Per frame: the camera pass
 //! with `shaders/methods/dbuffer.wgsl`. CPU twin: `geometry::DBufferTwin`.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use super::dbuffer_light::DBufferLight;
 use super::{
     require, CameraGroup, Cost, LightMaps, MethodSpec, MethodState, Prepare, Quality, SharedMaps,
@@ -135,7 +137,7 @@ pub struct DBuffer {
     /// The method's name, for an error about its light.
     name: &'static str,
     /// A user's method: its knobs' values and their uniform (at [`USER_BINDING`]).
-    user: Option<(&'static [f32; 4], wgpu::Buffer)>,
+    user: Option<(&'static UserValues, wgpu::Buffer)>,
     /// A user's method that traces the scene: its BVH's counts uniform, and the BVH once built
     /// (with the mesh revision it was built for).
     bvh: Option<(wgpu::Buffer, Option<(TraceScene, u64)>)>,
@@ -151,6 +153,28 @@ struct Bound {
     corners: u64,
     /// The mesh revision the scene's BVH was built for (a user's method that traces it).
     bvh: Option<u64>,
+}
+
+/// A user's method's four knob values (`user_params.values`), read each frame: the lab's
+/// sliders set them while it draws.
+#[derive(Debug, Default)]
+pub struct UserValues([AtomicU32; 4]);
+
+impl UserValues {
+    pub fn new(values: [f32; 4]) -> UserValues {
+        UserValues(values.map(|v| AtomicU32::new(v.to_bits())))
+    }
+
+    pub fn get(&self) -> [f32; 4] {
+        std::array::from_fn(|i| f32::from_bits(self.0[i].load(Ordering::Relaxed)))
+    }
+
+    /// Set value `i` (nothing past the fourth).
+    pub fn set(&self, i: usize, value: f32) {
+        if let Some(v) = self.0.get(i) {
+            v.store(value.to_bits(), Ordering::Relaxed);
+        }
+    }
 }
 
 impl DBuffer {
@@ -190,7 +214,7 @@ impl DBuffer {
         ctx: &GpuContext,
         spec: &'static MethodSpec,
         source: &str,
-        values: &'static [f32; 4],
+        values: &'static UserValues,
         bvh: bool,
     ) -> DBuffer {
         let fragment = wgpu::ShaderStages::FRAGMENT;
@@ -243,7 +267,7 @@ impl MethodState for DBuffer {
         queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         if let Some((values, buffer)) = &self.user {
-            queue.write_buffer(buffer, 0, bytemuck::bytes_of(*values));
+            queue.write_buffer(buffer, 0, bytemuck::bytes_of(&values.get()));
         }
         if let Some((counts, built)) = &mut self.bvh {
             if built

@@ -293,7 +293,7 @@ impl Method {
 
     /// A user's method's expanded shader and knob values (what decides its images beyond its
     /// name, for caches keyed by the method); `None` for the registry's.
-    pub fn user_shader(self) -> Option<(&'static str, &'static [f32])> {
+    pub fn user_shader(self) -> Option<(String, Vec<f32>)> {
         self.0.user.map(|u| u.shader_and_values())
     }
 }
@@ -303,6 +303,9 @@ impl FromStr for Method {
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         if let Some(path) = user::path_of(s) {
             return user::load(path, &[]);
+        }
+        if let Some(m) = user::by_name(s) {
+            return Ok(m);
         }
         ALL.iter().copied().find(|m| m.name() == s).ok_or_else(|| {
             let names: Vec<&str> = ALL.iter().map(|m| m.name()).collect();

@@ -61,7 +61,7 @@ pub trait MakeState: Send + Sync {
 
     /// The expanded shader and the knob values that decide what it draws, beyond its name:
     /// what a cache keyed by the method must hold so an edited file is measured again.
-    fn shader_and_values(&self) -> (&str, &[f32]);
+    fn shader_and_values(&self) -> (String, Vec<f32>);
 
     /// The file it was loaded from, as given.
     fn path(&self) -> &str;

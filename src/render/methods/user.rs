@@ -8,19 +8,22 @@
 //! lines, so the file's line numbers stay its own), with an accessor `knob_NAME()` per knob of
 //! its header (`// knob: NAME MIN..MAX = DEFAULT`, up to [`MAX_USER_KNOBS`]).
 //!
-//! Everything is checked when the file is loaded, before any GPU work: the file, its knob
-//! header, that it defines `method_visibility`, that it binds nothing in groups 0 and 1
-//! itself, and naga's parse and validation of the whole shader; each refusal is one line that
-//! names the user's file and the line (and column) in it.
+//! Everything is checked when the file is loaded, and again when the lab reloads it
+//! ([`UserMethod::reload`], which keeps the last good version), before any GPU work: the file,
+//! its knob header, that it defines `method_visibility`, that it binds nothing in groups 0 and 1
+//! itself, and naga's parse and validation of the whole shader; each refusal is a
+//! [`ShaderError`] that names the user's file and the line (and column) in it, with that line.
 
 use std::path::Path;
 
-use naga::valid::{Capabilities, ValidationFlags, Validator};
+use std::sync::{Mutex, RwLock};
 
 use super::dbuffer::{
-    DBuffer, BVH_BINDING, BVH_COUNTS_BINDING, NEEDS, NEEDS_WITH_BVH, USER_BINDING, USER_KNOBS,
+    DBuffer, UserValues, BVH_BINDING, BVH_COUNTS_BINDING, NEEDS, NEEDS_WITH_BVH, USER_BINDING,
+    USER_KNOBS,
 };
 use super::{Cost, MakeState, Method, MethodSpec, MethodState};
+use crate::render::shaders::{self, ShaderError};
 use crate::render::GpuContext;
 use crate::shader_source::{self, Expanded};
 
@@ -43,18 +46,112 @@ pub struct UserKnob {
     pub line: u32,
 }
 
-/// A user's method as loaded: its file, knobs and their values, and the expanded shader.
+/// A user's method as loaded: its file, knobs and their values, and the expanded shader; the
+/// knobs and the shader are those of the file's last good version ([`UserMethod::reload`]),
+/// the values what the `--knob` settings or the lab's sliders set.
 #[derive(Debug)]
 pub struct UserMethod {
     /// The path as given on the command line.
     pub path: String,
-    pub knobs: Vec<UserKnob>,
+    loaded: RwLock<Loaded>,
     /// The knobs' values in header order, unused slots 0 (`user_params.values` of the shader).
-    pub values: [f32; MAX_USER_KNOBS],
+    values: UserValues,
+}
+
+/// What a version of the file gives.
+#[derive(Debug)]
+struct Loaded {
+    text: String,
+    knobs: Vec<UserKnob>,
     /// The shader: the file, its includes and the generated code.
-    pub source: String,
+    source: String,
     /// The file calls `scene_occluded`: the scene's BVH is bound for it.
-    pub bvh: bool,
+    bvh: bool,
+}
+
+impl UserMethod {
+    /// The knobs of its header.
+    pub fn knobs(&self) -> Vec<UserKnob> {
+        self.loaded
+            .read()
+            .map(|l| l.knobs.clone())
+            .unwrap_or_default()
+    }
+
+    /// The knobs' values, in header order.
+    pub fn values(&self) -> [f32; MAX_USER_KNOBS] {
+        self.values.get()
+    }
+
+    /// Set knob `name` to `value`, clamped to its range; false for a name it lacks.
+    pub fn set_value(&self, name: &str, value: f32) -> bool {
+        let knobs = self.knobs();
+        let Some(i) = knobs.iter().position(|k| k.name == name) else {
+            return false;
+        };
+        let k = &knobs[i];
+        let v = if value.is_finite() {
+            value.clamp(k.min, k.max)
+        } else {
+            k.default
+        };
+        self.values.set(i, v);
+        true
+    }
+
+    /// The expanded shader of the file's last good version.
+    pub fn source(&self) -> String {
+        self.loaded
+            .read()
+            .map(|l| l.source.clone())
+            .unwrap_or_default()
+    }
+
+    /// Whether the file's last good version calls `scene_occluded` (the scene's BVH is bound).
+    pub fn traces_scene(&self) -> bool {
+        self.loaded.read().is_ok_and(|l| l.bvh)
+    }
+
+    /// The name its pipelines are kept under and that a change of its file is noted as
+    /// ([`crate::render::shaders`]): `file:PATH`.
+    pub fn shader_key(&self) -> String {
+        format!("{PREFIX}{}", self.path)
+    }
+
+    /// Read the file again: `Ok(false)` when its text is the same, `Ok(true)` when the new text
+    /// checked through and is now the method's (a knob kept by name keeps its value, clamped to
+    /// its new range; a new one starts at its default), else why not (the last good version
+    /// stays).
+    pub fn reload(&self) -> Result<bool, ShaderError> {
+        let path = &self.path;
+        let text = std::fs::read_to_string(path).map_err(|e| ShaderError {
+            file: path.clone(),
+            line: 0,
+            column: 0,
+            message: format!("cannot read the method file: {e}"),
+            text: None,
+        })?;
+        if self.loaded.read().is_ok_and(|l| l.text == text) {
+            return Ok(false);
+        }
+        let old = (self.knobs(), self.values());
+        let loaded = checked(path, text)?;
+        for (i, k) in loaded.knobs.iter().enumerate() {
+            let v = old
+                .0
+                .iter()
+                .position(|o| o.name == k.name)
+                .map_or(k.default, |j| old.1[j].clamp(k.min, k.max));
+            self.values.set(i, v);
+        }
+        for i in loaded.knobs.len()..MAX_USER_KNOBS {
+            self.values.set(i, 0.0);
+        }
+        if let Ok(mut l) = self.loaded.write() {
+            *l = loaded;
+        }
+        Ok(true)
+    }
 }
 
 /// Its state: the D-buffer's, drawing the file's shader with its knobs.
@@ -63,19 +160,55 @@ impl MakeState for UserMethod {
         Box::new(DBuffer::user(
             ctx,
             spec,
-            &self.source,
+            &self.source(),
             &self.values,
-            self.bvh,
+            self.traces_scene(),
         ))
     }
 
-    fn shader_and_values(&self) -> (&str, &[f32]) {
-        (&self.source, &self.values)
+    fn shader_and_values(&self) -> (String, Vec<f32>) {
+        (self.source(), self.values().to_vec())
     }
 
     fn path(&self) -> &str {
         &self.path
     }
+}
+
+/// The user's methods loaded so far in this process, the latest last.
+fn registry() -> &'static Mutex<Vec<(Method, &'static UserMethod)>> {
+    static LOADED: Mutex<Vec<(Method, &'static UserMethod)>> = Mutex::new(Vec::new());
+    &LOADED
+}
+
+/// The user's methods loaded so far, each name once (its latest load).
+pub fn loaded() -> Vec<(Method, &'static UserMethod)> {
+    let all = registry().lock().map(|r| r.clone()).unwrap_or_default();
+    let mut out: Vec<(Method, &'static UserMethod)> = Vec::new();
+    for (m, u) in all.into_iter().rev() {
+        if !out.iter().any(|(o, _)| *o == m) {
+            out.push((m, u));
+        }
+    }
+    out.reverse();
+    out
+}
+
+/// The user's method of `method`, if it is one.
+pub fn of(method: Method) -> Option<&'static UserMethod> {
+    method.is_user().then_some(())?;
+    loaded()
+        .into_iter()
+        .find(|(m, _)| *m == method)
+        .map(|(_, u)| u)
+}
+
+/// The loaded user's method named `name` (`user-STEM`).
+pub fn by_name(name: &str) -> Option<Method> {
+    loaded()
+        .into_iter()
+        .find(|(m, _)| m.name() == name)
+        .map(|(m, _)| m)
 }
 
 /// `file:PATH` → `PATH`, for any other name `None`.
@@ -89,35 +222,89 @@ pub fn path_of(name: &str) -> Option<&str> {
 /// Each call leaks one [`MethodSpec`] and its [`UserMethod`] (`Box::leak`): a [`Method`] is a
 /// `&'static MethodSpec`, and a command line loads a file once for the whole run.
 pub fn load(path: &str, settings: &[String]) -> Result<Method, String> {
+    load_checked(path, settings).map_err(|e| match e {
+        LoadError::Shader(e) => e.headline(),
+        LoadError::Other(e) => e,
+    })
+}
+
+/// Why a user's file is not a method: its shader (where, why, the offending line), or anything
+/// else (the file unread, a `--knob` setting) in one line.
+#[derive(Debug)]
+pub enum LoadError {
+    Shader(ShaderError),
+    Other(String),
+}
+
+/// [`load`], a shader's error kept whole: the command line prints its offending line too.
+pub fn load_checked(path: &str, settings: &[String]) -> Result<Method, LoadError> {
     let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read the method file {path}: {e}"))?;
-    let knobs = parse_header(path, &text)?;
-    let values = knob_values(path, &knobs, settings)?;
-    let bvh = uses_scene_bvh(&text);
-    let generated = generated_code(&knobs, bvh);
-    let expanded = shader_source::expand_user(path, &text, (GENERATED, &generated))
-        .map_err(|e| format!("{path}: {e}"))?;
-    check(path, &text, &expanded)?;
+        .map_err(|e| LoadError::Other(format!("cannot read the method file {path}: {e}")))?;
+    let loaded = checked(path, text).map_err(LoadError::Shader)?;
+    let values = knob_values(path, &loaded.knobs, settings).map_err(LoadError::Other)?;
     let user: &'static UserMethod = Box::leak(Box::new(UserMethod {
         path: path.to_owned(),
-        knobs,
-        values,
-        source: expanded.source,
-        bvh,
+        loaded: RwLock::new(loaded),
+        values: UserValues::new(values),
     }));
     let name: &'static str = Box::leak(method_name(path).into_boxed_str());
-    let shader: &'static str = Box::leak(format!("{PREFIX}{path}").into_boxed_str());
+    let shader: &'static str = Box::leak(user.shader_key().into_boxed_str());
     let about: &'static str = Box::leak(format!("a user's method from {path}").into_boxed_str());
     // The D-buffer's needs, knobs and lights: its state draws the file.
     let spec = MethodSpec::new(name, shader, |ctx| Box::new(DBuffer::new(ctx, false)))
-        .adapter(if bvh { NEEDS_WITH_BVH } else { NEEDS })
+        .adapter(if user.traces_scene() {
+            NEEDS_WITH_BVH
+        } else {
+            NEEDS
+        })
         .knobs(&USER_KNOBS)
         .lights(super::AREA_LIGHTS)
         .user(user)
         .about(about)
         .cost(Cost::DEFAULT)
         .fixed_quality("a user's method has no quality settings the study knows");
-    Ok(Method(Box::leak(Box::new(spec))))
+    let method = Method(Box::leak(Box::new(spec)));
+    if let Ok(mut r) = registry().lock() {
+        r.push((method, user));
+    }
+    Ok(method)
+}
+
+/// The file's `text` checked through: its knobs and expanded shader, or where and why not.
+fn checked(path: &str, text: String) -> Result<Loaded, ShaderError> {
+    let at_file = |message: String| {
+        // The messages of the header and the expansion start with the place themselves.
+        let rest = message
+            .strip_prefix(path)
+            .map(|r| r.trim_start_matches(':').trim_start())
+            .unwrap_or(&message);
+        let (line, message) = match rest.split_once(": ") {
+            Some((l, m)) if l.parse::<u32>().is_ok() => (l.parse().unwrap_or(0), m.to_owned()),
+            _ => (0, rest.to_owned()),
+        };
+        let text = (line > 0)
+            .then(|| text.lines().nth(line as usize - 1).map(str::to_owned))
+            .flatten();
+        ShaderError {
+            file: path.to_owned(),
+            line,
+            column: 0,
+            message,
+            text,
+        }
+    };
+    let knobs = parse_header(path, &text).map_err(at_file)?;
+    let bvh = uses_scene_bvh(&text);
+    let generated = generated_code(&knobs, bvh);
+    let expanded = shader_source::expand_user(path, &text, (GENERATED, &generated))
+        .map_err(|e| at_file(format!("{path}: {e}")))?;
+    check(path, &text, &expanded)?;
+    Ok(Loaded {
+        text,
+        knobs,
+        source: expanded.source,
+        bvh,
+    })
 }
 
 /// The name in reports and compare's files: `user-` and the file's stem, with anything but
@@ -328,40 +515,33 @@ fn defines_visibility(text: &str) -> bool {
     })
 }
 
-/// Where line `line` (1-based, column `column`) of the expanded shader is, in words: the
-/// user's `path:line:column`, or the shared file it came from.
-fn place(path: &str, expanded: &Expanded, line: u32, column: u32) -> String {
-    match expanded.origin(line) {
-        Some((file, l)) if file == path => format!("{path}:{l}:{column}"),
-        Some((file, l)) => format!("{path} (at {file}:{l}, which it includes)"),
-        None => path.to_owned(),
-    }
-}
-
 /// Refuse the file unless it defines `method_visibility`, binds nothing in groups 0 and 1 and
 /// naga parses and validates the expanded shader.
-fn check(path: &str, text: &str, expanded: &Expanded) -> Result<(), String> {
+fn check(path: &str, text: &str, expanded: &Expanded) -> Result<(), ShaderError> {
     if !defines_visibility(text) {
-        return Err(format!(
-            "{path}: defines no `fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: \
-             vec2<f32>) -> Visibility`"
-        ));
-    }
-    let source = &expanded.source;
-    let module = naga::front::wgsl::parse_str(source).map_err(|e| {
-        let at = e.location(source).map_or(path.to_owned(), |l| {
-            place(path, expanded, l.line_number, l.line_position)
+        return Err(ShaderError {
+            file: path.to_owned(),
+            line: 0,
+            column: 0,
+            message: "defines no `fn method_visibility(x: vec3<f32>, n: vec3<f32>, pixel: \
+                      vec2<f32>) -> Visibility`"
+                .into(),
+            text: None,
         });
-        let label = e
-            .labels()
-            .next()
-            .map(|(_, l)| l.to_owned())
-            .filter(|l| !l.is_empty() && l != e.message());
-        match label {
-            Some(l) => format!("{at}: {} ({l})", e.message()),
-            None => format!("{at}: {}", e.message()),
+    }
+    // A line of a shared file is named as the user's file, then that file and its line.
+    let path_of = |file: &str| {
+        if file == path {
+            path.to_owned()
+        } else {
+            format!("{path}: {file}")
         }
-    })?;
+    };
+    let module = match naga::front::wgsl::parse_str(&expanded.source) {
+        Ok(module) => module,
+        Err(_) => return shaders::validate(expanded, &path_of).map(|_| ()),
+    };
+    let source = &expanded.source;
     for (handle, var) in module.global_variables.iter() {
         let Some(binding) = &var.binding else {
             continue;
@@ -371,32 +551,24 @@ fn check(path: &str, text: &str, expanded: &Expanded) -> Result<(), String> {
             continue;
         };
         if file == path && binding.group <= 1 {
-            return Err(format!(
-                "{path}:{line}: declares `{}` at @group({}) @binding({}); groups 0 and 1 are \
-                 the camera pass's and the D-buffer's, whose bindings are declared for the file \
-                 (params, d_u, d_p, corners, user_params): a user's method binds nothing itself",
-                var.name.as_deref().unwrap_or("?"),
-                binding.group,
-                binding.binding
-            ));
+            return Err(ShaderError {
+                file: path.to_owned(),
+                line,
+                column: 0,
+                message: format!(
+                    "declares `{}` at @group({}) @binding({}); groups 0 and 1 are the camera \
+                     pass's and the D-buffer's, whose bindings are declared for the file \
+                     (params, d_u, d_p, corners, user_params): a user's method binds nothing \
+                     itself",
+                    var.name.as_deref().unwrap_or("?"),
+                    binding.group,
+                    binding.binding
+                ),
+                text: text.lines().nth(line as usize - 1).map(str::to_owned),
+            });
         }
     }
-    Validator::new(ValidationFlags::all(), Capabilities::all())
-        .validate(&module)
-        .map_err(|e| {
-            let at = e.location(source).map_or(path.to_owned(), |l| {
-                place(path, expanded, l.line_number, l.line_position)
-            });
-            let mut message = e.as_inner().to_string();
-            let mut cause = std::error::Error::source(e.as_inner());
-            while let Some(c) = cause {
-                message.push_str(": ");
-                message.push_str(&c.to_string());
-                cause = c.source();
-            }
-            format!("{at}: {}", message.replace('\n', " "))
-        })?;
-    Ok(())
+    shaders::validate(expanded, &path_of).map(|_| ())
 }
 
 #[cfg(test)]
