@@ -8,6 +8,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use eframe::egui;
 
@@ -32,7 +33,13 @@ pub struct Live {
     errors: BTreeMap<String, ShaderError>,
     /// Good reloads applied so far.
     applied: u64,
+    /// How long a user's method's trial frame may take ([`TRIAL_LIMIT`] unless set).
+    trial_limit: Option<Duration>,
 }
+
+/// How long the trial frame of a user's method opened or saved may take on its own device
+/// ([`crate::render::offline::trial`]) before the lab refuses it and keeps what it had.
+pub const TRIAL_LIMIT: Duration = Duration::from_secs(10);
 
 impl Live {
     fn watcher(&mut self) -> &Watcher {
@@ -69,6 +76,14 @@ impl LabApp {
         let text = path.display().to_string();
         match user::load(&text, &[]) {
             Ok(method) => {
+                if let Err(e) = self.trial(method) {
+                    let kept = self.settings.method.clone();
+                    self.set_status(
+                        format!("cannot open method: {e}; the lab keeps {kept}"),
+                        Level::Error,
+                    );
+                    return;
+                }
                 self.live.watcher().watch(path);
                 self.live.methods.retain(|m| *m != method);
                 self.live.methods.push(method);
@@ -119,13 +134,34 @@ impl LabApp {
                 }
             }
         }
-        for &m in &self.live.methods {
+        for m in self.live.methods.clone() {
             let Some(u) = user::of(m) else { continue };
             match u.reload() {
                 Ok(again) => {
                     self.live.errors.remove(&u.path);
-                    if again {
-                        changed.insert(u.shader_key());
+                    if !again {
+                        continue;
+                    }
+                    // A new version draws in the lab only once its trial frame finished on a
+                    // device of its own: one that loses its device, or never ends, is refused
+                    // and the last good version keeps drawing.
+                    match self.trial(m) {
+                        Ok(()) => {
+                            changed.insert(u.shader_key());
+                        }
+                        Err(e) => {
+                            u.revert();
+                            let prefix = format!("{}: ", u.path);
+                            let message = e.strip_prefix(&prefix).unwrap_or(&e).to_owned();
+                            let error = ShaderError {
+                                file: u.path.clone(),
+                                line: 0,
+                                column: 0,
+                                message,
+                                text: None,
+                            };
+                            self.live.errors.insert(u.path.clone(), error);
+                        }
                     }
                 }
                 Err(e) => {
@@ -154,6 +190,22 @@ impl LabApp {
             );
         }
         ctx.request_repaint();
+    }
+
+    /// One small frame of `method` on a device and thread of its own, on the lab's scene
+    /// ([`crate::render::offline::trial`]), waited for at most the trial limit.
+    fn trial(&self, method: Method) -> Result<(), String> {
+        let Some(scene) = self.core.as_ref().map(|c| c.scene().clone()) else {
+            return Ok(());
+        };
+        let limit = self.live.trial_limit.unwrap_or(TRIAL_LIMIT);
+        crate::render::offline::trial(method, &scene, limit)
+    }
+
+    /// How long a user's method's trial frame may take (tests set a tiny one to stand in for
+    /// a shader that never ends).
+    pub fn set_trial_limit(&mut self, limit: Duration) {
+        self.live.trial_limit = Some(limit);
     }
 
     /// Good reloads applied so far (tests wait for it to grow).

@@ -314,3 +314,68 @@ fn an_opened_method_is_listed_with_its_knobs_and_its_file_watched() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A method whose trial frame does not finish on its own device (a shader that never ends, or
+/// loses its device; here a 1 ms limit stands in for one, as lavapipe ends every loop) is
+/// refused: opened, the lab keeps the method it showed; saved, the panel says why and the last
+/// good version keeps drawing.
+#[test]
+fn a_method_whose_trial_frame_does_not_finish_leaves_the_lab_on_the_last_good_one() {
+    let dir: PathBuf =
+        std::env::temp_dir().join(format!("dbuffer-live-trial-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp folder");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let file = dir.join("trial.wgsl");
+    let original = std::fs::read_to_string(root.join("examples/methods/pcss_variant.wgsl"))
+        .expect("the example");
+    std::fs::write(&file, &original).expect("copy");
+
+    let mut h = support_lab::lab_sized(None, 900.0, 700.0);
+    h.run();
+    let shown = h.state().settings.method.clone();
+    h.state_mut().set_trial_limit(Duration::from_millis(1));
+    h.state_mut()
+        .open_method(&root.join("tests/methods/endless.wgsl"));
+    let status = h.state().status().0.to_owned();
+    assert!(
+        status.contains("trial frame did not finish") && status.contains("the lab keeps"),
+        "{status}"
+    );
+    assert_eq!(h.state().settings.method, shown, "the lab switched");
+    assert!(h.query_all_by_label("user-endless").next().is_none());
+
+    // A good method opened, then a save whose trial does not finish.
+    h.state_mut().set_trial_limit(Duration::from_secs(60));
+    h.state_mut().open_method(&file);
+    assert!(
+        step_until_gpu(&mut h, 20, |h| h
+            .state()
+            .shown()
+            .is_some_and(|s| s.method.name() == "user-trial")),
+        "the good method was not shown: {:?}",
+        h.state().status()
+    );
+    step_until_gpu(&mut h, 5, |_| false);
+    let before = visibility(&mut h);
+    h.state_mut().set_trial_limit(Duration::from_millis(1));
+    save(&mut h, &file, &constant_v(&original));
+    assert!(
+        step_until_gpu(&mut h, 20, |h| !h.state().shader_errors().is_empty()),
+        "no error shown"
+    );
+    let e = h.state().shader_errors()[0].clone();
+    assert_eq!(e.file, file.display().to_string());
+    assert!(e.message.contains("trial frame did not finish"), "{e}");
+    assert_eq!(
+        h.state().shader_reloads(),
+        0,
+        "the refused save was applied"
+    );
+    step_until_gpu(&mut h, 5, |_| false);
+    assert_eq!(
+        visibility(&mut h),
+        before,
+        "the last good version stopped drawing"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -56,6 +56,8 @@ pub struct UserMethod {
     loaded: RwLock<Loaded>,
     /// The knobs' values in header order, unused slots 0 (`user_params.values` of the shader).
     values: UserValues,
+    /// The version before the last good reload, and its knob values ([`UserMethod::revert`]).
+    previous: RwLock<Option<(Loaded, [f32; MAX_USER_KNOBS])>>,
 }
 
 /// What a version of the file gives.
@@ -148,9 +150,28 @@ impl UserMethod {
             self.values.set(i, 0.0);
         }
         if let Ok(mut l) = self.loaded.write() {
-            *l = loaded;
+            let before = std::mem::replace(&mut *l, loaded);
+            if let Ok(mut p) = self.previous.write() {
+                *p = Some((before, old.1));
+            }
         }
         Ok(true)
+    }
+
+    /// Go back to the version before the last good reload, with its knob values (the lab, when
+    /// the new version's trial frame failed: [`crate::render::offline::trial`]); false where
+    /// there is none. The file itself is left as the user saved it.
+    pub fn revert(&self) -> bool {
+        let Some((before, values)) = self.previous.write().ok().and_then(|mut p| p.take()) else {
+            return false;
+        };
+        for (i, v) in values.into_iter().enumerate() {
+            self.values.set(i, v);
+        }
+        if let Ok(mut l) = self.loaded.write() {
+            *l = before;
+        }
+        true
     }
 }
 
@@ -246,6 +267,7 @@ pub fn load_checked(path: &str, settings: &[String]) -> Result<Method, LoadError
         path: path.to_owned(),
         loaded: RwLock::new(loaded),
         values: UserValues::new(values),
+        previous: RwLock::new(None),
     }));
     let name: &'static str = Box::leak(method_name(path).into_boxed_str());
     let shader: &'static str = Box::leak(user.shader_key().into_boxed_str());
