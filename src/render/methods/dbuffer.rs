@@ -8,6 +8,7 @@
 //! with `shaders/methods/dbuffer.wgsl`. CPU twin: `geometry::DBufferTwin`.
 
 use super::dbuffer_light::DBufferLight;
+pub use super::dbuffer_light::{GeometryPath, GEOMETRY};
 use super::{
     require, CameraGroup, Cost, LightMaps, MethodSpec, MethodState, Prepare, Quality, SharedMaps,
     Switch,
@@ -32,7 +33,7 @@ pub static DBUFFER: MethodSpec =
     MethodSpec::new("dbuffer", SHADER, |ctx| Box::new(DBuffer::new(ctx, false)))
         .adapter(NEEDS)
         .about("D-buffer soft shadows (Jakobsen et al. 2004)")
-        .knobs(&[&HORIZON.0, &CORNERS.0])
+        .knobs(&[&HORIZON.0, &CORNERS.0, &GEOMETRY.0])
         .cost(DBUFFER_COST)
         .lights(super::AREA_LIGHTS)
         .sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]); // volumes from a planar light's outline
@@ -42,7 +43,7 @@ pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER
 })
 .adapter(NEEDS)
 .about("D-buffer with silhouettes from the light centre only")
-.knobs(&[&HORIZON.0, &CORNERS.0])
+.knobs(&[&HORIZON.0, &CORNERS.0, &GEOMETRY.0])
 .cost(DBUFFER_COST)
 .lights(super::AREA_LIGHTS)
 .sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]); // volumes from a planar light's outline
@@ -242,6 +243,12 @@ impl MethodState for DBuffer {
 
     fn geometry_builds(&self) -> (u64, f64) {
         self.paper.geometry_builds()
+    }
+
+    fn gpu_geometry(&self) -> Option<&crate::render::passes::geometry_gpu::GpuGeometry> {
+        self.paper
+            .gpu_geometry()
+            .filter(|_| self.paper.geometry_path() == GeometryPath::Gpu)
     }
 
     fn invalidate(&mut self) {
