@@ -324,36 +324,38 @@ impl GpuGeometry {
             rec.encoder.clear_buffer(&c.state, 0, None);
         }
         let span = rec.span("geometry_gpu");
-        {
-            let mut p = rec
-                .encoder
-                .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("GpuGeometry::stage"),
-                    timestamp_writes: span.compute_writes(rec.timer),
-                });
-            let max_groups = ctx
-                .device
-                .limits()
-                .max_compute_workgroups_per_dimension
-                .max(1);
-            let dispatch = |p: &mut wgpu::ComputePass<'_>, items: u32| {
-                let groups = items.div_ceil(64).max(1);
-                let x = groups.min(max_groups);
-                p.dispatch_workgroups(x, groups.div_ceil(x), 1);
-            };
+        let max_groups = ctx
+            .device
+            .limits()
+            .max_compute_workgroups_per_dimension
+            .max(1);
+        let groups = |items: u32| {
+            let groups = items.div_ceil(64).max(1);
+            let x = groups.min(max_groups);
+            (x, groups.div_ceil(x))
+        };
+        // One compute pass per step: each step reads what the one before wrote, and a pass
+        // boundary orders that on every backend (GL included).
+        let steps = [
+            &self.pass.classify,
+            &self.pass.edges,
+            &self.pass.fans,
+            &self.pass.faces,
+            &self.pass.finish,
+        ];
+        for (k, pipeline) in steps.into_iter().enumerate() {
+            let writes = span.compute_writes_over(rec.timer, k == 0, k + 1 == steps.len());
+            let mut p = rec.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("GpuGeometry::stage"),
+                timestamp_writes: writes,
+            });
+            p.set_pipeline(pipeline);
             for c in &self.casters {
                 let (f, e, v) = c.flat_counts;
+                let items = [f, e, v, f, 1][k];
+                let (x, y) = if k == 4 { (1, 1) } else { groups(items) };
                 p.set_bind_group(0, &c.bind_group, &[]);
-                p.set_pipeline(&self.pass.classify);
-                dispatch(&mut p, f);
-                p.set_pipeline(&self.pass.edges);
-                dispatch(&mut p, e);
-                p.set_pipeline(&self.pass.fans);
-                dispatch(&mut p, v);
-                p.set_pipeline(&self.pass.faces);
-                dispatch(&mut p, f);
-                p.set_pipeline(&self.pass.finish);
-                p.dispatch_workgroups(1, 1, 1);
+                p.dispatch_workgroups(x, y, 1);
             }
         }
         rec.encoder.copy_buffer_to_texture(
