@@ -236,6 +236,10 @@ enum Command {
         /// Also write the comparison as a PNG: method | reference | |ΔV| (0 … 0.25).
         #[arg(long)]
         out: Option<std::path::PathBuf>,
+        /// Where the counts come from: the geometry stage on the CPU, on the GPU, or auto (the
+        /// GPU where an adapter can run it, as `render` picks).
+        #[arg(long, default_value = "auto")]
+        geometry: String,
     },
 }
 
@@ -287,14 +291,14 @@ fn main() -> ExitCode {
             vt,
             method,
             out,
+            geometry,
         }) => cli::inspect(
             &scene,
             gltf_scene,
             samples,
-            &size,
-            &vt,
-            &method,
+            (&size, &vt, &method),
             out.as_deref(),
+            &geometry,
         ),
         None => cli::gui(None, None, None, None, None, verbose),
         Some(Command::Gui {

@@ -8,7 +8,9 @@
 //! with `shaders/methods/dbuffer.wgsl`. CPU twin: `geometry::DBufferTwin`.
 
 use super::dbuffer_light::DBufferLight;
-pub use super::dbuffer_light::{GeometryPath, GEOMETRY};
+pub use super::dbuffer_light::{
+    gpu_geometry_by_default, gpu_geometry_runs, GeometryPath, GEOMETRY,
+};
 use super::{
     require, CameraGroup, Cost, LightMaps, MethodSpec, MethodState, Prepare, Quality, SharedMaps,
     Switch,

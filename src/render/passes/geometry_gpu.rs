@@ -15,7 +15,7 @@
 use crate::budget::MAX_VOLUME_TRIANGLES;
 use crate::geometry::flat_caster::FlatCaster;
 use crate::geometry::volume_vertices::{CORNERS_PER_ROW, MAX_CORNERS, TEXELS_PER_CORNER};
-use crate::geometry::{PreparedCasters, VolumeParams};
+use crate::geometry::{GeometryStats, PreparedCasters, SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::IndirectVolume;
 use crate::render::readback::read_u32s;
 use crate::render::timer::Recorder;
@@ -78,6 +78,29 @@ pub struct GpuStageCounts {
     /// Volume triangles made, before ending them at their reach.
     pub umbra_triangles: u32,
     pub penumbra_triangles: u32,
+}
+
+impl GpuStageCounts {
+    /// The counts as the CPU stage states them, for a caster of `triangles` faces
+    /// ([`GeometryStats`]: the stats panel, `meta.json`, `dbuffer inspect`). A refused caster
+    /// has no volume triangles, as the CPU's has none.
+    pub fn stats(&self, triangles: usize) -> GeometryStats {
+        let made = |n: u32| if self.refused { 0 } else { n as usize };
+        GeometryStats {
+            triangles,
+            all_front: self.classes[0] as usize,
+            none_front: self.classes[1] as usize,
+            silhouette_a: self.classes[2] as usize,
+            silhouette_b: self.classes[3] as usize,
+            umbra_edges: self.umbra_edges as usize,
+            penumbra_edges: self.penumbra_edges as usize,
+            fans: made(self.fans),
+            umbra_fans: made(self.umbra_fans),
+            umbra_triangles: made(self.umbra_triangles),
+            penumbra_triangles: made(self.penumbra_triangles),
+            unextruded_edges: self.unextruded_edges as usize,
+        }
+    }
 }
 
 /// One caster's stage read back ([`GpuGeometry::read_back`]).
@@ -345,10 +368,12 @@ impl GpuGeometry {
         ];
         for (k, pipeline) in steps.into_iter().enumerate() {
             let writes = span.compute_writes_over(rec.timer, k == 0, k + 1 == steps.len());
-            let mut p = rec.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("GpuGeometry::stage"),
-                timestamp_writes: writes,
-            });
+            let mut p = rec
+                .encoder
+                .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("GpuGeometry::stage"),
+                    timestamp_writes: writes,
+                });
             p.set_pipeline(pipeline);
             for c in &self.casters {
                 let (f, e, v) = c.flat_counts;
@@ -391,6 +416,71 @@ impl GpuGeometry {
                 )
             })
             .collect()
+    }
+
+    /// The counts of the last build as the CPU stage's [`SceneGeometry`] states them (no classes,
+    /// silhouettes or volumes in it: those stay on the GPU), with a warning per caster that
+    /// casts nothing; reads back (waits for the GPU): for `render`'s `meta.json` and `dbuffer
+    /// inspect`, never on the way to a frame.
+    pub fn stats(
+        &self,
+        ctx: &GpuContext,
+        prepared: &PreparedCasters,
+    ) -> Result<SceneGeometry, RenderError> {
+        let read = self.read_back(ctx)?;
+        let mut out = SceneGeometry {
+            warnings: prepared.scene_warnings.clone(),
+            ..SceneGeometry::default()
+        };
+        for (r, mesh) in read.iter().zip(&prepared.meshes) {
+            let stats = r.counts.stats(mesh.faces.len());
+            out.warnings.extend(mesh.report.warning(&mesh.name));
+            if r.counts.refused {
+                out.warnings.push(format!(
+                    "caster '{}': its shadow volumes pass the GPU stage's buffers or budget \
+                     ({MAX_VOLUME_TRIANGLES} volume triangles, MAX_VOLUME_TRIANGLES), or more \
+                     than {MAX_GPU_VERTEX_ENDS} silhouette edges meet at one vertex: it casts no \
+                     shadow (--geometry cpu draws it)",
+                    mesh.name
+                ));
+            }
+            if stats.unextruded_edges > 0 {
+                out.warnings.push(format!(
+                    "caster '{}': {} silhouette edges point into the light disk and get no volume",
+                    mesh.name, stats.unextruded_edges
+                ));
+            }
+            out.stats += stats;
+            out.casters.push(crate::geometry::CasterGeometry {
+                name: mesh.name.clone(),
+                stats,
+                ..Default::default()
+            });
+        }
+        Ok(out)
+    }
+
+    /// Run the stage once for `light` and read its counts back ([`GpuGeometry::stats`]):
+    /// `dbuffer inspect --geometry gpu`.
+    pub fn run_once(
+        ctx: &GpuContext,
+        prepared: &PreparedCasters,
+        light: &AreaLight,
+        params: &VolumeParams,
+        reach: Option<f32>,
+    ) -> Result<SceneGeometry, RenderError> {
+        let gpu = GpuGeometry::new(ctx, prepared).map_err(RenderError::Request)?;
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("GpuGeometry::run_once"),
+            });
+        {
+            let mut rec = Recorder::new(&mut encoder, None);
+            gpu.record(ctx, &mut rec, light, params, reach);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        gpu.stats(ctx, prepared)
     }
 
     /// Every caster's last stage read back (waits for the GPU): for tests and `dbuffer inspect`,
