@@ -694,10 +694,16 @@ fn push_fan(apex: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, turn: f32, kind: u32,
         }
         if d > 1e-5 && d < abs(delta) - 1e-5 {
             var j = m;
-            while j > 0u && ds[j - 1u] > d {
+            loop {
+                if j == 0u {
+                    break;
+                }
+                if ds[j - 1u] <= d {
+                    break;
+                }
                 ds[j] = ds[j - 1u];
                 ids[j] = ids[j - 1u];
-                j--;
+                j -= 1u;
             }
             ds[j] = d;
             ids[j] = i;
@@ -754,10 +760,18 @@ fn fans(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         var ends: array<u32, 64>;
         for (var i = 0u; i < count; i++) {
             let s = atomicLoad(&work[slot_word(vol, run + i)]);
+            // (Each test its own statement: wgpu's GL backend got `j > 0 && ends[j - 1] > s`
+            // wrong as a loop condition.)
             var j = i;
-            while j > 0u && ends[j - 1u] > s {
+            loop {
+                if j == 0u {
+                    break;
+                }
+                if ends[j - 1u] <= s {
+                    break;
+                }
                 ends[j] = ends[j - 1u];
-                j--;
+                j -= 1u;
             }
             ends[j] = s;
         }

@@ -289,6 +289,7 @@ fn the_gpu_stage_is_the_cpu_stage_on_every_built_in_and_generated_scenes() {
     run_on(Offline::new().unwrap_or_else(|e| panic!("{e}")));
 }
 
+/// The same on wgpu's GL backend (llvmpipe through EGL), skipped loudly where there is none.
 #[test]
 fn the_gpu_stage_is_the_cpu_stage_on_gl() {
     dbuffer::render::adapter::quiet_device_select();

@@ -9,6 +9,7 @@
 
 use super::dbuffer_light::DBufferLight;
 pub use super::dbuffer_light::{
+    light_move_ms,
     gpu_geometry_by_default, gpu_geometry_runs, GeometryPath, GEOMETRY,
 };
 use super::{

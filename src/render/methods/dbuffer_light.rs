@@ -42,8 +42,8 @@ pub const CHANNELS: &[Channel] = &[
 pub static GEOMETRY: super::Choice = super::Choice::new(
     "geometry",
     "dbuffer, dbuffer-center: where the geometry stage (face classes, silhouettes, volumes) \
-     runs: auto = on the GPU where the adapter can (not on GL), cpu, gpu (the CPU where the \
-     adapter cannot)",
+     runs: auto = on the GPU where the adapter can, cpu, gpu (the CPU where the adapter \
+     cannot)",
     &["auto", "cpu", "gpu"],
     0,
 );
@@ -54,11 +54,9 @@ pub fn gpu_geometry_runs(caps: &Capabilities) -> bool {
         && caps.limits.max_storage_buffers_per_shader_stage >= GPU_GEOMETRY_STORAGE_BUFFERS
 }
 
-/// Whether `--geometry auto` runs the stage on the GPU on an adapter of `caps`: where it can,
-/// but not on wgpu's GL backend, where the closing fans do not yet come out as the CPU's
-/// (tests/gpu/geometry_gpu.rs, ignored there).
+/// Whether `--geometry auto` runs the stage on the GPU on an adapter of `caps`: wherever it can.
 pub fn gpu_geometry_by_default(caps: &Capabilities) -> bool {
-    gpu_geometry_runs(caps) && caps.backend != wgpu::Backend::Gl
+    gpu_geometry_runs(caps)
 }
 
 /// Where a build of the geometry stage ran.
@@ -381,4 +379,64 @@ fn corner_texture(ctx: &GpuContext, corners: &[[f32; 4]]) -> wgpu::TextureView {
             bytemuck::cast_slice(&data),
         )
         .create_view(&wgpu::TextureViewDescriptor::default())
+}
+
+/// Milliseconds from a light move to volumes the light pass can draw, per run, on `path`: on
+/// the CPU the geometry stage, the volumes laid out as drawn (`drawn_volumes`) and uploaded; on
+/// the GPU the stage's compute passes recorded and run. Each run waits until the device is idle,
+/// so both count what must be done before the light pass could draw (`bench`'s scaling curve).
+/// The scene's casters are prepared (welded, adjacency, on the GPU its buffers) once, untimed.
+pub fn light_move_ms(
+    ctx: &GpuContext,
+    scene: &crate::scene::Scene,
+    path: GeometryPath,
+    runs: usize,
+) -> Result<Vec<f64>, RenderError> {
+    let Some(light) = scene.light.as_area().copied() else {
+        return Ok(Vec::new());
+    };
+    let prepared = crate::geometry::PreparedCasters::new(scene);
+    let params = VolumeParams::for_scene(scene);
+    let view = crate::geometry::light_view::LightView::fit(scene);
+    let reach = reach_below(&light, scene.bounds());
+    let gpu = match path {
+        GeometryPath::Gpu => Some(GpuGeometry::new(ctx, &prepared).map_err(RenderError::Request)?),
+        GeometryPath::Cpu => None,
+    };
+    let mut out = Vec::new();
+    for _ in 0..runs.max(1) {
+        let t = Instant::now();
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("light_move_ms"),
+            });
+        let kept = match &gpu {
+            Some(gpu) => {
+                let mut rec = Recorder::new(&mut encoder, None);
+                gpu.record(ctx, &mut rec, &light, &params, Some(reach));
+                Vec::new()
+            }
+            None => {
+                let geometry = prepared.build(&light, &params);
+                let drawn = drawn_volumes(&geometry, &light, &view, Some(reach));
+                let mut kept: Vec<VertexChunks> = drawn
+                    .umbrae
+                    .iter()
+                    .map(|(u, _)| VertexChunks::new(&ctx.device, "light_move_ms::umbra", u))
+                    .collect();
+                kept.push(VertexChunks::new(
+                    &ctx.device,
+                    "light_move_ms::penumbra",
+                    &drawn.penumbra,
+                ));
+                kept
+            }
+        };
+        ctx.queue.submit([encoder.finish()]);
+        crate::render::readback::map_now(&ctx.device)?;
+        out.push(t.elapsed().as_secs_f64() * 1e3);
+        drop(kept);
+    }
+    Ok(out)
 }
