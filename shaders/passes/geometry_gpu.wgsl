@@ -741,8 +741,6 @@ fn fans(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if v >= vertices() {
         return;
     }
-    let apex = position(v);
-    let run = vertex_run(v);
     // The penumbra's fans first, then the umbra's, as the CPU closes them.
     for (var round = 0u; round < 2u; round++) {
         let vol = 1u - round;
@@ -756,97 +754,105 @@ fn fans(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             atomicStore(&state[S_REFUSED], 2u);
             continue;
         }
-        // Ends sorted by (edge, outgoing): the slot's own order.
-        var ends: array<u32, 64>;
-        for (var i = 0u; i < count; i++) {
-            let s = atomicLoad(&work[slot_word(vol, run + i)]);
-            // (Each test its own statement: wgpu's GL backend got `j > 0 && ends[j - 1] > s`
-            // wrong as a loop condition.)
-            var j = i;
-            loop {
-                if j == 0u {
-                    break;
-                }
-                if ends[j - 1u] <= s {
-                    break;
-                }
-                ends[j] = ends[j - 1u];
-                j -= 1u;
-            }
-            ends[j] = s;
-        }
-        var exts: array<vec3<f32>, 64>;
-        for (var i = 0u; i < count; i++) {
-            exts[i] = load_point(ends[i] >> 1u, vol);
-        }
-        var used: array<bool, 64>;
-        for (var i = 0u; i < count; i++) {
-            used[i] = false;
-        }
-        let kind = select(4u, 5u, vol == 0u);
+        close_vertex(v, vol, count);
+    }
+}
+
+// The fans of one volume at vertex `v`, whose `count` ends (2 to MAX_ENDS) are in its run: a
+// function of its own, so that only such a vertex sets up the arrays (most have no end).
+fn close_vertex(v: u32, vol: u32, count: u32) {
+    let apex = position(v);
+    let run = vertex_run(v);
+    // Ends sorted by (edge, outgoing): the slot's own order.
+    var ends: array<u32, 64>;
+    for (var i = 0u; i < count; i++) {
+        let s = atomicLoad(&work[slot_word(vol, run + i)]);
+        // (Each test its own statement: wgpu's GL backend got `j > 0 && ends[j - 1] > s`
+        // wrong as a loop condition.)
+        var j = i;
         loop {
-            // The best pair left (fans::Fans::pairs): an incoming end with an outgoing one
-            // first, then the closest extrusion points, then the first in order.
-            var bi = 0xffffffffu;
-            var bj = 0u;
-            var b_same = true;
-            var b_gap = 0.0;
-            if count == 2u {
-                if !used[0] {
-                    bi = 0u;
-                    bj = 1u;
-                }
-            } else {
-                for (var i = 0u; i < count; i++) {
-                    if used[i] {
-                        continue;
-                    }
-                    for (var j = i + 1u; j < count; j++) {
-                        if used[j] {
-                            continue;
-                        }
-                        let same = (ends[i] & 1u) == (ends[j] & 1u);
-                        let gap = len3(exts[i] - exts[j]);
-                        var better = bi == 0xffffffffu;
-                        if !better {
-                            better = (!same && b_same) || (same == b_same && gap < b_gap);
-                        }
-                        if better {
-                            bi = i;
-                            bj = j;
-                            b_same = same;
-                            b_gap = gap;
-                        }
-                    }
-                }
-            }
-            if bi == 0xffffffffu {
+            if j == 0u {
                 break;
             }
-            used[bi] = true;
-            used[bj] = true;
-            let ea = ends[bi] >> 1u;
-            let eb = ends[bj] >> 1u;
-            let p1 = exts[bi];
-            let p2 = exts[bj];
-            if all(p1 == p2) {
-                continue;
+            if ends[j - 1u] <= s {
+                break;
             }
-            let far = array<vec3<f32>, 2>(other_end(ea, v), other_end(eb, v));
-            let turn = support_turn(apex, far[0], p1, far[1], p2);
-            let behind = apex + (apex - 0.5 * (p1 + p2));
-            var marker = 0.0;
-            if corner_convexity(apex, array<u32, 2>(ea, eb), far, behind) == 1u
-                && caster_in_wedge(apex, far, behind) {
-                let k = atomicAdd(&state[S_CORNERS], 1u);
-                if k < P.limits.z && P.limits.y + k < MAX_CORNERS {
-                    store_corner(P.limits.y + k, apex, far, ea, eb, p1, p2);
-                    marker = -(2.0 + f32(P.limits.y + k));
+            ends[j] = ends[j - 1u];
+            j -= 1u;
+        }
+        ends[j] = s;
+    }
+    var exts: array<vec3<f32>, 64>;
+    for (var i = 0u; i < count; i++) {
+        exts[i] = load_point(ends[i] >> 1u, vol);
+    }
+    var used: array<bool, 64>;
+    for (var i = 0u; i < count; i++) {
+        used[i] = false;
+    }
+    let kind = select(4u, 5u, vol == 0u);
+    loop {
+        // The best pair left (fans::Fans::pairs): an incoming end with an outgoing one
+        // first, then the closest extrusion points, then the first in order.
+        var bi = 0xffffffffu;
+        var bj = 0u;
+        var b_same = true;
+        var b_gap = 0.0;
+        if count == 2u {
+            if !used[0] {
+                bi = 0u;
+                bj = 1u;
+            }
+        } else {
+            for (var i = 0u; i < count; i++) {
+                if used[i] {
+                    continue;
+                }
+                for (var j = i + 1u; j < count; j++) {
+                    if used[j] {
+                        continue;
+                    }
+                    let same = (ends[i] & 1u) == (ends[j] & 1u);
+                    let gap = len3(exts[i] - exts[j]);
+                    var better = bi == 0xffffffffu;
+                    if !better {
+                        better = (!same && b_same) || (same == b_same && gap < b_gap);
+                    }
+                    if better {
+                        bi = i;
+                        bj = j;
+                        b_same = same;
+                        b_gap = gap;
+                    }
                 }
             }
-            push_fan(apex, p1, p2, turn, kind, marker);
-            atomicAdd(&state[select(S_FANS, S_UMBRA_FANS, vol == 0u)], 1u);
         }
+        if bi == 0xffffffffu {
+            break;
+        }
+        used[bi] = true;
+        used[bj] = true;
+        let ea = ends[bi] >> 1u;
+        let eb = ends[bj] >> 1u;
+        let p1 = exts[bi];
+        let p2 = exts[bj];
+        if all(p1 == p2) {
+            continue;
+        }
+        let far = array<vec3<f32>, 2>(other_end(ea, v), other_end(eb, v));
+        let turn = support_turn(apex, far[0], p1, far[1], p2);
+        let behind = apex + (apex - 0.5 * (p1 + p2));
+        var marker = 0.0;
+        if corner_convexity(apex, array<u32, 2>(ea, eb), far, behind) == 1u
+            && caster_in_wedge(apex, far, behind) {
+            let k = atomicAdd(&state[S_CORNERS], 1u);
+            if k < P.limits.z && P.limits.y + k < MAX_CORNERS {
+                store_corner(P.limits.y + k, apex, far, ea, eb, p1, p2);
+                marker = -(2.0 + f32(P.limits.y + k));
+            }
+        }
+        push_fan(apex, p1, p2, turn, kind, marker);
+        atomicAdd(&state[select(S_FANS, S_UMBRA_FANS, vol == 0u)], 1u);
     }
 }
 

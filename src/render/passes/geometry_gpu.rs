@@ -14,7 +14,7 @@
 
 use crate::budget::MAX_VOLUME_TRIANGLES;
 use crate::geometry::flat_caster::FlatCaster;
-use crate::geometry::volume_vertices::{CORNERS_PER_ROW, MAX_CORNERS, TEXELS_PER_CORNER};
+use crate::geometry::volume_vertices::{CORNERS_PER_ROW, TEXELS_PER_CORNER};
 use crate::geometry::{GeometryStats, PreparedCasters, SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::IndirectVolume;
 use crate::render::readback::read_u32s;
@@ -180,6 +180,11 @@ struct GpuCaster {
 /// pair compared, as the CPU does up to as many); past it the caster casts no shadow.
 pub const MAX_GPU_VERTEX_ENDS: u32 = 64;
 
+/// The most corners the GPU stage stores for `V exact` over a scene's casters (the corners'
+/// texture is copied whole per build: 9.4 MB); a fan past it keeps its lit side (the chord's
+/// V), as the CPU's do past `MAX_CORNERS`.
+pub const MAX_GPU_CORNERS: u32 = 65_536;
+
 /// The geometry stage on the GPU for every caster of a scene.
 pub struct GpuGeometry {
     pass: Arc<GeometryGpuPass>,
@@ -231,7 +236,7 @@ impl GpuGeometry {
             // Only a corner V exact may use is stored: none of a caster past the wedge check.
             let past_check = !flat.convex
                 && flat.vertices as usize > crate::geometry::volumes::CORNER_CHECK_VERTICES;
-            let room = (MAX_CORNERS as u32).saturating_sub(corner_base);
+            let room = MAX_GPU_CORNERS.saturating_sub(corner_base);
             let corner_capacity = if past_check {
                 0
             } else {
@@ -343,7 +348,10 @@ impl GpuGeometry {
                 reach: [reach.unwrap_or(-1.0), reach.unwrap_or(-1.0), 0.0, 0.0],
             };
             ctx.queue.write_buffer(&c.params, 0, bytemuck::bytes_of(&g));
-            rec.encoder.clear_buffer(&c.work, 0, None);
+            // Only the ends' counts start at zero: the classes, slots and points are written
+            // before they are read.
+            rec.encoder
+                .clear_buffer(&c.work, u64::from(f) * 4, Some(u64::from(v) * 8));
             rec.encoder.clear_buffer(&c.state, 0, None);
         }
         let span = rec.span("geometry_gpu");
