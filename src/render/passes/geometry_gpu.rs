@@ -216,8 +216,9 @@ impl GpuGeometry {
     pub fn new(ctx: &GpuContext, prepared: &PreparedCasters) -> Result<GpuGeometry, String> {
         let device = &ctx.device;
         let limits = device.limits();
-        let max_binding =
-            u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        let max_binding = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
         let pass = GeometryGpuPass::get(ctx);
         let mut flats = Vec::new();
         let mut corner_base = 0u32;
