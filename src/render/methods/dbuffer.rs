@@ -9,8 +9,7 @@
 
 use super::dbuffer_light::DBufferLight;
 pub use super::dbuffer_light::{
-    light_move_ms,
-    gpu_geometry_by_default, gpu_geometry_runs, GeometryPath, GEOMETRY,
+    gpu_geometry_by_default, gpu_geometry_runs, light_move_ms, GeometryPath, GEOMETRY,
 };
 use super::{
     require, CameraGroup, Cost, LightMaps, MethodSpec, MethodState, Prepare, Quality, SharedMaps,
