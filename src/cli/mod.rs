@@ -104,9 +104,13 @@ impl clap::Args for MethodFlags {
         );
         for k in all_knobs() {
             let (min, max) = k.range();
-            // Every kind takes the whole number it is kept as; a switch also takes true/false.
+            // Every kind takes the whole number it is kept as; a switch also takes true/false,
+            // a choice its options' names.
             let parser = match k.kind {
                 KnobKind::Switch => clap::builder::ValueParser::new(parse_switch),
+                KnobKind::Choice { choices } => {
+                    clap::builder::ValueParser::new(move |text: &str| parse_choice(choices, text))
+                }
                 _ => clap::value_parser!(u32).into(),
             };
             cmd = cmd.arg(
@@ -133,6 +137,19 @@ const USER_KNOB: &str = "knob";
 
 /// An on/off knob's value: a whole number (checked against 0 to 1 with the others), `true` or
 /// `false`.
+/// A choice's value: its number, or the name of one of its options.
+fn parse_choice(choices: &[&str], text: &str) -> Result<u32, String> {
+    match choices.iter().position(|c| *c == text) {
+        Some(i) => Ok(i as u32),
+        None => text.parse().map_err(|_| {
+            format!(
+                "expected {} (or its number from 0), found '{text}'",
+                choices.join(", ")
+            )
+        }),
+    }
+}
+
 fn parse_switch(text: &str) -> Result<u32, std::num::ParseIntError> {
     match text {
         "true" => Ok(1),
