@@ -40,6 +40,10 @@ enum Command {
         /// With --bench: also write the numbers to this JSON file.
         #[arg(long, value_name = "FILE", requires = "bench")]
         bench_out: Option<std::path::PathBuf>,
+        /// Where the D-buffer's geometry stage runs: auto, cpu or gpu (the lab's `geometry`
+        /// setting; default: the saved one).
+        #[arg(long)]
+        geometry: Option<String>,
         /// Show the plot of a study (a `dbuffer study --out DIR` folder) for the open scene;
         /// clicking a point shows that method and setting.
         #[arg(long, value_name = "DIR")]
@@ -300,14 +304,22 @@ fn main() -> ExitCode {
             out.as_deref(),
             &geometry,
         ),
-        None => cli::gui(None, None, None, None, None, verbose),
+        None => cli::gui(None, None, (None, None), None, None, verbose),
         Some(Command::Gui {
             scene,
             gltf_scene,
             bench,
             bench_out,
             study,
-        }) => cli::gui(scene, gltf_scene, bench, bench_out, study, verbose),
+            geometry,
+        }) => cli::gui(
+            scene,
+            gltf_scene,
+            (bench, bench_out),
+            study,
+            geometry.as_deref(),
+            verbose,
+        ),
         Some(Command::Render {
             scene,
             gltf_scene,

@@ -67,6 +67,9 @@ pub struct LabOptions {
     pub verbose: bool,
     /// `--study DIR`: show that study's plot for the open scene.
     pub study: Option<PathBuf>,
+    /// `--geometry`: where the D-buffer's geometry stage runs (the `geometry` knob's value),
+    /// over the saved setting.
+    pub geometry: Option<u32>,
 }
 
 /// What a click picked.
@@ -141,6 +144,11 @@ impl LabApp {
                 .unwrap_or_default()
         };
         settings.sanitize();
+        if let Some(g) = options.geometry {
+            settings.knobs = settings
+                .knobs
+                .with(&crate::render::methods::dbuffer::GEOMETRY, g);
+        }
         let wanted = options.scene.as_deref().unwrap_or(DEFAULT_SCENE);
         let mut status = (String::new(), Level::Info);
         let load_options = crate::scene::LoadOptions {

@@ -312,11 +312,21 @@ pub fn render(args: &RenderArgs) -> Result<()> {
 pub fn gui(
     scene: Option<String>,
     gltf_scene: Option<usize>,
-    bench: Option<u32>,
-    bench_out: Option<std::path::PathBuf>,
+    (bench, bench_out): (Option<u32>, Option<std::path::PathBuf>),
     study: Option<std::path::PathBuf>,
+    geometry: Option<&str>,
     verbose: bool,
 ) -> Result<()> {
+    let geometry = match geometry {
+        None => None,
+        Some(text) => {
+            let choices = match dbuffer::render::methods::dbuffer::GEOMETRY.0.kind {
+                KnobKind::Choice { choices } => choices,
+                _ => &[],
+            };
+            Some(parse_choice(choices, text).map_err(|e| anyhow::anyhow!("--geometry: {e}"))?)
+        }
+    };
     if let Some(dir) = &study {
         let json = dir.join("study.json");
         if !json.is_file() {
@@ -342,6 +352,7 @@ pub fn gui(
         smoke_screenshot,
         verbose,
         study,
+        geometry,
         ..Default::default()
     })
 }
