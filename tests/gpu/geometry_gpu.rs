@@ -11,6 +11,8 @@
 //!   and `cos` — the disk fans' rim points and a polygon's tangent vertices — are not libm's, and
 //!   an extruded point carries their rounding out to the far distance), and a closing fan's
 //!   corner marker where the CPU's has one;
+//! - the D-buffer's channels agree within [`CHANNEL_TOL`] at all but [`CHANNEL_TEXELS`] of the
+//!   texels;
 //! - the frames agree: V (exact) within [`V_TOL`] at all but [`V_PIXELS`] of the pixels (the
 //!   triangles come in another order, so a texel where two volume faces lie at one depth may
 //!   keep the other; and the ends of the cut volumes are rounded differently).
@@ -33,6 +35,18 @@ const HEIGHT_TOL: f32 = 2e-3;
 /// V's difference at a pixel, and the share of pixels allowed past it.
 const V_TOL: f32 = 0.02;
 const V_PIXELS: f64 = 0.005;
+/// A D-buffer channel's difference at a texel (relative, and 1), and the share of texels allowed
+/// past it (where two volume faces meet at a texel either may win). Texels whose crossings on
+/// both sides lie beyond the nearest surface seen from `c` are not compared: no point reads them,
+/// and there the umbrae the CPU ends at the receivers' reach (casters disjoint in the light's
+/// view) run on to the far plane on the GPU.
+const CHANNEL_TOL: f32 = 1e-3;
+const CHANNEL_TEXELS: f64 = 0.01;
+/// `|cx_s|` is the winning face's edge-plane distance, and faces of one volume that lie in one
+/// plane at a texel (a polygon light's fans and quads share supports) tie in depth: which one is
+/// kept follows the drawing order, which the GPU does not set (on 2026-12-07 `polygon-triangle`
+/// differed at 6.5 % of its texels, every other scene under 1 %; V is held above).
+const CX_S_TEXELS: f64 = 0.08;
 
 fn request(geometry: u32) -> FrameRequest {
     FrameRequest {
@@ -251,6 +265,45 @@ fn compare(offline: &mut Offline, scene: &Scene) -> Vec<String> {
             scene.name,
             cpu_frame.visibility.len()
         ));
+    }
+    // The D-buffer's channels (|cx_o|, |cx_uv|, |cx_pv|, |cx_s|), texel by texel.
+    if let (Some(a), Some(b)) = (&cpu_frame.maps, &gpu_frame.maps) {
+        let n = a.size;
+        for c in 0..a.channels.len() {
+            let mut off = 0usize;
+            for y in 0..n {
+                for x in 0..n {
+                    let (p, q) = (a.channel(c, x, y), b.channel(c, x, y));
+                    // A crossing beyond the nearest surface seen from c is never looked up.
+                    let surface = a.channel(0, x, y).unwrap_or(f32::INFINITY);
+                    let beyond = |v: Option<f32>| v.is_none_or(|v| !(v <= surface * 1.001));
+                    if c > 0 && beyond(p) && beyond(q) {
+                        continue;
+                    }
+                    let same = match (p, q) {
+                        (Some(p), Some(q)) if p.is_finite() && q.is_finite() => {
+                            (p - q).abs() <= CHANNEL_TOL * (1.0 + p.abs())
+                        }
+                        (Some(p), Some(q)) => p.is_finite() == q.is_finite(),
+                        (p, q) => p.is_some() == q.is_some(),
+                    };
+                    off += usize::from(!same);
+                }
+            }
+            let share = if a.channels[c].name == "|cx_s|" {
+                CX_S_TEXELS
+            } else {
+                CHANNEL_TEXELS
+            };
+            if off as f64 > share * f64::from(n * n) {
+                out.push(format!(
+                    "{}: D-buffer channel {} differs at {off} of {} texels",
+                    scene.name,
+                    a.channels[c].name,
+                    n * n
+                ));
+            }
+        }
     }
     let errors = offline.ctx.take_uncaptured_errors();
     if !errors.is_empty() {
