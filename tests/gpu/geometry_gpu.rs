@@ -276,7 +276,8 @@ fn compare(offline: &mut Offline, scene: &Scene) -> Vec<String> {
                     let (p, q) = (a.channel(c, x, y), b.channel(c, x, y));
                     // A crossing beyond the nearest surface seen from c is never looked up.
                     let surface = a.channel(0, x, y).unwrap_or(f32::INFINITY);
-                    let beyond = |v: Option<f32>| v.is_none_or(|v| !(v <= surface * 1.001));
+                    let beyond =
+                        |v: Option<f32>| v.is_none_or(|v| v.is_nan() || v > surface * 1.001);
                     if c > 0 && beyond(p) && beyond(q) {
                         continue;
                     }
