@@ -40,6 +40,10 @@ enum Command {
         /// With --bench: also write the numbers to this JSON file.
         #[arg(long, value_name = "FILE", requires = "bench")]
         bench_out: Option<std::path::PathBuf>,
+        /// Where the D-buffer's geometry stage runs: auto, cpu or gpu (the lab's `geometry`
+        /// setting; default: the saved one).
+        #[arg(long)]
+        geometry: Option<String>,
         /// Show the plot of a study (a `dbuffer study --out DIR` folder) for the open scene;
         /// clicking a point shows that method and setting.
         #[arg(long, value_name = "DIR")]
@@ -245,6 +249,10 @@ enum Command {
         /// Also write the comparison as a PNG: method | reference | |ΔV| (0 … 0.25).
         #[arg(long)]
         out: Option<std::path::PathBuf>,
+        /// Where the counts come from: the geometry stage on the CPU, on the GPU, or auto (the
+        /// GPU where an adapter can run it, as `render` picks).
+        #[arg(long, default_value = "auto")]
+        geometry: String,
     },
 }
 
@@ -315,14 +323,14 @@ fn main() -> ExitCode {
             vt,
             method,
             out,
+            geometry,
         }) => cli::inspect(
             &scene,
             gltf_scene,
             samples,
-            &size,
-            &vt,
-            &method,
+            (&size, &vt, &method),
             out.as_deref(),
+            &geometry,
         ),
         None => cli::gui(
             None,
@@ -332,6 +340,7 @@ fn main() -> ExitCode {
                 bench_out: None,
                 study: None,
                 shaders: None,
+                geometry: None,
             },
             verbose,
         ),
@@ -342,6 +351,7 @@ fn main() -> ExitCode {
             bench_out,
             study,
             shaders,
+            geometry,
         }) => cli::gui(
             scene,
             cli::GuiArgs {
@@ -350,6 +360,7 @@ fn main() -> ExitCode {
                 bench_out,
                 study,
                 shaders,
+                geometry,
             },
             verbose,
         ),

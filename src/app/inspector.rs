@@ -307,17 +307,23 @@ impl LabApp {
                 "triangles".into(),
                 format!("{} casting, {total} in all", scene.caster_triangle_count()),
             ));
-            rows.push((
-                "silhouette edges".into(),
-                format!("{} umbra, {} penumbra", g.umbra_edges, g.penumbra_edges),
-            ));
-            rows.push((
-                "volume triangles".into(),
-                format!(
-                    "{} umbra, {} penumbra",
-                    g.umbra_triangles, g.penumbra_triangles
-                ),
-            ));
+            if core.session.gpu_geometry(method).is_some() {
+                // Counted on the GPU and never read back in the lab: its time is the GPU
+                // pass `geometry_gpu` above (`dbuffer inspect` reads the counts).
+                rows.push(("geometry stage".into(), "on the GPU".into()));
+            } else {
+                rows.push((
+                    "silhouette edges".into(),
+                    format!("{} umbra, {} penumbra", g.umbra_edges, g.penumbra_edges),
+                ));
+                rows.push((
+                    "volume triangles".into(),
+                    format!(
+                        "{} umbra, {} penumbra",
+                        g.umbra_triangles, g.penumbra_triangles
+                    ),
+                ));
+            }
             rows.push((
                 "geometry builds".into(),
                 core.session.geometry_builds(method).0.to_string(),

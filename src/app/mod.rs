@@ -70,6 +70,9 @@ pub struct LabOptions {
     pub study: Option<PathBuf>,
     /// `--shaders DIR`: read the shaders from this folder, and reload them when they change.
     pub shaders: Option<PathBuf>,
+    /// `--geometry`: where the D-buffer's geometry stage runs (the `geometry` knob's value),
+    /// over the saved setting.
+    pub geometry: Option<u32>,
 }
 
 /// What a click picked.
@@ -148,6 +151,11 @@ impl LabApp {
                 .unwrap_or_default()
         };
         settings.sanitize();
+        if let Some(g) = options.geometry {
+            settings.knobs = settings
+                .knobs
+                .with(&crate::render::methods::dbuffer::GEOMETRY, g);
+        }
         let wanted = options.scene.as_deref().unwrap_or(DEFAULT_SCENE);
         let mut status = (String::new(), Level::Info);
         let load_options = crate::scene::LoadOptions {

@@ -161,7 +161,17 @@ impl LabApp {
     }
 
     pub(super) fn base_request(&self, width: u32, height: u32) -> FrameRequest {
-        let knobs = self.settings.knobs;
+        let mut knobs = self.settings.knobs;
+        // The overlays of the geometry stage (classes, silhouettes, volumes) draw what the CPU
+        // stage made, which the GPU stage keeps on the GPU: with one on, `auto` runs it on the
+        // CPU (`gpu` chosen by name keeps the GPU, and the overlay says it has nothing).
+        let o = self.settings.overlays;
+        let geometry = &crate::render::methods::dbuffer::GEOMETRY;
+        if (o.classes || o.umbra_volume || o.penumbra_volume || o.silhouettes)
+            && knobs.get(geometry) == 0
+        {
+            knobs = knobs.with(geometry, 1);
+        }
         FrameRequest {
             width,
             height,

@@ -213,6 +213,8 @@ mod tests {
                     min: t as f64 * 2e-5,
                 },
                 volume_triangles: t / 10,
+                cpu_move_ms: None,
+                gpu_move_ms: None,
             })
             .collect();
         let png = scaling_png(&points, 640, 420).unwrap();

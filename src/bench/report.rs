@@ -151,6 +151,13 @@ pub struct ScalingPoint {
     /// Classes, silhouettes and volumes (per light move).
     pub build_ms: Stat,
     pub volume_triangles: usize,
+    /// A light move until the light pass could draw, on the CPU (the stage, the volumes laid
+    /// out and uploaded) and on the GPU (the stage's compute passes), on the bench's adapter
+    /// (`render::methods::dbuffer::light_move_ms`); `None` where that path did not run.
+    #[serde(default)]
+    pub cpu_move_ms: Option<Stat>,
+    #[serde(default)]
+    pub gpu_move_ms: Option<Stat>,
 }
 
 /// A target of the issue, measured (or a figure it asks the report to give).

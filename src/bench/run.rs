@@ -120,7 +120,7 @@ pub fn run(
     let mut scaling = Vec::new();
     for &t in &config.scaling {
         progress(&format!("scaling   geometry of a {t}-triangle sphere"));
-        scaling.push(scaling_point(t, config.scaling_runs));
+        scaling.push(scaling_point(ctx, t, config.scaling_runs));
     }
 
     let reference_rays_per_s = reference_throughput(&runs);
@@ -628,7 +628,7 @@ pub fn scaling_scene(triangles: u32) -> Scene {
     }
 }
 
-fn scaling_point(triangles: u32, runs: usize) -> ScalingPoint {
+fn scaling_point(ctx: &GpuContext, triangles: u32, runs: usize) -> ScalingPoint {
     let scene = scaling_scene(triangles);
     let t = Instant::now();
     let prepared = PreparedCasters::new(&scene);
@@ -643,11 +643,23 @@ fn scaling_point(triangles: u32, runs: usize) -> ScalingPoint {
         volume_triangles = g.stats.umbra_triangles + g.stats.penumbra_triangles;
         drop(std::hint::black_box(g));
     }
+    // Both paths on this adapter, a light move until the light pass could draw; the GPU path
+    // only where the adapter runs it.
+    use crate::render::methods::dbuffer::{gpu_geometry_runs, light_move_ms, GeometryPath};
+    let moved = |path| {
+        light_move_ms(ctx, &scene, path, runs)
+            .ok()
+            .and_then(|ms| Stat::of(&ms))
+    };
     ScalingPoint {
         triangles: scene.caster_triangle_count(),
         prepare_ms,
         build_ms: Stat::of(&samples).unwrap_or_default(),
         volume_triangles,
+        cpu_move_ms: moved(GeometryPath::Cpu),
+        gpu_move_ms: gpu_geometry_runs(&ctx.caps)
+            .then(|| moved(GeometryPath::Gpu))
+            .flatten(),
     }
 }
 

@@ -610,6 +610,8 @@ fn scaling(out: &mut String, r: &Report) {
             right("per light move ms (median / min)"),
             right("volume triangles"),
             right("adjacency ms (once per mesh)"),
+            right("move to drawable, CPU path + upload ms"),
+            right("move to drawable, GPU path ms"),
         ],
     );
     for p in &r.scaling {
@@ -618,6 +620,8 @@ fn scaling(out: &mut String, r: &Report) {
             format!("{} / {}", ms(p.build_ms.median), ms(p.build_ms.min)),
             thousands(p.volume_triangles),
             ms(p.prepare_ms),
+            ms_opt(p.cpu_move_ms),
+            ms_opt(p.gpu_move_ms),
         ]);
     }
     let _ = writeln!(out);

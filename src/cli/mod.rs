@@ -104,9 +104,13 @@ impl clap::Args for MethodFlags {
         );
         for k in all_knobs() {
             let (min, max) = k.range();
-            // Every kind takes the whole number it is kept as; a switch also takes true/false.
+            // Every kind takes the whole number it is kept as; a switch also takes true/false,
+            // a choice its options' names.
             let parser = match k.kind {
                 KnobKind::Switch => clap::builder::ValueParser::new(parse_switch),
+                KnobKind::Choice { choices } => {
+                    clap::builder::ValueParser::new(move |text: &str| parse_choice(choices, text))
+                }
                 _ => clap::value_parser!(u32).into(),
             };
             cmd = cmd.arg(
@@ -133,6 +137,19 @@ const USER_KNOB: &str = "knob";
 
 /// An on/off knob's value: a whole number (checked against 0 to 1 with the others), `true` or
 /// `false`.
+/// A choice's value: its number, or the name of one of its options.
+fn parse_choice(choices: &[&str], text: &str) -> Result<u32, String> {
+    match choices.iter().position(|c| *c == text) {
+        Some(i) => Ok(i as u32),
+        None => text.parse().map_err(|_| {
+            format!(
+                "expected {} (or its number from 0), found '{text}'",
+                choices.join(", ")
+            )
+        }),
+    }
+}
+
 fn parse_switch(text: &str) -> Result<u32, std::num::ParseIntError> {
     match text {
         "true" => Ok(1),
@@ -306,6 +323,7 @@ pub struct GuiArgs {
     pub bench_out: Option<std::path::PathBuf>,
     pub study: Option<std::path::PathBuf>,
     pub shaders: Option<std::path::PathBuf>,
+    pub geometry: Option<String>,
 }
 
 pub fn gui(scene: Option<String>, args: GuiArgs, verbose: bool) -> Result<()> {
@@ -315,12 +333,23 @@ pub fn gui(scene: Option<String>, args: GuiArgs, verbose: bool) -> Result<()> {
         bench_out,
         study,
         shaders,
+        geometry,
     } = args;
     let shaders = shaders
         .as_deref()
         .map(dbuffer::app::check_shader_dir)
         .transpose()
         .map_err(anyhow::Error::msg)?;
+    let geometry = match geometry.as_deref() {
+        None => None,
+        Some(text) => {
+            let choices = match dbuffer::render::methods::dbuffer::GEOMETRY.0.kind {
+                KnobKind::Choice { choices } => choices,
+                _ => &[],
+            };
+            Some(parse_choice(choices, text).map_err(|e| anyhow::anyhow!("--geometry: {e}"))?)
+        }
+    };
     if let Some(dir) = &study {
         let json = dir.join("study.json");
         if !json.is_file() {
@@ -347,6 +376,7 @@ pub fn gui(scene: Option<String>, args: GuiArgs, verbose: bool) -> Result<()> {
         verbose,
         study,
         shaders,
+        geometry,
         ..Default::default()
     })
 }
@@ -399,12 +429,17 @@ pub fn inspect(
     name: &str,
     gltf_scene: Option<usize>,
     samples: Option<usize>,
-    size: &str,
-    vt: &str,
-    method: &str,
+    (size, vt, method): (&str, &str, &str),
     out: Option<&Path>,
+    geometry_path: &str,
 ) -> Result<()> {
     let method = TwinMethod::parse(method)?;
+    let on_gpu = match geometry_path {
+        "cpu" => None,
+        "gpu" => Some(true),
+        "auto" => Some(false),
+        other => bail!("--geometry expects auto, cpu or gpu, found '{other}'"),
+    };
     // Every flag is checked before the scene is loaded: nothing is computed for a run that
     // would be refused at the end.
     let comparison = match samples {
@@ -450,6 +485,11 @@ pub fn inspect(
     let t1 = Instant::now();
     let geometry = prepared.build(&l, &params);
     let build_ms = t1.elapsed().as_secs_f64() * 1e3;
+    // The counts from the GPU stage where it runs (the fill and the twin read the CPU's).
+    let gpu_counts = match on_gpu {
+        None => None,
+        Some(required) => gpu_stage_counts(&scene, &prepared, &l, &params, required)?,
+    };
     // The paper's twin needs the geometry, not the prepared casters (welding and adjacency):
     // give their memory back before the oracle builds its BVH. dbuffer-fused's twin reads the
     // caster edges from them.
@@ -476,7 +516,8 @@ pub fn inspect(
         "umb-tri",
         "pen-tri"
     );
-    for c in &geometry.casters {
+    let counted = gpu_counts.as_ref().map_or(&geometry, |(g, _, _)| g);
+    for c in &counted.casters {
         let s = c.stats;
         outln!(
             "{:<16} {:>9} {:>9} {:>9} {:>6} {:>6} {:>7} {:>7} {:>5} {:>8} {:>8}",
@@ -494,6 +535,14 @@ pub fn inspect(
         );
     }
     outln!("geometry  prepare {prepare_ms:.3} ms (once per mesh), classes+silhouettes+volumes {build_ms:.3} ms");
+    if let Some((g, adapter, ms)) = &gpu_counts {
+        outln!(
+            "geometry  counts above from the GPU stage on {adapter} ({ms:.3} ms with its readback)"
+        );
+        for w in g.warnings.iter().filter(|w| !geometry.warnings.contains(w)) {
+            outln!("warning   {w}");
+        }
+    }
     print_volume_fill(&scene, &geometry, &l);
     for w in &geometry.warnings {
         outln!("warning   {w}");
@@ -515,6 +564,48 @@ pub fn inspect(
         }
     }
     Ok(())
+}
+
+/// The GPU geometry stage's counts for `inspect`, its adapter and its milliseconds: `None` where
+/// no adapter can run it and it was not `required` (`--geometry auto`), an error where it was.
+fn gpu_stage_counts(
+    scene: &scene::Scene,
+    prepared: &PreparedCasters,
+    light: &scene::AreaLight,
+    params: &VolumeParams,
+    required: bool,
+) -> Result<Option<(dbuffer::geometry::SceneGeometry, String, f64)>> {
+    use dbuffer::render::methods::dbuffer::{gpu_geometry_by_default, gpu_geometry_runs};
+    use dbuffer::render::passes::geometry_gpu::GpuGeometry;
+    let ctx = match dbuffer::render::GpuContext::headless() {
+        Ok(ctx) => ctx,
+        Err(e) if required => bail!("--geometry gpu: {e}"),
+        Err(_) => return Ok(None),
+    };
+    let runs = if required {
+        gpu_geometry_runs(&ctx.caps)
+    } else {
+        gpu_geometry_by_default(&ctx.caps)
+    };
+    if !runs {
+        if required {
+            bail!(
+                "--geometry gpu: {} has no compute shaders, indirect draws or storage buffers \
+                 enough for the GPU geometry stage",
+                ctx.caps.adapter
+            );
+        }
+        return Ok(None);
+    }
+    let reach = dbuffer::geometry::volume_vertices::reach_below(light, scene.bounds());
+    let t = Instant::now();
+    let g = GpuGeometry::run_once(&ctx, prepared, light, params, Some(reach))
+        .map_err(|e| anyhow::anyhow!("--geometry gpu: {e}"))?;
+    Ok(Some((
+        g,
+        ctx.caps.adapter.clone(),
+        t.elapsed().as_secs_f64() * 1e3,
+    )))
 }
 
 /// What the D-buffer's volumes cost the rasteriser of a light map: fragments per texel, every

@@ -11,6 +11,7 @@ pub mod adjacency;
 pub mod bitmask;
 pub mod bvh;
 pub mod classify;
+pub mod flat_caster;
 pub mod flip;
 pub mod fused;
 pub mod hard_volume;

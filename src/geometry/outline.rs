@@ -129,7 +129,11 @@ pub fn boundary_between(light: &AreaLight, p1: Vec3, p2: Vec3, turn: f32, step: 
     }
     match light.corners() {
         None => {
-            let n = ((delta.abs() / step.max(1e-3)).ceil() as usize).min(MAX_ARC_POINTS);
+            // An arc within ARC_SLACK of a whole number of steps takes that number: where two
+            // supports lie a whole step apart (a regular caster under a disk), the count does
+            // not flip with the last bit of an angle (the GPU stage's `atan2` is not libm's).
+            let n =
+                ((delta.abs() / step.max(1e-3) - ARC_SLACK).ceil() as usize).min(MAX_ARC_POINTS);
             (1..n)
                 .map(|k| {
                     let a = a1 + delta * k as f32 / n as f32;
@@ -162,6 +166,10 @@ pub fn boundary_between(light: &AreaLight, p1: Vec3, p2: Vec3, turn: f32, step: 
         }
     }
 }
+
+/// How far past a whole number of steps a disk fan's arc may reach and still take that number
+/// of triangles (a share of a step): [`boundary_between`].
+pub const ARC_SLACK: f32 = 1e-3;
 
 /// The most rim points a disk fan takes between two extrusion points.
 pub const MAX_ARC_POINTS: usize = 64;

@@ -97,6 +97,8 @@ pub struct Capabilities {
     /// "llvmpipe (LLVM 15.0.6, 256 bits) (Gl, Cpu)", to name it in a refusal.
     pub adapter: String,
     pub backend: wgpu::Backend,
+    /// A discrete or integrated GPU, a CPU rasteriser (lavapipe, llvmpipe)…
+    pub device_type: wgpu::DeviceType,
     pub features: Features,
     pub limits: wgpu::Limits,
     pub downlevel: DownlevelFlags,
@@ -130,6 +132,7 @@ impl Capabilities {
             .collect();
         Capabilities {
             adapter: describe(&info),
+            device_type: info.device_type,
             backend: info.backend,
             features,
             limits,
@@ -147,6 +150,7 @@ impl Capabilities {
             .collect();
         Capabilities {
             adapter: describe(info),
+            device_type: info.device_type,
             backend: info.backend,
             features,
             limits,

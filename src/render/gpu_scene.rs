@@ -79,6 +79,34 @@ impl VertexChunks {
     }
 }
 
+/// A volume made on the GPU, drawn with the indirect arguments its stage wrote
+/// (`passes::geometry_gpu`).
+#[derive(Clone)]
+pub struct IndirectVolume {
+    pub vertices: wgpu::Buffer,
+    pub args: wgpu::Buffer,
+    pub offset: u64,
+}
+
+/// Volume triangles to draw: uploaded from the CPU, or made on the GPU.
+pub enum VolumeDraw {
+    Chunks(VertexChunks),
+    Indirect(IndirectVolume),
+}
+
+impl VolumeDraw {
+    /// Draw every vertex into vertex buffer slot 0.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        match self {
+            VolumeDraw::Chunks(c) => c.draw(pass),
+            VolumeDraw::Indirect(v) => {
+                pass.set_vertex_buffer(0, v.vertices.slice(..));
+                pass.draw_indirect(&v.args, v.offset);
+            }
+        }
+    }
+}
+
 pub struct GpuScene {
     chunks: Vec<SurfaceChunk>,
     /// Bounds `(min, max)` of every surface, taken once at upload (the camera's depth range is

@@ -134,6 +134,11 @@ pub fn render_in_history(
     if let Some(g) = session.geometry(dbuffer) {
         report.geometry = g.stats;
         report.warnings = g.warnings.clone();
+    } else if let Some(gpu) = session.gpu_geometry(dbuffer) {
+        // The GPU stage's counts, read back here (a render reads its frame back anyway).
+        let g = gpu.stats(ctx, session.prepared())?;
+        report.geometry = g.stats;
+        report.warnings = g.warnings;
     }
     report.clipped = session.light_view().clipped;
     Ok((frame, report))

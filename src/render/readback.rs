@@ -261,3 +261,39 @@ pub fn f32s_of(bytes: &[u8]) -> impl Iterator<Item = f32> + '_ {
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
 }
+
+/// A mappable copy of `buffer`, its copy submitted (not waited for).
+pub fn copy_to_staging(ctx: &GpuContext, buffer: &wgpu::Buffer, label: &str) -> wgpu::Buffer {
+    let size = buffer.size();
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    ctx.queue.submit([encoder.finish()]);
+    staging
+}
+
+/// The `u32`s of `buffer`, copied to a staging buffer and read back (waits for the GPU).
+pub fn read_u32s(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u32>, RenderError> {
+    let staging = copy_to_staging(ctx, buffer, "readback::words");
+    let slice = staging.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    map_now(&ctx.device)?;
+    let words = {
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        view.chunks_exact(4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect()
+    };
+    staging.unmap();
+    ctx.check_lost()?;
+    Ok(words)
+}

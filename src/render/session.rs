@@ -275,6 +275,14 @@ impl Session {
         self.methods.get(&method).and_then(|m| m.geometry())
     }
 
+    /// `method`'s geometry stage on the GPU, where its last build ran there.
+    pub fn gpu_geometry(
+        &self,
+        method: Method,
+    ) -> Option<&crate::render::passes::geometry_gpu::GpuGeometry> {
+        self.methods.get(&method).and_then(|m| m.gpu_geometry())
+    }
+
     /// How many times `method` has run the geometry stage, and its last CPU milliseconds.
     pub fn geometry_builds(&self, method: Method) -> (u64, f64) {
         self.methods

@@ -205,6 +205,22 @@ impl Span {
             end_of_pass_write_index: Some(2 * i + 1),
         })
     }
+
+    /// [`Span::compute_writes`] for a span over several compute passes: its start in the
+    /// `first`, its end in the `last`.
+    pub fn compute_writes_over<'q>(
+        &self,
+        rec_timer: Option<&'q PassTimer>,
+        first: bool,
+        last: bool,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'q>> {
+        let (timer, i) = (rec_timer?, self.0?);
+        (first || last).then_some(wgpu::ComputePassTimestampWrites {
+            query_set: &timer.queries,
+            beginning_of_pass_write_index: first.then_some(2 * i),
+            end_of_pass_write_index: last.then_some(2 * i + 1),
+        })
+    }
 }
 
 struct Slot {

@@ -10,6 +10,7 @@ mod animate_cli;
 mod bad_inputs;
 mod bench_cli;
 mod compare_reference;
+mod geometry_path;
 mod large_frames;
 mod registry;
 mod render_cli;

@@ -111,7 +111,7 @@ fn star_prism(r: &mut Rng) -> Mesh {
 /// a tenth of the light's radius to four times it, under a disk (half the scenes), a rectangle
 /// (aspect up to 6:1) or a convex polygon of 3 to 8 vertices, tilted up to 14°; the camera looks
 /// down on the casters' shadow.
-fn family_scene(seed: u64) -> Scene {
+pub(crate) fn family_scene(seed: u64) -> Scene {
     let mut r = Rng(seed.wrapping_mul(0x51_7cc1).wrapping_add(7));
     let count = if r.next() < 0.33 { 3 + r.below(7) } else { 1 };
     let spread = if count > 1 { 1.2 } else { 0.0 };

@@ -10,6 +10,7 @@ mod compare_report;
 mod cost_views;
 mod dbuffer_knobs;
 mod engine_methods;
+mod geometry_gpu;
 mod hard_methods;
 mod linear_ssm;
 mod methods_accuracy;

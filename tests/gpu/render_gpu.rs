@@ -5,7 +5,9 @@
 //! channels up per texel and the twin per exact ray.
 
 use dbuffer::geometry::light_view::LightView;
-use dbuffer::geometry::{Branch, DBufferTwin, SceneGeometry, VtVariant};
+use dbuffer::geometry::{
+    Branch, DBufferTwin, PreparedCasters, SceneGeometry, VolumeParams, VtVariant,
+};
 use dbuffer::render::{Frame, FrameRequest, GpuContext, Method, Session};
 use dbuffer::scene::{self, Scene};
 
@@ -42,10 +44,19 @@ fn render(
     let frame = session
         .frame(ctx, &request)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
-    let geometry = session
-        .geometry(Method::DBUFFER)
-        .expect("the D-buffer was made")
-        .clone();
+    // The CPU stage's geometry: the session's where its stage ran on the CPU, else made here
+    // (the GPU stage gives the same, tests/gpu/geometry_gpu.rs), for the twin.
+    let geometry = match session.geometry(Method::DBUFFER) {
+        Some(g) => g.clone(),
+        None => {
+            assert!(
+                method != Method::DBUFFER || session.gpu_geometry(Method::DBUFFER).is_some(),
+                "the D-buffer was made"
+            );
+            let light = scene.light.area_or_centre();
+            PreparedCasters::new(&scene).build(&light, &VolumeParams::for_scene(&scene))
+        }
+    };
     (scene, geometry, *session.light_view(), frame)
 }
 

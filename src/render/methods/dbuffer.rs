@@ -10,6 +10,9 @@
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use super::dbuffer_light::DBufferLight;
+pub use super::dbuffer_light::{
+    gpu_geometry_by_default, gpu_geometry_runs, light_move_ms, GeometryPath, GEOMETRY,
+};
 use super::{
     require, CameraGroup, Cost, LightMaps, MethodSpec, MethodState, Prepare, Quality, SharedMaps,
     Switch,
@@ -37,7 +40,7 @@ pub static DBUFFER: MethodSpec =
     MethodSpec::new("dbuffer", SHADER, |ctx| Box::new(DBuffer::new(ctx, false)))
         .adapter(NEEDS)
         .about("D-buffer soft shadows (Jakobsen et al. 2004)")
-        .knobs(&[&HORIZON.0, &CORNERS.0])
+        .knobs(&[&HORIZON.0, &CORNERS.0, &GEOMETRY.0])
         .cost(DBUFFER_COST)
         .lights(super::AREA_LIGHTS)
         .sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]); // volumes from a planar light's outline
@@ -47,7 +50,7 @@ pub static DBUFFER_CENTER: MethodSpec = MethodSpec::new("dbuffer-center", SHADER
 })
 .adapter(NEEDS)
 .about("D-buffer with silhouettes from the light centre only")
-.knobs(&[&HORIZON.0, &CORNERS.0])
+.knobs(&[&HORIZON.0, &CORNERS.0, &GEOMETRY.0])
 .cost(DBUFFER_COST)
 .lights(super::AREA_LIGHTS)
 .sweep(&[Quality::MapSize], &[&[512], &[1024], &[2048]]); // volumes from a planar light's outline
@@ -323,6 +326,12 @@ impl MethodState for DBuffer {
 
     fn geometry_builds(&self) -> (u64, f64) {
         self.paper.geometry_builds()
+    }
+
+    fn gpu_geometry(&self) -> Option<&crate::render::passes::geometry_gpu::GpuGeometry> {
+        self.paper
+            .gpu_geometry()
+            .filter(|_| self.paper.geometry_path() == GeometryPath::Gpu)
     }
 
     fn invalidate(&mut self) {

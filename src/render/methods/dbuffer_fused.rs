@@ -235,7 +235,7 @@ impl DBufferFused {
         ]);
         let uniforms = uniform_buffer::<FusedUniforms>(&ctx.device, "DBufferFused::uniforms");
         DBufferFused {
-            paper: DBufferLight::new(ctx, false),
+            paper: DBufferLight::on_cpu(ctx, false),
             no_paper: Texture::new(
                 &ctx.device,
                 "DBufferFused::no_paper",

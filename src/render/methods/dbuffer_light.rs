@@ -1,7 +1,9 @@
 //! The paper's D-buffer in light space, which `dbuffer`, `dbuffer-center` and `dbuffer-fused`
-//! keep: the geometry stage (`geometry::PreparedCasters::build`: classes, silhouettes,
-//! volumes) and the volumes' upload per light or caster move, then the light pass — the session's
-//! shadow map (`|cx_o|`) and the volume channels (`passes::dbuffer_volumes`) — and its maps.
+//! keep: the geometry stage per light or caster move — on the CPU
+//! (`geometry::PreparedCasters::build`: classes, silhouettes, volumes, then uploaded) or on the
+//! GPU (`passes::geometry_gpu`, drawn with indirect draws, nothing read back), as the
+//! `--geometry` knob ([`GEOMETRY`]) says — then the light pass: the session's shadow map
+//! (`|cx_o|`) and the volume channels (`passes::dbuffer_volumes`), and its maps.
 
 use std::time::Instant;
 
@@ -10,10 +12,14 @@ use crate::geometry::volume_vertices::{
     drawn_volumes, reach_below, CORNERS_PER_ROW, MAX_CORNERS, TEXELS_PER_CORNER,
 };
 use crate::geometry::{SceneGeometry, VolumeParams};
+use crate::render::adapter::Capabilities;
 use crate::render::frame_tag::FrameTag;
-use crate::render::gpu_scene::VertexChunks;
+use crate::render::gpu_scene::{VertexChunks, VolumeDraw};
 use crate::render::passes::dbuffer_volumes::{
     CasterVolumes, DBufferVolumes, VolumeLayout, VolumeTargets,
+};
+use crate::render::passes::geometry_gpu::{
+    GpuGeometry, GPU_GEOMETRY_DOWNLEVEL, GPU_GEOMETRY_STORAGE_BUFFERS,
 };
 use crate::render::passes::shadow_map::LightUniforms;
 use crate::render::timer::Recorder;
@@ -30,14 +36,56 @@ pub const CHANNELS: &[Channel] = &[
     Channel::new("|cx_s|", 1, 1, Empty::NonPositive).or(2, 1),
 ];
 
+/// `--geometry`: where the D-buffer's geometry stage runs. `auto`: on the GPU where the adapter
+/// is a GPU with compute shaders, indirect draws and the storage buffers the stage binds
+/// ([`gpu_geometry_by_default`]) and the scene's casters fit it, else on the CPU.
+pub static GEOMETRY: super::Choice = super::Choice::new(
+    "geometry",
+    "dbuffer, dbuffer-center: where the geometry stage (face classes, silhouettes, volumes) \
+     runs: auto = on the GPU where the adapter is a GPU that can, cpu, gpu (the CPU where the \
+     adapter cannot)",
+    &["auto", "cpu", "gpu"],
+    0,
+);
+
+/// Whether an adapter of `caps` can run the geometry stage on the GPU.
+pub fn gpu_geometry_runs(caps: &Capabilities) -> bool {
+    caps.downlevel.contains(GPU_GEOMETRY_DOWNLEVEL)
+        && caps.limits.max_storage_buffers_per_shader_stage >= GPU_GEOMETRY_STORAGE_BUFFERS
+}
+
+/// Whether `--geometry auto` runs the stage on the GPU on an adapter of `caps`: wherever it can,
+/// but on a CPU rasteriser. There the "GPU" is the same cores running the stage as compute
+/// shaders, and a light move costs 13–48 × the CPU path's (lavapipe on the 2-core VM: 13.0
+/// against 0.65 ms at 4k triangles, 1,269 against 33 ms at 256k; docs/results/performance.md).
+pub fn gpu_geometry_by_default(caps: &Capabilities) -> bool {
+    gpu_geometry_runs(caps) && caps.device_type != wgpu::DeviceType::Cpu
+}
+
+/// Where a build of the geometry stage ran.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GeometryPath {
+    Cpu,
+    Gpu,
+}
+
 pub struct DBufferLight {
     center_silhouettes: bool,
+    /// Whether the geometry stage may run on the GPU (not for `dbuffer-fused`, which reads the
+    /// CPU stage's classes).
+    gpu_allowed: bool,
+    /// The GPU stage for this scene, or why it cannot run it; made on first use.
+    gpu: Option<Result<GpuGeometry, String>>,
+    /// Where the last build ran, and the revision the GPU stage must be recorded for (in the
+    /// light pass, which has the encoder).
+    path: GeometryPath,
+    gpu_pending: Option<(AreaLight, VolumeParams, f32)>,
     /// The geometry, and the revision it was built for.
     geometry: Option<(SceneGeometry, u64)>,
     builds: u64,
     geometry_ms: f64,
     casters: Vec<CasterVolumes>,
-    penumbra: VertexChunks,
+    penumbra: Vec<VolumeDraw>,
     volumes: DBufferVolumes,
     /// The closing fans' corners over all casters, `TEXELS_PER_CORNER` `Rgba32Float` texels
     /// each (apex, the two edges' far ends, each edge's faces' normals, the two extrusion
@@ -65,11 +113,15 @@ impl DBufferLight {
     pub fn new(ctx: &GpuContext, center_silhouettes: bool) -> DBufferLight {
         DBufferLight {
             center_silhouettes,
+            gpu_allowed: true,
+            gpu: None,
+            path: GeometryPath::Cpu,
+            gpu_pending: None,
             geometry: None,
             builds: 0,
             geometry_ms: 0.0,
             casters: Vec::new(),
-            penumbra: VertexChunks::empty(),
+            penumbra: Vec::new(),
             volumes: DBufferVolumes::new(ctx),
             corners: corner_texture(ctx, &[]),
             made_for: None,
@@ -77,12 +129,27 @@ impl DBufferLight {
         }
     }
 
+    /// The same, its geometry stage always on the CPU (what `dbuffer-fused` reads).
+    pub fn on_cpu(ctx: &GpuContext, center_silhouettes: bool) -> DBufferLight {
+        DBufferLight {
+            gpu_allowed: false,
+            ..DBufferLight::new(ctx, center_silhouettes)
+        }
+    }
+
     /// The geometry stage and the volumes' upload, when the light or a caster moved.
     fn update_geometry(&mut self, inputs: &FrameInputs<'_>, light: AreaLight) {
-        if self
-            .geometry
-            .as_ref()
-            .is_some_and(|(_, r)| *r == inputs.revision)
+        let gpu = self.wants_gpu(inputs);
+        let path = if gpu {
+            GeometryPath::Gpu
+        } else {
+            GeometryPath::Cpu
+        };
+        if self.path == path
+            && self
+                .geometry
+                .as_ref()
+                .is_some_and(|(_, r)| *r == inputs.revision)
         {
             return;
         }
@@ -90,6 +157,34 @@ impl DBufferLight {
             center_silhouettes: self.center_silhouettes,
             ..VolumeParams::for_scene(inputs.scene)
         };
+        if gpu {
+            if let Some(Ok(gpu)) = &self.gpu {
+                let t = Instant::now();
+                let reach = reach_below(&light, inputs.surfaces.bounds);
+                self.casters = gpu
+                    .volumes()
+                    .into_iter()
+                    .map(|(umbra, _)| CasterVolumes {
+                        // Its umbra's part of the view is not known without a readback.
+                        rect: [0.0, 0.0, 1.0, 1.0],
+                        umbra: VolumeDraw::Indirect(umbra),
+                    })
+                    .collect();
+                self.penumbra = gpu
+                    .volumes()
+                    .into_iter()
+                    .map(|(_, penumbra)| VolumeDraw::Indirect(penumbra))
+                    .collect();
+                self.gpu_pending = Some((light, params, reach));
+                self.geometry_ms = t.elapsed().as_secs_f64() * 1e3;
+                self.builds += 1;
+                self.path = GeometryPath::Gpu;
+                self.geometry = Some((SceneGeometry::default(), inputs.revision));
+                self.made_for = None;
+                return;
+            }
+        }
+        self.path = GeometryPath::Cpu;
         let t = Instant::now();
         let geometry = inputs.prepared().build(&light, &params);
         self.geometry_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -102,11 +197,15 @@ impl DBufferLight {
             .iter()
             .map(|(umbra, rect)| CasterVolumes {
                 rect: *rect,
-                umbra: VertexChunks::new(device, "DBuffer::umbra", umbra),
+                umbra: VolumeDraw::Chunks(VertexChunks::new(device, "DBuffer::umbra", umbra)),
             })
             .collect();
         let penumbra = drawn.penumbra;
-        self.penumbra = VertexChunks::new(device, "DBuffer::penumbra", &penumbra);
+        self.penumbra = vec![VolumeDraw::Chunks(VertexChunks::new(
+            device,
+            "DBuffer::penumbra",
+            &penumbra,
+        ))];
         let corners: Vec<[f32; 4]> = geometry
             .casters
             .iter()
@@ -124,6 +223,34 @@ impl DBufferLight {
         self.corners = corner_texture(inputs.ctx, &corners);
         self.geometry = Some((geometry, inputs.revision));
         self.made_for = None;
+    }
+
+    /// Whether this frame's geometry stage runs on the GPU: as [`GEOMETRY`] says, where the
+    /// adapter can and the scene's casters fit the GPU stage (made here on first use).
+    fn wants_gpu(&mut self, inputs: &FrameInputs<'_>) -> bool {
+        let choice = inputs.knobs.get(&GEOMETRY);
+        let wanted = match choice {
+            1 => false,
+            2 => true,
+            _ => gpu_geometry_by_default(&inputs.ctx.caps),
+        };
+        if !self.gpu_allowed || !wanted || !gpu_geometry_runs(&inputs.ctx.caps) {
+            return false;
+        }
+        if self.gpu.is_none() {
+            self.gpu = Some(GpuGeometry::new(inputs.ctx, inputs.prepared()));
+        }
+        matches!(self.gpu, Some(Ok(_)))
+    }
+
+    /// Where the last build of the geometry stage ran.
+    pub fn geometry_path(&self) -> GeometryPath {
+        self.path
+    }
+
+    /// The GPU stage, once made (its last build read back by tests and `dbuffer inspect`).
+    pub fn gpu_geometry(&self) -> Option<&GpuGeometry> {
+        self.gpu.as_ref().and_then(|g| g.as_ref().ok())
     }
 
     /// The geometry stage (face classes, silhouettes, volumes) for the current light, when the
@@ -146,6 +273,10 @@ impl DBufferLight {
         shared: &mut SharedMaps,
         rec: &mut Recorder<'_>,
     ) -> Result<(), RenderError> {
+        if let (Some((light, params, reach)), Some(Ok(gpu))) = (self.gpu_pending.take(), &self.gpu)
+        {
+            gpu.record(inputs.ctx, rec, &light, &params, Some(reach));
+        }
         let map = shared.shadow_map.update(inputs, rec)?;
         let key = Made {
             revision: inputs.revision,
@@ -177,7 +308,10 @@ impl DBufferLight {
 
     /// The closing fans' corners (`corners` of `shaders/methods/dbuffer.wgsl`).
     pub fn corners(&self) -> &wgpu::TextureView {
-        &self.corners
+        match (&self.gpu, self.path) {
+            (Some(Ok(gpu)), GeometryPath::Gpu) => &gpu.corner_view,
+            _ => &self.corners,
+        }
     }
 
     /// Its light-space maps: `|cx_o|` and the volume channels, once drawn.
@@ -196,9 +330,12 @@ impl DBufferLight {
         )
     }
 
-    /// The geometry stage's output.
+    /// The CPU geometry stage's output (none where the GPU made the last build).
     pub fn geometry(&self) -> Option<&SceneGeometry> {
-        self.geometry.as_ref().map(|(g, _)| g)
+        self.geometry
+            .as_ref()
+            .filter(|_| self.path == GeometryPath::Cpu)
+            .map(|(g, _)| g)
     }
 
     /// CPU milliseconds of its last geometry build, and how many builds it has made.
@@ -245,4 +382,64 @@ fn corner_texture(ctx: &GpuContext, corners: &[[f32; 4]]) -> wgpu::TextureView {
             bytemuck::cast_slice(&data),
         )
         .create_view(&wgpu::TextureViewDescriptor::default())
+}
+
+/// Milliseconds from a light move to volumes the light pass can draw, per run, on `path`: on
+/// the CPU the geometry stage, the volumes laid out as drawn (`drawn_volumes`) and uploaded; on
+/// the GPU the stage's compute passes recorded and run. Each run waits until the device is idle,
+/// so both count what must be done before the light pass could draw (`bench`'s scaling curve).
+/// The scene's casters are prepared (welded, adjacency, on the GPU its buffers) once, untimed.
+pub fn light_move_ms(
+    ctx: &GpuContext,
+    scene: &crate::scene::Scene,
+    path: GeometryPath,
+    runs: usize,
+) -> Result<Vec<f64>, RenderError> {
+    let Some(light) = scene.light.as_area().copied() else {
+        return Ok(Vec::new());
+    };
+    let prepared = crate::geometry::PreparedCasters::new(scene);
+    let params = VolumeParams::for_scene(scene);
+    let view = crate::geometry::light_view::LightView::fit(scene);
+    let reach = reach_below(&light, scene.bounds());
+    let gpu = match path {
+        GeometryPath::Gpu => Some(GpuGeometry::new(ctx, &prepared).map_err(RenderError::Request)?),
+        GeometryPath::Cpu => None,
+    };
+    let mut out = Vec::new();
+    for _ in 0..runs.max(1) {
+        let t = Instant::now();
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("light_move_ms"),
+            });
+        let kept = match &gpu {
+            Some(gpu) => {
+                let mut rec = Recorder::new(&mut encoder, None);
+                gpu.record(ctx, &mut rec, &light, &params, Some(reach));
+                Vec::new()
+            }
+            None => {
+                let geometry = prepared.build(&light, &params);
+                let drawn = drawn_volumes(&geometry, &light, &view, Some(reach));
+                let mut kept: Vec<VertexChunks> = drawn
+                    .umbrae
+                    .iter()
+                    .map(|(u, _)| VertexChunks::new(&ctx.device, "light_move_ms::umbra", u))
+                    .collect();
+                kept.push(VertexChunks::new(
+                    &ctx.device,
+                    "light_move_ms::penumbra",
+                    &drawn.penumbra,
+                ));
+                kept
+            }
+        };
+        ctx.queue.submit([encoder.finish()]);
+        crate::render::readback::map_now(&ctx.device)?;
+        out.push(t.elapsed().as_secs_f64() * 1e3);
+        drop(kept);
+    }
+    Ok(out)
 }

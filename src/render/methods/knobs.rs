@@ -231,7 +231,7 @@ impl KnobType for Scaled {
 }
 
 /// At most this many distinct knobs over all methods (checked by a test).
-pub const MAX_KNOBS: usize = 40;
+pub const MAX_KNOBS: usize = 48;
 
 /// Every distinct knob of the registry, in registry order. Gathered once: every knob read and
 /// every comparison of two [`Knobs`] (each frame the lab asks for) looks its slot up here.

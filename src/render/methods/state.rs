@@ -35,6 +35,11 @@ pub trait MethodState: Send {
         (0, 0.0)
     }
 
+    /// Its geometry stage on the GPU, where its last build ran there.
+    fn gpu_geometry(&self) -> Option<&crate::render::passes::geometry_gpu::GpuGeometry> {
+        None
+    }
+
     /// Forget the light-space products: the next frame remakes them (to time them).
     fn invalidate(&mut self) {}
     /// A temporal method: forget the frames before, so the next frame is a first one.

@@ -24,7 +24,7 @@ use super::shadow_map::{light_layout, LightUniforms, DEPTH_FORMAT};
 use super::{next_generation, scissor};
 use crate::geometry::volume_vertices::{disjoint_groups, union_all};
 use crate::render::frame_tag::FrameTag;
-use crate::render::gpu_scene::VertexChunks;
+use crate::render::gpu_scene::VolumeDraw;
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, cleared, depth_attachment, opaque, pipeline_layout, render_pipeline,
@@ -232,7 +232,7 @@ impl DBufferVolumesPass {
 
 /// One caster's umbra on the GPU, and where it falls in the light view.
 pub struct CasterVolumes {
-    pub umbra: VertexChunks,
+    pub umbra: VolumeDraw,
     /// `[x0, y0, x1, y1]` in `[0, 1]²` of the light view's image (y down) that its umbra can
     /// cover.
     pub rect: [f32; 4],
@@ -365,7 +365,7 @@ impl DBufferVolumes {
         light: &LightUniforms,
         surface_depth: &Texture,
         casters: &[CasterVolumes],
-        penumbra: &VertexChunks,
+        penumbra: &[VolumeDraw],
         layout: VolumeLayout,
     ) {
         let size = surface_depth.texture.width();
@@ -427,7 +427,9 @@ impl DBufferVolumes {
             });
             p.set_pipeline(&pass.penumbra);
             p.set_bind_group(0, bind_group, &[]);
-            penumbra.draw(&mut p);
+            for v in penumbra {
+                v.draw(&mut p);
+            }
             if !merged {
                 // From here on the depth is the exits': it starts at 1 over their rectangle.
                 let [x0, y0, x1, y1] = scissor(union_all(rects.iter().copied()), size);

@@ -11,6 +11,7 @@ pub mod extended_light_map;
 pub mod floor;
 pub mod fused_layers;
 pub mod fused_lists;
+pub mod geometry_gpu;
 pub mod hybrid;
 pub mod micro_patches;
 pub mod moment_sat;

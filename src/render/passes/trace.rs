@@ -26,7 +26,7 @@ use glam::Vec3;
 use super::trace_rq::Accel;
 use crate::geometry::bvh::{Bvh, FlatBvh};
 use crate::render::adapter::Capabilities;
-use crate::render::readback::map_now;
+use crate::render::readback::{copy_to_staging, read_u32s};
 use crate::render::{
     compute_pipeline, pipeline_layout, shader_module, storage_buffer, storage_entry, uniform_entry,
     GpuContext, RenderError,
@@ -343,42 +343,6 @@ fn results_buffer(ctx: &GpuContext, label: &str, words: u64) -> wgpu::Buffer {
             | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
-}
-
-/// A mappable copy of `buffer`, its copy submitted (not waited for).
-fn copy_to_staging(ctx: &GpuContext, buffer: &wgpu::Buffer, label: &str) -> wgpu::Buffer {
-    let size = buffer.size();
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
-    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
-    ctx.queue.submit([encoder.finish()]);
-    staging
-}
-
-/// The `u32`s of `buffer`, copied to a staging buffer and read back (waits for the GPU).
-fn read_u32s(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u32>, RenderError> {
-    let staging = copy_to_staging(ctx, buffer, "Trace::staging");
-    let slice = staging.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |_| {});
-    map_now(&ctx.device)?;
-    let words = {
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| RenderError::Readback(e.to_string()))?;
-        view.chunks_exact(4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect()
-    };
-    staging.unmap();
-    ctx.check_lost()?;
-    Ok(words)
 }
 
 /// Records one dispatch of `pipeline` over `count` items and submits it.
