@@ -255,33 +255,19 @@ pub fn validate(
     expanded: &Expanded,
     path_of: &dyn Fn(&str) -> String,
 ) -> Result<naga::Module, ShaderError> {
+    let module = parse(expanded, path_of)?;
+    check_module(expanded, &module, path_of)?;
+    Ok(module)
+}
+
+/// naga's parse of `expanded` alone (what [`validate`] does first), an error placed as it places
+/// them: for a caller that looks at the module before it is validated.
+pub fn parse(
+    expanded: &Expanded,
+    path_of: &dyn Fn(&str) -> String,
+) -> Result<naga::Module, ShaderError> {
     let source = &expanded.source;
-    let top = expanded.files().first().map_or("", String::as_str);
-    let at = |location: Option<naga::SourceLocation>, message: String| {
-        let text_of = |line: u32| {
-            source
-                .lines()
-                .nth(line.saturating_sub(1) as usize)
-                .map(str::to_owned)
-        };
-        match location.and_then(|l| Some((l, expanded.origin(l.line_number)?))) {
-            Some((l, (file, line))) => ShaderError {
-                file: path_of(file),
-                line,
-                column: l.line_position,
-                message,
-                text: text_of(l.line_number),
-            },
-            None => ShaderError {
-                file: path_of(top),
-                line: 0,
-                column: 0,
-                message,
-                text: None,
-            },
-        }
-    };
-    let module = naga::front::wgsl::parse_str(source).map_err(|e| {
+    naga::front::wgsl::parse_str(source).map_err(|e| {
         let label = e
             .labels()
             .next()
@@ -291,10 +277,19 @@ pub fn validate(
             Some(l) => format!("{} ({l})", e.message()),
             None => e.message().to_owned(),
         };
-        at(e.location(source), message)
-    })?;
+        place(expanded, path_of, e.location(source), message)
+    })
+}
+
+/// naga's validation of `module`, parsed from `expanded` ([`parse`]).
+pub fn check_module(
+    expanded: &Expanded,
+    module: &naga::Module,
+    path_of: &dyn Fn(&str) -> String,
+) -> Result<(), ShaderError> {
     Validator::new(ValidationFlags::all(), Capabilities::all())
-        .validate(&module)
+        .validate(module)
+        .map(|_| ())
         .map_err(|e| {
             let mut message = e.as_inner().to_string();
             let mut cause = std::error::Error::source(e.as_inner());
@@ -303,9 +298,38 @@ pub fn validate(
                 message.push_str(&c.to_string());
                 cause = c.source();
             }
-            at(e.location(source), message.replace('\n', " "))
-        })?;
-    Ok(module)
+            let location = e.location(&expanded.source);
+            place(expanded, path_of, location, message.replace('\n', " "))
+        })
+}
+
+/// `message` at `location` of the expansion, placed in the file and line it came from.
+fn place(
+    expanded: &Expanded,
+    path_of: &dyn Fn(&str) -> String,
+    location: Option<naga::SourceLocation>,
+    message: String,
+) -> ShaderError {
+    let source = &expanded.source;
+    match location.and_then(|l| Some((l, expanded.origin(l.line_number)?))) {
+        Some((l, (file, line))) => ShaderError {
+            file: path_of(file),
+            line,
+            column: l.line_position,
+            message,
+            text: source
+                .lines()
+                .nth(l.line_number.saturating_sub(1) as usize)
+                .map(str::to_owned),
+        },
+        None => ShaderError {
+            file: path_of(expanded.files().first().map_or("", String::as_str)),
+            line: 0,
+            column: 0,
+            message,
+            text: None,
+        },
+    }
 }
 
 /// The expanded source of top-level shader `name` as shaders are read now (the folder's

@@ -288,13 +288,13 @@ impl Method {
 
     /// A user's method's file, as given; `None` for the registry's.
     pub fn user_path(self) -> Option<&'static str> {
-        self.0.user.map(|u| u.path())
+        user::of(self).map(|u| u.path.as_str())
     }
 
     /// A user's method's expanded shader and knob values (what decides its images beyond its
     /// name, for caches keyed by the method); `None` for the registry's.
-    pub fn user_shader(self) -> Option<(String, Vec<f32>)> {
-        self.0.user.map(|u| u.shader_and_values())
+    pub fn user_shader(self) -> Option<(String, [f32; user::MAX_USER_KNOBS])> {
+        user::of(self).map(|u| (u.source(), u.values()))
     }
 }
 

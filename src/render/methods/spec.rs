@@ -58,13 +58,6 @@ pub struct MethodSpec {
 /// its shader and knobs): `new` is a plain `fn` and cannot carry them.
 pub trait MakeState: Send + Sync {
     fn state(&'static self, ctx: &GpuContext, spec: &'static MethodSpec) -> Box<dyn MethodState>;
-
-    /// The expanded shader and the knob values that decide what it draws, beyond its name:
-    /// what a cache keyed by the method must hold so an edited file is measured again.
-    fn shader_and_values(&self) -> (String, Vec<f32>);
-
-    /// The file it was loaded from, as given.
-    fn path(&self) -> &str;
 }
 
 /// What a method's cost view shows: the work its camera shader counted at each pixel with

@@ -186,14 +186,6 @@ impl MakeState for UserMethod {
             self.traces_scene(),
         ))
     }
-
-    fn shader_and_values(&self) -> (String, Vec<f32>) {
-        (self.source(), self.values().to_vec())
-    }
-
-    fn path(&self) -> &str {
-        &self.path
-    }
 }
 
 /// The user's methods loaded so far in this process, the latest last.
@@ -559,10 +551,7 @@ fn check(path: &str, text: &str, expanded: &Expanded) -> Result<(), ShaderError>
             format!("{path}: {file}")
         }
     };
-    let module = match naga::front::wgsl::parse_str(&expanded.source) {
-        Ok(module) => module,
-        Err(_) => return shaders::validate(expanded, &path_of).map(|_| ()),
-    };
+    let module = shaders::parse(expanded, &path_of)?;
     let source = &expanded.source;
     for (handle, var) in module.global_variables.iter() {
         let Some(binding) = &var.binding else {
@@ -590,7 +579,7 @@ fn check(path: &str, text: &str, expanded: &Expanded) -> Result<(), ShaderError>
             });
         }
     }
-    shaders::validate(expanded, &path_of).map(|_| ())
+    shaders::check_module(expanded, &module, &path_of)
 }
 
 #[cfg(test)]
