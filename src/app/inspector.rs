@@ -181,9 +181,10 @@ impl LabApp {
         rows_grid(ui, "pixel-grid", self.pixel_rows());
     }
 
-    /// The light as seen from the pixel under the cursor (`light_panel`): computed on this
+    /// The light as seen from the pixel under the cursor (`light_panel`): its rays cast on this
     /// thread for that one pixel when the cursor reaches another surface point, not while a
-    /// mouse button is down (a drag edits the scene every frame).
+    /// mouse button is down (a drag edits the scene every frame); what they are cast against is
+    /// made on a worker thread after each edit.
     fn light_section(&mut self, ui: &mut egui::Ui) {
         let Some(hover) = self.viewport.hover else {
             return;
@@ -210,10 +211,23 @@ impl LabApp {
         };
         let busy = ui.input(|i| i.pointer.any_down());
         if let (Some(core), false) = (self.core.as_ref(), busy) {
+            let revisions = light_panel::Revisions {
+                scene: self.revision,
+                geometry: self.geometry_revision,
+            };
+            let ctx = ui.ctx().clone();
             self.light_panel
-                .update(core.scene(), self.revision, method, x, params);
+                .update(core.scene(), revisions, method, x, params, move || {
+                    ctx.request_repaint()
+                });
+        }
+        if let Some(e) = &self.light_panel.error {
+            ui.label(RichText::new(e).small());
         }
         let Some(light) = self.light_panel.shown.as_ref() else {
+            if self.light_panel.preparing() {
+                ui.label(RichText::new("casting the reference's rays…").small());
+            }
             return;
         };
         light_panel::draw(ui, light);

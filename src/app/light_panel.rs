@@ -1,13 +1,16 @@
 //! The inspector's **light as seen from this pixel** panel: the light's disk as the
 //! receiver under the cursor sees it, for every method. The reference's disk samples for that
 //! one pixel are cast on the CPU ([`crate::geometry::oracle`], [`PANEL_SAMPLES`] rays, when the
-//! cursor moves to another surface point) and marked blocked or free; for `dbuffer-fused` the
+//! cursor moves to another surface point, against a BVH made on a worker thread: see
+//! [`LightPanel`]) and marked blocked or free; for `dbuffer-fused` the
 //! method's own view from its CPU twin ([`FusedTwin::light_from`]) is drawn over them: each listed
 //! edge projected onto the light's plane, the chord it cuts, and the mask's samples shaded by the
 //! layers between the pixel and each (lit where none). Nothing is read back from the GPU beyond the
 //! one texel the inspector already reads (the position comes from the probe).
 
 use eframe::egui::{self, Color32, Pos2, Rect, Sense, Stroke};
+use std::sync::mpsc;
+
 use glam::{Vec2, Vec3};
 
 use crate::geometry::fused::{FusedParams, FusedPath, FusedTwin, LightFromPoint, MaskEval};
@@ -98,23 +101,54 @@ impl PixelLight {
     }
 }
 
-/// What the panel's pictures are made from, per scene revision and fused setup.
+/// Which scene the panel's tools are for: `scene` changes with every edit (the light's too),
+/// `geometry` only when a mesh does (an object moved, another scene opened).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Revisions {
+    pub scene: u64,
+    pub geometry: u64,
+}
+
+/// What the tools are made for: the scene's revision and, for `dbuffer-fused`, its setup.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct ToolsKey {
+    revisions: Revisions,
+    /// `Some` where the fused method's twin is wanted.
+    fused: Option<FusedParams>,
+}
+
+/// What the panel's pictures are made from.
 struct Tools {
-    revision: u64,
-    params: FusedParams,
+    key: ToolsKey,
     oracle: Oracle,
     /// The unit-disk coordinates of the oracle's samples.
     disk: Vec<Vec2>,
-    /// Made when the fused method is first inspected in this revision.
     twin: Option<FusedTwin>,
 }
 
-/// The panel's state: its tools and the last pixel it was computed for.
+/// Tools being made on a thread of their own.
+struct Job {
+    key: ToolsKey,
+    done: mpsc::Receiver<Tools>,
+}
+
+/// The panel's state: its tools, the job making new ones, and the last pixel it was computed
+/// for.
+///
+/// The tools (the oracle's BVH over every triangle, and `dbuffer-fused`'s twin) are made on a
+/// worker thread, never the UI thread: at a million triangles the BVH takes a second or more,
+/// and an edit would stall the window that long. A light move keeps the BVH (it depends on the
+/// triangles alone) and makes only the light's samples and the twin anew. Until the tools for
+/// the scene shown are ready the panel says so; one job runs at a time, and one for a scene
+/// already edited again is followed by one for the newest.
 #[derive(Default)]
 pub struct LightPanel {
     tools: Option<Tools>,
+    job: Option<Job>,
     key: Option<(u64, [u32; 3], Method, FusedParams)>,
     pub shown: Option<PixelLight>,
+    /// Why the last job could not run, if it could not.
+    pub error: Option<String>,
 }
 
 /// The twin's setup for the frame `request` drew (the GPU's look-up tables: `MaskEval::Lut`).
@@ -129,62 +163,83 @@ pub fn fused_params(request: &FrameRequest) -> FusedParams {
     }
 }
 
+/// The tools for `key`, the BVH taken from `reuse` where it was built on the same triangles.
+fn make_tools(scene: &Scene, key: ToolsKey, reuse: Option<Oracle>) -> Tools {
+    let oracle = match reuse {
+        Some(o) => o.relit(scene.light, PANEL_SAMPLES),
+        None => Oracle::from_scene(scene, PANEL_SAMPLES),
+    };
+    // The light's own frame, scaled to the unit disk (a segment: along u, from -1 to 1).
+    let (e1, e2, r) = match &scene.light {
+        Light::Area(d) => {
+            let (e1, e2) = d.basis();
+            (e1, e2, d.radius)
+        }
+        Light::Line(l) => {
+            let along = (l.b - l.a).normalize_or_zero();
+            (along, Vec3::ZERO, 0.5 * l.length())
+        }
+    };
+    let (c, r) = (scene.light.center(), r.max(f32::MIN_POSITIVE));
+    let disk = oracle
+        .sample_points()
+        .iter()
+        .map(|&p| Vec2::new((p - c).dot(e1), (p - c).dot(e2)) / r)
+        .collect();
+    let twin = key.fused.map(|params| {
+        let prepared = PreparedCasters::new(scene);
+        let geometry = prepared.build(
+            &scene.light.area_or_centre(),
+            &VolumeParams::for_scene(scene),
+        );
+        FusedTwin::new(scene, &prepared, &geometry, params)
+    });
+    Tools {
+        key,
+        oracle,
+        disk,
+        twin,
+    }
+}
+
 impl LightPanel {
     /// Computes the panel for the receiver `x` shown by `method` (no work if nothing changed).
+    /// Where the tools for `revisions` are not made yet, starts making them on a worker thread
+    /// (`ready` is called from it when they are) and shows nothing until they are.
     pub fn update(
         &mut self,
         scene: &Scene,
-        revision: u64,
+        revisions: Revisions,
         method: Method,
         x: Vec3,
         params: FusedParams,
+        ready: impl Fn() + Send + 'static,
     ) {
-        let key = (revision, x.to_array().map(f32::to_bits), method, params);
+        let key = (
+            revisions.scene,
+            x.to_array().map(f32::to_bits),
+            method,
+            params,
+        );
         if self.key == Some(key) && self.shown.is_some() {
             return;
         }
-        let stale = self
-            .tools
-            .as_ref()
-            .is_none_or(|t| t.revision != revision || t.params != params);
-        if stale {
-            let oracle = Oracle::from_scene(scene, PANEL_SAMPLES);
-            // The light's own frame, scaled to the unit disk (a segment: along u, from -1 to 1).
-            let (e1, e2, r) = match &scene.light {
-                Light::Area(d) => {
-                    let (e1, e2) = d.basis();
-                    (e1, e2, d.radius)
-                }
-                Light::Line(l) => {
-                    let along = (l.b - l.a).normalize_or_zero();
-                    (along, Vec3::ZERO, 0.5 * l.length())
-                }
-            };
-            let (c, r) = (scene.light.center(), r.max(f32::MIN_POSITIVE));
-            let disk = oracle
-                .sample_points()
-                .iter()
-                .map(|&p| Vec2::new((p - c).dot(e1), (p - c).dot(e2)) / r)
-                .collect();
-            self.tools = Some(Tools {
-                revision,
-                params,
-                oracle,
-                disk,
-                twin: None,
-            });
+        let want = ToolsKey {
+            revisions,
+            fused: (method == Method::DBUFFER_FUSED).then_some(params),
+        };
+        self.collect();
+        if self.tools.as_ref().is_none_or(|t| t.key != want) {
+            self.shown = None;
+            self.key = None;
+            if self.job.is_none() {
+                self.start(scene, want, ready);
+            }
+            return;
         }
-        let Some(tools) = self.tools.as_mut() else {
+        let Some(tools) = self.tools.as_ref() else {
             return;
         };
-        if method == Method::DBUFFER_FUSED && tools.twin.is_none() {
-            let prepared = PreparedCasters::new(scene);
-            let geometry = prepared.build(
-                &scene.light.area_or_centre(),
-                &VolumeParams::for_scene(scene),
-            );
-            tools.twin = Some(FusedTwin::new(scene, &prepared, &geometry, params));
-        }
         let reference = tools
             .oracle
             .sample_points()
@@ -195,9 +250,7 @@ impl LightPanel {
                 blocked: tools.oracle.count_visible(x, std::slice::from_ref(p)) == 0,
             })
             .collect();
-        let fused = (method == Method::DBUFFER_FUSED)
-            .then(|| tools.twin.as_ref().map(|t| t.light_from(x)))
-            .flatten();
+        let fused = tools.twin.as_ref().map(|t| t.light_from(x));
         let corners = scene.light.as_area().map_or(Vec::new(), |a| {
             let (e1, e2) = a.basis();
             let r = a.radius.max(f32::MIN_POSITIVE);
@@ -217,6 +270,81 @@ impl LightPanel {
             fused,
         });
         self.key = Some(key);
+    }
+
+    /// Whether tools are being made (the panel shows nothing new until they are).
+    pub fn preparing(&self) -> bool {
+        self.job.is_some()
+    }
+
+    /// Blocks until the job in flight, if any, is done (for tests: the window never waits).
+    pub fn wait(&mut self) {
+        if let Some(job) = self.job.take() {
+            if let Ok(tools) = job.done.recv() {
+                self.tools = Some(tools);
+            }
+        }
+    }
+
+    /// The oracle the panel's reference rays are cast with, once made (a test holds a clone to
+    /// see whether a later one shares its BVH: [`Oracle::shares_bvh`]).
+    pub fn oracle(&self) -> Option<&Oracle> {
+        self.tools.as_ref().map(|t| &t.oracle)
+    }
+
+    /// Takes the job's tools where it has finished.
+    fn collect(&mut self) {
+        let Some(job) = self.job.as_ref() else {
+            return;
+        };
+        match job.done.try_recv() {
+            Ok(tools) => {
+                self.tools = Some(tools);
+                self.job = None;
+            }
+            Err(mpsc::TryRecvError::Empty) => {}
+            Err(mpsc::TryRecvError::Disconnected) => {
+                self.error = Some(format!(
+                    "making the reference's rays for revision {} failed",
+                    job.key.revisions.scene
+                ));
+                self.job = None;
+            }
+        }
+    }
+
+    /// Starts the job that makes the tools for `key`; the scene is copied for it only where
+    /// its triangles are needed (a new BVH, or the fused twin).
+    fn start(&mut self, scene: &Scene, key: ToolsKey, ready: impl Fn() + Send + 'static) {
+        let reuse = self
+            .tools
+            .as_ref()
+            .filter(|t| t.key.revisions.geometry == key.revisions.geometry)
+            .map(|t| t.oracle.clone());
+        let scene = if reuse.is_some() && key.fused.is_none() {
+            Scene {
+                name: scene.name.clone(),
+                camera: scene.camera,
+                light: scene.light,
+                objects: Vec::new(),
+            }
+        } else {
+            scene.clone()
+        };
+        let (send, done) = mpsc::channel();
+        let spawned = std::thread::Builder::new()
+            .name("light-panel".into())
+            .spawn(move || {
+                let _ = send.send(make_tools(&scene, key, reuse));
+                ready();
+            });
+        match spawned {
+            Ok(_) => {
+                self.job = Some(Job { key, done });
+                self.error = None;
+            }
+            Err(e) => self.error = Some(format!("cannot start the reference's thread: {e}")),
+        }
     }
 
     /// Forget the pixel (the cursor left the viewport or shows no surface).

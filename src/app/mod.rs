@@ -112,6 +112,9 @@ pub struct LabApp {
     history: History,
     /// Bumped by every scene edit and scene change: a new frame is needed.
     revision: u64,
+    /// Bumped when a mesh changes (an object moved, another scene): what depends on the
+    /// triangles alone (the light panel's BVH) is made again.
+    geometry_revision: u64,
     /// Per object, a BVH for picking, built when first needed after the object moved.
     bvhs: Vec<Option<Bvh>>,
     status: (String, Level),
@@ -207,6 +210,7 @@ impl LabApp {
             doc,
             history: History::default(),
             revision: 0,
+            geometry_revision: 0,
             bvhs: vec![None; objects],
             status,
             render_error: None,
@@ -264,6 +268,16 @@ impl LabApp {
     /// What the inspector's "light as seen from this pixel" panel shows, once computed.
     pub fn pixel_light(&self) -> Option<&light_panel::PixelLight> {
         self.light_panel.shown.as_ref()
+    }
+
+    /// The light panel's state (its oracle, whether it is preparing).
+    pub fn light_panel(&self) -> &light_panel::LightPanel {
+        &self.light_panel
+    }
+
+    /// Blocks until the light panel's worker is done (tests; the window never waits).
+    pub fn wait_for_light_panel(&mut self) {
+        self.light_panel.wait();
     }
 
     /// The right side of a split view.
@@ -409,6 +423,7 @@ impl LabApp {
                 self.history.clear();
                 self.selection = Selection::None;
                 self.revision += 1;
+                self.geometry_revision += 1;
                 self.viewport.drag = None;
                 if !SceneDoc::is_builtin(name_or_path) {
                     self.settings.push_recent(name_or_path);
@@ -488,6 +503,9 @@ impl LabApp {
             if let Some(b) = self.bvhs.get_mut(i) {
                 *b = None;
             }
+        }
+        if !moved.is_empty() {
+            self.geometry_revision += 1;
         }
         self.revision += 1;
     }

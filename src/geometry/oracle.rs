@@ -33,6 +33,7 @@
 //! Speed: `benches/oracle.rs` (`cargo bench --bench oracle`) measures rays per second.
 
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -52,7 +53,9 @@ const JITTER_SEED: u64 = 0x0d1b_5eed_0000_0000;
 /// The ray-cast visibility oracle. See the module documentation.
 #[derive(Debug)]
 pub struct Oracle {
-    bvh: Bvh,
+    /// Shared with every oracle relit from this one ([`Oracle::relit`]): it depends on the
+    /// triangles alone.
+    bvh: Arc<Bvh>,
     light: Light,
     /// Sample points on the light, world space.
     samples: Vec<Vec3>,
@@ -64,7 +67,7 @@ pub struct Oracle {
 impl Clone for Oracle {
     fn clone(&self) -> Self {
         Self {
-            bvh: self.bvh.clone(),
+            bvh: Arc::clone(&self.bvh),
             light: self.light,
             samples: self.samples.clone(),
             light_ok: self.light_ok,
@@ -78,12 +81,14 @@ impl Oracle {
     /// a disk or a line light.
     pub fn new(triangles: Vec<[Vec3; 3]>, light: impl Into<Light>, samples: usize) -> Oracle {
         let light = light.into();
-        let k = samples.max(1);
-        let samples: Vec<Vec3> = match &light {
-            Light::Area(d) => super::outline::area_samples(d, k),
-            Light::Line(l) => line_samples(l, k),
-        };
-        Oracle::with_samples(triangles, light, samples)
+        Oracle::with_samples(triangles, light, light_samples(&light, samples))
+    }
+
+    /// The same occluders under another light with `samples` rays per point (0 means 1): the
+    /// BVH is shared, not built again, so moving the light costs only its samples.
+    pub fn relit(&self, light: impl Into<Light>, samples: usize) -> Oracle {
+        let light = light.into();
+        Oracle::on_bvh(Arc::clone(&self.bvh), light, light_samples(&light, samples))
     }
 
     /// An oracle with the sample points `samples` on `light` given (0 samples: none visible):
@@ -94,11 +99,14 @@ impl Oracle {
         light: impl Into<Light>,
         samples: Vec<Vec3>,
     ) -> Oracle {
-        let light = light.into();
+        Oracle::on_bvh(Arc::new(Bvh::build(triangles)), light.into(), samples)
+    }
+
+    fn on_bvh(bvh: Arc<Bvh>, light: Light, samples: Vec<Vec3>) -> Oracle {
         let light_ok =
             light.is_finite() && samples.iter().all(|s| s.is_finite()) && !samples.is_empty();
         Oracle {
-            bvh: Bvh::build(triangles),
+            bvh,
             light,
             samples,
             light_ok,
@@ -119,6 +127,12 @@ impl Oracle {
     /// The BVH of the occluders.
     pub fn bvh(&self) -> &Bvh {
         &self.bvh
+    }
+
+    /// Whether `self` and `other` cast against one BVH (one was [`Oracle::relit`] from the
+    /// other, or both from a third).
+    pub fn shares_bvh(&self, other: &Oracle) -> bool {
+        Arc::ptr_eq(&self.bvh, &other.bvh)
     }
 
     /// Number of light samples (rays per point in front of the light).
@@ -181,6 +195,16 @@ impl Oracle {
     /// [`Oracle::visibility`] for many points, in parallel on all cores; same order as `xs`.
     pub fn visibility_many(&self, xs: &[Vec3]) -> Vec<f32> {
         xs.par_iter().map(|&x| self.visibility(x)).collect()
+    }
+}
+
+/// `k` samples (0 means 1) on `light`: stratified over a disk, rectangle or polygon, jittered
+/// along a segment.
+fn light_samples(light: &Light, k: usize) -> Vec<Vec3> {
+    let k = k.max(1);
+    match light {
+        Light::Area(d) => super::outline::area_samples(d, k),
+        Light::Line(l) => line_samples(l, k),
     }
 }
 
@@ -319,6 +343,36 @@ mod tests {
             Oracle::new(Vec::new(), light(), 0).visibility(Vec3::ZERO),
             1.0
         );
+    }
+
+    #[test]
+    fn a_relit_oracle_casts_as_a_new_one_on_the_same_bvh() {
+        // A square occluder half over the receivers: moving the light moves the shadow.
+        let q = [
+            Vec3::new(-1.0, 2.0, -1.0),
+            Vec3::new(1.0, 2.0, -1.0),
+            Vec3::new(1.0, 2.0, 1.0),
+            Vec3::new(-1.0, 2.0, 1.0),
+        ];
+        let tris = vec![[q[0], q[1], q[2]], [q[0], q[2], q[3]]];
+        let first = Oracle::new(tris.clone(), light(), 64);
+        let moved = AreaLight {
+            center: Vec3::new(2.5, 4.0, 0.3),
+            radius: 0.8,
+            ..light()
+        };
+        let relit = first.relit(moved, 100);
+        let fresh = Oracle::new(tris, moved, 100);
+        assert!(relit.shares_bvh(&first) && !fresh.shares_bvh(&first));
+        assert_eq!(relit.sample_points(), fresh.sample_points());
+        assert_eq!(relit.light(), fresh.light());
+        let xs: Vec<Vec3> = (0..40)
+            .map(|i| Vec3::new(-3.0 + 0.17 * i as f32, 0.0, 0.05 * i as f32 - 1.0))
+            .collect();
+        let (a, b) = (relit.visibility_many(&xs), fresh.visibility_many(&xs));
+        assert_eq!(a, b);
+        assert_ne!(a, first.visibility_many(&xs), "the light moved the shadow");
+        assert!(a.iter().any(|&v| v == 0.0) && a.iter().any(|&v| v == 1.0));
     }
 
     #[test]

@@ -1005,3 +1005,83 @@ fn the_window_bench_runs_its_phases_and_puts_the_scene_back() {
     assert_eq!(json["phases"][3]["phase"], "orbit");
     let _ = std::fs::remove_file(&out);
 }
+
+/// The inspector's "light as seen from this pixel" panel makes what it casts against on a
+/// worker thread and keeps its BVH when only the light moves: the rays after a light drag are
+/// cast on the BVH made before it, and agree with an oracle made afresh for the moved light;
+/// another scene gets a BVH of its own.
+#[test]
+fn the_light_panel_keeps_its_bvh_when_the_light_moves() {
+    use dbuffer::app::light_panel::PANEL_SAMPLES;
+    use dbuffer::geometry::oracle::Oracle;
+
+    let mut h = lab(Some("fig7-concave"));
+    h.run();
+    click(&mut h, "light");
+    assert_eq!(h.state().selection, Selection::Light);
+    h.key_press(egui::Key::F);
+    h.run();
+    // A penumbra pixel of the shown frame, under the cursor.
+    let f = shown_frame(&mut h, false);
+    let i = (0..f.visibility.len())
+        .filter(|&i| f.hit(i) && (0.2..0.8).contains(&f.visibility[i]))
+        .nth(40)
+        .expect("a penumbra pixel");
+    let rect = h.state().viewport_rect().expect("viewport");
+    let pos = egui::pos2(
+        rect.left() + ((i as u32 % f.width) as f32 + 0.5) / f.width as f32 * rect.width(),
+        rect.top() + ((i as u32 / f.width) as f32 + 0.5) / f.height as f32 * rect.height(),
+    );
+    h.hover_at(pos);
+    assert!(step_until_gpu(&mut h, 200, |h| h
+        .state()
+        .pixel_light()
+        .is_some()));
+    let before = h.state().light_panel().oracle().expect("made").clone();
+    let x = h.state().pixel_light().expect("shown").position;
+
+    // Drag the light aside, then hover the pixel again.
+    let at = h.state().light_screen_pos().expect("the light in view");
+    h.drag_at(at);
+    h.step();
+    h.hover_at(at + egui::vec2(60.0, 0.0));
+    h.step();
+    h.drop_at(at + egui::vec2(120.0, 0.0));
+    h.run();
+    let scene = h.state().scene().expect("scene").clone();
+    assert_ne!(scene.light, *before.light(), "the light moved");
+    h.hover_at(pos);
+    assert!(step_until_gpu(&mut h, 200, |h| h
+        .state()
+        .pixel_light()
+        .is_some_and(|l| (l.position - x).length() < 1e-5)
+        && h.state().light_panel().oracle().map(|o| *o.light())
+            == Some(scene.light)));
+    let after = h.state().light_panel().oracle().expect("made").clone();
+    assert!(
+        after.shares_bvh(&before),
+        "a light move built the BVH again"
+    );
+    let panel = h.state().pixel_light().expect("shown").clone();
+    let fresh = Oracle::from_scene(&scene, PANEL_SAMPLES);
+    assert_eq!(after.sample_points(), fresh.sample_points());
+    let blocked = panel.reference.iter().filter(|s| s.blocked).count();
+    let visible = fresh.count_visible(panel.position, fresh.sample_points()) as usize;
+    assert_eq!(
+        blocked + visible,
+        PANEL_SAMPLES,
+        "the rays as a fresh oracle casts them"
+    );
+
+    // Another scene (new triangles): a BVH of its own.
+    h.state_mut().open_scene("fig7-concave");
+    h.key_press(egui::Key::F);
+    h.run();
+    h.hover_at(pos);
+    assert!(step_until_gpu(&mut h, 200, |h| h
+        .state()
+        .pixel_light()
+        .is_some()));
+    let reopened = h.state().light_panel().oracle().expect("made");
+    assert!(!reopened.shares_bvh(&before));
+}

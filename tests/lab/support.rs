@@ -138,6 +138,8 @@ pub fn step_until_gpu(
 ) -> bool {
     for _ in 0..steps {
         h.step();
+        // The light panel's tools are made on a worker thread: wait for it as for the GPU.
+        h.state_mut().wait_for_light_panel();
         if ready(h) {
             return true;
         }
