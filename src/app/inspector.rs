@@ -322,9 +322,20 @@ impl LabApp {
                 format!("{} casting, {total} in all", scene.caster_triangle_count()),
             ));
             if core.session.gpu_geometry(method).is_some() {
-                // Counted on the GPU and never read back in the lab: its time is the GPU
-                // pass `geometry_gpu` above (`dbuffer inspect` reads the counts).
-                rows.push(("geometry stage".into(), "on the GPU".into()));
+                // Counted on the GPU and never read back in the lab (`dbuffer inspect` reads
+                // the counts); its time is the GPU pass `geometry_gpu`, not the UI thread's.
+                let gpu_ms = self
+                    .stats
+                    .median_gpu_ms()
+                    .into_iter()
+                    .find(|(pass, _)| pass == crate::render::passes::geometry_gpu::SPAN)
+                    .map(|(_, v)| v);
+                let at = match gpu_ms {
+                    Some(_) if self.deterministic => "on the GPU".to_string(),
+                    Some(v) => format!("on the GPU, {v:.2} ms"),
+                    None => "on the GPU".to_string(),
+                };
+                rows.push(("geometry stage".into(), at));
             } else {
                 rows.push((
                     "silhouette edges".into(),

@@ -91,6 +91,13 @@ const FORMATS: &[TextureFormat] = &[
     TextureFormat::Depth32FloatStencil8,
 ];
 
+/// The major version of Mesa in a driver's description ("Mesa 22.3.6 (LLVM 15.0.6)"), if it is
+/// Mesa.
+pub fn mesa_major(driver_info: &str) -> Option<u32> {
+    let version = driver_info.split("Mesa ").nth(1)?;
+    version.split('.').next()?.trim().parse().ok()
+}
+
 /// What a device (or the device an adapter would open) can do, as far as the methods ask.
 #[derive(Clone, Debug)]
 pub struct Capabilities {
@@ -99,6 +106,8 @@ pub struct Capabilities {
     pub backend: wgpu::Backend,
     /// A discrete or integrated GPU, a CPU rasteriser (lavapipe, llvmpipe)…
     pub device_type: wgpu::DeviceType,
+    /// The driver's own description ("Mesa 22.3.6 (LLVM 15.0.6)").
+    pub driver_info: String,
     pub features: Features,
     pub limits: wgpu::Limits,
     pub downlevel: DownlevelFlags,
@@ -133,6 +142,7 @@ impl Capabilities {
         Capabilities {
             adapter: describe(&info),
             device_type: info.device_type,
+            driver_info: info.driver_info.clone(),
             backend: info.backend,
             features,
             limits,
@@ -151,12 +161,18 @@ impl Capabilities {
         Capabilities {
             adapter: describe(info),
             device_type: info.device_type,
+            driver_info: info.driver_info.clone(),
             backend: info.backend,
             features,
             limits,
             downlevel: DownlevelFlags::all(),
             formats,
         }
+    }
+
+    /// The major version of Mesa, where the driver is Mesa's.
+    pub fn mesa_major(&self) -> Option<u32> {
+        mesa_major(&self.driver_info)
     }
 
     /// Whether shaders may trace rays through acceleration structures (hardware ray queries,

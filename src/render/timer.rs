@@ -89,14 +89,7 @@ impl<'a> Recorder<'a> {
 /// build, or `WGPU_DEBUG=1`, which a RenderDoc capture wants anyway.)
 pub fn groups_span_passes(adapter: &wgpu::AdapterInfo) -> bool {
     adapter.backend != wgpu::Backend::Vulkan
-        || mesa_major(&adapter.driver_info).is_none_or(|v| v >= 24)
-}
-
-/// The major version of Mesa in a driver's description ("Mesa 22.3.6 (LLVM 15.0.6)"), if it is
-/// Mesa.
-fn mesa_major(driver_info: &str) -> Option<u32> {
-    let version = driver_info.split("Mesa ").nth(1)?;
-    version.split('.').next()?.trim().parse().ok()
+        || super::adapter::mesa_major(&adapter.driver_info).is_none_or(|v| v >= 24)
 }
 
 /// What the encoder is told.
@@ -399,7 +392,8 @@ fn read_slot(slot: &mut Slot, period_ms: f64) -> Vec<(String, f64)> {
 
 #[cfg(test)]
 mod tests {
-    use super::{mesa_major, GroupOp, Groups};
+    use super::{GroupOp, Groups};
+    use crate::render::adapter::mesa_major;
 
     #[test]
     fn mesa_versions_are_read_from_the_driver_description() {

@@ -37,13 +37,14 @@ pub const CHANNELS: &[Channel] = &[
 ];
 
 /// `--geometry`: where the D-buffer's geometry stage runs. `auto`: on the GPU where the adapter
-/// is a GPU with compute shaders, indirect draws and the storage buffers the stage binds
-/// ([`gpu_geometry_by_default`]) and the scene's casters fit it, else on the CPU.
+/// has compute shaders, indirect draws and the storage buffers the stage binds, is a GPU or a
+/// CPU rasteriser that runs the stage well ([`gpu_geometry_by_default`]), and the scene's
+/// casters fit it; else on the CPU.
 pub static GEOMETRY: super::Choice = super::Choice::new(
     "geometry",
     "dbuffer, dbuffer-center: where the geometry stage (face classes, silhouettes, volumes) \
-     runs: auto = on the GPU where the adapter is a GPU that can, cpu, gpu (the CPU where the \
-     adapter cannot)",
+     runs: auto = on the GPU where the adapter can and runs it well (a GPU, or Mesa 25's lavapipe), \
+     cpu, gpu (the CPU where the adapter cannot)",
     &["auto", "cpu", "gpu"],
     0,
 );
@@ -55,11 +56,19 @@ pub fn gpu_geometry_runs(caps: &Capabilities) -> bool {
 }
 
 /// Whether `--geometry auto` runs the stage on the GPU on an adapter of `caps`: wherever it can,
-/// but on a CPU rasteriser. There the "GPU" is the same cores running the stage as compute
-/// shaders, and a light move costs 13–48 × the CPU path's (lavapipe on the 2-core VM: 13.0
-/// against 0.65 ms at 4k triangles, 1,269 against 33 ms at 256k; docs/results/performance.md).
+/// but on a CPU rasteriser not measured to run it well. There the "GPU" is the same cores
+/// running the stage as compute shaders, and how well depends on the driver: on the 2-core VM,
+/// the same run (docs/results/performance.md), Mesa 25.0.7's lavapipe moves the light over
+/// 1M triangles in 62.8 ms on the GPU path against 124 ms on the CPU path (28.0 against 35.4 at
+/// 256k, 0.92 against 0.35 at 1k), where Mesa 22.3's takes 2,829 ms (61 ms at 1k). So on a CPU
+/// adapter, only Mesa 25's or newer.
 pub fn gpu_geometry_by_default(caps: &Capabilities) -> bool {
-    gpu_geometry_runs(caps) && caps.device_type != wgpu::DeviceType::Cpu
+    gpu_geometry_runs(caps) && runs_the_stage_well(caps.device_type, caps.mesa_major())
+}
+
+/// A GPU, or a CPU rasteriser of Mesa 25 or newer ([`gpu_geometry_by_default`]).
+fn runs_the_stage_well(device_type: wgpu::DeviceType, mesa_major: Option<u32>) -> bool {
+    device_type != wgpu::DeviceType::Cpu || mesa_major.is_some_and(|v| v >= 25)
 }
 
 /// Where a build of the geometry stage ran.
@@ -442,4 +451,33 @@ pub fn light_move_ms(
         drop(kept);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::runs_the_stage_well;
+    use wgpu::DeviceType;
+
+    #[test]
+    fn auto_takes_the_gpu_on_a_gpu_and_on_mesa_25s_lavapipe() {
+        for gpu in [
+            DeviceType::DiscreteGpu,
+            DeviceType::IntegratedGpu,
+            DeviceType::VirtualGpu,
+        ] {
+            assert!(runs_the_stage_well(gpu, None));
+            assert!(runs_the_stage_well(gpu, Some(22)));
+        }
+        assert!(runs_the_stage_well(DeviceType::Cpu, Some(25)));
+        assert!(runs_the_stage_well(DeviceType::Cpu, Some(26)));
+        assert!(!runs_the_stage_well(DeviceType::Cpu, Some(22)));
+        assert!(
+            !runs_the_stage_well(DeviceType::Cpu, Some(24)),
+            "not measured"
+        );
+        assert!(
+            !runs_the_stage_well(DeviceType::Cpu, None),
+            "WARP, SwiftShader: not measured"
+        );
+    }
 }

@@ -38,6 +38,9 @@ const ARGS_UMBRA: u64 = 16 * 4;
 const ARGS_PENUMBRA: u64 = 20 * 4;
 const VERTEX_WORDS: u64 = (std::mem::size_of::<VolumeVertex>() / 4) as u64;
 
+/// The timed span of the stage's compute passes (its GPU time in the stats).
+pub const SPAN: &str = "geometry_gpu";
+
 /// `GeomParams` of `shaders/passes/geometry_gpu.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
@@ -355,7 +358,7 @@ impl GpuGeometry {
                 .clear_buffer(&c.work, u64::from(f) * 4, Some(u64::from(v) * 8));
             rec.encoder.clear_buffer(&c.state, 0, None);
         }
-        let span = rec.span("geometry_gpu");
+        let span = rec.span(SPAN);
         let max_groups = ctx
             .device
             .limits()
