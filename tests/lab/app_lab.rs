@@ -1085,3 +1085,91 @@ fn the_light_panel_keeps_its_bvh_when_the_light_moves() {
     let reopened = h.state().light_panel().oracle().expect("made");
     assert!(!reopened.shares_bvh(&before));
 }
+
+/// `gui --geometry gpu`: the light dragged over the caster, every build of the geometry stage
+/// runs as the GPU's compute passes (no CPU stage output, the `geometry_gpu` pass timed among the
+/// GPU's), and the lab shows what the CPU stage gives for the light where it was dropped.
+#[test]
+fn the_light_drags_with_the_geometry_stage_on_the_gpu() {
+    let mut h = support_lab::lab_timed_with(
+        LabOptions {
+            scene: Some("fig7-concave".into()),
+            geometry: Some(2),
+            ..LabOptions::default()
+        },
+        900.0,
+        720.0,
+    );
+    h.run();
+    click(&mut h, "light");
+    h.key_press(egui::Key::F);
+    h.run();
+    let start = h.state().scene().expect("scene").light.center();
+    let at = h.state().light_screen_pos().expect("the light in view");
+    h.drag_at(at);
+    h.step();
+    for k in 1..=4 {
+        h.hover_at(at + egui::vec2(20.0 * k as f32, 10.0 * k as f32));
+        h.step();
+    }
+    h.drop_at(at + egui::vec2(100.0, 50.0));
+    h.run();
+    let scene = h.state().scene().expect("scene").clone();
+    assert!(
+        (scene.light.center() - start).length() > 0.2,
+        "the light moved"
+    );
+    let session = &h.state().core().expect("core").session;
+    assert!(
+        session.gpu_geometry(Method::DBUFFER).is_some(),
+        "the GPU stage ran"
+    );
+    assert!(
+        session.geometry(Method::DBUFFER).is_none(),
+        "the CPU stage's output is not the last build's"
+    );
+    let (builds, _) = session.geometry_builds(Method::DBUFFER);
+    assert!(
+        builds >= 3,
+        "a build per light position of the drag: {builds}"
+    );
+    // Its timings come back a frame or more later.
+    let timed = step_until_gpu(&mut h, 100, |h| {
+        h.state()
+            .gpu_passes()
+            .iter()
+            .any(|p| p == dbuffer::render::passes::geometry_gpu::SPAN)
+    });
+    assert!(
+        timed,
+        "the stage is a timed GPU pass: {:?}",
+        h.state().gpu_passes()
+    );
+
+    // The frame shown against the CPU stage's for the same light, request and map.
+    let shown = h.state().shown().expect("shown").clone();
+    let gpu = shown_frame(&mut h, false);
+    let ctx = &h.state().core().expect("core").ctx;
+    let mut request = shown.request.clone();
+    request.knobs = request
+        .knobs
+        .with(&dbuffer::render::methods::dbuffer::GEOMETRY, 1);
+    let mut cpu_session = dbuffer::render::Session::new(ctx, scene);
+    let cpu = cpu_session
+        .frame(ctx, &request)
+        .expect("the CPU path's frame");
+    assert_eq!((gpu.width, gpu.height), (cpu.width, cpu.height));
+    let lit = (0..gpu.len()).filter(|&i| gpu.hit(i)).count();
+    let off = (0..gpu.len())
+        .filter(|&i| gpu.hit(i) && (gpu.visibility[i] - cpu.visibility[i]).abs() > 0.02)
+        .count();
+    assert!(lit > 1000, "{lit} surface pixels");
+    assert!(
+        off * 200 <= lit,
+        "{off} of {lit} pixels differ by more than 0.02 between the paths"
+    );
+    let penumbra = (0..gpu.len())
+        .filter(|&i| gpu.hit(i) && (0.05..0.95).contains(&gpu.visibility[i]))
+        .count();
+    assert!(penumbra > 50, "a soft shadow: {penumbra} penumbra pixels");
+}

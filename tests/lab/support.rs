@@ -41,6 +41,18 @@ pub fn lab_with(options: LabOptions, width: f32, height: f32) -> Harness<'static
 /// The lab on `scene` on a device with timestamp queries where the adapter has them (as the
 /// lab's own window asks for), so the Stats panel lists GPU time per pass.
 pub fn lab_timed(scene: &str, width: f32, height: f32) -> Harness<'static, LabApp> {
+    lab_timed_with(
+        LabOptions {
+            scene: Some(scene.to_string()),
+            ..LabOptions::default()
+        },
+        width,
+        height,
+    )
+}
+
+/// [`lab_timed`] as `options` say.
+pub fn lab_timed_with(options: LabOptions, width: f32, height: f32) -> Harness<'static, LabApp> {
     let egui_wgpu::WgpuSetup::CreateNew(mut setup) = egui_kittest::wgpu::default_wgpu_setup()
     else {
         unreachable!("kittest creates its device")
@@ -57,10 +69,7 @@ pub fn lab_timed(scene: &str, width: f32, height: f32) -> Harness<'static, LabAp
             .with_max_steps(500)
             .with_render_cursor(false)
             .wgpu_setup(egui_wgpu::WgpuSetup::CreateNew(setup)),
-        LabOptions {
-            scene: Some(scene.to_string()),
-            ..LabOptions::default()
-        },
+        options,
     )
 }
 
