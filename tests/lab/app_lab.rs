@@ -1150,7 +1150,7 @@ fn the_light_drags_with_the_geometry_stage_on_the_gpu() {
     let shown = h.state().shown().expect("shown").clone();
     let gpu = shown_frame(&mut h, false);
     let ctx = &h.state().core().expect("core").ctx;
-    let mut request = shown.request.clone();
+    let mut request = shown.request;
     request.knobs = request
         .knobs
         .with(&dbuffer::render::methods::dbuffer::GEOMETRY, 1);
