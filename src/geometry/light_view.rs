@@ -52,27 +52,135 @@ impl LightView {
     /// them; only the axis — the mean direction, which the bounds then cover whatever it is —
     /// is taken over a fixed stride of at most [`AXIS_VERTICES`] caster vertices.
     pub fn fit(scene: &Scene) -> LightView {
+        LightView::fit_with(scene, &FitBoxes::new(scene))
+    }
+
+    /// [`LightView::fit`] with the meshes' boxes made before (once per set of meshes: a light
+    /// move then costs a few operations per box, not per vertex). Boxes of other meshes than
+    /// `scene`'s (by their sizes) are made again here.
+    pub fn fit_with(scene: &Scene, boxes: &FitBoxes) -> LightView {
+        if !boxes.are_of(scene) {
+            return LightView::fit(scene);
+        }
         let light = scene.light;
         let c = light.center();
-        let casters: Vec<&[Vec3]> = scene
-            .casters()
-            .map(|o| o.mesh.positions.as_slice())
+        let casters: Vec<Chunked<'_>> = scene
+            .objects
+            .iter()
+            .zip(&boxes.objects)
+            .filter(|(o, _)| o.casts_shadow)
+            .map(|(o, b)| Chunked {
+                points: &o.mesh.positions,
+                boxes: &b.points,
+            })
             .collect();
         // Without a caster, a point in front of the light stands in for one.
         let stand_in = [c + default_axis(&light)];
-        let casters = if casters.iter().any(|p| p.iter().any(|v| v.is_finite())) {
+        let stand_in_box = [Some((stand_in[0], stand_in[0]))];
+        let casters = if casters.iter().any(|k| k.boxes.iter().any(Option::is_some)) {
             casters
         } else {
-            vec![&stand_in[..]]
+            vec![Chunked {
+                points: &stand_in,
+                boxes: &stand_in_box,
+            }]
         };
         let extrusion = crate::geometry::VolumeParams::for_scene(scene).far;
         // The near plane from the nearest point of any triangle (a large one passes much closer
         // to the light than its corners), less the light's half extent: the frustum is moved to
         // every point of the light (`sampled`, `linear-ssm`) and must not cut what they see.
-        let nearest = nearest_surface(c, scene) - light.half_extent();
-        let farthest = farthest_point(c, scene);
+        let nearest = nearest_surface(c, scene, boxes) - light.half_extent();
+        let farthest = farthest_point(c, scene, boxes);
         fit_directions(&light, &casters, farthest, extrusion, nearest)
     }
+}
+
+/// An axis-aligned box, `(min, max)`.
+type Box3 = (Vec3, Vec3);
+
+/// The bounding boxes of a scene's meshes, [`CHUNK`] vertices (and triangles) at a time, for
+/// [`LightView::fit_with`]: made once per set of meshes, in one pass over them.
+#[derive(Clone, Debug, Default)]
+pub struct FitBoxes {
+    objects: Vec<MeshBoxes>,
+}
+
+#[derive(Clone, Debug)]
+struct MeshBoxes {
+    vertices: usize,
+    triangles: usize,
+    /// Per run of vertices, the box of its finite ones (`None`: none is).
+    points: Vec<Option<Box3>>,
+    /// Per run of triangles, the box of their finite corners.
+    faces: Vec<Option<Box3>>,
+}
+
+impl FitBoxes {
+    pub fn new(scene: &Scene) -> FitBoxes {
+        let objects = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let mesh = &o.mesh;
+                MeshBoxes {
+                    vertices: mesh.positions.len(),
+                    triangles: mesh.triangles.len(),
+                    points: mesh
+                        .positions
+                        .chunks(CHUNK)
+                        .map(|chunk| finite_box(chunk.iter().copied()))
+                        .collect(),
+                    faces: mesh
+                        .triangles
+                        .chunks(CHUNK)
+                        .map(|chunk| finite_box(chunk.iter().flat_map(|t| corners_of(mesh, t))))
+                        .collect(),
+                }
+            })
+            .collect();
+        FitBoxes { objects }
+    }
+
+    /// Whether these are, by their sizes, the boxes of `scene`'s meshes.
+    fn are_of(&self, scene: &Scene) -> bool {
+        self.objects.len() == scene.objects.len()
+            && self.objects.iter().zip(&scene.objects).all(|(b, o)| {
+                b.vertices == o.mesh.positions.len() && b.triangles == o.mesh.triangles.len()
+            })
+    }
+}
+
+/// Every `stride`-th item (from the first) of lists of the lengths `lens` taken as one list, as
+/// (list, index in it).
+fn strided(
+    lens: impl Iterator<Item = usize>,
+    stride: usize,
+) -> impl Iterator<Item = (usize, usize)> {
+    let stride = stride.max(1);
+    lens.enumerate()
+        .scan(0usize, move |skip, (k, len)| {
+            // `skip`: where the stride's next item lies in this list.
+            let first = *skip;
+            *skip = if first >= len {
+                first - len
+            } else {
+                first + (len - first).div_ceil(stride) * stride - len
+            };
+            Some((k, first, len))
+        })
+        .flat_map(move |(k, first, len)| (first..len).step_by(stride).map(move |i| (k, i)))
+}
+
+/// A caster's vertices and their boxes, [`CHUNK`] to a box.
+struct Chunked<'a> {
+    points: &'a [Vec3],
+    boxes: &'a [Option<Box3>],
+}
+
+/// The corners of triangle `t` of `mesh` (NaN for an index out of range).
+fn corners_of(mesh: &crate::scene::Mesh, t: &[u32; 3]) -> [Vec3; 3] {
+    let p = |i: u32| mesh.positions.get(i as usize).copied().unwrap_or(Vec3::NAN);
+    [p(t[0]), p(t[1]), p(t[2])]
 }
 
 /// Caster vertices over which the frustum's axis is averaged at most (a fixed stride over
@@ -127,11 +235,11 @@ fn margin(scale: f32) -> f32 {
 }
 
 /// How far the farthest finite vertex of any object is from `c`.
-fn farthest_point(c: Vec3, scene: &Scene) -> f32 {
+fn farthest_point(c: Vec3, scene: &Scene, boxes: &FitBoxes) -> f32 {
     let mut farthest = 0.0f32;
-    for o in &scene.objects {
-        for chunk in o.mesh.positions.chunks(CHUNK) {
-            let Some(b) = finite_box(chunk.iter().copied()) else {
+    for (o, b) in scene.objects.iter().zip(&boxes.objects) {
+        for (chunk, b) in o.mesh.positions.chunks(CHUNK).zip(&b.points) {
+            let Some(b) = *b else {
                 continue;
             };
             let reach = corners(b)
@@ -152,16 +260,12 @@ fn farthest_point(c: Vec3, scene: &Scene) -> f32 {
 }
 
 /// How close any (finite) triangle of any object comes to `c`; `f32::MAX` with none.
-fn nearest_surface(c: Vec3, scene: &Scene) -> f32 {
+fn nearest_surface(c: Vec3, scene: &Scene, boxes: &FitBoxes) -> f32 {
     let mut nearest = f32::MAX;
-    for o in &scene.objects {
+    for (o, b) in scene.objects.iter().zip(&boxes.objects) {
         let mesh = &o.mesh;
-        for chunk in mesh.triangles.chunks(CHUNK) {
-            let corners_of = |t: &[u32; 3]| {
-                let p = |i: u32| mesh.positions.get(i as usize).copied().unwrap_or(Vec3::NAN);
-                [p(t[0]), p(t[1]), p(t[2])]
-            };
-            let Some((lo, hi)) = finite_box(chunk.iter().flat_map(corners_of)) else {
+        for (chunk, b) in mesh.triangles.chunks(CHUNK).zip(&b.faces) {
+            let Some((lo, hi)) = *b else {
                 continue;
             };
             // The box holds every finite corner, so every finite triangle: none is nearer.
@@ -172,7 +276,7 @@ fn nearest_surface(c: Vec3, scene: &Scene) -> f32 {
             }
             nearest = chunk
                 .iter()
-                .map(|t| (closest_on_triangle(c, corners_of(t)) - c).length())
+                .map(|t| (closest_on_triangle(c, corners_of(mesh, t)) - c).length())
                 .filter(|d| d.is_finite())
                 .fold(nearest, f32::min);
         }
@@ -274,7 +378,7 @@ fn box_slopes(view: &Mat4, sources: &[Vec3], b: (Vec3, Vec3)) -> Option<[f32; 4]
 /// `farthest`: how far the farthest point of the scene is from its centre.
 fn fit_directions(
     light: &Light,
-    casters: &[&[Vec3]],
+    casters: &[Chunked<'_>],
     farthest: f32,
     extrusion: f32,
     nearest: f32,
@@ -308,18 +412,22 @@ fn fit_directions(
             .flat_map(move |_| from.iter().filter_map(move |&q| (v - q).try_normalize()))
             .filter(move |d| normal.is_none_or(|n| d.dot(n) > 1e-4))
     };
-    let vertices = || {
-        casters
-            .iter()
-            .flat_map(|p| p.iter().copied())
-            .filter(|p| p.is_finite())
-    };
-    let stride = vertices().count().div_ceil(AXIS_VERTICES).max(1);
+    // The axis over every `stride`-th caster vertex (every one up to `AXIS_VERTICES`), counted
+    // through the casters as one list.
+    let count: usize = casters.iter().map(|k| k.points.len()).sum();
+    let stride = count.div_ceil(AXIS_VERTICES).max(1);
+    let mut sum = Vec3::ZERO;
+    let mut any = false;
+    for (k, i) in strided(casters.iter().map(|k| k.points.len()), stride) {
+        let v = casters[k].points[i];
+        if v.is_finite() {
+            for d in directions(v) {
+                sum += d;
+                any = true;
+            }
+        }
+    }
     let fallback_axis = default_axis(light);
-    let (sum, any) = vertices()
-        .step_by(stride)
-        .flat_map(directions)
-        .fold((Vec3::ZERO, false), |(s, _), d| (s + d, true));
     let axis = if any {
         sum.try_normalize().unwrap_or(fallback_axis)
     } else {
@@ -337,11 +445,8 @@ fn fit_directions(
     // come out the same.)
     let chunks: Vec<(&[Vec3], Option<[f32; 4]>)> = casters
         .iter()
-        .flat_map(|p| p.chunks(CHUNK))
-        .filter_map(|chunk| {
-            let b = finite_box(chunk.iter().copied())?;
-            Some((chunk, box_slopes(&view, &sources, b)))
-        })
+        .flat_map(|k| k.points.chunks(CHUNK).zip(k.boxes))
+        .filter_map(|(chunk, b)| Some((chunk, box_slopes(&view, &sources, (*b)?))))
         .collect();
     let reach = |side: usize| {
         let sign = if side.is_multiple_of(2) { -1.0 } else { 1.0 };

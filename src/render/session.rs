@@ -23,7 +23,7 @@ use super::readback::Readback;
 use super::reference::{self, ReferenceKey};
 use super::timer::{groups_span_passes, PassTimer, Recorder};
 use super::{GpuContext, RenderError, Texture};
-use crate::geometry::light_view::LightView;
+use crate::geometry::light_view::{FitBoxes, LightView};
 use crate::geometry::progressive::ProgressiveReference;
 use crate::geometry::{PreparedCasters, SceneGeometry};
 use crate::scene::{Camera as SceneCamera, Light, LightKind, Mesh, Scene};
@@ -57,6 +57,8 @@ pub struct Session {
     prepared: OnceCell<PreparedCasters>,
     surfaces: GpuScene,
     light_view: LightView,
+    /// The meshes' boxes the light view is fitted with (made again when a mesh changes).
+    fit_boxes: FitBoxes,
     /// Bumped whenever the light or a caster changed.
     revision: u64,
     /// Bumped whenever an object's mesh changes (the reference depends on every object).
@@ -92,7 +94,8 @@ pub struct Session {
 impl Session {
     pub fn new(ctx: &GpuContext, scene: Scene) -> Session {
         let surfaces = GpuScene::new(ctx, &scene);
-        let light_view = LightView::fit(&scene);
+        let fit_boxes = FitBoxes::new(&scene);
+        let light_view = LightView::fit_with(&scene, &fit_boxes);
         let ((shadow_map, camera), common) =
             super::shaders::recording(|| (ShadowMap::new(ctx), Camera::new(ctx)));
         Session {
@@ -106,6 +109,7 @@ impl Session {
             prepared: OnceCell::new(),
             surfaces,
             light_view,
+            fit_boxes,
             revision: 1,
             meshes: 0,
             methods: HashMap::new(),
@@ -174,6 +178,7 @@ impl Session {
             self.prepared = OnceCell::new();
         }
         self.surfaces = GpuScene::new(ctx, &self.scene);
+        self.fit_boxes = FitBoxes::new(&self.scene);
         self.meshes += 1;
         self.moved();
     }
@@ -267,7 +272,7 @@ impl Session {
 
     fn moved(&mut self) {
         self.revision += 1;
-        self.light_view = LightView::fit(&self.scene);
+        self.light_view = LightView::fit_with(&self.scene, &self.fit_boxes);
     }
 
     /// The geometry stage's output `method` last built its light pass from.

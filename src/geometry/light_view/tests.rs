@@ -420,3 +420,41 @@ fn a_large_caster_is_covered_with_a_strided_axis() {
         assert_eq!((view.near, view.far), (exhaustive.near, exhaustive.far));
     }
 }
+
+#[test]
+fn strided_takes_every_stride_th_item_across_the_lists() {
+    let mut rng = Rng(7);
+    for _ in 0..200 {
+        let lens: Vec<usize> = (0..1 + (rng.next() * 5.0) as usize)
+            .map(|_| (rng.next() * 40.0) as usize)
+            .collect();
+        let stride = 1 + (rng.next() * 9.0) as usize;
+        let flat: Vec<(usize, usize)> = lens
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &n)| (0..n).map(move |i| (k, i)))
+            .collect();
+        let expected: Vec<(usize, usize)> = flat.iter().copied().step_by(stride).collect();
+        assert_eq!(
+            strided(lens.iter().copied(), stride).collect::<Vec<_>>(),
+            expected,
+            "{lens:?} / {stride}"
+        );
+    }
+}
+
+/// Boxes made for other meshes (another count of vertices) are not trusted: the fit makes its
+/// own.
+#[test]
+fn boxes_of_other_meshes_are_made_again() {
+    let (a, b) = (generated(11), generated(12));
+    assert_ne!(caster_vertices(&a), caster_vertices(&b));
+    assert_eq!(
+        LightView::fit_with(&b, &FitBoxes::new(&a)),
+        LightView::fit(&b)
+    );
+    assert_eq!(
+        LightView::fit_with(&b, &FitBoxes::default()),
+        LightView::fit(&b)
+    );
+}
