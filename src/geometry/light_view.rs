@@ -50,7 +50,8 @@ impl LightView {
     /// size where it can be without changing the result: the bounds, the far and the near
     /// plane skip each run of [`CHUNK`] vertices (triangles) whose bounding box cannot move
     /// them; only the axis — the mean direction, which the bounds then cover whatever it is —
-    /// is taken over a fixed stride of at most [`AXIS_VERTICES`] caster vertices.
+    /// is taken over [`AXIS_SAMPLES`] caster vertices a fixed stride apart where there are more
+    /// than [`AXIS_VERTICES`].
     pub fn fit(scene: &Scene) -> LightView {
         LightView::fit_with(scene, &FitBoxes::new(scene))
     }
@@ -183,10 +184,13 @@ fn corners_of(mesh: &crate::scene::Mesh, t: &[u32; 3]) -> [Vec3; 3] {
     [p(t[0]), p(t[1]), p(t[2])]
 }
 
-/// Caster vertices over which the frustum's axis is averaged at most (a fixed stride over
-/// more): the mean direction of a million vertices is the mean of any 65,536 spread evenly
-/// among them to well under a texel, and the bounds still cover all of them.
+/// Caster vertices up to which the frustum's axis is averaged over every one of them.
 pub const AXIS_VERTICES: usize = 1 << 16;
+
+/// Caster vertices the axis is averaged over above [`AXIS_VERTICES`], a fixed stride apart: the
+/// mean direction of a million vertices is the mean of a few thousand spread evenly among them
+/// to well under a texel, and the bounds still cover all of them.
+pub const AXIS_SAMPLES: usize = 1 << 12;
 
 /// Vertices (or triangles) per bounding box when [`LightView::fit`] skips what cannot change
 /// its result.
@@ -412,10 +416,14 @@ fn fit_directions(
             .flat_map(move |_| from.iter().filter_map(move |&q| (v - q).try_normalize()))
             .filter(move |d| normal.is_none_or(|n| d.dot(n) > 1e-4))
     };
-    // The axis over every `stride`-th caster vertex (every one up to `AXIS_VERTICES`), counted
-    // through the casters as one list.
+    // The axis over every caster vertex up to `AXIS_VERTICES`, else over `AXIS_SAMPLES` of
+    // them a stride apart, counted through the casters as one list.
     let count: usize = casters.iter().map(|k| k.points.len()).sum();
-    let stride = count.div_ceil(AXIS_VERTICES).max(1);
+    let stride = if count <= AXIS_VERTICES {
+        1
+    } else {
+        count.div_ceil(AXIS_SAMPLES)
+    };
     let mut sum = Vec3::ZERO;
     let mut any = false;
     for (k, i) in strided(casters.iter().map(|k| k.points.len()), stride) {
