@@ -321,9 +321,9 @@ impl LabApp {
                 "triangles".into(),
                 format!("{} casting, {total} in all", scene.caster_triangle_count()),
             ));
-            if core.session.gpu_geometry(method).is_some() {
-                // Counted on the GPU and never read back in the lab (`dbuffer inspect` reads
-                // the counts); its time is the GPU pass `geometry_gpu`, not the UI thread's.
+            if let Some(gpu) = core.session.gpu_geometry(method) {
+                // Its time is the GPU pass `geometry_gpu`, not the UI thread's; its counts come
+                // back a frame or more after the build.
                 let gpu_ms = self
                     .stats
                     .median_gpu_ms()
@@ -331,11 +331,31 @@ impl LabApp {
                     .find(|(pass, _)| pass == crate::render::passes::geometry_gpu::SPAN)
                     .map(|(_, v)| v);
                 let at = match gpu_ms {
-                    Some(_) if self.deterministic => "on the GPU".to_string(),
-                    Some(v) => format!("on the GPU, {v:.2} ms"),
-                    None => "on the GPU".to_string(),
+                    Some(v) if !self.deterministic => format!("on the GPU, {v:.2} ms"),
+                    _ => "on the GPU".to_string(),
                 };
                 rows.push(("geometry stage".into(), at));
+                let sum = |f: fn(&crate::render::passes::geometry_gpu::GpuStageCounts) -> u32| {
+                    gpu.last_counts()
+                        .map(|c| c.iter().map(f).sum::<u32>().to_string())
+                        .unwrap_or_else(|| "…".into())
+                };
+                rows.push((
+                    "silhouette edges".into(),
+                    format!(
+                        "{} umbra, {} penumbra",
+                        sum(|c| c.umbra_edges),
+                        sum(|c| c.penumbra_edges)
+                    ),
+                ));
+                rows.push((
+                    "volume triangles".into(),
+                    format!(
+                        "{} umbra, {} penumbra",
+                        sum(|c| if c.refused { 0 } else { c.umbra_triangles }),
+                        sum(|c| if c.refused { 0 } else { c.penumbra_triangles })
+                    ),
+                ));
             } else {
                 rows.push((
                     "silhouette edges".into(),

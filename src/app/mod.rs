@@ -466,6 +466,10 @@ impl LabApp {
                     .map(|g| g.warnings.clone())
                     .unwrap_or_default(),
             );
+            // The GPU stage's refusals, known a frame or more after its build.
+            if let Some(gpu) = core.session.gpu_geometry(self.settings.method()) {
+                warnings.extend(gpu.refused_warnings());
+            }
         }
         warnings
     }

@@ -366,3 +366,83 @@ fn the_gpu_stage_is_the_cpu_stage_on_gl() {
         reference: Default::default(),
     });
 }
+
+/// A caster of 40 separate thin triangles that all share one vertex: 80 boundary (so silhouette)
+/// edges end there, past the GPU stage's 64, so the stage refuses its volumes. The counts come
+/// back a frame later without a wait (as the lab polls them), and say so with a warning naming
+/// the caster; a second caster beside it is not refused.
+#[test]
+fn a_refused_caster_is_known_a_frame_later() {
+    let mut offline = Offline::new().unwrap_or_else(|e| panic!("{e}"));
+    let mut scene = scene::load("table1-224").expect("built-in");
+    let v0 = Vec3::new(0.0, 1.2, 0.0);
+    let mut positions = vec![v0];
+    let mut triangles = Vec::new();
+    for i in 0..40u32 {
+        let a = i as f32 / 40.0 * std::f32::consts::TAU;
+        let at = |a: f32| v0 + 0.8 * Vec3::new(a.cos(), 0.0, a.sin());
+        positions.push(at(a));
+        positions.push(at(a + 0.06));
+        // Wound to face up, towards the light.
+        triangles.push([0, 2 * i + 2, 2 * i + 1]);
+    }
+    let pinwheel = dbuffer::scene::Mesh::new(positions, triangles);
+    let sphere = scene
+        .objects
+        .iter()
+        .position(|o| o.casts_shadow)
+        .expect("a caster");
+    let mut other = scene.objects[sphere].clone();
+    other.name = "sphere-aside".into();
+    for p in &mut other.mesh.positions {
+        *p += Vec3::new(2.5, 0.0, 0.0);
+    }
+    scene.objects[sphere].name = "pinwheel".into();
+    scene.objects[sphere].mesh = pinwheel;
+    scene.objects.push(other);
+
+    let mut session = offline.session(scene.clone());
+    offline
+        .render_in(&mut session, &request(2))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let ctx = &offline.ctx;
+    let mut arrived = false;
+    for _ in 0..5 {
+        session.poll_geometry(ctx);
+        let gpu = session
+            .gpu_geometry(Method::DBUFFER)
+            .expect("the GPU stage ran");
+        if gpu.last_counts().is_some() {
+            arrived = true;
+            break;
+        }
+        let _ = ctx.device.poll(wgpu::PollType::wait_indefinitely());
+    }
+    assert!(arrived, "the counts came back");
+    let gpu = session
+        .gpu_geometry(Method::DBUFFER)
+        .expect("the GPU stage");
+    let counts = gpu.last_counts().expect("counts");
+    assert_eq!(counts.len(), 2);
+    assert!(
+        counts[0].refused && counts[0].umbra_edges >= 80,
+        "{:?}",
+        counts[0]
+    );
+    assert!(
+        !counts[1].refused && counts[1].umbra_edges > 0,
+        "{:?}",
+        counts[1]
+    );
+    let warnings = gpu.refused_warnings();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("'pinwheel'") && warnings[0].contains("--geometry cpu"));
+    // The same as the read-back that waits.
+    let read: Vec<_> = gpu
+        .read_back(ctx)
+        .expect("read back")
+        .into_iter()
+        .map(|r| r.counts)
+        .collect();
+    assert_eq!(counts, &read[..]);
+}

@@ -1146,6 +1146,52 @@ fn the_light_drags_with_the_geometry_stage_on_the_gpu() {
         h.state().gpu_passes()
     );
 
+    // Its counts come back a frame or more later, without a wait: those of the last build, as
+    // a read-back (which waits) gives them; the stats panel lists them.
+    let counted = step_until_gpu(&mut h, 100, |h| {
+        h.state()
+            .core()
+            .and_then(|c| c.session.gpu_geometry(Method::DBUFFER))
+            .is_some_and(|g| g.last_counts().is_some())
+    });
+    assert!(counted, "the GPU stage's counts came back");
+    {
+        let core = h.state().core().expect("core");
+        let gpu = core
+            .session
+            .gpu_geometry(Method::DBUFFER)
+            .expect("GPU stage");
+        let polled = gpu.last_counts().expect("counts").to_vec();
+        let read: Vec<_> = gpu
+            .read_back(&core.ctx)
+            .expect("read back")
+            .into_iter()
+            .map(|r| r.counts)
+            .collect();
+        assert_eq!(polled, read);
+        assert!(polled
+            .iter()
+            .any(|c| c.umbra_edges > 0 && c.penumbra_triangles > 0));
+        assert!(gpu.refused_warnings().is_empty());
+    }
+    let row = h
+        .state()
+        .core()
+        .and_then(|c| c.session.gpu_geometry(Method::DBUFFER))
+        .and_then(|g| g.last_counts())
+        .map(|c| {
+            let (u, p) = c.iter().fold((0, 0), |(u, p), c| {
+                (u + c.umbra_edges, p + c.penumbra_edges)
+            });
+            format!("{u} umbra, {p} penumbra")
+        })
+        .expect("counts");
+    h.run();
+    assert!(
+        h.query_by_label(&row).is_some(),
+        "the stats list the silhouette edges as '{row}'"
+    );
+
     // The frame shown against the CPU stage's for the same light, request and map.
     let shown = h.state().shown().expect("shown").clone();
     let gpu = shown_frame(&mut h, false);

@@ -337,4 +337,8 @@ impl MethodState for DBuffer {
     fn invalidate(&mut self) {
         self.paper.invalidate();
     }
+
+    fn poll_geometry(&mut self) -> bool {
+        self.paper.poll_gpu_counts()
+    }
 }

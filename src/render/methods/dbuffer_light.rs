@@ -257,6 +257,15 @@ impl DBufferLight {
         self.path
     }
 
+    /// Pick up the GPU stage's counts a frame or more after its build (never waits); `true`
+    /// while they are on their way or have just arrived.
+    pub fn poll_gpu_counts(&mut self) -> bool {
+        match &mut self.gpu {
+            Some(Ok(gpu)) if self.path == GeometryPath::Gpu => gpu.poll_counts(),
+            _ => false,
+        }
+    }
+
     /// The GPU stage, once made (its last build read back by tests and `dbuffer inspect`).
     pub fn gpu_geometry(&self) -> Option<&GpuGeometry> {
         self.gpu.as_ref().and_then(|g| g.as_ref().ok())
@@ -282,7 +291,8 @@ impl DBufferLight {
         shared: &mut SharedMaps,
         rec: &mut Recorder<'_>,
     ) -> Result<(), RenderError> {
-        if let (Some((light, params, reach)), Some(Ok(gpu))) = (self.gpu_pending.take(), &self.gpu)
+        if let (Some((light, params, reach)), Some(Ok(gpu))) =
+            (self.gpu_pending.take(), &mut self.gpu)
         {
             gpu.record(inputs.ctx, rec, &light, &params, Some(reach));
         }
@@ -411,7 +421,7 @@ pub fn light_move_ms(
     let params = VolumeParams::for_scene(scene);
     let view = crate::geometry::light_view::LightView::fit(scene);
     let reach = reach_below(&light, scene.bounds());
-    let gpu = match path {
+    let mut gpu = match path {
         GeometryPath::Gpu => Some(GpuGeometry::new(ctx, &prepared).map_err(RenderError::Request)?),
         GeometryPath::Cpu => None,
     };
@@ -423,7 +433,7 @@ pub fn light_move_ms(
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("light_move_ms"),
             });
-        let kept = match &gpu {
+        let kept = match &mut gpu {
             Some(gpu) => {
                 let mut rec = Recorder::new(&mut encoder, None);
                 gpu.record(ctx, &mut rec, &light, &params, Some(reach));

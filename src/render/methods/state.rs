@@ -57,8 +57,8 @@ pub trait MethodState: Send {
         None
     }
 
-    /// Pick up what the GPU hands back a frame or more later for the overlays (`hybrid`'s
-    /// walls), without waiting; `true` while something is on its way or has just arrived (a
+    /// Pick up what the GPU hands back a frame or more later for the overlays and the stats
+    /// (`hybrid`'s walls, the GPU geometry stage's counts), without waiting; `true` while something is on its way or has just arrived (a
     /// window repaints then).
     fn poll_geometry(&mut self) -> bool {
         false

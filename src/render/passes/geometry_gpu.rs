@@ -24,6 +24,7 @@ use crate::render::{
     GpuContext, RenderError, VolumeVertex,
 };
 use crate::scene::AreaLight;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// What the geometry stage on the GPU needs of an adapter besides the D-buffer's own: compute
@@ -34,6 +35,8 @@ pub const GPU_GEOMETRY_STORAGE_BUFFERS: u32 = 7;
 
 /// Words of the state buffer: the counts, then the two draws' arguments.
 const STATE_WORDS: usize = 24;
+/// The state words that hold a caster's counts ([`GpuStageCounts::decode`]).
+const COUNT_WORDS: u64 = 16;
 const ARGS_UMBRA: u64 = 16 * 4;
 const ARGS_PENUMBRA: u64 = 20 * 4;
 const VERTEX_WORDS: u64 = (std::mem::size_of::<VolumeVertex>() / 4) as u64;
@@ -84,6 +87,26 @@ pub struct GpuStageCounts {
 }
 
 impl GpuStageCounts {
+    /// The counts in a caster's state words (`s`: at least [`COUNT_WORDS`]), its stored corners
+    /// at most `corner_capacity`.
+    fn decode(s: &[u32], corner_capacity: u32) -> GpuStageCounts {
+        let w = |i: usize| s.get(i).copied().unwrap_or(0);
+        GpuStageCounts {
+            umbra_drawn: w(0),
+            penumbra_drawn: w(1),
+            corners: w(2).min(corner_capacity),
+            refused: w(3) != 0,
+            classes: [w(5), w(6), w(7), w(8)],
+            umbra_edges: w(9),
+            penumbra_edges: w(10),
+            fans: w(11),
+            umbra_fans: w(12),
+            unextruded_edges: w(13),
+            umbra_triangles: w(14),
+            penumbra_triangles: w(15),
+        }
+    }
+
     /// The counts as the CPU stage states them, for a caster of `triangles` faces
     /// ([`GeometryStats`]: the stats panel, `meta.json`, `dbuffer inspect`). A refused caster
     /// has no volume triangles, as the CPU's has none.
@@ -104,6 +127,16 @@ impl GpuStageCounts {
             unextruded_edges: self.unextruded_edges as usize,
         }
     }
+}
+
+/// What a caster whose volumes the GPU stage refused is warned with.
+fn refused_warning(name: &str) -> String {
+    format!(
+        "caster '{name}': its shadow volumes pass the GPU stage's buffers or budget \
+         ({MAX_VOLUME_TRIANGLES} volume triangles, MAX_VOLUME_TRIANGLES), or more than \
+         {MAX_GPU_VERTEX_ENDS} silhouette edges meet at one vertex: it casts no shadow \
+         (--geometry cpu draws it)"
+    )
 }
 
 /// One caster's stage read back ([`GpuGeometry::read_back`]).
@@ -197,6 +230,22 @@ pub struct GpuGeometry {
     corner_texture: wgpu::Texture,
     pub corner_view: wgpu::TextureView,
     corner_rows: u32,
+    /// The casters' names, for the warnings.
+    names: Vec<String>,
+    /// The last build's counts on their way back, a frame or more late (the lab's stats and
+    /// warnings; nothing waits for them).
+    copy: CountsCopy,
+    /// The counts of the last build that came back.
+    counts: Option<Vec<GpuStageCounts>>,
+}
+
+/// Every caster's count words copied after a build, mapped a frame later.
+struct CountsCopy {
+    buffer: wgpu::Buffer,
+    mapped: Arc<AtomicBool>,
+    /// Copied in a recorded build, not yet asked to map.
+    waiting: bool,
+    mapping: bool,
 }
 
 /// Triangles one volume of a caster may need at most, within the device's binding and the
@@ -284,6 +333,17 @@ impl GpuGeometry {
                 GpuCaster::new(ctx, &pass, flat, capacity, *corners, &corner_buffer)
             })
             .collect();
+        let copy = CountsCopy {
+            buffer: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("GpuGeometry::counts_copy"),
+                size: (flats.len() as u64).max(1) * COUNT_WORDS * 4,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            mapped: Arc::new(AtomicBool::new(false)),
+            waiting: false,
+            mapping: false,
+        };
         Ok(GpuGeometry {
             pass,
             casters,
@@ -291,6 +351,9 @@ impl GpuGeometry {
             corner_texture,
             corner_view,
             corner_rows,
+            names: prepared.meshes.iter().map(|m| m.name.clone()).collect(),
+            copy,
+            counts: None,
         })
     }
 
@@ -298,7 +361,7 @@ impl GpuGeometry {
     /// `params.center_silhouettes`), each volume ended at `reach` where given (the umbra only
     /// where `end_umbra`: a scene of one caster).
     pub fn record(
-        &self,
+        &mut self,
         ctx: &GpuContext,
         rec: &mut Recorder<'_>,
         light: &AreaLight,
@@ -407,6 +470,77 @@ impl GpuGeometry {
             self.corner_texture.as_image_copy(),
             self.corner_texture.size(),
         );
+        // The counts, back a frame or more later (unless the last ones are still mapping).
+        if !self.copy.mapping {
+            for (i, c) in self.casters.iter().enumerate() {
+                rec.encoder.copy_buffer_to_buffer(
+                    &c.state,
+                    0,
+                    &self.copy.buffer,
+                    i as u64 * COUNT_WORDS * 4,
+                    COUNT_WORDS * 4,
+                );
+            }
+            self.copy.waiting = !self.casters.is_empty();
+        }
+    }
+
+    /// Pick up the counts of a recorded build without waiting: the first call after the build
+    /// was submitted asks for the copy, a later one takes it ([`GpuGeometry::last_counts`]).
+    /// `true` while they are on their way or have just arrived.
+    pub fn poll_counts(&mut self) -> bool {
+        if self.copy.waiting && !self.copy.mapping {
+            let flag = self.copy.mapped.clone();
+            flag.store(false, Ordering::Release);
+            self.copy
+                .buffer
+                .slice(..)
+                .map_async(wgpu::MapMode::Read, move |r| {
+                    flag.store(r.is_ok(), Ordering::Release);
+                });
+            self.copy.waiting = false;
+            self.copy.mapping = true;
+            return true;
+        }
+        if !self.copy.mapping {
+            return false;
+        }
+        if !self.copy.mapped.load(Ordering::Acquire) {
+            return true;
+        }
+        if let Ok(bytes) = self.copy.buffer.slice(..).get_mapped_range() {
+            let words: Vec<u32> = bytes
+                .chunks_exact(4)
+                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect();
+            self.counts = Some(
+                self.casters
+                    .iter()
+                    .zip(words.chunks(COUNT_WORDS as usize))
+                    .map(|(c, s)| GpuStageCounts::decode(s, c.corner_capacity))
+                    .collect(),
+            );
+        }
+        self.copy.buffer.unmap();
+        self.copy.mapping = false;
+        true
+    }
+
+    /// Per caster, the counts of the last build that came back ([`GpuGeometry::poll_counts`]).
+    pub fn last_counts(&self) -> Option<&[GpuStageCounts]> {
+        self.counts.as_deref()
+    }
+
+    /// A warning per caster of the last build that came back whose volumes the stage refused
+    /// (it casts no shadow).
+    pub fn refused_warnings(&self) -> Vec<String> {
+        self.counts
+            .iter()
+            .flatten()
+            .zip(&self.names)
+            .filter(|(c, _)| c.refused)
+            .map(|(_, name)| refused_warning(name))
+            .collect()
     }
 
     /// Per caster its umbra and its penumbra, as the light pass draws them.
@@ -448,13 +582,7 @@ impl GpuGeometry {
             let stats = r.counts.stats(mesh.faces.len());
             out.warnings.extend(mesh.report.warning(&mesh.name));
             if r.counts.refused {
-                out.warnings.push(format!(
-                    "caster '{}': its shadow volumes pass the GPU stage's buffers or budget \
-                     ({MAX_VOLUME_TRIANGLES} volume triangles, MAX_VOLUME_TRIANGLES), or more \
-                     than {MAX_GPU_VERTEX_ENDS} silhouette edges meet at one vertex: it casts no \
-                     shadow (--geometry cpu draws it)",
-                    mesh.name
-                ));
+                out.warnings.push(refused_warning(&mesh.name));
             }
             if stats.unextruded_edges > 0 {
                 out.warnings.push(format!(
@@ -481,7 +609,7 @@ impl GpuGeometry {
         params: &VolumeParams,
         reach: Option<f32>,
     ) -> Result<SceneGeometry, RenderError> {
-        let gpu = GpuGeometry::new(ctx, prepared).map_err(RenderError::Request)?;
+        let mut gpu = GpuGeometry::new(ctx, prepared).map_err(RenderError::Request)?;
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -503,20 +631,7 @@ impl GpuGeometry {
         for c in &self.casters {
             let s = read_u32s(ctx, &c.state)?;
             let (f, e, _) = c.flat_counts;
-            let counts = GpuStageCounts {
-                umbra_drawn: s[0],
-                penumbra_drawn: s[1],
-                corners: s[2].min(c.corner_capacity),
-                refused: s[3] != 0,
-                classes: [s[5], s[6], s[7], s[8]],
-                umbra_edges: s[9],
-                penumbra_edges: s[10],
-                fans: s[11],
-                umbra_fans: s[12],
-                unextruded_edges: s[13],
-                umbra_triangles: s[14],
-                penumbra_triangles: s[15],
-            };
+            let counts = GpuStageCounts::decode(&s, c.corner_capacity);
             let work = read_u32s(ctx, &c.work)?;
             let v = c.flat_counts.2 as usize;
             let points = f as usize + 2 * v + 4 * e as usize;
