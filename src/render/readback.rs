@@ -297,3 +297,74 @@ pub fn read_u32s(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u32>, Re
     ctx.check_lost()?;
     Ok(words)
 }
+
+/// A small buffer a frame's passes copy into (counts, a few walls), mapped a frame or more later
+/// without a wait: the lab's overlays and stats. A copy is recorded only while the last one is
+/// not being mapped ([`LateCopy::free`]); [`LateCopy::poll`], once per frame, asks for the map
+/// after a copy was submitted, and a later call hands the bytes over.
+pub struct LateCopy {
+    pub buffer: wgpu::Buffer,
+    mapped: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    /// Copied in a recorded frame, not yet asked to map.
+    waiting: bool,
+    mapping: bool,
+}
+
+impl LateCopy {
+    pub fn new(device: &wgpu::Device, label: &str, size: u64) -> LateCopy {
+        LateCopy {
+            buffer: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(4),
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            }),
+            mapped: Default::default(),
+            waiting: false,
+            mapping: false,
+        }
+    }
+
+    /// Whether a copy into it may be recorded now (the last one is not being mapped).
+    pub fn free(&self) -> bool {
+        !self.mapping
+    }
+
+    /// A copy into it was recorded (the frame that holds it is about to be submitted).
+    pub fn copied(&mut self) {
+        self.waiting = true;
+    }
+
+    /// Whether a copy is on its way back.
+    pub fn pending(&self) -> bool {
+        self.waiting || self.mapping
+    }
+
+    /// Never waits: the first call after a copy asks for the map, a later one returns its bytes
+    /// (empty where the map failed) and frees the buffer.
+    pub fn poll(&mut self) -> Option<Vec<u8>> {
+        use std::sync::atomic::Ordering;
+        if self.waiting && !self.mapping {
+            let flag = self.mapped.clone();
+            flag.store(false, Ordering::Release);
+            self.buffer
+                .slice(..)
+                .map_async(wgpu::MapMode::Read, move |r| {
+                    flag.store(r.is_ok(), Ordering::Release);
+                });
+            self.waiting = false;
+            self.mapping = true;
+            return None;
+        }
+        if !self.mapping || !self.mapped.load(Ordering::Acquire) {
+            return None;
+        }
+        let bytes = match self.buffer.slice(..).get_mapped_range() {
+            Ok(view) => view.to_vec(),
+            Err(_) => Vec::new(),
+        };
+        self.buffer.unmap();
+        self.mapping = false;
+        Some(bytes)
+    }
+}

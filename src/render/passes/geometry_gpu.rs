@@ -17,14 +17,13 @@ use crate::geometry::flat_caster::FlatCaster;
 use crate::geometry::volume_vertices::{CORNERS_PER_ROW, TEXELS_PER_CORNER};
 use crate::geometry::{GeometryStats, PreparedCasters, SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::IndirectVolume;
-use crate::render::readback::read_u32s;
+use crate::render::readback::{read_u32s, LateCopy};
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, compute_pipeline, pipeline_layout, shader_module, storage_entry, uniform_entry,
     GpuContext, RenderError, VolumeVertex,
 };
 use crate::scene::AreaLight;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// What the geometry stage on the GPU needs of an adapter besides the D-buffer's own: compute
@@ -234,18 +233,9 @@ pub struct GpuGeometry {
     names: Vec<String>,
     /// The last build's counts on their way back, a frame or more late (the lab's stats and
     /// warnings; nothing waits for them).
-    copy: CountsCopy,
+    copy: LateCopy,
     /// The counts of the last build that came back.
     counts: Option<Vec<GpuStageCounts>>,
-}
-
-/// Every caster's count words copied after a build, mapped a frame later.
-struct CountsCopy {
-    buffer: wgpu::Buffer,
-    mapped: Arc<AtomicBool>,
-    /// Copied in a recorded build, not yet asked to map.
-    waiting: bool,
-    mapping: bool,
 }
 
 /// Triangles one volume of a caster may need at most, within the device's binding and the
@@ -333,17 +323,11 @@ impl GpuGeometry {
                 GpuCaster::new(ctx, &pass, flat, capacity, *corners, &corner_buffer)
             })
             .collect();
-        let copy = CountsCopy {
-            buffer: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("GpuGeometry::counts_copy"),
-                size: (flats.len() as u64).max(1) * COUNT_WORDS * 4,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
-            mapped: Arc::new(AtomicBool::new(false)),
-            waiting: false,
-            mapping: false,
-        };
+        let copy = LateCopy::new(
+            device,
+            "GpuGeometry::counts_copy",
+            flats.len() as u64 * COUNT_WORDS * 4,
+        );
         Ok(GpuGeometry {
             pass,
             casters,
@@ -471,7 +455,7 @@ impl GpuGeometry {
             self.corner_texture.size(),
         );
         // The counts, back a frame or more later (unless the last ones are still mapping).
-        if !self.copy.mapping {
+        if self.copy.free() && !self.casters.is_empty() {
             for (i, c) in self.casters.iter().enumerate() {
                 rec.encoder.copy_buffer_to_buffer(
                     &c.state,
@@ -481,7 +465,7 @@ impl GpuGeometry {
                     COUNT_WORDS * 4,
                 );
             }
-            self.copy.waiting = !self.casters.is_empty();
+            self.copy.copied();
         }
     }
 
@@ -489,40 +473,23 @@ impl GpuGeometry {
     /// was submitted asks for the copy, a later one takes it ([`GpuGeometry::last_counts`]).
     /// `true` while they are on their way or have just arrived.
     pub fn poll_counts(&mut self) -> bool {
-        if self.copy.waiting && !self.copy.mapping {
-            let flag = self.copy.mapped.clone();
-            flag.store(false, Ordering::Release);
-            self.copy
-                .buffer
-                .slice(..)
-                .map_async(wgpu::MapMode::Read, move |r| {
-                    flag.store(r.is_ok(), Ordering::Release);
-                });
-            self.copy.waiting = false;
-            self.copy.mapping = true;
-            return true;
+        let Some(bytes) = self.copy.poll() else {
+            return self.copy.pending();
+        };
+        if (bytes.len() as u64) < self.casters.len() as u64 * COUNT_WORDS * 4 {
+            return true; // the map failed: the counts before stay
         }
-        if !self.copy.mapping {
-            return false;
-        }
-        if !self.copy.mapped.load(Ordering::Acquire) {
-            return true;
-        }
-        if let Ok(bytes) = self.copy.buffer.slice(..).get_mapped_range() {
-            let words: Vec<u32> = bytes
-                .chunks_exact(4)
-                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                .collect();
-            self.counts = Some(
-                self.casters
-                    .iter()
-                    .zip(words.chunks(COUNT_WORDS as usize))
-                    .map(|(c, s)| GpuStageCounts::decode(s, c.corner_capacity))
-                    .collect(),
-            );
-        }
-        self.copy.buffer.unmap();
-        self.copy.mapping = false;
+        let words: Vec<u32> = bytes
+            .chunks_exact(4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        self.counts = Some(
+            self.casters
+                .iter()
+                .zip(words.chunks(COUNT_WORDS as usize))
+                .map(|(c, s)| GpuStageCounts::decode(s, c.corner_capacity))
+                .collect(),
+        );
         true
     }
 

@@ -9,7 +9,6 @@
 //! waits, and the walls are read back only for the lab's overlay, a frame or more later
 //! ([`Hybrid::poll_walls`]).
 
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use glam::{Mat4, Vec3, Vec4};
@@ -18,7 +17,7 @@ use super::stencil_volumes::{
     depth_stencil, stencil_both, volume_vertex_layout, ScreenTargets, VISIBILITY_FORMAT,
 };
 use crate::geometry::hybrid::WallParams;
-use crate::render::readback::map_now;
+use crate::render::readback::{map_now, LateCopy};
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, compute_pipeline, pipeline_layout, shader_module, texture_entry, uniform_buffer,
@@ -281,16 +280,6 @@ impl HybridPass {
     }
 }
 
-/// Walls copied back for the overlay: the copy, whether it has been mapped, and its revision.
-struct Copy {
-    buffer: wgpu::Buffer,
-    mapped: Arc<AtomicBool>,
-    /// Copied in a submitted frame, not yet asked to map.
-    waiting: bool,
-    mapping: bool,
-    revision: u64,
-}
-
 /// A method state's hybrid passes: uniforms, the walls, their draw arguments.
 pub struct Hybrid {
     pass: Arc<HybridPass>,
@@ -309,7 +298,9 @@ pub struct Hybrid {
     map_copy: Option<wgpu::Buffer>,
     /// Group 0 and the generation of the map it binds.
     inputs_group: Option<(wgpu::BindGroup, u64)>,
-    copy: Copy,
+    /// The walls copied back for the overlay, and the revision they were made for.
+    copy: LateCopy,
+    copy_revision: u64,
 }
 
 impl Hybrid {
@@ -348,17 +339,12 @@ impl Hybrid {
             ],
         });
         Hybrid {
-            copy: Copy {
-                buffer: buffer(
-                    "Hybrid::copy",
-                    16 + u64::from(MAX_HYBRID_WALLS) * WALL_BYTES,
-                    B::COPY_DST | B::MAP_READ,
-                ),
-                mapped: Arc::new(AtomicBool::new(false)),
-                waiting: false,
-                mapping: false,
-                revision: 0,
-            },
+            copy: LateCopy::new(
+                &ctx.device,
+                "Hybrid::copy",
+                16 + u64::from(MAX_HYBRID_WALLS) * WALL_BYTES,
+            ),
+            copy_revision: 0,
             pass,
             uniforms: uniform_buffer::<HybridUniforms>(device, "Hybrid::uniforms"),
             walls,
@@ -478,7 +464,7 @@ impl Hybrid {
             pass.set_pipeline(&self.pass.finish);
             pass.dispatch_workgroups(1, 1, 1);
         }
-        if !self.copy.mapping {
+        if self.copy.free() {
             rec.encoder
                 .copy_buffer_to_buffer(&self.count, 0, &self.copy.buffer, 0, 4);
             rec.encoder.copy_buffer_to_buffer(
@@ -488,8 +474,8 @@ impl Hybrid {
                 16,
                 u64::from(MAX_HYBRID_WALLS) * WALL_BYTES,
             );
-            self.copy.waiting = true;
-            self.copy.revision = revision;
+            self.copy.copied();
+            self.copy_revision = revision;
         }
     }
 
@@ -550,34 +536,14 @@ impl Hybrid {
     /// how many were found)`, each wall its six vertices. Never waits: call once per frame (the
     /// first call after an extraction asks for the copy, a later one returns it).
     pub fn poll_walls(&mut self) -> Option<(u64, Vec<[Vec4; 6]>, u32)> {
-        if self.copy.waiting && !self.copy.mapping {
-            let flag = self.copy.mapped.clone();
-            flag.store(false, Ordering::Release);
-            self.copy
-                .buffer
-                .slice(..)
-                .map_async(wgpu::MapMode::Read, move |r| {
-                    flag.store(r.is_ok(), Ordering::Release);
-                });
-            self.copy.waiting = false;
-            self.copy.mapping = true;
-            return None;
-        }
-        if !self.copy.mapping || !self.copy.mapped.load(Ordering::Acquire) {
-            return None;
-        }
-        let out = match self.copy.buffer.slice(..).get_mapped_range() {
-            Ok(bytes) => decode_walls(&bytes),
-            Err(_) => (Vec::new(), 0),
-        };
-        self.copy.buffer.unmap();
-        self.copy.mapping = false;
-        Some((self.copy.revision, out.0, out.1))
+        let bytes = self.copy.poll()?;
+        let (walls, found) = decode_walls(&bytes);
+        Some((self.copy_revision, walls, found))
     }
 
     /// Whether walls are being copied back (a later [`Hybrid::poll_walls`] returns them).
     pub fn walls_pending(&self) -> bool {
-        self.copy.waiting || self.copy.mapping
+        self.copy.pending()
     }
 
     /// [`Hybrid::poll_walls`], waiting for the GPU (tests): everything submitted so far must
