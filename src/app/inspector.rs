@@ -6,6 +6,7 @@ use crate::render::truth;
 use eframe::egui::{self, Color32, Pos2, Rect, RichText, Sense, Stroke, Vec2};
 
 use super::{light_panel, LabApp};
+use crate::geometry::GeometryStats;
 use crate::render::passes::probe::PixelValues;
 use crate::render::passes::view::View;
 use crate::render::passes::view_twin::branch_name;
@@ -311,19 +312,25 @@ impl LabApp {
         if let Some(core) = self.core.as_ref() {
             let scene = core.scene();
             let method = self.settings.method();
-            let g = core
-                .session
-                .geometry(method)
-                .map(|g| g.stats)
-                .unwrap_or_default();
             let total: usize = scene.objects.iter().map(|o| o.mesh.triangles.len()).sum();
             rows.push((
                 "triangles".into(),
                 format!("{} casting, {total} in all", scene.caster_triangle_count()),
             ));
-            if let Some(gpu) = core.session.gpu_geometry(method) {
-                // Its time is the GPU pass `geometry_gpu`, not the UI thread's; its counts come
-                // back a frame or more after the build.
+            let gpu = core.session.gpu_geometry(method);
+            // The CPU stage's counts, or the GPU stage's once they came back (a frame or more
+            // after its build).
+            let g = match gpu {
+                Some(gpu) => gpu.last_stats(),
+                None => Some(
+                    core.session
+                        .geometry(method)
+                        .map(|g| g.stats)
+                        .unwrap_or_default(),
+                ),
+            };
+            if gpu.is_some() {
+                // Its time is the GPU pass `geometry_gpu`, not the UI thread's.
                 let gpu_ms = self
                     .stats
                     .median_gpu_ms()
@@ -335,40 +342,22 @@ impl LabApp {
                     _ => "on the GPU".to_string(),
                 };
                 rows.push(("geometry stage".into(), at));
-                let sum = |f: fn(&crate::render::passes::geometry_gpu::GpuStageCounts) -> u32| {
-                    gpu.last_counts()
-                        .map(|c| c.iter().map(f).sum::<u32>().to_string())
-                        .unwrap_or_else(|| "…".into())
-                };
-                rows.push((
-                    "silhouette edges".into(),
-                    format!(
-                        "{} umbra, {} penumbra",
-                        sum(|c| c.umbra_edges),
-                        sum(|c| c.penumbra_edges)
-                    ),
-                ));
-                rows.push((
-                    "volume triangles".into(),
-                    format!(
-                        "{} umbra, {} penumbra",
-                        sum(|c| if c.refused { 0 } else { c.umbra_triangles }),
-                        sum(|c| if c.refused { 0 } else { c.penumbra_triangles })
-                    ),
-                ));
-            } else {
-                rows.push((
-                    "silhouette edges".into(),
-                    format!("{} umbra, {} penumbra", g.umbra_edges, g.penumbra_edges),
-                ));
-                rows.push((
-                    "volume triangles".into(),
-                    format!(
-                        "{} umbra, {} penumbra",
-                        g.umbra_triangles, g.penumbra_triangles
-                    ),
-                ));
             }
+            let pair = |umbra: fn(&GeometryStats) -> usize,
+                        penumbra: fn(&GeometryStats) -> usize| {
+                g.as_ref().map_or_else(
+                    || "…".to_string(),
+                    |g| format!("{} umbra, {} penumbra", umbra(g), penumbra(g)),
+                )
+            };
+            rows.push((
+                "silhouette edges".into(),
+                pair(|g| g.umbra_edges, |g| g.penumbra_edges),
+            ));
+            rows.push((
+                "volume triangles".into(),
+                pair(|g| g.umbra_triangles, |g| g.penumbra_triangles),
+            ));
             rows.push((
                 "geometry builds".into(),
                 core.session.geometry_builds(method).0.to_string(),

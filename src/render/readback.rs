@@ -262,6 +262,14 @@ pub fn f32s_of(bytes: &[u8]) -> impl Iterator<Item = f32> + '_ {
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
 }
 
+/// Little-endian `u32`s from bytes.
+pub fn u32s(bytes: &[u8]) -> Vec<u32> {
+    bytes
+        .chunks_exact(4)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect()
+}
+
 /// A mappable copy of `buffer`, its copy submitted (not waited for).
 pub fn copy_to_staging(ctx: &GpuContext, buffer: &wgpu::Buffer, label: &str) -> wgpu::Buffer {
     let size = buffer.size();
@@ -289,9 +297,7 @@ pub fn read_u32s(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u32>, Re
         let view = slice
             .get_mapped_range()
             .map_err(|e| RenderError::Readback(e.to_string()))?;
-        view.chunks_exact(4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect()
+        u32s(&view)
     };
     staging.unmap();
     ctx.check_lost()?;

@@ -58,8 +58,8 @@ pub trait MethodState: Send {
     }
 
     /// Pick up what the GPU hands back a frame or more later for the overlays and the stats
-    /// (`hybrid`'s walls, the GPU geometry stage's counts), without waiting; `true` while something is on its way or has just arrived (a
-    /// window repaints then).
+    /// (`hybrid`'s walls, the GPU geometry stage's counts), without waiting; `true` while
+    /// something is on its way or has just arrived (a window repaints then).
     fn poll_geometry(&mut self) -> bool {
         false
     }

@@ -17,7 +17,7 @@ use crate::geometry::flat_caster::FlatCaster;
 use crate::geometry::volume_vertices::{CORNERS_PER_ROW, TEXELS_PER_CORNER};
 use crate::geometry::{GeometryStats, PreparedCasters, SceneGeometry, VolumeParams};
 use crate::render::gpu_scene::IndirectVolume;
-use crate::render::readback::{read_u32s, LateCopy};
+use crate::render::readback::{read_u32s, u32s, LateCopy};
 use crate::render::timer::Recorder;
 use crate::render::{
     buffer_entry, compute_pipeline, pipeline_layout, shader_module, storage_entry, uniform_entry,
@@ -36,7 +36,7 @@ pub const GPU_GEOMETRY_STORAGE_BUFFERS: u32 = 7;
 const STATE_WORDS: usize = 24;
 /// The state words that hold a caster's counts ([`GpuStageCounts::decode`]).
 const COUNT_WORDS: u64 = 16;
-const ARGS_UMBRA: u64 = 16 * 4;
+const ARGS_UMBRA: u64 = COUNT_WORDS * 4;
 const ARGS_PENUMBRA: u64 = 20 * 4;
 const VERTEX_WORDS: u64 = (std::mem::size_of::<VolumeVertex>() / 4) as u64;
 
@@ -479,10 +479,7 @@ impl GpuGeometry {
         if (bytes.len() as u64) < self.casters.len() as u64 * COUNT_WORDS * 4 {
             return true; // the map failed: the counts before stay
         }
-        let words: Vec<u32> = bytes
-            .chunks_exact(4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
+        let words = u32s(&bytes);
         self.counts = Some(
             self.casters
                 .iter()
@@ -496,6 +493,17 @@ impl GpuGeometry {
     /// Per caster, the counts of the last build that came back ([`GpuGeometry::poll_counts`]).
     pub fn last_counts(&self) -> Option<&[GpuStageCounts]> {
         self.counts.as_deref()
+    }
+
+    /// The counts of the last build that came back, over every caster, as the CPU stage states
+    /// them ([`GpuStageCounts::stats`]).
+    pub fn last_stats(&self) -> Option<GeometryStats> {
+        let counts = self.counts.as_ref()?;
+        let mut out = GeometryStats::default();
+        for (c, caster) in counts.iter().zip(&self.casters) {
+            out += c.stats(caster.flat_counts.0 as usize);
+        }
+        Some(out)
     }
 
     /// A warning per caster of the last build that came back whose volumes the stage refused
