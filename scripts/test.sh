@@ -24,8 +24,9 @@ cargo test --locked --doc
 # Under Mesa 25's lavapipe, fetched beside the system's 22.3 (scripts/mesa25.sh), two paths the
 # system driver does not take run again: the shadow-ray tracer's hardware path (22.3 has no ray
 # queries; here an adapter without them is a failure), and the D-buffer's geometry stage on the
-# GPU, which `--geometry auto` takes under Mesa 25 and not under 22.3 (its equality with the CPU
-# stage, and the D-buffer against the reference on every built-in). About a minute and a half.
+# GPU, which `--geometry auto` takes under Mesa 25 for large casters and never under 22.3 (its
+# equality with the CPU stage); and the D-buffer against the reference on every built-in under
+# that driver. About a minute and a half.
 # DBUFFER_SKIP_RAY_QUERY_RUN=1 leaves this run out, and says so.
 if [ "${DBUFFER_SKIP_RAY_QUERY_RUN:-0}" = 1 ]; then
   echo "DBUFFER_SKIP_RAY_QUERY_RUN=1: the Mesa 25 run is left out" >&2

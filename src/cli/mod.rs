@@ -585,7 +585,7 @@ fn gpu_stage_counts(
     let runs = if required {
         gpu_geometry_runs(&ctx.caps)
     } else {
-        gpu_geometry_by_default(&ctx.caps)
+        gpu_geometry_by_default(&ctx.caps, scene.caster_triangle_count())
     };
     if !runs {
         if required {

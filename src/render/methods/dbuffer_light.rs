@@ -38,13 +38,13 @@ pub const CHANNELS: &[Channel] = &[
 
 /// `--geometry`: where the D-buffer's geometry stage runs. `auto`: on the GPU where the adapter
 /// has compute shaders, indirect draws and the storage buffers the stage binds, is a GPU or a
-/// CPU rasteriser that runs the stage well ([`gpu_geometry_by_default`]), and the scene's
-/// casters fit it; else on the CPU.
+/// CPU rasteriser that runs the stage well for the scene ([`gpu_geometry_by_default`]), and
+/// the scene's casters fit it; else on the CPU.
 pub static GEOMETRY: super::Choice = super::Choice::new(
     "geometry",
     "dbuffer, dbuffer-center: where the geometry stage (face classes, silhouettes, volumes) \
-     runs: auto = on the GPU where the adapter can and runs it well (a GPU, or Mesa 25's lavapipe), \
-     cpu, gpu (the CPU where the adapter cannot)",
+     runs: auto = on the GPU where the adapter can and runs it well (a GPU; Mesa 25's lavapipe \
+     from 131,072 caster triangles), cpu, gpu (the CPU where the adapter cannot)",
     &["auto", "cpu", "gpu"],
     0,
 );
@@ -55,20 +55,33 @@ pub fn gpu_geometry_runs(caps: &Capabilities) -> bool {
         && caps.limits.max_storage_buffers_per_shader_stage >= GPU_GEOMETRY_STORAGE_BUFFERS
 }
 
-/// Whether `--geometry auto` runs the stage on the GPU on an adapter of `caps`: wherever it can,
-/// but on a CPU rasteriser not measured to run it well. There the "GPU" is the same cores
-/// running the stage as compute shaders, and how well depends on the driver: on the 2-core VM,
-/// the same run (docs/results/performance.md), Mesa 25.0.7's lavapipe moves the light over
-/// 1M triangles in 62.8 ms on the GPU path against 124 ms on the CPU path (28.0 against 35.4 at
-/// 256k, 0.92 against 0.35 at 1k), where Mesa 22.3's takes 2,829 ms (61 ms at 1k). So on a CPU
-/// adapter, only Mesa 25's or newer.
-pub fn gpu_geometry_by_default(caps: &Capabilities) -> bool {
-    gpu_geometry_runs(caps) && runs_the_stage_well(caps.device_type, caps.mesa_major())
+/// Whether `--geometry auto` runs the stage on the GPU on an adapter of `caps` for a scene of
+/// `caster_triangles`: wherever it can, but on a CPU rasteriser only where it was measured to
+/// win. There the "GPU" is the same cores running the stage as compute shaders, and it depends
+/// on the driver and the scene (the 2-core VM, docs/results/performance.md): under Mesa 25.0.7's
+/// lavapipe the GPU path moves the light over 1M triangles in 62.8 ms against the CPU path's 124
+/// (28.0 against 35.4 at 256k) but loses below (9.2 against 7.7 at 64k), and on a scene of many
+/// small casters its volumes, drawn over the whole view, cost the light pass twice the fill
+/// (`fusion-many` at 256²: 172 against 84 ms); Mesa 22.3's takes 2,829 ms at 1M.
+pub fn gpu_geometry_by_default(caps: &Capabilities, caster_triangles: usize) -> bool {
+    gpu_geometry_runs(caps)
+        && runs_the_stage_well(caps.device_type, caps.mesa_major(), caster_triangles)
 }
 
-/// A GPU, or a CPU rasteriser of Mesa 25 or newer ([`gpu_geometry_by_default`]).
-fn runs_the_stage_well(device_type: wgpu::DeviceType, mesa_major: Option<u32>) -> bool {
-    device_type != wgpu::DeviceType::Cpu || mesa_major.is_some_and(|v| v >= 25)
+/// Caster triangles from which `auto` takes the GPU stage on a CPU rasteriser that runs it well
+/// (between the 64k where the CPU path still wins and the 256k where the GPU path does).
+pub const CPU_ADAPTER_GPU_STAGE_TRIANGLES: usize = 1 << 17;
+
+/// A GPU; or a CPU rasteriser of Mesa 25 or newer, for a scene of at least
+/// [`CPU_ADAPTER_GPU_STAGE_TRIANGLES`] caster triangles ([`gpu_geometry_by_default`]).
+fn runs_the_stage_well(
+    device_type: wgpu::DeviceType,
+    mesa_major: Option<u32>,
+    caster_triangles: usize,
+) -> bool {
+    device_type != wgpu::DeviceType::Cpu
+        || (mesa_major.is_some_and(|v| v >= 25)
+            && caster_triangles >= CPU_ADAPTER_GPU_STAGE_TRIANGLES)
 }
 
 /// Where a build of the geometry stage ran.
@@ -241,7 +254,7 @@ impl DBufferLight {
         let wanted = match choice {
             1 => false,
             2 => true,
-            _ => gpu_geometry_by_default(&inputs.ctx.caps),
+            _ => gpu_geometry_by_default(&inputs.ctx.caps, inputs.scene.caster_triangle_count()),
         };
         if !self.gpu_allowed || !wanted || !gpu_geometry_runs(&inputs.ctx.caps) {
             return false;
@@ -465,28 +478,35 @@ pub fn light_move_ms(
 
 #[cfg(test)]
 mod tests {
-    use super::runs_the_stage_well;
+    use super::{runs_the_stage_well, CPU_ADAPTER_GPU_STAGE_TRIANGLES};
     use wgpu::DeviceType;
 
     #[test]
-    fn auto_takes_the_gpu_on_a_gpu_and_on_mesa_25s_lavapipe() {
+    fn auto_takes_the_gpu_on_a_gpu_and_on_mesa_25s_lavapipe_for_large_casters() {
+        let large = CPU_ADAPTER_GPU_STAGE_TRIANGLES;
         for gpu in [
             DeviceType::DiscreteGpu,
             DeviceType::IntegratedGpu,
             DeviceType::VirtualGpu,
         ] {
-            assert!(runs_the_stage_well(gpu, None));
-            assert!(runs_the_stage_well(gpu, Some(22)));
+            for tris in [0, 224, large] {
+                assert!(runs_the_stage_well(gpu, None, tris));
+                assert!(runs_the_stage_well(gpu, Some(22), tris));
+            }
         }
-        assert!(runs_the_stage_well(DeviceType::Cpu, Some(25)));
-        assert!(runs_the_stage_well(DeviceType::Cpu, Some(26)));
-        assert!(!runs_the_stage_well(DeviceType::Cpu, Some(22)));
+        assert!(runs_the_stage_well(DeviceType::Cpu, Some(25), large));
+        assert!(runs_the_stage_well(DeviceType::Cpu, Some(26), 4 * large));
         assert!(
-            !runs_the_stage_well(DeviceType::Cpu, Some(24)),
+            !runs_the_stage_well(DeviceType::Cpu, Some(25), large - 1),
+            "many small casters: the CPU path"
+        );
+        assert!(!runs_the_stage_well(DeviceType::Cpu, Some(22), 4 * large));
+        assert!(
+            !runs_the_stage_well(DeviceType::Cpu, Some(24), large),
             "not measured"
         );
         assert!(
-            !runs_the_stage_well(DeviceType::Cpu, None),
+            !runs_the_stage_well(DeviceType::Cpu, None, large),
             "WARP, SwiftShader: not measured"
         );
     }
